@@ -1,0 +1,194 @@
+// spherechain baker — the data every stage shares: the imported character (Mesh, Skin, Clip), the
+// five regions, Result<T> for fallible calls, and the injected Context for logs and stage timers.
+//
+// The baker library never prints: it logs through Context (the CLI routes it to spdlog), and every
+// call that reads user data returns Result<T>; exceptions from assimp, tinygltf or CGAL are caught at
+// the stage boundary and turned into Error messages.
+#pragma once
+
+#include <array>
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <variant>
+#include <vector>
+
+namespace spherechain::baker {
+
+// ---------------------------------------------------------------------------------------------------
+// Regions (paper §3): R0 left arm, R1 right arm, R2 left leg, R3 right leg, R4 torso. Left/right is the
+// character's own. Head and neck belong to the torso, hands to the arms, feet to the legs.
+enum class Region : uint8_t { kLeftArm = 0, kRightArm = 1, kLeftLeg = 2, kRightLeg = 3, kTorso = 4 };
+inline constexpr int kRegionCount = 5;
+/// Sentinel for "no region" in per-triangle / per-vertex region arrays.
+inline constexpr uint8_t kNoRegion = 0xFF;
+
+/// "left_arm", "right_arm", "left_leg", "right_leg", "torso"; "none" for anything else.
+const char* RegionName(Region r);
+/// "R0".."R4".
+const char* RegionSymbol(Region r);
+inline bool IsTubular(Region r) { return r != Region::kTorso; }
+
+// ---------------------------------------------------------------------------------------------------
+/// An error a caller can show a user: a stable code and a message that says what and where.
+struct Error {
+  enum class Code : uint8_t {
+    kIo,            ///< missing / unreadable / unwritable file
+    kFormat,        ///< unsupported or corrupt file format
+    kInvalidMesh,   ///< no triangles, NaN/Inf, out-of-range indices, ...
+    kSegmentation,  ///< not a standing body / a region could not be found
+    kFit,           ///< sphere fitting failed
+    kConfig,        ///< bad bake configuration
+    kInternal,      ///< a library threw; message holds its text
+  };
+  Code code = Code::kInternal;
+  std::string message;
+};
+const char* ToString(Error::Code code);
+
+/// Value or Error (Jolt's Result<T>). Check `ok()` before `value()`.
+template <class T>
+class [[nodiscard]] Result {
+ public:
+  Result(T value) : v_(std::move(value)) {}           // NOLINT(google-explicit-constructor)
+  Result(Error error) : v_(std::move(error)) {}       // NOLINT(google-explicit-constructor)
+  bool ok() const { return v_.index() == 0; }
+  explicit operator bool() const { return ok(); }
+  T& value() & { return std::get<0>(v_); }
+  const T& value() const& { return std::get<0>(v_); }
+  T&& value() && { return std::get<0>(std::move(v_)); }
+  const Error& error() const { return std::get<1>(v_); }
+  T* operator->() { return &value(); }
+  const T* operator->() const { return &value(); }
+
+ private:
+  std::variant<T, Error> v_;
+};
+
+/// Result<void>.
+struct Ok {};
+using Status = Result<Ok>;
+
+inline Error MakeError(Error::Code code, std::string message) { return Error{code, std::move(message)}; }
+
+// ---------------------------------------------------------------------------------------------------
+/// Injected logging and per-stage timing (Recast's rcContext). All members optional; not thread-safe.
+class Context {
+ public:
+  enum class Level : uint8_t { kDebug, kInfo, kWarn };
+  std::function<void(Level, const std::string&)> sink;  ///< [opt] receives every log line
+  std::vector<std::pair<std::string, double>> timings_ms;  ///< stage name → milliseconds, in order
+
+  void Log(Level level, const std::string& message) const {
+    if (sink) sink(level, message);
+  }
+  void Info(const std::string& m) const { Log(Level::kInfo, m); }
+  void Warn(const std::string& m) const { Log(Level::kWarn, m); }
+  void Debug(const std::string& m) const { Log(Level::kDebug, m); }
+
+  /// RAII stage timer: adds (name, ms) to `timings_ms` when it goes out of scope.
+  class Timer {
+   public:
+    Timer(Context* ctx, std::string name)
+        : ctx_(ctx), name_(std::move(name)), t0_(std::chrono::steady_clock::now()) {}
+    ~Timer() {
+      if (!ctx_) return;
+      const double ms =
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0_).count();
+      ctx_->timings_ms.emplace_back(name_, ms);
+    }
+    Timer(const Timer&) = delete;
+    Timer& operator=(const Timer&) = delete;
+
+   private:
+    Context* ctx_;
+    std::string name_;
+    std::chrono::steady_clock::time_point t0_;
+  };
+};
+
+// ---------------------------------------------------------------------------------------------------
+// The imported character.
+
+enum class UpAxis : uint8_t { kY = 0, kZ = 1, kX = 2 };
+
+/// One source mesh / glTF primitive, in concatenation order (documented per importer in import.h).
+struct MeshPart {
+  std::string name;
+  uint32_t first_vertex = 0;
+  uint32_t vertex_count = 0;
+  uint32_t first_triangle = 0;
+  uint32_t triangle_count = 0;
+};
+
+/// A node of the skeleton hierarchy with its rest (bind-time) local transform.
+/// Nodes are stored parents-first: `parent < own index`, or -1 for a root.
+struct Node {
+  std::string name;
+  int32_t parent = -1;
+  std::array<float, 3> translation{0, 0, 0};
+  std::array<float, 4> rotation{0, 0, 0, 1};  ///< unit quaternion (x, y, z, w)
+  std::array<float, 3> scale{1, 1, 1};
+};
+
+/// A skinning influence: the node it follows and the matrix taking *assembled bind-pose model space*
+/// (the space of Mesh::positions) into that node's space. Several joints may share a node (one per
+/// source mesh that the bone skins, each with its own inverse bind).
+struct SkinJoint {
+  int32_t node = -1;
+  std::array<float, 16> inverse_bind{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};  ///< column-major
+};
+
+/// Skin weights in compressed rows: vertex v's influences are
+/// [weight_offsets[v], weight_offsets[v+1]) into weight_joints / weights. Weights of a vertex sum to 1
+/// (the importer normalises); a vertex with no influence follows no joint (stays at bind).
+struct Skin {
+  std::vector<Node> nodes;
+  std::vector<SkinJoint> joints;
+  std::vector<uint32_t> weight_offsets;  ///< #V+1
+  std::vector<uint32_t> weight_joints;   ///< index into joints
+  std::vector<float> weights;
+  std::string source;  ///< "gltf", "assimp", "mhskel"
+};
+
+/// One animation channel (glTF semantics): node, property, key times (s) and values (3 or 4 floats a
+/// key; rotations are quaternions x, y, z, w).
+struct Channel {
+  enum class Path : uint8_t { kTranslation, kRotation, kScale };
+  enum class Interpolation : uint8_t { kLinear, kStep };
+  int32_t node = -1;
+  Path path = Path::kRotation;
+  Interpolation interpolation = Interpolation::kLinear;
+  std::vector<float> times;
+  std::vector<float> values;
+};
+
+struct Clip {
+  std::string name;
+  float duration_s = 0.0f;
+  std::vector<Channel> channels;
+};
+
+/// The character as imported. Positions are the assembled bind pose (node transforms applied) in
+/// model space and source units; vertex and triangle order are the source's (parts concatenated).
+struct Mesh {
+  std::vector<float> positions;  ///< #V×3
+  std::vector<uint32_t> indices;  ///< #T×3, counter-clockwise as in the source
+  std::vector<MeshPart> parts;
+  std::string source_path;
+  std::string source_format;  ///< "gltf", "obj", "x", "fbx", ...
+  std::string units = "unknown";  ///< "dm", "m", "cm", ... when the source says or the importer knows
+  float unit_scale_m = 0.0f;      ///< metres per unit, 0 when unknown
+  UpAxis up_axis = UpAxis::kY;
+  std::optional<Skin> skin;
+  std::vector<Clip> clips;
+
+  uint32_t vertex_count() const { return static_cast<uint32_t>(positions.size() / 3); }
+  uint32_t triangle_count() const { return static_cast<uint32_t>(indices.size() / 3); }
+};
+
+}  // namespace spherechain::baker
