@@ -1,1 +1,25 @@
-int main() { return 0; }
+// spherechain — the command-line tool: bake, inspect, export-debug, play, validate.
+#include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+
+#include "commands.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{"spherechain — sphere-chain self-collision assets for animated characters\n"
+               "(Madera, Ayala, Moo-Mena 2015: Self-collision Detection using Sphere Chains)"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "spherechain 0.1.0");
+  bool verbose = false, quiet = false;
+  app.add_flag("-v,--verbose", verbose, "Log every stage in detail");
+  app.add_flag("-q,--quiet", quiet, "Log warnings and errors only");
+  spherechain::cli::Commands commands;
+  spherechain::cli::Register(app, &commands);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  spdlog::set_pattern("%^%l%$: %v");
+  spdlog::set_level(verbose ? spdlog::level::debug : quiet ? spdlog::level::warn : spdlog::level::info);
+  return spherechain::cli::Dispatch(commands);
+}

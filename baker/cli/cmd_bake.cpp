@@ -1,0 +1,121 @@
+// spherechain bake INPUT -o OUT.sphc [--report R.json] [--config C.json] ...
+#include <cstdio>
+#include <filesystem>
+
+#include <spdlog/spdlog.h>
+
+#include "commands.h"
+#include "spherechain/baker/bake.h"
+#include "spherechain/baker/debug_export.h"
+
+namespace spherechain::cli {
+
+namespace {
+
+struct BakeArgs {
+  std::string input, output, report, config, rig, segmentation, region_map, ray_csv, png;
+  double disk_step = 0.0;
+};
+
+void PrintSummary(const baker::BakeResult& r, const baker::Context& ctx) {
+  using baker::Region;
+  std::printf("\n%-10s %10s %8s\n", "region", "triangles", "spheres");
+  for (int k = 0; k < baker::kRegionCount; ++k) {
+    const Region reg = static_cast<Region>(k);
+    size_t tris = 0, sph = 0;
+    for (uint8_t t : r.segmentation.triangle_regions) tris += t == k;
+    for (const auto& s : r.fit.spheres) sph += s.region == reg;
+    std::printf("%-3s %-6s %10zu %8zu\n", baker::RegionSymbol(reg), baker::RegionName(reg), tris, sph);
+  }
+  std::printf("%-10s %10u %8zu   (unassigned triangles: %u)\n", "total", r.mesh.triangle_count(), r.fit.spheres.size(),
+              r.unassigned_triangles);
+  std::printf("\nchains:");
+  for (const auto& c : r.chains) std::printf(" %s=%zu", c.name.c_str(), c.spheres.size());
+  std::printf("   excluded pairs: %zu\n", r.excluded.size());
+  if (r.agreement)
+    std::printf("segmentation: %s; agreement with %s: %.1f%% of triangles, %.1f%% of area\n",
+                r.segmentation.method.c_str(), r.other_segmentation->method.c_str(),
+                100.0 * r.agreement->triangle_fraction, 100.0 * r.agreement->area_fraction);
+  else
+    std::printf("segmentation: %s\n", r.segmentation.method.c_str());
+  std::printf("\naccuracy F = r - |c - v| over surrounding-region vertices\n");
+  std::printf("%-14s %10s %10s %10s %10s\n", "method", "mean|F|", "RMS", "min", "max");
+  auto row = [](const char* n, const baker::AccuracyStats& s) {
+    std::printf("%-14s %10.4f %10.4f %10.4f %10.4f\n", n, s.mean_abs_f, s.rms_f, s.min_f, s.max_f);
+  };
+  row("phi1", r.accuracy.phi1);
+  row("phi1' (adj.)", r.accuracy.phi1_adjusted);
+  row("phi2 (MEB)", r.accuracy.phi2);
+  std::printf("\ntimings (ms):");
+  double total = 0;
+  for (const auto& [n, ms] : ctx.timings_ms) {
+    std::printf(" %s=%.1f", n.c_str(), ms);
+    total += ms;
+  }
+  std::printf("  total=%.1f\n", total);
+}
+
+int RunBake(const BakeArgs& a) {
+  baker::BakeConfig config;
+  if (!a.config.empty()) {
+    auto c = baker::LoadBakeConfig(a.config);
+    if (!c.ok()) return Fail(c.error());
+    config = std::move(c).value();
+  }
+  if (!a.rig.empty()) config.import.rig_path = a.rig;
+  if (!a.region_map.empty()) config.region_map = a.region_map;
+  if (a.disk_step > 0) config.fit.disk_step = a.disk_step;
+  if (a.segmentation == "rig") config.segmentation = baker::SegmentMethod::kRig;
+  else if (a.segmentation == "geometry") config.segmentation = baker::SegmentMethod::kGeometry;
+  else if (a.segmentation == "map" && config.region_map.empty()) return Fail("--segmentation map needs --region-map");
+
+  baker::Context ctx = MakeLoggingContext();
+  auto result = baker::Bake(a.input, config, &ctx);
+  if (!result.ok()) return Fail(result.error());
+  const baker::BakeResult& r = result.value();
+
+  // Everything is in memory; write each output atomically (a failure leaves no partial file).
+  if (auto s = baker::WriteFileAtomic(a.output, r.asset.data(), r.asset.size()); !s.ok()) return Fail(s.error());
+  if (!a.report.empty()) {
+    const std::string text = baker::MakeBakeReport(r, config, ctx).dump(2) + "\n";
+    if (auto s = baker::WriteFileAtomic(a.report, text); !s.ok()) return Fail(s.error());
+  }
+  if (!a.ray_csv.empty())
+    if (auto s = baker::WriteFileAtomic(a.ray_csv, baker::TorsoRayCsv(r)); !s.ok()) return Fail(s.error());
+  if (!a.png.empty()) {
+    runtime::AssetView view;
+    if (runtime::Failed(runtime::LoadAsset(r.asset.data(), r.asset.size(), &view)))
+      return Fail("internal: the baked asset does not load");
+    if (auto s = baker::RenderDebugPng(r.mesh, view, a.png); !s.ok()) return Fail(s.error());
+  }
+  PrintSummary(r, ctx);
+  std::printf("\nwrote %s (%zu bytes)", a.output.c_str(), r.asset.size());
+  if (!a.report.empty()) std::printf(", %s", a.report.c_str());
+  if (!a.ray_csv.empty()) std::printf(", %s", a.ray_csv.c_str());
+  if (!a.png.empty()) std::printf(", %s", a.png.c_str());
+  std::printf("\n");
+  return 0;
+}
+
+}  // namespace
+
+void RegisterBake(CLI::App& app, Commands* commands) {
+  auto args = std::make_shared<BakeArgs>();
+  CLI::App* sub = app.add_subcommand("bake", "Bake a character into a .sphc sphere-chain asset (paper §3-§5.1)");
+  sub->add_option("input", args->input, "Character file: .gltf/.glb (tinygltf); .obj .fbx .dae .x .blend ... (assimp)")
+      ->required()->check(CLI::ExistingFile);
+  sub->add_option("-o,--output", args->output, "Asset to write (.sphc); written atomically")->required();
+  sub->add_option("--report", args->report, "JSON bake report to write");
+  sub->add_option("--config", args->config, "JSON bake configuration (parameters, chains, segmentation)")
+      ->check(CLI::ExistingFile);
+  sub->add_option("--rig", args->rig, "MakeHuman rig (.mhskel) for an OBJ; default: default.mhskel beside the OBJ");
+  sub->add_option("--segmentation", args->segmentation, "auto (rig when rigged, else geometry), rig, geometry, map")
+      ->check(CLI::IsMember({"auto", "rig", "geometry", "map"}));
+  sub->add_option("--region-map", args->region_map, "JSON region map {\"triangle_regions\": [...]} (implies map)");
+  sub->add_option("--disk-step", args->disk_step, "Torso disk step delta in source units (default: relative to height)");
+  sub->add_option("--ray-csv", args->ray_csv, "CSV of the paper's per-ray comparison for the torso spheres");
+  sub->add_option("--png", args->png, "PNG views (front and side) of regions and spheres (needs rsvg-convert)");
+  commands->handlers.emplace_back(sub, [args] { return RunBake(*args); });
+}
+
+}  // namespace spherechain::cli

@@ -1,0 +1,115 @@
+// spherechain inspect ASSET [--json]
+#include <cstdio>
+
+#include <nlohmann/json.hpp>
+
+#include "asset_file.h"
+#include "commands.h"
+
+namespace spherechain::cli {
+
+namespace {
+
+struct InspectArgs {
+  std::string asset;
+  bool json = false;
+};
+
+nlohmann::json Describe(const runtime::AssetView& v) {
+  const schema::Asset& a = *v.asset;
+  nlohmann::json j;
+  j["schema_version"] = a.schema_version();
+  j["generator"] = a.generator() ? a.generator()->str() : "";
+  j["vertices"] = v.vertex_count;
+  j["triangles"] = v.triangle_count;
+  j["spheres"] = v.sphere_count;
+  j["units"] = a.units() ? a.units()->str() : "";
+  j["unit_scale_m"] = a.unit_scale_m();
+  j["up_axis"] = schema::EnumNameUpAxis(a.up_axis());
+  char hash[40];
+  std::snprintf(hash, sizeof hash, "%016llx", (unsigned long long)a.fingerprint()->positions_hash());
+  j["fingerprint"]["positions_hash"] = hash;
+  std::snprintf(hash, sizeof hash, "%016llx", (unsigned long long)a.fingerprint()->indices_hash());
+  j["fingerprint"]["indices_hash"] = hash;
+  nlohmann::json parts = nlohmann::json::array();
+  if (a.parts())
+    for (const auto* p : *a.parts())
+      parts.push_back({{"name", p->name() ? p->name()->str() : ""}, {"first_vertex", p->first_vertex()},
+                       {"vertices", p->vertex_count()}, {"first_triangle", p->first_triangle()},
+                       {"triangles", p->triangle_count()}});
+  j["parts"] = parts;
+  static const char* names[5] = {"left_arm", "right_arm", "left_leg", "right_leg", "torso"};
+  size_t tris[5] = {}, sph[5] = {};
+  for (uint8_t r : *a.triangle_regions())
+    if (r < 5) ++tris[r];
+  for (uint8_t r : *a.sphere_regions())
+    if (r < 5) ++sph[r];
+  for (int k = 0; k < 5; ++k) j["regions"][names[k]] = {{"triangles", tris[k]}, {"spheres", sph[k]}};
+  nlohmann::json chains = nlohmann::json::array();
+  size_t total = 0;
+  for (const auto* c : *a.chains()) {
+    chains.push_back({{"name", c->name() ? c->name()->str() : ""}, {"spheres", c->spheres()->size()}});
+    total += c->spheres()->size();
+  }
+  j["chains"] = chains;
+  j["mean_spheres_per_chain"] = chains.empty() ? 0.0 : double(total) / double(chains.size());
+  j["excluded_pairs"] = a.excluded_pairs() ? a.excluded_pairs()->size() : 0;
+  j["unassigned_triangles"] = v.triangle_count - (a.surrounding_triangles() ? a.surrounding_triangles()->size() : 0);
+  if (const auto* p = a.params())
+    j["params"] = {{"rays", p->rays()}, {"spheres_per_level", p->spheres_per_level()}, {"disk_step", p->disk_step()},
+                   {"penetration_depth", p->penetration_depth()}, {"pivots_per_sphere", p->pivots_per_sphere()},
+                   {"segmentation", p->segmentation() ? p->segmentation()->str() : ""}};
+  auto stats = [](const schema::AccuracyStats* s) -> nlohmann::json {
+    if (!s) return nullptr;
+    return {{"mean_abs_F", s->mean_abs_f()}, {"rms_F", s->rms_f()}, {"min_F", s->min_f()}, {"max_F", s->max_f()}};
+  };
+  if (const auto* acc = a.accuracy())
+    j["accuracy"] = {{"phi1", stats(acc->phi1())}, {"phi1_adjusted", stats(acc->phi1_adjusted())},
+                     {"phi2", stats(acc->phi2())}};
+  return j;
+}
+
+int RunInspect(const InspectArgs& args) {
+  LoadedAsset asset;
+  std::string error;
+  if (!LoadAssetFile(args.asset, &asset, &error)) return Fail(error);
+  const nlohmann::json j = Describe(asset.view);
+  if (args.json) {
+    std::printf("%s\n", j.dump(2).c_str());
+    return 0;
+  }
+  std::printf("%s: spherechain asset, schema v%u, %zu bytes (%s)\n", args.asset.c_str(), j["schema_version"].get<unsigned>(),
+              asset.size, j["generator"].get<std::string>().c_str());
+  std::printf("mesh: %u vertices, %u triangles, %zu part(s), units %s, up %s\n", asset.view.vertex_count,
+              asset.view.triangle_count, j["parts"].size(), j["units"].get<std::string>().c_str(),
+              j["up_axis"].get<std::string>().c_str());
+  for (const auto& p : j["parts"])
+    std::printf("  part %-24s vertices %u+%u  triangles %u+%u\n", p["name"].get<std::string>().c_str(),
+                p["first_vertex"].get<unsigned>(), p["vertices"].get<unsigned>(), p["first_triangle"].get<unsigned>(),
+                p["triangles"].get<unsigned>());
+  std::printf("spheres: %u\n", asset.view.sphere_count);
+  for (const auto& [name, r] : j["regions"].items())
+    std::printf("  %-10s triangles %6zu  spheres %3zu\n", name.c_str(), r["triangles"].get<size_t>(), r["spheres"].get<size_t>());
+  std::printf("chains:");
+  for (const auto& c : j["chains"]) std::printf(" %s=%zu", c["name"].get<std::string>().c_str(), c["spheres"].get<size_t>());
+  std::printf(" (mean %.1f)\nexcluded pairs: %zu, unassigned triangles: %zu\n", j["mean_spheres_per_chain"].get<double>(),
+              j["excluded_pairs"].get<size_t>(), j["unassigned_triangles"].get<size_t>());
+  if (j.contains("accuracy"))
+    for (const char* m : {"phi1", "phi1_adjusted", "phi2"})
+      if (!j["accuracy"][m].is_null())
+        std::printf("accuracy %-14s mean|F| %.4f  RMS %.4f\n", m, j["accuracy"][m]["mean_abs_F"].get<double>(),
+                    j["accuracy"][m]["rms_F"].get<double>());
+  return 0;
+}
+
+}  // namespace
+
+void RegisterInspect(CLI::App& app, Commands* commands) {
+  auto args = std::make_shared<InspectArgs>();
+  CLI::App* sub = app.add_subcommand("inspect", "Show what a .sphc asset holds (verified with the runtime loader)");
+  sub->add_option("asset", args->asset, "Asset (.sphc)")->required();
+  sub->add_flag("--json", args->json, "Print JSON instead of text");
+  commands->handlers.emplace_back(sub, [args] { return RunInspect(*args); });
+}
+
+}  // namespace spherechain::cli

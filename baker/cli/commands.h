@@ -1,0 +1,34 @@
+// spherechain CLI — subcommand registration and handlers (one file per subcommand).
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "spherechain/baker/types.h"
+
+namespace spherechain::cli {
+
+/// Every subcommand registers its options and a handler returning the process exit code.
+struct Commands {
+  std::vector<std::pair<CLI::App*, std::function<int()>>> handlers;
+};
+
+void Register(CLI::App& app, Commands* commands);
+int Dispatch(const Commands& commands);
+
+void RegisterBake(CLI::App& app, Commands* commands);
+void RegisterInspect(CLI::App& app, Commands* commands);
+void RegisterExportDebug(CLI::App& app, Commands* commands);
+void RegisterPlay(CLI::App& app, Commands* commands);
+void RegisterValidate(CLI::App& app, Commands* commands);
+
+/// A baker::Context whose log lines go to spdlog.
+baker::Context MakeLoggingContext();
+/// Logs `error` as "error: <code>: <message>" and returns exit code 1.
+int Fail(const baker::Error& error);
+int Fail(const std::string& message);
+
+}  // namespace spherechain::cli

@@ -1,0 +1,80 @@
+// spherechain baker — the whole preprocessing stage (paper §3, §4, §5.1) in one call, its
+// configuration and its readable report.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "spherechain/baker/chains.h"
+#include "spherechain/baker/fit.h"
+#include "spherechain/baker/import.h"
+#include "spherechain/baker/regions.h"
+#include "spherechain/baker/segment.h"
+#include "spherechain/baker/write.h"
+
+namespace spherechain::baker {
+
+/// Bake configuration. JSON form (every key optional):
+/// { "segmentation": "auto"|"rig"|"geometry"|"map", "region_map": "map.json", "rig": "x.mhskel",
+///   "rays": 80, "spheres_per_level": 2, "disk_step": 0.25, "disk_step_rel": 0.015,
+///   "penetration_depth": 0.3, "chains": [{"name": "zeta0", "members": ["R0", "R4L", "R2"]}, ...] }
+struct BakeConfig {
+  SegmentMethod segmentation = SegmentMethod::kAuto;
+  std::string region_map;  ///< [opt] with segmentation "map" (or set alone: implies "map")
+  ImportOptions import;
+  FitParams fit;
+  std::vector<ChainDef> chains = DefaultChainDefs();
+  bool compare_segmentations = true;  ///< rigged mesh: also segment by geometry and report agreement
+};
+
+/// Parses a JSON configuration file. Errors: kIo, kConfig (unknown key, wrong type, value out of range —
+/// the message names the key).
+Result<BakeConfig> LoadBakeConfig(const std::string& path);
+/// Parses JSON text (as LoadBakeConfig) — `where` names the source in messages.
+Result<BakeConfig> ParseBakeConfig(const std::string& json_text, const std::string& where);
+/// The canonical JSON of a configuration (stable key order), hashed into the asset.
+std::string CanonicalConfig(const BakeConfig& config);
+
+/// Accuracy F of one sphere over its surrounding region's vertices for φ1, φ1', φ2.
+struct SphereAccuracy {
+  AccuracyStats phi1, phi1_adjusted, phi2;
+};
+
+/// Everything a bake produced.
+struct BakeResult {
+  Mesh mesh;
+  Segmentation segmentation;
+  std::optional<Segmentation> other_segmentation;      ///< the method not chosen, when compared
+  std::optional<SegmentationAgreement> agreement;      ///< chosen vs other
+  std::string other_segmentation_error;                ///< why the comparison could not run
+  FitResult fit;
+  std::vector<Ball> phi2;                              ///< #S, minimum enclosing balls
+  std::vector<Chain> chains;
+  std::vector<SpherePair> excluded;
+  std::vector<SpherePair> cross_region_bind_overlaps;
+  SurroundingRegions surrounding;
+  Pivots pivots;
+  std::vector<SphereAccuracy> sphere_accuracy;         ///< #S
+  AccuracySummary accuracy;
+  std::vector<uint8_t> asset;                          ///< the .sphc bytes
+  uint32_t unassigned_triangles = 0;
+};
+
+/// Runs import → segment → fit → φ2 + accuracy → chains → surrounding regions → pivots → asset.
+/// Nothing is written to disk. Stage timings go to ctx->timings_ms. Errors: those of each stage.
+Result<BakeResult> Bake(const std::string& input_path, const BakeConfig& config, Context* ctx = nullptr);
+
+/// The JSON bake report: vertices, triangles, spheres, regions{name: {triangles, spheres}}, chains[{name,
+/// spheres}], unassigned_triangles, accuracy{phi1, phi1_adjusted, phi2: {mean_abs_F, rms_F, min_F,
+/// max_F}}, per-sphere table, segmentation (method, agreement), timings_ms.
+nlohmann::json MakeBakeReport(const BakeResult& result, const BakeConfig& config, const Context& ctx);
+
+/// The paper's per-ray comparison (§6) for the torso spheres as CSV: for each torso sphere and each
+/// of its rays, the distance from the disk centre to the surface hit and to where the ray leaves the
+/// sphere for φ1, φ1' and φ2 (empty when the disk centre is outside that sphere).
+std::string TorsoRayCsv(const BakeResult& result);
+
+}  // namespace spherechain::baker

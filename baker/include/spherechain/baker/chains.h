@@ -1,0 +1,48 @@
+// spherechain baker — chain construction (paper §4, Table 1) and the adjacent (excluded) pairs (§5.2).
+#pragma once
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "spherechain/baker/fit.h"
+#include "spherechain/baker/types.h"
+
+namespace spherechain::baker {
+
+/// A chain definition: a name and the sphere sets it unites. Member tokens:
+/// "R0".."R3" (a whole tubular region), "R4" (the whole torso), "R4L", "R4R", "R4T", "R4D" (torso
+/// spheres carrying that label, Figure 6).
+struct ChainDef {
+  std::string name;
+  std::vector<std::string> members;
+};
+
+/// Table 1: ζ0 = R0 ∪ R4L ∪ R2, ζ1 = R1 ∪ R4R ∪ R3, ζ2 = R0 ∪ R4T ∪ R1, ζ3 = R2 ∪ R4D ∪ R3,
+/// ζ4 = R0 ∪ R4T ∪ R4R ∪ R3, ζ5 = R1 ∪ R4T ∪ R4L ∪ R2.
+std::vector<ChainDef> DefaultChainDefs();
+
+/// A built chain ζ_i: sphere indices into the fitted sphere list, ascending, unique.
+struct Chain {
+  std::string name;
+  std::vector<uint16_t> spheres;
+};
+
+/// Builds the chains. Errors: kConfig for an unknown member token, an empty chain, more than 65,535
+/// spheres, or no chain at all.
+Result<std::vector<Chain>> BuildChains(const std::vector<FittedSphere>& spheres, const std::vector<ChainDef>& defs);
+
+/// A pair of sphere indices, a < b.
+using SpherePair = std::pair<uint16_t, uint16_t>;
+
+/// Adjacent pairs, never reported by detection (§5.2 "two spheres collide when they are not adjacent"):
+/// neighbours in a region's sequence (limbs: consecutive spheres; torso: the two spheres of a level and
+/// consecutive levels of a column and across columns), and every pair that overlaps at the bind pose
+/// (‖cA − cB‖ < rA + rB — the limb roots and the torso spheres they join, among others).
+/// Sorted by (a, b), unique. `cross_region_bind_overlaps` [opt, out] receives the bind-overlapping
+/// pairs whose regions are not a limb and the torso (e.g. a hand resting on a thigh), which the report
+/// flags because such contacts are then never reported.
+std::vector<SpherePair> ExcludedPairs(const std::vector<FittedSphere>& spheres,
+                                      std::vector<SpherePair>* cross_region_bind_overlaps = nullptr);
+
+}  // namespace spherechain::baker

@@ -1,0 +1,31 @@
+// spherechain baker — pictures of a bake for people: a glTF scene (mesh coloured by region + the
+// spheres) viewable in any glTF viewer, and front/side PNG views rendered from SVG by rsvg-convert.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "spherechain/baker/types.h"
+#include "spherechain/runtime/asset.h"
+
+namespace spherechain::baker {
+
+/// sRGB colour of a region in every picture: R0 orange, R1 blue, R2 green, R3 purple, R4 grey.
+std::array<float, 3> RegionColor(Region r);
+
+/// Writes `out_path` (.gltf, buffers embedded): node "mesh" = the character coloured by region
+/// (COLOR_0 per vertex, from the asset's triangle_regions), node "spheres" = one UV sphere per asset
+/// sphere (bind pose, region colour, 35 % opaque). `mesh` must match the asset's fingerprint counts.
+/// Written atomically. Errors: kConfig (counts differ), kIo.
+Status ExportDebugGltf(const Mesh& mesh, const runtime::AssetView& asset, const std::string& out_path);
+
+/// Renders a 4-panel picture — front: regions | spheres; side: regions | spheres — as SVG text.
+/// Orthographic, painter's algorithm, Lambert shading. `width_px` is the whole picture's width.
+std::string RenderDebugSvg(const Mesh& mesh, const runtime::AssetView& asset, int width_px = 1600);
+
+/// Renders RenderDebugSvg to PNG with `rsvg-convert` (Debian librsvg2-bin). Errors: kIo when the tool
+/// is missing or fails (the SVG is still written beside the PNG when `keep_svg`).
+Status RenderDebugPng(const Mesh& mesh, const runtime::AssetView& asset, const std::string& png_path,
+                      bool keep_svg = false);
+
+}  // namespace spherechain::baker

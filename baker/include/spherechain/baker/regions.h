@@ -1,0 +1,51 @@
+// spherechain baker — surrounding regions and pivot polygons (paper §5.1, Figure 9).
+#pragma once
+
+#include <array>
+#include <vector>
+
+#include "spherechain/baker/fit.h"
+#include "spherechain/baker/segment.h"
+#include "spherechain/baker/types.h"
+
+namespace spherechain::baker {
+
+/// The surrounding region of each sphere: the triangles assigned to it (§5.1: Δ_i ∈ ⊙_j iff ⊙_j's
+/// centre is the nearest to Δ_i). Here the nearest is taken among the spheres of the triangle's own
+/// region (so an arm triangle never belongs to a torso sphere), measuring from the centre to the
+/// triangle's centroid; a region without spheres falls back to all spheres.
+struct SurroundingRegions {
+  std::vector<uint16_t> triangle_spheres;  ///< #T, owning sphere per triangle
+  std::vector<uint32_t> offsets;           ///< #S+1 into `triangles`
+  std::vector<uint32_t> triangles;         ///< triangle indices grouped by sphere, ascending in a group
+  /// Vertex indices of sphere s's surrounding region (unique, ascending), for accuracy and φ2.
+  std::vector<uint32_t> Vertices(const Mesh& mesh, size_t sphere) const;
+};
+
+/// Assigns every triangle to a sphere. Cost: O(#T · spheres per region). Errors: kFit when there is no
+/// sphere at all.
+Result<SurroundingRegions> BuildSurroundingRegions(const Mesh& mesh, const Segmentation& seg,
+                                                   const std::vector<FittedSphere>& spheres);
+
+/// Four pivot polygons per sphere (§5.1, Figure 9 right) and their bind-pose frame data.
+struct Pivots {
+  std::vector<uint32_t> triangles;  ///< #S×4 triangle indices
+  std::vector<uint32_t> vertices;   ///< #S×4×3 vertex indices of those triangles
+  struct Frame {
+    std::array<float, 3> local_center{};     ///< centre in the pivot frame (runtime BuildPivotFrame)
+    std::array<float, 3> centroid_offset{};  ///< centre − mean of the pivot centroids
+    float mean_distance = 0.0f;              ///< mean ‖c − p_k‖ over the four pivot centroids
+  };
+  std::vector<Frame> frames;  ///< #S
+};
+
+/// Chooses four pivot polygons per sphere, spread around it: in the plane perpendicular to the
+/// sphere's axis (limbs: towards the next sphere of the sequence; torso: up) the four triangles of its
+/// surrounding region whose centroids lie nearest the directions +u, +v, −u, −v and closest to the
+/// sphere's level, each of non-negligible area. The frame they span is never degenerate: a choice
+/// whose frame is ill-conditioned is replaced by the best-spread triangles of the sphere's
+/// neighbourhood. Errors: kFit naming the sphere when no non-degenerate choice exists.
+Result<Pivots> ChoosePivots(const Mesh& mesh, const std::vector<FittedSphere>& spheres,
+                            const SurroundingRegions& surrounding);
+
+}  // namespace spherechain::baker

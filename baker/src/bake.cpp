@@ -1,0 +1,370 @@
+#include "spherechain/baker/bake.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+namespace spherechain::baker {
+
+using nlohmann::json;
+
+// ---------------------------------------------------------------------------------------------------
+// Configuration
+
+namespace {
+
+const char* MethodName(SegmentMethod m) {
+  switch (m) {
+    case SegmentMethod::kRig: return "rig";
+    case SegmentMethod::kGeometry: return "geometry";
+    case SegmentMethod::kAuto: break;
+  }
+  return "auto";
+}
+
+template <class T>
+Status ReadNumber(const json& j, const char* key, T lo, T hi, T* out, const std::string& where) {
+  if (!j.contains(key)) return Ok{};
+  const json& v = j.at(key);
+  if (!v.is_number())
+    return MakeError(Error::Code::kConfig, where + ": '" + key + "' must be a number");
+  const double d = v.get<double>();
+  if (!std::isfinite(d) || d < double(lo) || d > double(hi)) {
+    std::ostringstream m;
+    m << where << ": '" << key << "' = " << d << " is out of range [" << lo << ", " << hi << "]";
+    return MakeError(Error::Code::kConfig, m.str());
+  }
+  *out = static_cast<T>(d);
+  return Ok{};
+}
+
+}  // namespace
+
+Result<BakeConfig> ParseBakeConfig(const std::string& text, const std::string& where) {
+  json j;
+  try {
+    j = json::parse(text);
+  } catch (const std::exception& e) {
+    return MakeError(Error::Code::kConfig, where + ": not valid JSON: " + e.what());
+  }
+  if (!j.is_object()) return MakeError(Error::Code::kConfig, where + ": the configuration must be a JSON object");
+  static const std::set<std::string> known = {"segmentation", "region_map", "rig", "rays", "spheres_per_level",
+                                              "disk_step", "disk_step_rel", "penetration_depth", "chains",
+                                              "compare_segmentations"};
+  for (auto it = j.begin(); it != j.end(); ++it)
+    if (!known.count(it.key())) return MakeError(Error::Code::kConfig, where + ": unknown key '" + it.key() + "'");
+
+  BakeConfig c;
+  if (j.contains("segmentation")) {
+    if (!j["segmentation"].is_string()) return MakeError(Error::Code::kConfig, where + ": 'segmentation' must be a string");
+    const std::string m = j["segmentation"];
+    if (m == "auto") c.segmentation = SegmentMethod::kAuto;
+    else if (m == "rig") c.segmentation = SegmentMethod::kRig;
+    else if (m == "geometry") c.segmentation = SegmentMethod::kGeometry;
+    else if (m != "map")
+      return MakeError(Error::Code::kConfig, where + ": 'segmentation' must be auto, rig, geometry or map, not '" + m + "'");
+    if (m == "map" && !j.contains("region_map"))
+      return MakeError(Error::Code::kConfig, where + ": segmentation 'map' needs 'region_map'");
+  }
+  for (const char* key : {"region_map", "rig"}) {
+    if (!j.contains(key)) continue;
+    if (!j[key].is_string()) return MakeError(Error::Code::kConfig, where + ": '" + key + "' must be a path string");
+  }
+  if (j.contains("region_map")) c.region_map = j["region_map"];
+  if (j.contains("rig")) c.import.rig_path = j["rig"];
+  if (j.contains("compare_segmentations")) {
+    if (!j["compare_segmentations"].is_boolean())
+      return MakeError(Error::Code::kConfig, where + ": 'compare_segmentations' must be true or false");
+    c.compare_segmentations = j["compare_segmentations"];
+  }
+  Status s = ReadNumber(j, "rays", 8, 4096, &c.fit.rays, where);
+  if (s.ok()) s = ReadNumber(j, "spheres_per_level", 2, 2, &c.fit.spheres_per_level, where);
+  if (s.ok()) s = ReadNumber(j, "disk_step", 1e-9, 1e9, &c.fit.disk_step, where);
+  if (s.ok()) s = ReadNumber(j, "disk_step_rel", 1e-4, 0.5, &c.fit.disk_step_rel, where);
+  if (s.ok()) s = ReadNumber(j, "penetration_depth", 0.0, 0.9, &c.fit.penetration_depth, where);
+  if (!s.ok()) return s.error();
+  if (j.contains("chains")) {
+    const json& cj = j["chains"];
+    if (!cj.is_array() || cj.empty())
+      return MakeError(Error::Code::kConfig, where + ": 'chains' must be a non-empty array");
+    c.chains.clear();
+    for (size_t i = 0; i < cj.size(); ++i) {
+      const json& e = cj[i];
+      const std::string at = where + ": chains[" + std::to_string(i) + "]";
+      if (!e.is_object() || !e.contains("members") || !e["members"].is_array())
+        return MakeError(Error::Code::kConfig, at + " must be {\"name\": ..., \"members\": [...]}");
+      ChainDef d;
+      d.name = e.contains("name") && e["name"].is_string() ? e["name"].get<std::string>() : "chain" + std::to_string(i);
+      for (const json& m : e["members"]) {
+        if (!m.is_string()) return MakeError(Error::Code::kConfig, at + ": members must be strings");
+        d.members.push_back(m);
+      }
+      c.chains.push_back(std::move(d));
+    }
+  }
+  return c;
+}
+
+Result<BakeConfig> LoadBakeConfig(const std::string& path) {
+  auto bytes = ReadFileBytes(path, 16u << 20);
+  if (!bytes.ok()) return bytes.error();
+  return ParseBakeConfig(std::string(bytes->begin(), bytes->end()), path);
+}
+
+std::string CanonicalConfig(const BakeConfig& c) {
+  json j;  // nlohmann::json objects are key-sorted: stable
+  j["segmentation"] = c.region_map.empty() ? MethodName(c.segmentation) : "map";
+  j["rays"] = c.fit.rays;
+  j["spheres_per_level"] = c.fit.spheres_per_level;
+  j["disk_step"] = c.fit.disk_step;
+  j["disk_step_rel"] = c.fit.disk_step_rel;
+  j["penetration_depth"] = c.fit.penetration_depth;
+  json chains = json::array();
+  for (const ChainDef& d : c.chains) chains.push_back({{"name", d.name}, {"members", d.members}});
+  j["chains"] = chains;
+  return j.dump();
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Bake
+
+Result<BakeResult> Bake(const std::string& input_path, const BakeConfig& config, Context* ctx) {
+  BakeResult r;
+  {
+    Context::Timer t(ctx, "import");
+    auto mesh = ImportMesh(input_path, config.import, ctx);
+    if (!mesh.ok()) return mesh.error();
+    r.mesh = std::move(mesh).value();
+  }
+  const Mesh& mesh = r.mesh;
+  {
+    Context::Timer t(ctx, "segment");
+    Result<Segmentation> seg = config.region_map.empty() ? Segment(mesh, config.segmentation, ctx)
+                                                         : SegmentByMap(mesh, config.region_map, ctx);
+    if (!seg.ok()) return seg.error();
+    r.segmentation = std::move(seg).value();
+  }
+  if (config.compare_segmentations && config.region_map.empty() && mesh.skin) {
+    Context::Timer t(ctx, "segment_compare");
+    const SegmentMethod other = r.segmentation.method == "rig" ? SegmentMethod::kGeometry : SegmentMethod::kRig;
+    auto seg2 = Segment(mesh, other, ctx);
+    if (seg2.ok()) {
+      r.agreement = CompareSegmentations(mesh, r.segmentation, seg2.value());
+      r.other_segmentation = std::move(seg2).value();
+    } else {
+      r.other_segmentation_error = seg2.error().message;
+    }
+  }
+  {
+    Context::Timer t(ctx, "fit");
+    auto fit = FitSpheres(mesh, r.segmentation, config.fit, ctx);
+    if (!fit.ok()) return fit.error();
+    r.fit = std::move(fit).value();
+  }
+  const auto& spheres = r.fit.spheres;
+  if (spheres.size() > 0xFFFF) return MakeError(Error::Code::kFit, "more than 65,535 spheres");
+  {
+    Context::Timer t(ctx, "chains");
+    auto chains = BuildChains(spheres, config.chains);
+    if (!chains.ok()) return chains.error();
+    r.chains = std::move(chains).value();
+    r.excluded = ExcludedPairs(spheres, &r.cross_region_bind_overlaps);
+  }
+  {
+    Context::Timer t(ctx, "surrounding_regions");
+    auto surr = BuildSurroundingRegions(mesh, r.segmentation, spheres);
+    if (!surr.ok()) return surr.error();
+    r.surrounding = std::move(surr).value();
+    r.unassigned_triangles = mesh.triangle_count() - r.surrounding.offsets.back();
+  }
+  {
+    Context::Timer t(ctx, "pivots");
+    auto piv = ChoosePivots(mesh, spheres, r.surrounding);
+    if (!piv.ok()) return piv.error();
+    r.pivots = std::move(piv).value();
+  }
+  {
+    Context::Timer t(ctx, "phi2_accuracy");
+    AccuracyAccumulator all1, all1a, all2;
+    r.phi2.resize(spheres.size());
+    r.sphere_accuracy.resize(spheres.size());
+    for (size_t s = 0; s < spheres.size(); ++s) {
+      const std::vector<uint32_t> verts = r.surrounding.Vertices(mesh, s);
+      std::vector<Eigen::Vector3d> pts;
+      pts.reserve(verts.size());
+      for (uint32_t v : verts)
+        pts.emplace_back(mesh.positions[3 * v], mesh.positions[3 * v + 1], mesh.positions[3 * v + 2]);
+      r.phi2[s] = MinimumEnclosingBall(pts);
+      AccuracyAccumulator a1, a1a, a2;
+      const FittedSphere& S = spheres[s];
+      for (const Eigen::Vector3d& p : pts) {
+        a1.Add(S.center_phi1, S.radius_phi1, p);
+        a1a.Add(S.center, S.radius, p);
+        a2.Add(r.phi2[s].center, r.phi2[s].radius, p);
+        all1.Add(S.center_phi1, S.radius_phi1, p);
+        all1a.Add(S.center, S.radius, p);
+        all2.Add(r.phi2[s].center, r.phi2[s].radius, p);
+      }
+      r.sphere_accuracy[s] = {a1.Stats(), a1a.Stats(), a2.Stats()};
+    }
+    r.accuracy = {all1.Stats(), all1a.Stats(), all2.Stats()};
+  }
+  {
+    Context::Timer t(ctx, "write");
+    AssetInputs in;
+    in.mesh = &mesh;
+    in.segmentation = &r.segmentation;
+    in.fit = &r.fit;
+    in.phi2 = &r.phi2;
+    in.chains = &r.chains;
+    in.excluded = &r.excluded;
+    in.surrounding = &r.surrounding;
+    in.pivots = &r.pivots;
+    in.accuracy = r.accuracy;
+    in.params = config.fit;
+    const std::string canonical = CanonicalConfig(config);
+    in.config_hash = Hash64(canonical.data(), canonical.size());
+    r.asset = BuildAsset(in);
+  }
+  return r;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Report
+
+namespace {
+
+json StatsJson(const AccuracyStats& s) {
+  return {{"mean_abs_F", s.mean_abs_f}, {"rms_F", s.rms_f}, {"min_F", s.min_f}, {"max_F", s.max_f}, {"count", s.count}};
+}
+
+std::string LabelString(uint8_t labels) {
+  std::string s;
+  if (labels & kLabelL) s += 'L';
+  if (labels & kLabelR) s += 'R';
+  if (labels & kLabelT) s += 'T';
+  if (labels & kLabelD) s += 'D';
+  return s;
+}
+
+}  // namespace
+
+json MakeBakeReport(const BakeResult& r, const BakeConfig& config, const Context& ctx) {
+  const Mesh& mesh = r.mesh;
+  const auto& spheres = r.fit.spheres;
+  json j;
+  j["input"] = mesh.source_path;
+  j["format"] = mesh.source_format;
+  j["vertices"] = mesh.vertex_count();
+  j["triangles"] = mesh.triangle_count();
+  j["spheres"] = spheres.size();
+  j["units"] = mesh.units;
+  j["body_height"] = r.fit.body_height;
+  j["disk_step"] = r.fit.disk_step;
+  j["asset_bytes"] = r.asset.size();
+  json parts = json::array();
+  for (const MeshPart& p : mesh.parts)
+    parts.push_back({{"name", p.name}, {"first_vertex", p.first_vertex}, {"vertices", p.vertex_count},
+                     {"first_triangle", p.first_triangle}, {"triangles", p.triangle_count}});
+  j["parts"] = parts;
+
+  json regions = json::object();
+  for (int k = 0; k < kRegionCount; ++k) {
+    const Region reg = static_cast<Region>(k);
+    size_t tris = std::count(r.segmentation.triangle_regions.begin(), r.segmentation.triangle_regions.end(), uint8_t(k));
+    size_t sph = std::count_if(spheres.begin(), spheres.end(), [&](const FittedSphere& s) { return s.region == reg; });
+    regions[RegionName(reg)] = {{"symbol", RegionSymbol(reg)}, {"triangles", tris}, {"spheres", sph}};
+  }
+  j["regions"] = regions;
+
+  json seg = {{"method", r.segmentation.method}, {"notes", r.segmentation.notes}};
+  if (r.agreement && r.other_segmentation) {
+    json iou = json::object();
+    for (int k = 0; k < kRegionCount; ++k) iou[RegionName(static_cast<Region>(k))] = r.agreement->iou[k];
+    seg["compared_with"] = r.other_segmentation->method;
+    seg["agreement"] = {{"triangle_fraction", r.agreement->triangle_fraction},
+                        {"area_fraction", r.agreement->area_fraction}, {"iou", iou}};
+  } else if (!r.other_segmentation_error.empty()) {
+    seg["comparison_error"] = r.other_segmentation_error;
+  }
+  j["segmentation"] = seg;
+
+  json chains = json::array();
+  size_t total = 0;
+  for (const Chain& c : r.chains) {
+    chains.push_back({{"name", c.name}, {"spheres", c.spheres.size()}, {"members", c.spheres}});
+    total += c.spheres.size();
+  }
+  j["chains"] = chains;
+  j["mean_spheres_per_chain"] = r.chains.empty() ? 0.0 : double(total) / double(r.chains.size());
+  j["excluded_pairs"] = r.excluded.size();
+  if (!r.cross_region_bind_overlaps.empty()) {
+    json w = json::array();
+    for (const SpherePair& p : r.cross_region_bind_overlaps) w.push_back({p.first, p.second});
+    j["warnings"]["cross_region_bind_overlaps"] = w;
+  }
+  j["unassigned_triangles"] = r.unassigned_triangles;
+  j["accuracy"] = {{"phi1", StatsJson(r.accuracy.phi1)},
+                   {"phi1_adjusted", StatsJson(r.accuracy.phi1_adjusted)},
+                   {"phi2", StatsJson(r.accuracy.phi2)}};
+  json per = json::array();
+  for (size_t s = 0; s < spheres.size(); ++s) {
+    const FittedSphere& S = spheres[s];
+    per.push_back({{"index", s},
+                   {"region", RegionSymbol(S.region)},
+                   {"labels", LabelString(S.labels)},
+                   {"sequence", S.sequence},
+                   {"center", {S.center.x(), S.center.y(), S.center.z()}},
+                   {"radius", S.radius},
+                   {"radius_phi1", S.radius_phi1},
+                   {"radius_phi2", r.phi2[s].radius},
+                   {"surrounding_triangles", r.surrounding.offsets[s + 1] - r.surrounding.offsets[s]},
+                   {"mean_abs_F", {{"phi1", r.sphere_accuracy[s].phi1.mean_abs_f},
+                                   {"phi1_adjusted", r.sphere_accuracy[s].phi1_adjusted.mean_abs_f},
+                                   {"phi2", r.sphere_accuracy[s].phi2.mean_abs_f}}}});
+  }
+  j["sphere_table"] = per;
+  j["params"] = json::parse(CanonicalConfig(config));
+  json timings = json::object();
+  double sum = 0;
+  for (const auto& [name, ms] : ctx.timings_ms) {
+    timings[name] = ms;
+    sum += ms;
+  }
+  timings["total"] = sum;
+  j["timings_ms"] = timings;
+  return j;
+}
+
+std::string TorsoRayCsv(const BakeResult& r) {
+  std::ostringstream out;
+  out << "sphere,labels,ray,dir_x,dir_y,dir_z,surface,phi1,phi1_adjusted,phi2\n";
+  auto exit_distance = [](const Eigen::Vector3d& o, const Eigen::Vector3d& d, const Eigen::Vector3d& c,
+                          double rad) -> std::string {
+    // |o + t d − c|² = r², largest root; none when o is outside the sphere.
+    const Eigen::Vector3d oc = o - c;
+    const double b = oc.dot(d), cc = oc.squaredNorm() - rad * rad;
+    if (cc > 0) return "";
+    const double disc = b * b - cc;
+    std::ostringstream s;
+    s << (-b + std::sqrt(std::max(disc, 0.0)));
+    return s.str();
+  };
+  const auto& spheres = r.fit.spheres;
+  for (size_t s = 0; s < spheres.size(); ++s) {
+    const FittedSphere& S = spheres[s];
+    if (S.region != Region::kTorso) continue;
+    for (size_t k = 0; k < S.ray_ids.size() && k < S.ray_dirs.size() && k < S.ray_hit.size(); ++k) {
+      const Eigen::Vector3d& d = S.ray_dirs[k];
+      out << s << ',' << LabelString(S.labels) << ',' << S.ray_ids[k] << ',' << d.x() << ',' << d.y() << ','
+          << d.z() << ',' << S.ray_hit[k] << ',' << exit_distance(S.disk_center, d, S.center_phi1, S.radius_phi1)
+          << ',' << exit_distance(S.disk_center, d, S.center, S.radius) << ','
+          << exit_distance(S.disk_center, d, r.phi2[s].center, r.phi2[s].radius) << '\n';
+    }
+  }
+  return out.str();
+}
+
+}  // namespace spherechain::baker

@@ -1,0 +1,109 @@
+#include "spherechain/baker/chains.h"
+
+#include <algorithm>
+#include <set>
+
+namespace spherechain::baker {
+
+std::vector<ChainDef> DefaultChainDefs() {
+  return {
+      {"zeta0", {"R0", "R4L", "R2"}},
+      {"zeta1", {"R1", "R4R", "R3"}},
+      {"zeta2", {"R0", "R4T", "R1"}},
+      {"zeta3", {"R2", "R4D", "R3"}},
+      {"zeta4", {"R0", "R4T", "R4R", "R3"}},
+      {"zeta5", {"R1", "R4T", "R4L", "R2"}},
+  };
+}
+
+namespace {
+
+// True when sphere `s` belongs to the set named by `token`; false with *known=false for a bad token.
+bool InSet(const FittedSphere& s, const std::string& token, bool* known) {
+  *known = true;
+  if (token.size() == 2 && token[0] == 'R' && token[1] >= '0' && token[1] <= '4')
+    return static_cast<int>(s.region) == token[1] - '0';
+  if (token.size() == 3 && token.rfind("R4", 0) == 0) {
+    if (s.region != Region::kTorso) return false;
+    switch (token[2]) {
+      case 'L': return (s.labels & kLabelL) != 0;
+      case 'R': return (s.labels & kLabelR) != 0;
+      case 'T': return (s.labels & kLabelT) != 0;
+      case 'D': return (s.labels & kLabelD) != 0;
+      default: break;
+    }
+  }
+  *known = false;
+  return false;
+}
+
+}  // namespace
+
+Result<std::vector<Chain>> BuildChains(const std::vector<FittedSphere>& spheres, const std::vector<ChainDef>& defs) {
+  if (defs.empty()) return MakeError(Error::Code::kConfig, "no chain is defined");
+  if (spheres.size() > 0xFFFF) return MakeError(Error::Code::kConfig, "more than 65,535 spheres");
+  std::vector<Chain> chains;
+  for (const ChainDef& def : defs) {
+    Chain chain{def.name, {}};
+    for (const std::string& token : def.members) {
+      bool known = true;
+      for (size_t i = 0; i < spheres.size(); ++i) {
+        if (InSet(spheres[i], token, &known)) chain.spheres.push_back(static_cast<uint16_t>(i));
+        if (!known) break;
+      }
+      if (!known)
+        return MakeError(Error::Code::kConfig, "chain '" + def.name + "': unknown member '" + token +
+                                                   "' (expected R0..R4, R4L, R4R, R4T or R4D)");
+    }
+    std::sort(chain.spheres.begin(), chain.spheres.end());
+    chain.spheres.erase(std::unique(chain.spheres.begin(), chain.spheres.end()), chain.spheres.end());
+    if (chain.spheres.size() < 2)
+      return MakeError(Error::Code::kConfig, "chain '" + def.name + "' has fewer than two spheres");
+    chains.push_back(std::move(chain));
+  }
+  return chains;
+}
+
+std::vector<SpherePair> ExcludedPairs(const std::vector<FittedSphere>& spheres,
+                                      std::vector<SpherePair>* cross_region_bind_overlaps) {
+  std::set<SpherePair> pairs;
+  const size_t n = spheres.size();
+  auto add = [&](size_t a, size_t b) {
+    if (a == b) return;
+    if (a > b) std::swap(a, b);
+    pairs.emplace(static_cast<uint16_t>(a), static_cast<uint16_t>(b));
+  };
+  for (size_t a = 0; a < n; ++a) {
+    for (size_t b = a + 1; b < n; ++b) {
+      const FittedSphere& A = spheres[a];
+      const FittedSphere& B = spheres[b];
+      const bool same_region = A.region == B.region;
+      // Sequence neighbours.
+      if (same_region && IsTubular(A.region) && std::abs(A.sequence - B.sequence) == 1) add(a, b);
+      if (same_region && A.region == Region::kTorso && A.level >= 0 && B.level >= 0) {
+        // Same level, or consecutive levels (levels are consecutive in the torso's level order).
+        const int dl = std::abs(A.level - B.level);
+        if (dl == 0) add(a, b);
+        if (dl > 0) {
+          // consecutive *sphere* levels: no other torso sphere level strictly between them
+          bool between = false;
+          const int lo = std::min(A.level, B.level), hi = std::max(A.level, B.level);
+          for (const FittedSphere& s : spheres)
+            if (s.region == Region::kTorso && s.level > lo && s.level < hi) { between = true; break; }
+          if (!between) add(a, b);
+        }
+      }
+      // Overlap at the bind pose.
+      const double d = (A.center - B.center).norm();
+      if (d < A.radius + B.radius) {
+        add(a, b);
+        const bool limb_torso = (A.region == Region::kTorso) != (B.region == Region::kTorso);
+        if (!same_region && !limb_torso && cross_region_bind_overlaps)
+          cross_region_bind_overlaps->emplace_back(static_cast<uint16_t>(a), static_cast<uint16_t>(b));
+      }
+    }
+  }
+  return {pairs.begin(), pairs.end()};
+}
+
+}  // namespace spherechain::baker

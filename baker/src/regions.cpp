@@ -1,0 +1,211 @@
+#include "spherechain/baker/regions.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include <Eigen/Geometry>
+
+#include "spherechain/runtime/refit.h"
+
+namespace spherechain::baker {
+
+namespace {
+
+Eigen::Vector3d Vertex(const Mesh& mesh, uint32_t v) {
+  return {mesh.positions[3 * v + 0], mesh.positions[3 * v + 1], mesh.positions[3 * v + 2]};
+}
+
+Eigen::Vector3d Centroid(const Mesh& mesh, uint32_t t) {
+  return (Vertex(mesh, mesh.indices[3 * t]) + Vertex(mesh, mesh.indices[3 * t + 1]) +
+          Vertex(mesh, mesh.indices[3 * t + 2])) /
+         3.0;
+}
+
+double Area(const Mesh& mesh, uint32_t t) {
+  const Eigen::Vector3d a = Vertex(mesh, mesh.indices[3 * t]);
+  return 0.5 * (Vertex(mesh, mesh.indices[3 * t + 1]) - a).cross(Vertex(mesh, mesh.indices[3 * t + 2]) - a).norm();
+}
+
+Eigen::Vector3d UpVector(UpAxis up) {
+  switch (up) {
+    case UpAxis::kZ: return Eigen::Vector3d::UnitZ();
+    case UpAxis::kX: return Eigen::Vector3d::UnitX();
+    case UpAxis::kY: break;
+  }
+  return Eigen::Vector3d::UnitY();
+}
+
+// The sphere's axis: along its region's sequence for limbs, up for the torso.
+Eigen::Vector3d SphereAxis(const Mesh& mesh, const std::vector<FittedSphere>& spheres, size_t s) {
+  const FittedSphere& S = spheres[s];
+  if (S.region == Region::kTorso) return UpVector(mesh.up_axis);
+  const FittedSphere* prev = nullptr;
+  const FittedSphere* next = nullptr;
+  for (const FittedSphere& o : spheres) {
+    if (o.region != S.region) continue;
+    if (o.sequence == S.sequence - 1) prev = &o;
+    if (o.sequence == S.sequence + 1) next = &o;
+  }
+  Eigen::Vector3d a = Eigen::Vector3d::Zero();
+  if (prev && next) a = next->center - prev->center;
+  else if (next) a = next->center - S.center;
+  else if (prev) a = S.center - prev->center;
+  if (a.norm() < 1e-12) a = UpVector(mesh.up_axis);
+  return a.normalized();
+}
+
+// Pivots ordered +u, +v, −u, −v: both diagonals longer than `min_length` and at least 15° apart, so
+// the runtime's BuildPivotFrame (refit.h) is stable under float noise and the pivots surround the centre.
+bool PivotsWellConditioned(const float p[4][3], float min_length) {
+  const Eigen::Vector3f a(p[0][0] - p[2][0], p[0][1] - p[2][1], p[0][2] - p[2][2]);
+  const Eigen::Vector3f b(p[1][0] - p[3][0], p[1][1] - p[3][1], p[1][2] - p[3][2]);
+  const float na = a.norm(), nb = b.norm();
+  if (!(na > min_length) || !(nb > min_length)) return false;
+  runtime::PivotFrameBasis basis;
+  return a.cross(b).norm() / (na * nb) > 0.25f && runtime::BuildPivotFrame(p, &basis);
+}
+
+}  // namespace
+
+std::vector<uint32_t> SurroundingRegions::Vertices(const Mesh& mesh, size_t sphere) const {
+  std::vector<uint32_t> v;
+  for (uint32_t k = offsets[sphere]; k < offsets[sphere + 1]; ++k) {
+    const uint32_t t = triangles[k];
+    v.insert(v.end(), {mesh.indices[3 * t], mesh.indices[3 * t + 1], mesh.indices[3 * t + 2]});
+  }
+  std::sort(v.begin(), v.end());
+  v.erase(std::unique(v.begin(), v.end()), v.end());
+  return v;
+}
+
+Result<SurroundingRegions> BuildSurroundingRegions(const Mesh& mesh, const Segmentation& seg,
+                                                   const std::vector<FittedSphere>& spheres) {
+  if (spheres.empty()) return MakeError(Error::Code::kFit, "no sphere to assign triangles to");
+  const uint32_t T = mesh.triangle_count();
+  std::array<std::vector<uint32_t>, kRegionCount> by_region;
+  for (size_t s = 0; s < spheres.size(); ++s) by_region[static_cast<int>(spheres[s].region)].push_back(uint32_t(s));
+  std::vector<uint32_t> all(spheres.size());
+  std::iota(all.begin(), all.end(), 0u);
+
+  SurroundingRegions out;
+  out.triangle_spheres.resize(T);
+  for (uint32_t t = 0; t < T; ++t) {
+    const uint8_t r = t < seg.triangle_regions.size() ? seg.triangle_regions[t] : kNoRegion;
+    const std::vector<uint32_t>& candidates = (r < kRegionCount && !by_region[r].empty()) ? by_region[r] : all;
+    const Eigen::Vector3d c = Centroid(mesh, t);
+    double best = std::numeric_limits<double>::infinity();
+    uint32_t best_s = candidates.front();
+    for (uint32_t s : candidates) {
+      const double d = (spheres[s].center - c).squaredNorm();
+      if (d < best) { best = d; best_s = s; }  // ties keep the lower index: deterministic
+    }
+    out.triangle_spheres[t] = static_cast<uint16_t>(best_s);
+  }
+  out.offsets.assign(spheres.size() + 1, 0);
+  for (uint32_t t = 0; t < T; ++t) ++out.offsets[out.triangle_spheres[t] + 1];
+  for (size_t s = 0; s < spheres.size(); ++s) out.offsets[s + 1] += out.offsets[s];
+  out.triangles.resize(T);
+  std::vector<uint32_t> cursor(out.offsets.begin(), out.offsets.end() - 1);
+  for (uint32_t t = 0; t < T; ++t) out.triangles[cursor[out.triangle_spheres[t]]++] = t;
+  return out;
+}
+
+Result<Pivots> ChoosePivots(const Mesh& mesh, const std::vector<FittedSphere>& spheres,
+                            const SurroundingRegions& surrounding) {
+  const uint32_t T = mesh.triangle_count();
+  std::vector<double> areas(T);
+  for (uint32_t t = 0; t < T; ++t) areas[t] = Area(mesh, t);
+  std::vector<double> sorted = areas;
+  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+  const double min_area = 0.05 * sorted[sorted.size() / 2];
+
+  Pivots out;
+  out.triangles.reserve(spheres.size() * 4);
+  out.vertices.reserve(spheres.size() * 12);
+  out.frames.resize(spheres.size());
+
+  for (size_t s = 0; s < spheres.size(); ++s) {
+    const FittedSphere& S = spheres[s];
+    const Eigen::Vector3d a = SphereAxis(mesh, spheres, s);
+    // u: a fixed world direction projected off the axis (deterministic), v = a × u.
+    Eigen::Vector3d ref = std::abs(a.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitZ();
+    const Eigen::Vector3d u = (ref - ref.dot(a) * a).normalized();
+    const Eigen::Vector3d v = a.cross(u);
+    const Eigen::Vector3d targets[4] = {u, v, -u, -v};
+
+    // Candidates: the surrounding region's triangles of non-negligible area; when too few, the
+    // triangles of the same region nearest the centre.
+    std::vector<uint32_t> candidates;
+    for (uint32_t k = surrounding.offsets[s]; k < surrounding.offsets[s + 1]; ++k)
+      if (areas[surrounding.triangles[k]] > min_area) candidates.push_back(surrounding.triangles[k]);
+
+    auto choose = [&](const std::vector<uint32_t>& cand, double axial_weight, std::array<uint32_t, 4>* pick) {
+      for (int k = 0; k < 4; ++k) {
+        double best = -std::numeric_limits<double>::infinity();
+        uint32_t best_t = UINT32_MAX;
+        for (uint32_t t : cand) {
+          if (std::find(pick->begin(), pick->begin() + k, t) != pick->begin() + k) continue;
+          const Eigen::Vector3d d = Centroid(mesh, t) - S.center;
+          const double axial = d.dot(a);
+          const Eigen::Vector3d radial = d - axial * a;
+          const double rn = radial.norm();
+          if (rn < 1e-12) continue;
+          const double score = radial.dot(targets[k]) / rn - axial_weight * std::abs(axial) / std::max(S.radius, 1e-12);
+          if (score > best) { best = score; best_t = t; }
+        }
+        if (best_t == UINT32_MAX) return false;
+        (*pick)[k] = best_t;
+      }
+      return true;
+    };
+    auto well_conditioned = [&](const std::array<uint32_t, 4>& pick) {
+      float p[4][3];
+      for (int k = 0; k < 4; ++k) {
+        const Eigen::Vector3d c = Centroid(mesh, pick[k]);
+        p[k][0] = float(c.x()); p[k][1] = float(c.y()); p[k][2] = float(c.z());
+      }
+      return PivotsWellConditioned(p, float(0.05 * S.radius));
+    };
+
+    std::array<uint32_t, 4> pick{};
+    bool ok = candidates.size() >= 4 && choose(candidates, 0.5, &pick) && well_conditioned(pick);
+    if (!ok) {
+      // Widen to the sphere's whole region neighbourhood: triangles within 2.5 r of the centre.
+      std::vector<uint32_t> wide;
+      for (uint32_t t = 0; t < T; ++t)
+        if (areas[t] > min_area && (Centroid(mesh, t) - S.center).norm() < 2.5 * S.radius) wide.push_back(t);
+      for (double w : {0.5, 0.2, 0.0}) {
+        pick = {};
+        if (wide.size() >= 4 && choose(wide, w, &pick) && well_conditioned(pick)) { ok = true; break; }
+      }
+    }
+    if (!ok)
+      return MakeError(Error::Code::kFit, "sphere " + std::to_string(s) + " (" + RegionSymbol(S.region) +
+                                              "): no four non-degenerate pivot polygons around it");
+
+    float p[4][3];
+    for (int k = 0; k < 4; ++k) {
+      const uint32_t t = pick[k];
+      out.triangles.push_back(t);
+      for (int j = 0; j < 3; ++j) out.vertices.push_back(mesh.indices[3 * t + j]);
+      // The centroid exactly as the runtime's refit computes it.
+      runtime::TriangleCentroid(&mesh.positions[3 * mesh.indices[3 * t]], &mesh.positions[3 * mesh.indices[3 * t + 1]],
+                                &mesh.positions[3 * mesh.indices[3 * t + 2]], p[k]);
+    }
+    // Bind data with the runtime's own frame functions, so refit reproduces the bind sphere.
+    const float c[3] = {float(S.center.x()), float(S.center.y()), float(S.center.z())};
+    runtime::PivotFrameBasis basis;
+    if (!runtime::BuildPivotFrame(p, &basis))
+      return MakeError(Error::Code::kFit, "sphere " + std::to_string(s) + ": degenerate pivot frame");
+    float local[3];
+    runtime::PivotFrameToLocal(basis, c, local);
+    out.frames[s].local_center = {local[0], local[1], local[2]};
+    out.frames[s].centroid_offset = {c[0] - basis.origin[0], c[1] - basis.origin[1], c[2] - basis.origin[2]};
+    out.frames[s].mean_distance = runtime::PivotMeanDistance(p, c);
+  }
+  return out;
+}
+
+}  // namespace spherechain::baker

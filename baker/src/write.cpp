@@ -1,0 +1,182 @@
+#include "spherechain/baker/write.h"
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <system_error>
+
+#include <unistd.h>
+
+#include <flatbuffers/flatbuffers.h>
+#include <xxhash.h>
+
+#include "spherechain/runtime/schema/spherechain_generated.h"
+
+namespace spherechain::baker {
+
+namespace fb = spherechain::schema;
+
+uint64_t Hash64(const void* data, size_t size) { return XXH3_64bits(data, size); }
+
+Fingerprint ComputeFingerprint(const Mesh& mesh) {
+  Fingerprint f;
+  f.vertex_count = mesh.vertex_count();
+  f.triangle_count = mesh.triangle_count();
+  f.positions_hash = Hash64(mesh.positions.data(), mesh.positions.size() * sizeof(float));
+  f.indices_hash = Hash64(mesh.indices.data(), mesh.indices.size() * sizeof(uint32_t));
+  return f;
+}
+
+namespace {
+
+fb::Sphere ToSphere(const Eigen::Vector3d& c, double r) {
+  return fb::Sphere(fb::Vec3(float(c.x()), float(c.y()), float(c.z())), float(r));
+}
+
+flatbuffers::Offset<fb::AccuracyStats> ToStats(flatbuffers::FlatBufferBuilder& b, const AccuracyStats& s) {
+  return fb::CreateAccuracyStats(b, float(s.mean_abs_f), float(s.rms_f), float(s.min_f), float(s.max_f));
+}
+
+fb::UpAxis ToUpAxis(UpAxis a) {
+  switch (a) {
+    case UpAxis::kZ: return fb::UpAxis::Z;
+    case UpAxis::kX: return fb::UpAxis::X;
+    case UpAxis::kY: break;
+  }
+  return fb::UpAxis::Y;
+}
+
+}  // namespace
+
+std::vector<uint8_t> BuildAsset(const AssetInputs& in) {
+  const Mesh& mesh = *in.mesh;
+  const auto& spheres = in.fit->spheres;
+  flatbuffers::FlatBufferBuilder b(1 << 20);
+  b.ForceDefaults(true);  // every scalar present: readers never see a missing field
+
+  const Fingerprint fp = ComputeFingerprint(mesh);
+  auto fingerprint = fb::CreateFingerprint(b, fp.vertex_count, fp.triangle_count, fp.positions_hash, fp.indices_hash);
+
+  std::vector<flatbuffers::Offset<fb::MeshPart>> parts;
+  for (const MeshPart& p : mesh.parts)
+    parts.push_back(fb::CreateMeshPart(b, b.CreateString(p.name), p.first_vertex, p.vertex_count, p.first_triangle,
+                                       p.triangle_count));
+  auto parts_v = b.CreateVector(parts);
+
+  auto params = fb::CreateBakeParams(b, uint32_t(in.params.rays), uint32_t(in.params.spheres_per_level),
+                                     float(in.fit->disk_step), float(in.params.penetration_depth), 4u,
+                                     b.CreateString(in.segmentation->method), in.config_hash);
+
+  std::vector<fb::Sphere> s_adj, s_phi1, s_phi2;
+  std::vector<uint8_t> regions, labels;
+  for (size_t i = 0; i < spheres.size(); ++i) {
+    s_adj.push_back(ToSphere(spheres[i].center, spheres[i].radius));
+    s_phi1.push_back(ToSphere(spheres[i].center_phi1, spheres[i].radius_phi1));
+    s_phi2.push_back(ToSphere((*in.phi2)[i].center, (*in.phi2)[i].radius));
+    regions.push_back(static_cast<uint8_t>(spheres[i].region));
+    labels.push_back(spheres[i].labels);
+  }
+  auto s_adj_v = b.CreateVectorOfStructs(s_adj);
+  auto s_phi1_v = b.CreateVectorOfStructs(s_phi1);
+  auto s_phi2_v = b.CreateVectorOfStructs(s_phi2);
+  auto regions_v = b.CreateVector(regions);
+  auto labels_v = b.CreateVector(labels);
+
+  std::vector<flatbuffers::Offset<fb::Chain>> chains;
+  for (const Chain& c : *in.chains) chains.push_back(fb::CreateChain(b, b.CreateString(c.name), b.CreateVector(c.spheres)));
+  auto chains_v = b.CreateVector(chains);
+
+  std::vector<fb::SpherePair> excluded;
+  for (const SpherePair& p : *in.excluded) excluded.emplace_back(p.first, p.second);
+  auto excluded_v = b.CreateVectorOfStructs(excluded);
+
+  auto tri_regions_v = b.CreateVector(in.segmentation->triangle_regions);
+  auto tri_spheres_v = b.CreateVector(in.surrounding->triangle_spheres);
+  auto offsets_v = b.CreateVector(in.surrounding->offsets);
+  auto surr_v = b.CreateVector(in.surrounding->triangles);
+  auto piv_t_v = b.CreateVector(in.pivots->triangles);
+  auto piv_v_v = b.CreateVector(in.pivots->vertices);
+  std::vector<fb::PivotFrame> frames;
+  for (const Pivots::Frame& f : in.pivots->frames)
+    frames.emplace_back(fb::Vec3(f.local_center[0], f.local_center[1], f.local_center[2]),
+                        fb::Vec3(f.centroid_offset[0], f.centroid_offset[1], f.centroid_offset[2]), f.mean_distance);
+  auto frames_v = b.CreateVectorOfStructs(frames);
+
+  auto accuracy = fb::CreateAccuracy(b, ToStats(b, in.accuracy.phi1), ToStats(b, in.accuracy.phi1_adjusted),
+                                     ToStats(b, in.accuracy.phi2));
+  auto generator = b.CreateString("spherechain-baker 0.1.0");
+  auto units = b.CreateString(mesh.units);
+
+  fb::AssetBuilder ab(b);
+  ab.add_schema_version(1);
+  ab.add_generator(generator);
+  ab.add_fingerprint(fingerprint);
+  ab.add_parts(parts_v);
+  ab.add_units(units);
+  ab.add_unit_scale_m(mesh.unit_scale_m);
+  ab.add_up_axis(ToUpAxis(mesh.up_axis));
+  ab.add_params(params);
+  ab.add_spheres(s_adj_v);
+  ab.add_spheres_phi1(s_phi1_v);
+  ab.add_spheres_phi2(s_phi2_v);
+  ab.add_sphere_regions(regions_v);
+  ab.add_sphere_labels(labels_v);
+  ab.add_chains(chains_v);
+  ab.add_excluded_pairs(excluded_v);
+  ab.add_triangle_regions(tri_regions_v);
+  ab.add_triangle_spheres(tri_spheres_v);
+  ab.add_surrounding_offsets(offsets_v);
+  ab.add_surrounding_triangles(surr_v);
+  ab.add_pivot_triangles(piv_t_v);
+  ab.add_pivot_vertices(piv_v_v);
+  ab.add_pivot_frames(frames_v);
+  ab.add_accuracy(accuracy);
+  fb::FinishAssetBuffer(b, ab.Finish());
+  return {b.GetBufferPointer(), b.GetBufferPointer() + b.GetSize()};
+}
+
+Status WriteFileAtomic(const std::string& path, const void* bytes, size_t size) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::path target(path);
+  const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
+  if (!fs::is_directory(dir, ec))
+    return MakeError(Error::Code::kIo, "cannot write '" + path + "': folder '" + dir.string() + "' does not exist");
+  const fs::path tmp = dir / ("." + target.filename().string() + ".tmp" + std::to_string(::getpid()));
+  {
+    std::FILE* f = std::fopen(tmp.c_str(), "wb");
+    if (!f) return MakeError(Error::Code::kIo, "cannot create '" + tmp.string() + "'");
+    const bool ok = std::fwrite(bytes, 1, size, f) == size && std::fflush(f) == 0 && ::fsync(::fileno(f)) == 0;
+    const bool closed = std::fclose(f) == 0;
+    if (!ok || !closed) {
+      fs::remove(tmp, ec);
+      return MakeError(Error::Code::kIo, "cannot write '" + tmp.string() + "' (disk full?)");
+    }
+  }
+  fs::rename(tmp, target, ec);
+  if (ec) {
+    fs::remove(tmp, ec);
+    return MakeError(Error::Code::kIo, "cannot rename the temporary file onto '" + path + "': " + ec.message());
+  }
+  return Ok{};
+}
+
+Result<std::vector<uint8_t>> ReadFileBytes(const std::string& path, size_t max_size) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (!fs::exists(path, ec)) return MakeError(Error::Code::kIo, "'" + path + "': no such file");
+  if (fs::is_directory(path, ec)) return MakeError(Error::Code::kIo, "'" + path + "' is a folder, not a file");
+  const auto size = fs::file_size(path, ec);
+  if (ec) return MakeError(Error::Code::kIo, "'" + path + "': " + ec.message());
+  if (size > max_size)
+    return MakeError(Error::Code::kIo, "'" + path + "' is " + std::to_string(size) + " bytes, over the limit of " +
+                                           std::to_string(max_size));
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return MakeError(Error::Code::kIo, "'" + path + "': cannot open for reading");
+  std::vector<uint8_t> bytes(size);
+  if (size && !in.read(reinterpret_cast<char*>(bytes.data()), std::streamsize(size)))
+    return MakeError(Error::Code::kIo, "'" + path + "': read failed");
+  return bytes;
+}
+
+}  // namespace spherechain::baker
