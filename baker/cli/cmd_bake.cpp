@@ -50,7 +50,7 @@ void PrintSummary(const baker::BakeResult& r, const baker::Context& ctx) {
   double total = 0;
   for (const auto& [n, ms] : ctx.timings_ms) {
     std::printf(" %s=%.1f", n.c_str(), ms);
-    total += ms;
+    if (n.find('.') == std::string::npos) total += ms;  // "a.b" is a sub-stage of "a"
   }
   std::printf("  total=%.1f\n", total);
 }
@@ -69,6 +69,13 @@ int RunBake(const BakeArgs& a) {
   else if (a.segmentation == "geometry") config.segmentation = baker::SegmentMethod::kGeometry;
   else if (a.segmentation == "map" && config.region_map.empty()) return Fail("--segmentation map needs --region-map");
 
+  // Fail before the work when an output cannot be written.
+  for (const std::string* out : {&a.output, &a.report, &a.ray_csv, &a.png}) {
+    if (out->empty()) continue;
+    const std::filesystem::path dir = std::filesystem::path(*out).parent_path();
+    if (!dir.empty() && !std::filesystem::is_directory(dir))
+      return Fail("cannot write '" + *out + "': folder '" + dir.string() + "' does not exist");
+  }
   baker::Context ctx = MakeLoggingContext();
   auto result = baker::Bake(a.input, config, &ctx);
   if (!result.ok()) return Fail(result.error());

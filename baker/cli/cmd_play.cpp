@@ -1,4 +1,443 @@
+// spherechain play ASSET --mesh INPUT [--clip NAME | --morph POSES...] [--frames N] [--method m1|m2|both]
+//                  [--refit paper|frame] [--json OUT] [--poses-dir DIR] [--rig MHSKEL] [--repeat R]
+//
+// Plays an animation of the character the asset was baked from — a skinned clip, or the paper's
+// Bézier morph through key poses (§5.1, §6: 40 frames) — and runs the runtime on every frame: refit
+// the spheres to the skinned vertices, detect overlapping sphere pairs with M1 (chains) and/or M2 (all
+// spheres) (§5.2). Prints a per-frame table (pairs, timings, which regions touch) and a summary.
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <set>
+
+#include <nlohmann/json.hpp>
+#include <spdlog/spdlog.h>
+
+#include "asset_file.h"
 #include "commands.h"
+#include "spherechain/baker/animation.h"
+#include "spherechain/baker/import.h"
+#include "spherechain/baker/morph.h"
+#include "spherechain/baker/write.h"
+#include "spherechain/runtime/runtime.h"
+
 namespace spherechain::cli {
-void RegisterPlay(CLI::App&, Commands*) {}
+
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+struct PlayArgs {
+  std::string asset, mesh, clip, json, poses_dir, rig, method = "both", refit = "frame";
+  std::vector<std::string> morph;
+  uint32_t frames = 40;
+  uint32_t repeat = 5;
+};
+
+/// Folder of the character's default key poses: --poses-dir, else data/poses/<character> found by
+/// walking up from the current directory and from the executable's folder (build/<dir>/baker/).
+std::string FindPosesDir(const std::string& character, const std::string& explicit_dir) {
+  if (!explicit_dir.empty()) return explicit_dir;
+  const fs::path rel = fs::path("data") / "poses" / character;
+  std::vector<fs::path> starts;
+  std::error_code ec;
+  starts.push_back(fs::current_path(ec));
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (!ec) starts.push_back(exe.parent_path());
+  for (fs::path p : starts) {
+    for (int up = 0; up < 6 && !p.empty(); ++up, p = p.parent_path()) {
+      if (fs::is_directory(p / rel, ec)) return (p / rel).string();
+      if (p == p.parent_path()) break;
+    }
+  }
+  return {};
+}
+
+/// "R0-R4 R1-R4": the region pairs of the given colliding sphere pairs, sorted, each once.
+std::string RegionsTouching(const std::set<std::pair<int, int>>& pairs) {
+  std::string s;
+  for (const auto& [a, b] : pairs) {
+    if (!s.empty()) s += ' ';
+    s += "R" + std::to_string(a) + "-R" + std::to_string(b);
+  }
+  return s.empty() ? "-" : s;
+}
+
+struct FrameRow {
+  uint32_t frame = 0;
+  std::string label;  // "t=0.533s" or "arms_crossed t=0.50"
+  runtime::DetectStats m1, m2;
+  double refit_us = 0, detect_m1_us = 0, detect_m2_us = 0;
+  std::set<std::pair<int, int>> regions;
+  std::vector<runtime::Collision> pairs;  // of M2 when run, else M1
+};
+
+/// Refit + detect on `positions`, timing each job as the minimum over `repeat` runs.
+class Player {
+ public:
+  Player(const runtime::AssetView& view, runtime::Context* ctx, runtime::RefitMode mode, bool m1, bool m2,
+         uint32_t repeat)
+      : view_(view), ctx_(ctx), mode_(mode), run_m1_(m1), run_m2_(m2), repeat_(std::max(1u, repeat)) {
+    out_m1_.resize(runtime::DetectBound(view, runtime::DetectMethod::kM1));
+    out_m2_.resize(runtime::DetectBound(view, runtime::DetectMethod::kM2));
+  }
+
+  /// Fills row counters, timings and touching regions; returns false with `*error` on a runtime error.
+  bool Run(const float* positions, FrameRow* row, std::string* error) {
+    runtime::RefitJob refit;
+    refit.context = ctx_;
+    refit.mode = mode_;
+    refit.positions = {positions, view_.vertex_count, 12};
+    row->refit_us = Time([&] { return refit.Run(); }, error);
+    if (row->refit_us < 0) return false;
+    const runtime::Collision* regions_from = nullptr;
+    uint32_t regions_count = 0;
+    if (run_m1_) {
+      row->detect_m1_us = Detect(runtime::DetectMethod::kM1, &out_m1_, &count_m1_, &row->m1, error);
+      if (row->detect_m1_us < 0) return false;
+      regions_from = out_m1_.data();
+      regions_count = count_m1_;
+    }
+    if (run_m2_) {
+      row->detect_m2_us = Detect(runtime::DetectMethod::kM2, &out_m2_, &count_m2_, &row->m2, error);
+      if (row->detect_m2_us < 0) return false;
+      regions_from = out_m2_.data();  // M2 sees every pair: prefer it for the region summary
+      regions_count = count_m2_;
+    }
+    const auto* sr = view_.asset->sphere_regions();
+    row->regions.clear();
+    row->pairs.assign(regions_from, regions_from + regions_count);
+    for (uint32_t i = 0; i < regions_count; ++i) {
+      const int a = sr ? sr->Get(regions_from[i].a) : -1, b = sr ? sr->Get(regions_from[i].b) : -1;
+      row->regions.emplace(std::min(a, b), std::max(a, b));
+    }
+    return true;
+  }
+
+ private:
+  template <class F>
+  double Time(F&& f, std::string* error) {
+    double best = 1e300;
+    for (uint32_t r = 0; r < repeat_; ++r) {
+      const auto t0 = Clock::now();
+      const runtime::Status s = f();
+      const double us = std::chrono::duration<double, std::micro>(Clock::now() - t0).count();
+      if (runtime::Failed(s)) {
+        *error = std::string("runtime: ") + runtime::ToString(s);
+        return -1;
+      }
+      best = std::min(best, us);
+    }
+    return best;
+  }
+
+  double Detect(runtime::DetectMethod method, std::vector<runtime::Collision>* out, uint32_t* count,
+                runtime::DetectStats* stats, std::string* error) {
+    runtime::DetectJob job;
+    job.context = ctx_;
+    job.method = method;
+    job.output = out->data();
+    job.capacity = static_cast<uint32_t>(out->size());
+    job.count = count;
+    job.stats = stats;
+    return Time([&] { return job.Run(); }, error);
+  }
+
+  runtime::AssetView view_;
+  runtime::Context* ctx_;
+  runtime::RefitMode mode_;
+  bool run_m1_, run_m2_;
+  uint32_t repeat_;
+  std::vector<runtime::Collision> out_m1_, out_m2_;
+  uint32_t count_m1_ = 0, count_m2_ = 0;
+};
+
+std::string Hex(uint64_t v) {
+  char b[24];
+  std::snprintf(b, sizeof b, "%016llx", static_cast<unsigned long long>(v));
+  return b;
+}
+
+/// The mesh must be the one the asset was baked from (DESIGN.md: a mismatched pairing is an error).
+bool CheckFingerprint(const runtime::AssetView& view, const baker::Mesh& mesh, const PlayArgs& a, std::string* error) {
+  const baker::Fingerprint f = baker::ComputeFingerprint(mesh);
+  const auto* af = view.asset->fingerprint();
+  const std::string pair = "mesh '" + a.mesh + "' does not match asset '" + a.asset + "': ";
+  if (f.vertex_count != af->vertex_count()) {
+    *error = pair + "the mesh has " + std::to_string(f.vertex_count) + " vertices, the asset was baked from " +
+             std::to_string(af->vertex_count());
+    return false;
+  }
+  if (f.triangle_count != af->triangle_count()) {
+    *error = pair + "the mesh has " + std::to_string(f.triangle_count) + " triangles, the asset was baked from " +
+             std::to_string(af->triangle_count());
+    return false;
+  }
+  if (f.positions_hash != af->positions_hash() || f.indices_hash != af->indices_hash()) {
+    *error = pair + "same counts but different content (positions hash " + Hex(f.positions_hash) + " vs " +
+             Hex(af->positions_hash()) + ", indices hash " + Hex(f.indices_hash) + " vs " + Hex(af->indices_hash()) +
+             "); re-bake the asset from this mesh";
+    return false;
+  }
+  return true;
+}
+
+int RunPlay(const PlayArgs& a) {
+  if (!a.clip.empty() && !a.morph.empty()) return Fail("--clip and --morph exclude each other");
+  LoadedAsset asset;
+  std::string error;
+  if (!LoadAssetFile(a.asset, &asset, &error)) return Fail(error);
+  const runtime::AssetView& view = asset.view;
+
+  baker::ImportOptions opts;
+  opts.rig_path = a.rig;
+  baker::Context log = MakeLoggingContext();
+  auto imported = baker::ImportMesh(a.mesh, opts, &log);
+  if (!imported.ok()) return Fail(imported.error());
+  const baker::Mesh& mesh = imported.value();
+  if (!CheckFingerprint(view, mesh, a, &error)) return Fail(error);
+  if (!mesh.skin)
+    return Fail("'" + a.mesh + "' has no skin: play needs a rigged character (glTF skin, assimp bones, or a "
+                "MakeHuman .mhskel beside base.obj / --rig)");
+
+  // ---- the animation ----------------------------------------------------------------------------
+  const baker::Clip* clip = nullptr;
+  std::vector<baker::Pose> poses;
+  std::string poses_from;
+  if (!a.clip.empty()) {
+    for (const auto& c : mesh.clips)
+      if (c.name == a.clip) clip = &c;
+    if (!clip) {
+      std::string names;
+      for (const auto& c : mesh.clips) names += (names.empty() ? "" : ", ") + ("'" + c.name + "'");
+      return Fail("no clip named '" + a.clip + "' in '" + a.mesh + "' (clips: " + (names.empty() ? "none" : names) + ")");
+    }
+  } else if (a.morph.empty() && !mesh.clips.empty()) {
+    clip = &mesh.clips.front();
+  }
+  if (!clip) {
+    const std::string character = mesh.skin->source == "mhskel" ? "makehuman" : fs::path(a.mesh).stem().string();
+    const std::string dir = FindPosesDir(character, a.poses_dir);
+    if (a.morph.empty()) {
+      if (dir.empty())
+        return Fail("'" + a.mesh + "' has no clips and no default key poses (data/poses/" + character +
+                    " not found from the current directory or the executable); pass --morph POSE.json... or "
+                    "--poses-dir DIR");
+      auto loaded = baker::LoadPoseFolder(dir, *mesh.skin);
+      if (!loaded.ok()) return Fail(loaded.error());
+      poses = std::move(loaded).value();
+      poses_from = dir;
+    } else {
+      for (const std::string& m : a.morph) {
+        std::string path = m;
+        if (!fs::exists(path) && !dir.empty() && fs::exists(fs::path(dir) / (m + ".json")))
+          path = (fs::path(dir) / (m + ".json")).string();
+        if (fs::is_directory(path)) {
+          auto loaded = baker::LoadPoseFolder(path, *mesh.skin);
+          if (!loaded.ok()) return Fail(loaded.error());
+          for (auto& p : loaded.value()) poses.push_back(std::move(p));
+        } else {
+          auto p = baker::LoadPose(path, *mesh.skin);
+          if (!p.ok()) return Fail(p.error());
+          poses.push_back(std::move(p).value());
+        }
+      }
+      poses_from = "--morph";
+    }
+  }
+  const uint32_t frames = a.frames;
+  if (frames == 0) return Fail("--frames must be > 0");
+  if (!clip && frames < 2 * poses.size())
+    return Fail("--frames " + std::to_string(frames) + " is too few for " + std::to_string(poses.size()) +
+                " key poses (each needs a rest frame and its key frame: at least " + std::to_string(2 * poses.size()) +
+                ")");
+  if (clip) {
+    if (auto s = baker::ValidateClip(*mesh.skin, *clip); !s.ok()) return Fail(s.error());
+  }
+
+  // ---- runtime ------------------------------------------------------------------------------------
+  runtime::Context ctx;
+  if (runtime::Status s = ctx.Init(view); runtime::Failed(s))
+    return Fail(std::string("runtime Context::Init: ") + runtime::ToString(s));
+  const bool m1 = a.method != "m2", m2 = a.method != "m1";
+  const runtime::RefitMode mode = a.refit == "paper" ? runtime::RefitMode::kPaper : runtime::RefitMode::kPivotFrame;
+  Player player(view, &ctx, mode, m1, m2, a.repeat);
+
+  std::vector<float> positions(mesh.positions.size());
+  baker::SkinningScratch scratch;
+  std::vector<FrameRow> rows(frames);
+
+  // The bind pose first: refit to the undeformed mesh (what a correct asset reports as no pairs).
+  FrameRow bind;
+  bind.label = "bind";
+  if (!player.Run(mesh.positions.data(), &bind, &error)) return Fail(error);
+
+  for (uint32_t f = 0; f < frames; ++f) {
+    FrameRow& row = rows[f];
+    row.frame = f;
+    char label[96];
+    if (clip) {
+      const float t = clip->duration_s * float(f) / float(frames);
+      std::snprintf(label, sizeof label, "t=%.3fs", t);
+      if (auto s = baker::SkinClip(mesh, *clip, t, &scratch, positions.data(), positions.size()); !s.ok())
+        return Fail(s.error());
+    } else {
+      auto mf = baker::MorphFrameAt(f, frames, static_cast<uint32_t>(poses.size()));
+      if (!mf.ok()) return Fail(mf.error());
+      std::snprintf(label, sizeof label, "%s t=%.3f", poses[mf->key].name.c_str(), mf->t);
+      if (auto s = baker::SkinMorphFrame(mesh, poses, f, frames, &scratch, positions.data(), positions.size());
+          !s.ok())
+        return Fail(s.error());
+    }
+    row.label = label;
+    if (!player.Run(positions.data(), &row, &error)) return Fail(error);
+  }
+
+  // ---- report ------------------------------------------------------------------------------------
+  std::printf("play: %s + %s — %s, %u frames, %u spheres, %u chains, refit %s, timings = min of %u runs\n",
+              a.asset.c_str(), a.mesh.c_str(),
+              clip ? ("clip '" + clip->name + "' (" + std::to_string(clip->duration_s) + " s)").c_str()
+                   : ("morph through " + std::to_string(poses.size()) + " key poses from " + poses_from).c_str(),
+              frames, view.sphere_count, view.chain_count, a.refit.c_str(), std::max(1u, a.repeat));
+  if (!clip) {
+    std::printf("key poses:");
+    for (size_t k = 0; k < poses.size(); ++k)
+      std::printf(" %s@%u", poses[k].name.c_str(),
+                  baker::MorphKeyFrame(uint32_t(k), frames, uint32_t(poses.size())));
+    std::printf("\n");
+  }
+  std::printf("\n%5s  %-26s %7s %7s %8s %7s %8s %8s %9s %9s  %s\n", "frame", "pose", "testsM1", "M1 raw",
+              "M1 dist", "M2", "testsM2", "refit us", "M1 us", "M2 us", "regions touching");
+  auto print_row = [&](const FrameRow& r, const std::string& frame) {
+    std::printf("%5s  %-26s %7u %7u %8u %7u %8u %8.1f %9.1f %9.1f  %s\n", frame.c_str(), r.label.c_str(), r.m1.tests,
+                r.m1.raw_pairs, r.m1.distinct_pairs, r.m2.distinct_pairs, r.m2.tests, r.refit_us, r.detect_m1_us,
+                r.detect_m2_us, RegionsTouching(r.regions).c_str());
+  };
+  print_row(bind, "bind");
+  for (const FrameRow& r : rows) print_row(r, std::to_string(r.frame));
+
+  double sum_refit = 0, sum_m1 = 0, sum_m2 = 0, sum_raw = 0, sum_dist = 0, sum_pm2 = 0;
+  uint32_t max_raw = 0, max_pm2 = 0, frames_with_pairs = 0;
+  std::map<std::pair<int, int>, uint32_t> region_frames;
+  for (const FrameRow& r : rows) {
+    sum_refit += r.refit_us;
+    sum_m1 += r.detect_m1_us;
+    sum_m2 += r.detect_m2_us;
+    sum_raw += r.m1.raw_pairs;
+    sum_dist += r.m1.distinct_pairs;
+    sum_pm2 += r.m2.distinct_pairs;
+    max_raw = std::max(max_raw, r.m1.raw_pairs);
+    max_pm2 = std::max(max_pm2, r.m2.distinct_pairs);
+    frames_with_pairs += !r.regions.empty();
+    for (const auto& p : r.regions) ++region_frames[p];
+  }
+  const double n = frames;
+  std::printf("\nsummary: %u frames, %u with collisions; bind pose: M1 %u pairs, M2 %u pairs\n", frames,
+              frames_with_pairs, bind.m1.distinct_pairs, bind.m2.distinct_pairs);
+  if (m1)
+    std::printf("  M1: mean %.1f raw / %.1f distinct pairs (max raw %u), %u tests, detect mean %.1f us\n", sum_raw / n,
+                sum_dist / n, max_raw, rows.empty() ? 0u : rows[0].m1.tests, sum_m1 / n);
+  if (m2)
+    std::printf("  M2: mean %.1f pairs (max %u), %u tests, detect mean %.1f us\n", sum_pm2 / n, max_pm2,
+                rows.empty() ? 0u : rows[0].m2.tests, sum_m2 / n);
+  std::printf("  refit (%s): mean %.1f us\n", a.refit.c_str(), sum_refit / n);
+  std::printf("  regions touching (frames):");
+  if (region_frames.empty()) std::printf(" none");
+  for (const auto& [p, c] : region_frames) std::printf(" R%d-R%d(%u)", p.first, p.second, c);
+  std::printf("\n");
+
+  if (!a.json.empty()) {
+    nlohmann::json j;
+    j["asset"] = a.asset;
+    j["mesh"] = a.mesh;
+    j["method"] = a.method;
+    j["refit"] = a.refit;
+    j["repeat"] = std::max(1u, a.repeat);
+    if (clip) {
+      j["animation"] = {{"kind", "clip"}, {"name", clip->name}, {"duration_s", clip->duration_s}};
+    } else {
+      nlohmann::json keys = nlohmann::json::array();
+      for (size_t k = 0; k < poses.size(); ++k)
+        keys.push_back({{"name", poses[k].name},
+                        {"frame", baker::MorphKeyFrame(uint32_t(k), frames, uint32_t(poses.size()))}});
+      j["animation"] = {{"kind", "morph"}, {"poses_from", poses_from}, {"keys", keys}};
+    }
+    auto row_json = [&](const FrameRow& r) {
+      nlohmann::json regions = nlohmann::json::array();
+      for (const auto& [ra, rb] : r.regions) regions.push_back("R" + std::to_string(ra) + "-R" + std::to_string(rb));
+      nlohmann::json o = {{"label", r.label},
+                          {"tests_m1", r.m1.tests},
+                          {"pairs_m1_raw", r.m1.raw_pairs},
+                          {"pairs_m1", r.m1.distinct_pairs},
+                          {"tests_m2", r.m2.tests},
+                          {"pairs_m2", r.m2.distinct_pairs},
+                          {"refit_us", r.refit_us},
+                          {"detect_m1_us", r.detect_m1_us},
+                          {"detect_m2_us", r.detect_m2_us},
+                          {"regions_touching", regions}};
+      const auto* sr = view.asset->sphere_regions();
+      nlohmann::json pairs = nlohmann::json::array();
+      for (const runtime::Collision& c : r.pairs)
+        pairs.push_back({{"a", c.a}, {"b", c.b}, {"region_a", sr ? int(sr->Get(c.a)) : -1},
+                         {"region_b", sr ? int(sr->Get(c.b)) : -1}, {"depth", c.depth}});
+      o["pairs"] = pairs;  // M2's when run, else M1's
+      return o;
+    };
+    j["bind"] = row_json(bind);
+    nlohmann::json fr = nlohmann::json::array();
+    for (const FrameRow& r : rows) {
+      nlohmann::json o = row_json(r);
+      o["frame"] = r.frame;
+      fr.push_back(o);
+    }
+    j["frames"] = fr;
+    nlohmann::json rf = nlohmann::json::object();
+    for (const auto& [p, c] : region_frames) rf["R" + std::to_string(p.first) + "-R" + std::to_string(p.second)] = c;
+    j["summary"] = {{"frames", frames},
+                    {"frames_with_collisions", frames_with_pairs},
+                    {"mean_pairs_m1_raw", sum_raw / n},
+                    {"mean_pairs_m1", sum_dist / n},
+                    {"mean_pairs_m2", sum_pm2 / n},
+                    {"mean_refit_us", sum_refit / n},
+                    {"mean_detect_m1_us", sum_m1 / n},
+                    {"mean_detect_m2_us", sum_m2 / n},
+                    {"regions_touching_frames", rf}};
+    const std::string text = j.dump(2) + "\n";
+    if (auto s = baker::WriteFileAtomic(a.json, text); !s.ok()) return Fail(s.error());
+    std::printf("wrote %s\n", a.json.c_str());
+  }
+  return 0;
+}
+
+}  // namespace
+
+void RegisterPlay(CLI::App& app, Commands* commands) {
+  auto args = std::make_shared<PlayArgs>();
+  CLI::App* sub = app.add_subcommand(
+      "play", "Play an animation (skinned clip or the paper's Bezier morph of key poses, §5.1/§6) and report "
+              "sphere collisions per frame with M1 and M2 (§5.2)");
+  sub->add_option("asset", args->asset, ".sphc asset baked from the mesh")->required()->check(CLI::ExistingFile);
+  sub->add_option("--mesh", args->mesh, "The character file the asset was baked from (checked by fingerprint)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  sub->add_option("--clip", args->clip, "Clip to play (default: the first clip; none: the morph)");
+  sub->add_option("--morph", args->morph,
+                  "Key pose files (.json), pose names in the poses folder, or folders; morph through them");
+  sub->add_option("--poses-dir", args->poses_dir,
+                  "Folder of default key poses (default: data/poses/<character> found upward from the current "
+                  "directory or the executable)");
+  sub->add_option("--frames", args->frames, "Frames: the morph's length, or uniform samples of the clip (default 40)");
+  sub->add_option("--method", args->method, "Broad phase: m1 (chains), m2 (all spheres), both")
+      ->check(CLI::IsMember({"m1", "m2", "both"}));
+  sub->add_option("--refit", args->refit, "Refit: paper (centre = mean pivot displacement) or frame (pivot frame)")
+      ->check(CLI::IsMember({"paper", "frame"}));
+  sub->add_option("--repeat", args->repeat, "Runs per job per frame; timings are the minimum (default 5)");
+  sub->add_option("--rig", args->rig, "MakeHuman rig (.mhskel) for an OBJ; default: default.mhskel beside the OBJ");
+  sub->add_option("--json", args->json, "Write the per-frame table and summary as JSON");
+  commands->handlers.emplace_back(sub, [args] { return RunPlay(*args); });
+}
+
 }  // namespace spherechain::cli

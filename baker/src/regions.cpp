@@ -172,13 +172,17 @@ Result<Pivots> ChoosePivots(const Mesh& mesh, const std::vector<FittedSphere>& s
     std::array<uint32_t, 4> pick{};
     bool ok = candidates.size() >= 4 && choose(candidates, 0.5, &pick) && well_conditioned(pick);
     if (!ok) {
-      // Widen to the sphere's whole region neighbourhood: triangles within 2.5 r of the centre.
-      std::vector<uint32_t> wide;
-      for (uint32_t t = 0; t < T; ++t)
-        if (areas[t] > min_area && (Centroid(mesh, t) - S.center).norm() < 2.5 * S.radius) wide.push_back(t);
-      for (double w : {0.5, 0.2, 0.0}) {
-        pick = {};
-        if (wide.size() >= 4 && choose(wide, w, &pick) && well_conditioned(pick)) { ok = true; break; }
+      // Widen to the neighbourhood: triangles within k·r of the centre (k = 2.5, 4, 8), with a relaxed
+      // level constraint each time, until a well-spread choice appears.
+      for (double reach : {2.5, 4.0, 8.0}) {
+        std::vector<uint32_t> wide;
+        for (uint32_t t = 0; t < T; ++t)
+          if (areas[t] > 0.0 && (Centroid(mesh, t) - S.center).norm() < reach * S.radius) wide.push_back(t);
+        for (double w : {0.5, 0.2, 0.0}) {
+          pick = {};
+          if (wide.size() >= 4 && choose(wide, w, &pick) && well_conditioned(pick)) { ok = true; break; }
+        }
+        if (ok) break;
       }
     }
     if (!ok)

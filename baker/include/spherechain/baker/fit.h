@@ -29,18 +29,26 @@ struct FittedSphere {
   double radius = 0.0;
   Eigen::Vector3d center_phi1 = Eigen::Vector3d::Zero();  ///< φ1 before the adjustment
   double radius_phi1 = 0.0;
+  /// φ2 (torso only): the minimum enclosing ball of `support_vertices` (Welzl 1991), for comparison;
+  /// tubular regions: equal to φ1.
+  Eigen::Vector3d center_phi2 = Eigen::Vector3d::Zero();
+  double radius_phi2 = 0.0;
   Region region = Region::kTorso;
   uint8_t labels = 0;      ///< TorsoLabel bits (torso only)
   int sequence = 0;        ///< position along its region's sequence: limbs from the torso outwards,
                            ///< torso bottom-up by level (paper Figure 12)
-  int level = -1;          ///< torso: disk level index; limbs: -1
+  int level = -1;          ///< torso: ordinal of the chosen disk level, 0 = bottom; limbs: -1
   int column = -1;         ///< torso: 0 = character's left, 1 = right; limbs: -1
   /// Torso only: the disk's rays assigned to this sphere: ray index k (0..N_r-1), the disk centre and
   /// the surface hit distance along the ray (the paper's per-ray comparison, §6).
   Eigen::Vector3d disk_center = Eigen::Vector3d::Zero();
   std::vector<int> ray_ids;
   std::vector<Eigen::Vector3d> ray_dirs;
-  std::vector<double> ray_hit;
+  std::vector<double> ray_hit;  ///< distance from disk_center to the ray's last exit from the torso
+                                ///< surface [Units: source]; +inf: the ray missed
+  /// Torso only: vertex indices of the triangles its rays hit (its part of the surrounding region,
+  /// §3.2), sorted; the vertices over which F is measured for φ1, φ1' and φ2.
+  std::vector<uint32_t> support_vertices;
 };
 
 struct FitResult {
@@ -51,17 +59,46 @@ struct FitResult {
 
 /// Moving circumference (§3.1) for one tubular region: spheres centred in the limb's cross-section,
 /// radius reaching the nearest surface of the region, neighbours overlapping by PD.
-/// `region_triangles`: triangle indices of the region. Errors: kFit (region empty / degenerate).
+/// Base curve: graph-geodesic distance over the region's vertex graph from its root boundary (edges
+/// shared with triangles outside the region, i.e. the torso; a free-standing region starts at one of
+/// its boundary loops), level sets of width ~1.5 mean edges, each reduced to its largest connected
+/// ring, centroids interpolated. A position fits when the sphere does not reach past the root or the
+/// tip along the curve and its radius is above a quarter of the limb's median (skips the gaps between
+/// fingers/toes). First sphere: the first fitting position; next: the first position whose centre
+/// distance is ≥ (1 − PD)(r_prev + r); last: the last fitting position near the tip when not already
+/// covered. Spheres ordered from the torso outwards; center = center_phi1 = center_phi2.
+/// `region_triangles`: triangle indices of the region (mesh.indices / 3), bind pose, source units.
+/// Errors: kFit (region empty, index out of range, PD outside [0, 0.9], degenerate region).
+/// Cost: O(#T log #T) for the region plus a uniform-grid query a curve sample; allocates.
 Result<std::vector<FittedSphere>> FitTubular(const Mesh& mesh, const std::vector<uint32_t>& region_triangles,
                                              Region region, const FitParams& params, Context* ctx = nullptr);
 
 /// Disk of N_r rays moving up in steps of δ, N_s = 2 spheres per level, then the adjustment φ1' (§3.2),
-/// and the L/R/T/D labels (Figure 6). Errors: kFit.
+/// and the L/R/T/D labels (Figure 6).
+/// Frame: up = Mesh::up_axis; the character's left = centroid(R0) − centroid(R1) (else legs R2 − R3,
+/// else +X for Y-up), horizontal; forward = left × up. Ray k points at θ = 2π(k + ½)/N_r from forward
+/// towards left: rays 0..N_r/2−1 are the left half (column 0), the rest the right half (column 1).
+/// Per level (heights hmin + δ/2 + kδ over the torso): disk centre = centre of the hits (iterated);
+/// each ray records its last exit from the torso surface (inner surfaces such as the mouth do not
+/// stop it); a half needs ≥ 40% of its rays to hit. φ1: centre = centroid of the half's hit points,
+/// radius = distance to the nearest of the level's hit points and of the surrounding region (all
+/// triangles any ray hit, 3-D) — inscribed. Levels are kept like FitTubular keeps positions (both
+/// columns must clear (1 − PD)(r_prev + r)), first level at least ½ r above the bottom, last one
+/// fitting under the top. φ1' (center/radius): centre moved from φ1 towards the disk centre by
+/// t ∈ [0, 1], radius = median distance to support_vertices, t minimising mean |F| over them.
+/// φ2 = MinimumEnclosingBall(support_vertices). Labels: L/R by column; T on levels between the lowest
+/// and highest vertex shared by an arm and the torso (else the level nearest that band); D on the
+/// bottom level. `seg` must match the mesh (#T); it orients left/right and finds the shoulders.
+/// Errors: kFit (empty torso, rays odd or < 8, N_s ≠ 2, PD outside [0, 0.9], δ ≤ 0, segmentation
+/// size mismatch, no level with a closed cross-section). Cost: ~#levels × N_r × #triangles crossing a
+/// level ray tests; allocates.
 Result<std::vector<FittedSphere>> FitTorso(const Mesh& mesh, const std::vector<uint32_t>& torso_triangles,
                                            const Segmentation& seg, const FitParams& params,
                                            Context* ctx = nullptr);
 
-/// All five regions. Errors: kFit naming the region.
+/// All five regions: FitTubular for R0..R3, then FitTorso; δ = params.disk_step, or disk_step_rel ×
+/// the body height along Mesh::up_axis. Adds a "fit" timing to `ctx`. Errors: kFit (segmentation size
+/// mismatch, a region's failure naming the region, an exception from CGAL turned into a message).
 Result<FitResult> FitSpheres(const Mesh& mesh, const Segmentation& seg, const FitParams& params,
                              Context* ctx = nullptr);
 

@@ -1,0 +1,258 @@
+// spherechain baker — import of every non-glTF, non-OBJ format through assimp.
+//
+// Post-processing: aiProcess_Triangulate only (it keeps each mesh's vertex array and order; nothing
+// welds, splits or sorts). Order (import.h): nodes depth-first from the root, children in file order;
+// for each node its meshes in node order (a mesh referenced by several nodes appears once per
+// instance). Positions are the assembled bind pose (node global × vertex). Skin::nodes is the whole
+// node hierarchy, parents-first, with rest local TRS decomposed from aiNode::mTransformation.
+// One SkinJoint per (mesh instance, aiBone): node = the bone's node, inverse_bind = mOffsetMatrix · B⁻¹
+// (B: the mesh's bind transform above), so Σ w · Global_rest(node) · inverse_bind · p = p at rest. Meshes without bones in a skinned scene follow their node rigidly.
+// Clips: aiAnimation, times ticks / mTicksPerSecond (25 when 0).
+#include <assimp/Importer.hpp>
+#include <assimp/anim.h>
+#include <assimp/config.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "import_internal.h"
+
+namespace spherechain::baker::detail {
+namespace {
+
+Eigen::Matrix4d ToEigen(const aiMatrix4x4& m) {
+  Eigen::Matrix4d e;
+  e << m.a1, m.a2, m.a3, m.a4, m.b1, m.b2, m.b3, m.b4, m.c1, m.c2, m.c3, m.c4, m.d1, m.d2, m.d3, m.d4;
+  return e;
+}
+
+std::string NodeName(const aiNode* n, size_t slot) {
+  return n->mName.length ? std::string(n->mName.C_Str()) : "node" + std::to_string(slot);
+}
+
+}  // namespace
+
+Result<Mesh> ImportAssimp(const std::string& path, const ImportOptions& options, Context* ctx) {
+  Assimp::Importer importer;
+  const std::string ext = LowerExtension(path);
+  if (ext.empty() || !importer.IsExtensionSupported("." + ext))
+    return FileError(Error::Code::kFormat, path,
+                     "unsupported file extension '" + ext + "' (glTF/GLB, OBJ or a format assimp reads)");
+  // No skeleton placeholder meshes (BVH etc.): only real geometry is imported.
+  importer.SetPropertyBool(AI_CONFIG_IMPORT_NO_SKELETON_MESHES, true);
+  const aiScene* scene = importer.ReadFile(path, aiProcess_Triangulate);
+  if (!scene || !scene->mRootNode)
+    return FileError(Error::Code::kFormat, path, std::string("assimp cannot read it: ") + importer.GetErrorString());
+  if (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE)
+    return FileError(Error::Code::kFormat, path, "assimp read an incomplete scene");
+
+  Mesh mesh;
+  mesh.source_format = ext;
+  mesh.up_axis = UpAxis::kY;  // assimp's convention; overridden below when the file says otherwise
+  if (scene->mMetaData) {
+    int32_t up = -1, sign = 1;
+    if (scene->mMetaData->Get("UpAxis", up)) {
+      scene->mMetaData->Get("UpAxisSign", sign);
+      if (up == 0) mesh.up_axis = UpAxis::kX;
+      if (up == 1) mesh.up_axis = UpAxis::kY;
+      if (up == 2) mesh.up_axis = UpAxis::kZ;
+      if (sign < 0 && ctx) ctx->Warn("import: " + path + ": file declares a negative up axis");
+    }
+    // FBX: centimetres per unit (assimp stores it as float; some writers as double).
+    double scale_cm = 0.0;
+    float scale_cm_f = 0.0f;
+    if (scene->mMetaData->Get("UnitScaleFactor", scale_cm_f)) scale_cm = scale_cm_f;
+    else scene->mMetaData->Get("UnitScaleFactor", scale_cm);
+    if (std::isfinite(scale_cm) && scale_cm > 0.0) {
+      mesh.unit_scale_m = static_cast<float>(scale_cm * 0.01);
+      mesh.units = scale_cm == 1.0 ? "cm" : scale_cm == 100.0 ? "m" : scale_cm == 10.0 ? "dm" : "unknown";
+    }
+  }
+
+  // Node table, parents-first (depth-first, children in file order), with globals.
+  std::vector<const aiNode*> order;
+  std::vector<Eigen::Matrix4d> global;
+  std::vector<Node> nodes;
+  std::unordered_map<std::string, int32_t> by_name;
+  std::vector<std::pair<const aiNode*, int32_t>> stack{{scene->mRootNode, -1}};
+  while (!stack.empty()) {
+    const auto [an, parent] = stack.back();
+    stack.pop_back();
+    const int32_t slot = static_cast<int32_t>(nodes.size());
+    const Eigen::Matrix4d local = ToEigen(an->mTransformation);
+    global.push_back(parent < 0 ? local : Eigen::Matrix4d(global[static_cast<size_t>(parent)] * local));
+    Node node;
+    node.name = NodeName(an, static_cast<size_t>(slot));
+    node.parent = parent;
+    SetNodeTrs(local, node);
+    by_name.emplace(node.name, slot);  // first wins on duplicate names
+    nodes.push_back(node);
+    order.push_back(an);
+    for (unsigned c = an->mNumChildren; c-- > 0;) stack.emplace_back(an->mChildren[c], slot);
+  }
+
+  bool any_bones = false;
+  for (const aiNode* an : order)
+    for (unsigned k = 0; k < an->mNumMeshes; ++k)
+      if (an->mMeshes[k] < scene->mNumMeshes && scene->mMeshes[an->mMeshes[k]]->HasBones()) any_bones = true;
+
+  Skin skin;
+  skin.source = "assimp";
+  std::vector<Influences> influences;
+  for (size_t slot = 0; slot < order.size(); ++slot) {
+    const aiNode* an = order[slot];
+    for (unsigned k = 0; k < an->mNumMeshes; ++k) {
+      if (an->mMeshes[k] >= scene->mNumMeshes) return FileError(Error::Code::kFormat, path, "node references a missing mesh");
+      const aiMesh* am = scene->mMeshes[an->mMeshes[k]];
+      const std::string mname = am->mName.length ? std::string(am->mName.C_Str()) : NodeName(an, slot);
+      // Bones first: a skinned mesh is placed by its bones (B), an unskinned one by its node (M).
+      std::vector<int32_t> bone_node(am->mNumBones, -1);
+      std::vector<Eigen::Matrix4d> joint_binds;
+      for (unsigned b = 0; b < am->mNumBones; ++b) {
+        const aiBone* bone = am->mBones[b];
+        auto it = by_name.find(bone->mName.C_Str());
+        if (it == by_name.end())
+          return FileError(Error::Code::kFormat, path, "mesh '" + mname + "' bone '" + bone->mName.C_Str() + "' has no node");
+        bone_node[b] = it->second;
+        if (bone->mNumWeights > 0)
+          joint_binds.push_back(global[static_cast<size_t>(it->second)] * ToEigen(bone->mOffsetMatrix));
+      }
+      Eigen::Matrix4d M = global[slot];
+      if (am->HasBones()) {
+        bool consistent = false;
+        M = SkinnedMeshBind(joint_binds, global[slot], &consistent);
+        if (!consistent && ctx)
+          ctx->Warn("import: " + path + ": mesh '" + mname +
+                    "': rest pose differs from the bind pose; placed by its node transform");
+      }
+      const Eigen::Matrix4d M_inv = M.inverse();
+      MeshPart part;
+      part.name = mname;
+      part.first_vertex = mesh.vertex_count();
+      part.vertex_count = am->mNumVertices;
+      part.first_triangle = mesh.triangle_count();
+      for (unsigned v = 0; v < am->mNumVertices; ++v) {
+        const aiVector3D& q = am->mVertices[v];
+        const Eigen::Vector4d p = M * Eigen::Vector4d(q.x, q.y, q.z, 1.0);
+        mesh.positions.insert(mesh.positions.end(),
+                              {static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z())});
+      }
+      unsigned skipped = 0;
+      for (unsigned f = 0; f < am->mNumFaces; ++f) {
+        const aiFace& face = am->mFaces[f];
+        if (face.mNumIndices != 3) {
+          ++skipped;  // points and lines
+          continue;
+        }
+        for (unsigned c = 0; c < 3; ++c) {
+          if (face.mIndices[c] >= am->mNumVertices)
+            return FileError(Error::Code::kInvalidMesh, path,
+                             "mesh '" + mname + "' face " + std::to_string(f) + " references vertex " +
+                                 std::to_string(face.mIndices[c]) + " of " + std::to_string(am->mNumVertices));
+          mesh.indices.push_back(part.first_vertex + face.mIndices[c]);
+        }
+      }
+      if (skipped && ctx) ctx->Info("import: " + path + ": mesh '" + mname + "': " + std::to_string(skipped) + " non-triangle faces skipped");
+      part.triangle_count = mesh.triangle_count() - part.first_triangle;
+      mesh.parts.push_back(part);
+
+      if (!any_bones) continue;
+      influences.resize(mesh.vertex_count());
+      if (am->HasBones()) {
+        for (unsigned b = 0; b < am->mNumBones; ++b) {
+          const aiBone* bone = am->mBones[b];
+          SkinJoint j;
+          j.node = bone_node[b];
+          j.inverse_bind = ToColumnMajor(ToEigen(bone->mOffsetMatrix) * M_inv);
+          const uint32_t ji = static_cast<uint32_t>(skin.joints.size());
+          skin.joints.push_back(j);
+          for (unsigned w = 0; w < bone->mNumWeights; ++w) {
+            const aiVertexWeight& vw = bone->mWeights[w];
+            if (vw.mVertexId >= am->mNumVertices)
+              return FileError(Error::Code::kInvalidMesh, path,
+                               "bone '" + std::string(bone->mName.C_Str()) + "' weights vertex " +
+                                   std::to_string(vw.mVertexId) + " of " + std::to_string(am->mNumVertices));
+            influences[part.first_vertex + vw.mVertexId].emplace_back(ji, vw.mWeight);
+          }
+        }
+      } else {
+        SkinJoint j;  // rigid part: follows its own node
+        j.node = static_cast<int32_t>(slot);
+        j.inverse_bind = ToColumnMajor(M_inv);
+        const uint32_t ji = static_cast<uint32_t>(skin.joints.size());
+        skin.joints.push_back(j);
+        for (unsigned v = 0; v < am->mNumVertices; ++v) influences[part.first_vertex + v].emplace_back(ji, 1.0f);
+      }
+    }
+  }
+  if (mesh.indices.empty()) return FileError(Error::Code::kInvalidMesh, path, "no triangles");
+  if (any_bones) {
+    influences.resize(mesh.vertex_count());
+    skin.nodes = nodes;
+    PackWeights(influences, skin);
+    mesh.skin = std::move(skin);
+  }
+
+  if (options.read_clips && mesh.skin) {
+    for (unsigned a = 0; a < scene->mNumAnimations; ++a) {
+      const aiAnimation* aa = scene->mAnimations[a];
+      const double tps = aa->mTicksPerSecond > 0.0 ? aa->mTicksPerSecond : 25.0;
+      Clip clip;
+      clip.name = aa->mName.length ? std::string(aa->mName.C_Str()) : "animation" + std::to_string(a);
+      clip.duration_s = static_cast<float>(aa->mDuration / tps);
+      for (unsigned c = 0; c < aa->mNumChannels; ++c) {
+        const aiNodeAnim* na = aa->mChannels[c];
+        auto it = by_name.find(na->mNodeName.C_Str());
+        if (it == by_name.end()) {
+          if (ctx) ctx->Warn("import: " + path + ": clip '" + clip.name + "' animates unknown node '" + na->mNodeName.C_Str() + "'");
+          continue;
+        }
+        if (na->mNumPositionKeys) {
+          Channel ch;
+          ch.node = it->second;
+          ch.path = Channel::Path::kTranslation;
+          for (unsigned k = 0; k < na->mNumPositionKeys; ++k) {
+            const aiVectorKey& key = na->mPositionKeys[k];
+            ch.times.push_back(static_cast<float>(key.mTime / tps));
+            ch.values.insert(ch.values.end(), {key.mValue.x, key.mValue.y, key.mValue.z});
+          }
+          clip.channels.push_back(std::move(ch));
+        }
+        if (na->mNumRotationKeys) {
+          Channel ch;
+          ch.node = it->second;
+          ch.path = Channel::Path::kRotation;
+          for (unsigned k = 0; k < na->mNumRotationKeys; ++k) {
+            const aiQuatKey& key = na->mRotationKeys[k];
+            ch.times.push_back(static_cast<float>(key.mTime / tps));
+            ch.values.insert(ch.values.end(), {key.mValue.x, key.mValue.y, key.mValue.z, key.mValue.w});
+          }
+          clip.channels.push_back(std::move(ch));
+        }
+        if (na->mNumScalingKeys) {
+          Channel ch;
+          ch.node = it->second;
+          ch.path = Channel::Path::kScale;
+          for (unsigned k = 0; k < na->mNumScalingKeys; ++k) {
+            const aiVectorKey& key = na->mScalingKeys[k];
+            ch.times.push_back(static_cast<float>(key.mTime / tps));
+            ch.values.insert(ch.values.end(), {key.mValue.x, key.mValue.y, key.mValue.z});
+          }
+          clip.channels.push_back(std::move(ch));
+        }
+      }
+      for (const Channel& ch : clip.channels)
+        if (!ch.times.empty()) clip.duration_s = std::max(clip.duration_s, ch.times.back());
+      mesh.clips.push_back(std::move(clip));
+    }
+  }
+  return mesh;
+}
+
+}  // namespace spherechain::baker::detail

@@ -1,0 +1,66 @@
+// spherechain baker — helpers shared by the segmentation files (segment.cpp, segment_rig.cpp,
+// segment_geometry.cpp). Not installed.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string_view>
+#include <string>
+#include <vector>
+
+#include "spherechain/baker/segment.h"
+#include "spherechain/baker/types.h"
+
+namespace spherechain::baker::segment_detail {
+
+/// Vertex `v` as a double vector (model space, source units).
+inline Eigen::Vector3d Position(const Mesh& mesh, uint32_t v) {
+  return {mesh.positions[3 * v + 0], mesh.positions[3 * v + 1], mesh.positions[3 * v + 2]};
+}
+
+/// Unit vector of Mesh::up_axis.
+Eigen::Vector3d UpVector(UpAxis axis);
+
+/// Indices in range and at least one triangle; kInvalidMesh otherwise.
+Status CheckMeshForSegmentation(const Mesh& mesh);
+
+/// Vertex adjacency for *analysis only*: vertices at the same position (UV / normal seams, split glTF
+/// primitives) are welded to one representative (the lowest index), edges come from the triangles.
+/// Nothing in the mesh is changed. Cost O(#V log #V + #T).
+struct WeldedGraph {
+  std::vector<uint32_t> rep;      ///< #V: representative vertex of each vertex (rep[rep[v]] == rep[v])
+  std::vector<uint32_t> offsets;  ///< #V+1 CSR over representatives (rows of non-representatives empty)
+  std::vector<uint32_t> adj;      ///< neighbour representatives
+  std::vector<uint8_t> used;      ///< #V: 1 when a representative is referenced by a triangle
+  std::vector<double> area;       ///< #V: a third of the incident triangles' area, on representatives
+};
+WeldedGraph BuildWeldedGraph(const Mesh& mesh);
+
+/// Area of each triangle (source units²).
+std::vector<double> TriangleAreas(const Mesh& mesh);
+
+/// Connected-component cleanup so that each limb region is one connected piece (triangles connected
+/// through shared welded vertices): for each limb region every piece but the largest (by area) moves to
+/// the region it touches most (the torso when it touches nothing); then every torso piece but the
+/// largest that touches a single limb only (an island enclosed by that limb) joins that limb.
+/// Appends what it did to `notes`.
+void MakeLimbsConnected(const Mesh& mesh, std::vector<uint8_t>& triangle_regions, std::string& notes);
+
+/// Fills Segmentation::vertex_regions from triangle_regions: a vertex takes the majority region of its
+/// incident triangles (ties go to the lowest region value); kNoRegion when unreferenced.
+void ComputeVertexRegions(const Mesh& mesh, Segmentation& seg);
+
+/// Bone-name rules (segment_rig.cpp): the region a bone's weights go to, or nullopt for a limb bone
+/// with no side in its name. Tokens split at non-alphanumerics, case and digit changes; side tokens
+/// l/left, r/right; clavicle / collar / shoulder / scapula / breast / pelvis → torso (the arm is cut at
+/// the armpit, as the geometric method does); arm/elbow/wrist/hand/finger/thumb/metacarpal → arm;
+/// leg/thigh/knee/calf/shin/foot/ankle/toe/heel and a *sided* hip → leg; anything else → torso.
+std::optional<Region> RegionOfBone(std::string_view bone_name);
+
+/// "R0 left_arm 1234 tri, R1 ..." summary for notes and logs.
+std::string RegionCounts(const std::vector<uint8_t>& triangle_regions);
+
+}  // namespace spherechain::baker::segment_detail

@@ -1,0 +1,71 @@
+// spherechain cuda — a device copy of a .sphc asset's refit and detect data (uploaded once).
+#pragma once
+
+#include <cstdint>
+
+#include "spherechain/cuda/status.h"
+#include "spherechain/runtime/asset.h"
+
+namespace spherechain::cuda {
+
+/// Device pointers and counts of one uploaded asset. POD, shared by host and device code; every
+/// pointer is DEVICE memory owned by the DeviceAsset it came from (lifetime: until Release / the
+/// DeviceAsset's destruction). Layout mirrors runtime::Context's SoA (same values, same arithmetic):
+struct DeviceAssetDesc {
+  const uint32_t* pivot_vertices = nullptr;  ///< #S×12: vertex indices (< #V) of the 4 pivot triangles
+                                             ///< (Asset.pivot_vertices)
+  const float4* frame_local = nullptr;       ///< #S: (PivotFrame.local_center xyz, bind radius /
+                                             ///< PivotFrame.mean_distance)
+  const float4* frame_offset = nullptr;      ///< #S: (PivotFrame.centroid_offset xyz, 0)
+  const float4* bind = nullptr;              ///< #S: bind spheres (centre xyz, radius) (Asset.spheres)
+  const uint32_t* chain_mask = nullptr;      ///< #S: bit c ⇔ sphere in Asset.chains[c]
+  const uint32_t* chain_offsets = nullptr;   ///< #C+1 into chain_spheres
+  const uint16_t* chain_spheres = nullptr;   ///< Σ|chain|, each chain ascending
+  const uint32_t* excl_offsets = nullptr;    ///< #S+1 into excl_neighbors (CSR by the smaller index a)
+  const uint16_t* excl_neighbors = nullptr;  ///< #excluded: partners b > a, ascending per a
+  uint32_t sphere_count = 0;                 ///< #S (1..65535)
+  uint32_t vertex_count = 0;                 ///< #V the positions must have
+  uint32_t chain_count = 0;                  ///< #C (0..32)
+  uint32_t max_chain_length = 0;             ///< longest chain (spheres)
+  uint32_t excluded_count = 0;               ///< #excluded (len(Asset.excluded_pairs))
+};
+
+/// Owning device copy of what refit and detect need from one asset (runtime::AssetView), uploaded
+/// once. Move-only. Thread safety: Upload/Release are not thread-safe on one object; const use
+/// (desc(), being referenced by a Batch) is.
+class DeviceAsset {
+ public:
+  DeviceAsset() = default;
+  DeviceAsset(const DeviceAsset&) = delete;
+  DeviceAsset& operator=(const DeviceAsset&) = delete;
+  DeviceAsset(DeviceAsset&& o) noexcept;
+  DeviceAsset& operator=(DeviceAsset&& o) noexcept;
+  ~DeviceAsset();
+
+  /// Copies `view`'s refit/detect data to the current device (one cudaMalloc, one synchronous
+  /// cudaMemcpy). The asset bytes are no longer needed afterwards.
+  /// Returns kOk; kErrorNullArgument (`!view.valid()`); kErrorOutOfMemory (host/device allocation);
+  /// kErrorCuda (LastCudaError()). On failure the object is left empty.
+  /// Cost: O(#S + Σ|chain| + #excluded) host work, ~100 B per sphere of device memory, synchronous.
+  /// Must not be called while a Batch referencing this asset runs (it frees the old copy).
+  Status Upload(const runtime::AssetView& view);
+  /// Frees the device memory (cudaFree, synchronising). Safe on an empty object.
+  void Release();
+
+  /// True after a successful Upload.
+  bool valid() const { return storage_ != nullptr; }
+  /// Device pointers + counts (see DeviceAssetDesc); all null/0 when empty.
+  const DeviceAssetDesc& desc() const { return desc_; }
+  uint32_t sphere_count() const { return desc_.sphere_count; }  ///< #S
+  uint32_t vertex_count() const { return desc_.vertex_count; }  ///< #V
+  uint32_t chain_count() const { return desc_.chain_count; }    ///< #C
+  /// Device bytes held.
+  size_t device_bytes() const { return bytes_; }
+
+ private:
+  void* storage_ = nullptr;  // one device allocation holding every array
+  size_t bytes_ = 0;
+  DeviceAssetDesc desc_{};
+};
+
+}  // namespace spherechain::cuda

@@ -1,0 +1,164 @@
+// spherechain cuda — refit + detect for one or many character instances per launch (paper §5.1, §5.2, §6).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "spherechain/cuda/asset.h"
+#include "spherechain/cuda/status.h"
+#include "spherechain/runtime/detect.h"
+#include "spherechain/runtime/refit.h"
+
+namespace spherechain::cuda {
+
+/// How the fused refit+detect kernel maps work to threads (paper §6 compares M1/M2 on the GPU).
+/// All strategies report the same pair set for a given DetectMethod (the CPU DetectJob's set).
+enum class Strategy : uint8_t {
+  /// kBlockPerChain for M1 when there are few instances (< 4 per SM), else kWarpPerInstance.
+  /// M2: kThreadPerSphere for few instances, else kWarpPerInstance.
+  kAuto = 0,
+  /// A block per instance, a thread per sphere: thread a refits sphere a into shared memory, then
+  /// tests it against every higher-index sphere b > a (M1: only b sharing a chain with a). The paper's
+  /// M2 GPU mapping. Block size = #S rounded up to 32, at most 256 (larger #S: threads loop).
+  kThreadPerSphere = 1,
+  /// M1 only: a block per (instance, chain), a thread per chain sphere: the block refits its chain's
+  /// spheres into shared memory (a sphere in k chains is refitted k times), thread i tests chain
+  /// sphere i against chain spheres j > i; a pair is reported by the first chain holding both (as
+  /// the CPU). The paper's M1 GPU mapping. kErrorInvalidJob with M2.
+  kBlockPerChain = 2,
+  /// Batched: a warp per instance, 4 instances per 128-thread block; lanes refit spheres, then for
+  /// each sphere a the lanes test b > a in parallel. Fills the GPU with many small characters.
+  kWarpPerInstance = 3,
+};
+
+/// One character instance of a batch (host struct, copied to the device by Batch::Init /
+/// SetInstances).
+struct Instance {
+  /// DEVICE pointer to the deformed positions, vertex i = 3 floats (x, y, z) at
+  /// `(const char*)positions + i * stride_bytes` — runtime::PositionsView on the device. Same space
+  /// and units as the asset's bind pose (or a rigid motion of it). [Limit: 4-byte aligned, non-null]
+  /// Read by every Batch::Run; must stay valid (and be written by the caller's skinning before Run
+  /// on the same stream, or synchronised) for as long as the batch runs.
+  const void* positions = nullptr;
+  uint32_t vertex_count = 0;   ///< #V [Limit: == the asset's vertex_count, else kErrorVertexCount]
+  uint32_t stride_bytes = 12;  ///< [Limit: >= 12, multiple of 4, else kErrorStride]
+  uint32_t asset = 0;          ///< slot in the `assets` array passed to Batch::Init [Limit: < asset_count]
+};
+
+/// One colliding pair of one instance: runtime::Collision (same fields, same values as the CPU
+/// DetectJob) tagged with its instance. POD, 16 bytes, device output record.
+struct BatchCollision {
+  uint32_t instance;         ///< index into the instance table
+  runtime::Collision pair;   ///< a < b, depth [source units], chains mask
+};
+static_assert(sizeof(BatchCollision) == 16);
+
+/// Per-frame parameters of Batch::Run.
+struct FrameParams {
+  runtime::RefitMode mode = runtime::RefitMode::kPivotFrame;  ///< as RefitJob::mode (§5.1)
+  runtime::DetectMethod method = runtime::DetectMethod::kM1;  ///< as DetectJob::method (§5.2)
+  Strategy strategy = Strategy::kAuto;                        ///< kernel mapping (see Strategy)
+  bool write_spheres = false;  ///< also store the refitted spheres in spheres() (costs 16 B/sphere)
+};
+
+/// Host copy of one frame's results (Batch::Download). Allocates; for tests and tools, not the
+/// per-frame path.
+struct HostResults {
+  std::vector<BatchCollision> pairs;     ///< min(total, capacity) records, in no particular order
+  std::vector<uint32_t> instance_counts; ///< per instance: distinct overlapping non-excluded pairs
+                                         ///< (complete even when the output overflowed)
+  std::vector<float4> spheres;           ///< Σ#S (when FrameParams::write_spheres; else empty)
+  uint32_t total = 0;                    ///< Σ instance_counts (may exceed capacity)
+  bool overflow = false;                 ///< total > capacity: `pairs` holds an arbitrary subset
+};
+
+/// A set of character instances refitted and tested together, with its device outputs.
+/// Setup (Init / SetInstances / Release) allocates and synchronises; Run() does neither: it enqueues
+/// one cudaMemsetAsync and one kernel on the caller's stream, so a frame can be captured into a CUDA
+/// graph and replayed (the positions are re-read at every replay).
+/// Outputs (device memory owned by the batch; transient: overwritten by the next Run, valid once the
+/// stream reaches the end of that Run's work):
+///  - pairs(): BatchCollision[capacity], compacted with atomics, order unspecified (sort to compare);
+///  - counters(): uint32[2 + N]: [0] total pairs (all instances; may exceed capacity), [1] overflow
+///    flag (1 ⇔ total > capacity), [2 + i] instance i's distinct pairs;
+///  - spheres() [opt]: float4 (x, y, z, r) per sphere, instance i's at sphere_offset(i).
+/// Thread safety: one Run at a time per batch object (outputs are shared); different batches are
+/// independent. Referenced DeviceAssets must outlive the batch.
+class Batch {
+ public:
+  Batch() = default;
+  Batch(const Batch&) = delete;
+  Batch& operator=(const Batch&) = delete;
+  Batch(Batch&& o) noexcept;
+  Batch& operator=(Batch&& o) noexcept;
+  ~Batch();
+
+  /// Validates the instance table and allocates the device tables and outputs.
+  /// @param assets          host array of `asset_count` uploaded assets (borrowed; must outlive the
+  ///                        batch) [Limit: 1..65536, each valid()]
+  /// @param instances       host array of `instance_count` instances (copied) [Limit: 1..2^26]
+  /// @param capacity        BatchCollision records in pairs(); 0 = Σ over instances of the exact
+  ///                        non-excluded pair count of its asset (never truncates, M1 or M2; clamped
+  ///                        to 2^31). Memory: 16 B per record.
+  /// Returns kOk; kErrorNullArgument; kErrorInvalidJob (asset slot out of range, asset not uploaded,
+  /// counts out of limits); kErrorAlignment / kErrorStride / kErrorVertexCount (the first bad
+  /// instance; the batch is left empty); kErrorOutOfMemory; kErrorCuda.
+  /// Cost: O(#assets + N) host work, allocations, synchronous copies.
+  Status Init(const DeviceAsset* const* assets, uint32_t asset_count, const Instance* instances,
+              uint32_t instance_count, uint32_t capacity = 0);
+
+  /// Replaces the instance table (same instance_count as Init; e.g. new positions pointers), with the
+  /// same checks as Init. Synchronous (device-wide cudaMemcpy): call between frames, not inside a
+  /// graph capture. Graphs captured before remain valid (the table lives at the same address).
+  Status SetInstances(const Instance* instances, uint32_t instance_count);
+
+  /// Enqueues one frame on `stream` (0 = legacy default stream): zero the counters, then refit every
+  /// instance's spheres from its positions and report overlapping non-excluded pairs. Asynchronous,
+  /// no allocation, no synchronisation: capturable (cudaStreamBeginCapture … EndCapture).
+  /// Returns kOk (enqueued; read the overflow flag for truncation); kErrorInvalidJob (not initialised,
+  /// unknown mode/method/strategy, kBlockPerChain with M2); kErrorCuda (launch failed:
+  /// LastCudaError()). Non-finite positions give non-finite spheres, which never overlap.
+  /// Cost: one kernel; per sphere 12 vertex reads (144 B) + ~120 flops; per tested pair 11 flops.
+  Status Run(const FrameParams& params, cudaStream_t stream) const;
+
+  /// Copies the last frame's outputs to `out` after synchronising `stream` (allocates host vectors).
+  /// `with_spheres`: also copy spheres() (only meaningful when the last Run wrote them).
+  /// Returns kOk, kOkTruncated (overflow), kErrorNullArgument, kErrorInvalidJob (not initialised),
+  /// kErrorCuda (also reports asynchronous errors of the frame's kernel).
+  Status Download(cudaStream_t stream, HostResults* out, bool with_spheres = false) const;
+
+  /// Releases the device memory (synchronising). Safe on an empty batch.
+  void Release();
+
+  bool initialized() const { return instance_count_ != 0; }       ///< after a successful Init
+  uint32_t instance_count() const { return instance_count_; }     ///< N
+  uint32_t capacity() const { return capacity_; }                 ///< records in pairs()
+  uint32_t total_spheres() const { return total_spheres_; }       ///< Σ#S over instances
+  /// Index of instance i's first sphere in spheres(). [Limit: i < N]
+  uint32_t sphere_offset(uint32_t i) const { return sphere_offsets_[i]; }
+  const BatchCollision* pairs() const { return pairs_; }  ///< DEVICE, [capacity]
+  const uint32_t* counters() const { return counters_; }  ///< DEVICE, [2 + N] (see class comment)
+  const float4* spheres() const { return spheres_; }      ///< DEVICE, [total_spheres]
+
+  /// Bytes of positions a frame reads (12 vertices × 12 B per sphere, Σ over instances): the
+  /// "useful" traffic for bandwidth figures (the hardware moves whole 32 B sectors).
+  uint64_t frame_position_bytes() const { return frame_position_bytes_; }
+
+ private:
+  Status Upload(const Instance* instances, uint32_t instance_count);
+
+  const DeviceAsset* const* host_assets_ = nullptr;
+  uint32_t asset_count_ = 0;
+  uint32_t instance_count_ = 0, capacity_ = 0, total_spheres_ = 0;
+  uint32_t max_spheres_ = 0, max_chains_ = 0, max_chain_length_ = 0, sm_count_ = 1;
+  uint64_t frame_position_bytes_ = 0;
+  std::vector<uint32_t> sphere_offsets_;
+  void* table_ = nullptr;          // device: DeviceAssetDesc[asset_count] + internal instance table
+  void* asset_table_ = nullptr;    // into table_
+  void* instance_table_ = nullptr; // into table_
+  BatchCollision* pairs_ = nullptr;
+  uint32_t* counters_ = nullptr;
+  float4* spheres_ = nullptr;
+};
+
+}  // namespace spherechain::cuda

@@ -1,0 +1,452 @@
+// Batch: fused refit + detect kernels (one launch per frame) and their host-side setup.
+//
+// Kernel design (see Strategy in batch.h):
+//  - GroupKernel<kWarp=false>: a block per instance, a thread per sphere (kThreadPerSphere);
+//  - GroupKernel<kWarp=true>:  a warp per instance, 4 per block (kWarpPerInstance);
+//  - ChainKernel: a block per (instance, chain), a thread per chain sphere (kBlockPerChain, M1).
+// Each refits the spheres it needs into shared memory (DevRefitSphere, the CPU formulas), syncs, runs
+// the overlap tests, and appends hits to one device array with warp-aggregated atomicAdd
+// (cooperative_groups::coalesced_threads), counting per instance. When the spheres do not fit in
+// 48 KiB of shared memory the kernels keep them in the batch's global sphere buffer instead.
+#include <cooperative_groups.h>
+
+#include <algorithm>
+#include <new>
+#include <utility>
+
+#include "internal.h"
+#include "refit_device.cuh"
+#include "spherechain/cuda/batch.h"
+
+namespace cg = cooperative_groups;
+
+namespace spherechain::cuda {
+namespace {
+
+using detail::DeviceInstance;
+
+constexpr uint32_t kFlagFrameMode = 1u;     // RefitMode::kPivotFrame
+constexpr uint32_t kFlagWriteSpheres = 2u;  // FrameParams::write_spheres
+constexpr uint32_t kFlagM1 = 4u;            // DetectMethod::kM1
+constexpr uint32_t kWarpsPerBlock = 4;      // kWarpPerInstance: instances per block
+constexpr size_t kSharedLimit = 48 * 1024;  // default dynamic shared memory per block
+
+struct KernelParams {
+  const DeviceAssetDesc* assets;
+  const DeviceInstance* instances;
+  BatchCollision* pairs;
+  uint32_t* counters;  // [0] total, [1] overflow, [2 + i] per instance
+  float4* spheres;     // Σ#S: output, and the sphere store when not in shared memory
+  uint32_t instance_count;
+  uint32_t capacity;
+  uint32_t shared_spheres;  // spheres per group slice of shared memory
+  uint32_t chains_per_instance;
+  uint32_t flags;
+};
+
+// Appends one pair: one atomicAdd per coalesced group of hitting threads.
+__device__ __forceinline__ void Emit(const KernelParams& p, uint32_t inst, uint32_t a, uint32_t b, const float4& A,
+                                     const float4& B, uint32_t chains) {
+  const float depth = detail::DevDepth(A, B);
+  cg::coalesced_group g = cg::coalesced_threads();
+  uint32_t base = 0;
+  if (g.thread_rank() == 0) base = atomicAdd(p.counters, g.size());
+  base = g.shfl(base, 0);
+  const uint32_t slot = base + g.thread_rank();
+  if (slot < p.capacity) {
+    reinterpret_cast<uint4*>(p.pairs)[slot] = make_uint4(inst, a | (b << 16), __float_as_uint(depth), chains);
+  } else {
+    p.counters[1] = 1u;
+  }
+}
+
+// Adds each warp's hit count to instance `inst`'s counter (every lane of the warp must call).
+__device__ __forceinline__ void AddInstanceCount(const KernelParams& p, uint32_t inst, uint32_t hits) {
+  hits = __reduce_add_sync(0xffffffffu, hits);
+  if ((threadIdx.x & 31u) == 0 && hits) atomicAdd(p.counters + 2 + inst, hits);
+}
+
+template <bool kWarp, bool kShared>
+__global__ void GroupKernel(KernelParams p) {
+  extern __shared__ float4 smem[];
+  const uint32_t G = kWarp ? 32u : blockDim.x;
+  const uint32_t group = kWarp ? threadIdx.x / 32u : 0u;
+  const uint32_t lane = kWarp ? threadIdx.x % 32u : threadIdx.x;
+  const uint32_t inst = kWarp ? blockIdx.x * (blockDim.x / 32u) + group : blockIdx.x;
+  if (inst >= p.instance_count) return;  // whole warp (kWarp) or whole block
+  const DeviceInstance I = p.instances[inst];
+  const DeviceAssetDesc& A = p.assets[I.asset];
+  const uint32_t S = A.sphere_count;
+  const bool frame_mode = p.flags & kFlagFrameMode, write = p.flags & kFlagWriteSpheres, m1 = p.flags & kFlagM1;
+  float4* sph = kShared ? smem + size_t{group} * p.shared_spheres : p.spheres + I.sphere_offset;
+
+  for (uint32_t s = lane; s < S; s += G) {
+    const float4 v = detail::DevRefitSphere(A, I.positions, I.stride_bytes, s, frame_mode);
+    sph[s] = v;
+    if (kShared && write) p.spheres[I.sphere_offset + s] = v;
+  }
+  if (kWarp) __syncwarp(); else __syncthreads();
+
+  const uint32_t* mask = A.chain_mask;
+  uint32_t hits = 0;
+  if (kWarp) {
+    // Sphere a broadcast to the warp; lanes take b = a + 1 + lane, a + 33 + lane, ...
+    for (uint32_t a = 0; a + 1 < S; ++a) {
+      const float4 SA = sph[a];
+      const uint32_t ma = __ldg(mask + a);
+      if (m1 && !ma) continue;  // uniform across the warp
+      for (uint32_t b = a + 1 + lane; b < S; b += 32u) {
+        const uint32_t common = ma & __ldg(mask + b);
+        if (m1 && !common) continue;
+        const float4 SB = sph[b];
+        if (detail::DevOverlap(SA, SB) && !detail::DevIsExcluded(A, a, b)) {
+          ++hits;
+          Emit(p, inst, a, b, SA, SB, common);
+        }
+      }
+    }
+  } else {
+    // Thread per sphere: sphere a against every higher-index sphere (§6, M2 mapping).
+    for (uint32_t a = lane; a < S; a += G) {
+      const float4 SA = sph[a];
+      const uint32_t ma = __ldg(mask + a);
+      if (m1 && !ma) continue;
+      for (uint32_t b = a + 1; b < S; ++b) {
+        const uint32_t common = ma & __ldg(mask + b);
+        if (m1 && !common) continue;
+        const float4 SB = sph[b];
+        if (detail::DevOverlap(SA, SB) && !detail::DevIsExcluded(A, a, b)) {
+          ++hits;
+          Emit(p, inst, a, b, SA, SB, common);
+        }
+      }
+    }
+  }
+  AddInstanceCount(p, inst, hits);
+}
+
+// M1, a block per (instance, chain), a thread per chain sphere (§6, M1 mapping).
+template <bool kShared>
+__global__ void ChainKernel(KernelParams p) {
+  extern __shared__ float4 smem[];
+  const uint32_t inst = blockIdx.x / p.chains_per_instance, chain = blockIdx.x % p.chains_per_instance;
+  if (inst >= p.instance_count) return;
+  const DeviceInstance I = p.instances[inst];
+  const DeviceAssetDesc& A = p.assets[I.asset];
+  if (chain >= A.chain_count && chain != 0) return;  // whole block
+  const bool frame_mode = p.flags & kFlagFrameMode, write = p.flags & kFlagWriteSpheres;
+  const uint32_t* mask = A.chain_mask;
+  uint32_t off = 0, n = 0;
+  if (chain < A.chain_count) {
+    off = __ldg(A.chain_offsets + chain);
+    n = __ldg(A.chain_offsets + chain + 1) - off;
+  }
+  const uint16_t* ids = A.chain_spheres + off;
+  float4* global = p.spheres + I.sphere_offset;
+
+  // Refit the chain's spheres (shared: by chain position; global: by sphere index — blocks of other
+  // chains may write the same sphere, always with the same bits). Each sphere is written to the
+  // output by its first chain's block; chain 0's block also refits the chainless spheres.
+  for (uint32_t i = threadIdx.x; i < n; i += blockDim.x) {
+    const uint32_t s = ids[i];
+    const float4 v = detail::DevRefitSphere(A, I.positions, I.stride_bytes, s, frame_mode);
+    if (kShared) {
+      smem[i] = v;
+      if (write && uint32_t(__ffs(__ldg(mask + s)) - 1) == chain) global[s] = v;
+    } else {
+      global[s] = v;
+    }
+  }
+  if (write && chain == 0)
+    for (uint32_t s = threadIdx.x; s < A.sphere_count; s += blockDim.x)
+      if (!__ldg(mask + s)) global[s] = detail::DevRefitSphere(A, I.positions, I.stride_bytes, s, frame_mode);
+  __syncthreads();
+
+  uint32_t hits = 0;
+  for (uint32_t i = threadIdx.x; i < n; i += blockDim.x) {
+    const uint32_t a = ids[i];
+    const float4 SA = kShared ? smem[i] : global[a];
+    const uint32_t ma = __ldg(mask + a);
+    for (uint32_t j = i + 1; j < n; ++j) {
+      const uint32_t b = ids[j];
+      const float4 SB = kShared ? smem[j] : global[b];
+      if (!detail::DevOverlap(SA, SB)) continue;
+      const uint32_t common = ma & __ldg(mask + b);
+      // Reported once: by the first chain containing both (as the CPU DetectM1).
+      if (uint32_t(__ffs(common) - 1) != chain || detail::DevIsExcluded(A, a, b)) continue;
+      ++hits;
+      Emit(p, inst, a, b, SA, SB, common);
+    }
+  }
+  AddInstanceCount(p, inst, hits);
+}
+
+uint32_t RoundUp32(uint32_t v) { return (v + 31u) & ~31u; }
+
+void FreeAll(void** ptrs, size_t n) {
+  for (size_t i = 0; i < n; ++i)
+    if (ptrs[i]) (void)cudaFree(ptrs[i]);
+}
+
+}  // namespace
+
+Batch::Batch(Batch&& o) noexcept { *this = std::move(o); }
+
+Batch& Batch::operator=(Batch&& o) noexcept {
+  if (this != &o) {
+    Release();
+    host_assets_ = std::exchange(o.host_assets_, nullptr);
+    asset_count_ = std::exchange(o.asset_count_, 0);
+    instance_count_ = std::exchange(o.instance_count_, 0);
+    capacity_ = std::exchange(o.capacity_, 0);
+    total_spheres_ = std::exchange(o.total_spheres_, 0);
+    max_spheres_ = std::exchange(o.max_spheres_, 0);
+    max_chains_ = std::exchange(o.max_chains_, 0);
+    max_chain_length_ = std::exchange(o.max_chain_length_, 0);
+    sm_count_ = std::exchange(o.sm_count_, 1);
+    frame_position_bytes_ = std::exchange(o.frame_position_bytes_, 0);
+    sphere_offsets_ = std::move(o.sphere_offsets_);
+    table_ = std::exchange(o.table_, nullptr);
+    asset_table_ = std::exchange(o.asset_table_, nullptr);
+    instance_table_ = std::exchange(o.instance_table_, nullptr);
+    pairs_ = std::exchange(o.pairs_, nullptr);
+    counters_ = std::exchange(o.counters_, nullptr);
+    spheres_ = std::exchange(o.spheres_, nullptr);
+  }
+  return *this;
+}
+
+Batch::~Batch() { Release(); }
+
+void Batch::Release() {
+  void* ptrs[] = {table_, pairs_, counters_, spheres_};
+  FreeAll(ptrs, 4);
+  host_assets_ = nullptr;
+  asset_count_ = instance_count_ = capacity_ = total_spheres_ = 0;
+  max_spheres_ = max_chains_ = max_chain_length_ = 0;
+  sm_count_ = 1;
+  frame_position_bytes_ = 0;
+  sphere_offsets_.clear();
+  table_ = asset_table_ = instance_table_ = nullptr;
+  pairs_ = nullptr;
+  counters_ = nullptr;
+  spheres_ = nullptr;
+}
+
+namespace {
+
+Status CheckInstances(const DeviceAsset* const* assets, uint32_t asset_count, const Instance* instances,
+                      uint32_t instance_count) {
+  for (uint32_t i = 0; i < instance_count; ++i) {
+    const Instance& in = instances[i];
+    if (!in.positions) return Status::kErrorNullArgument;
+    if (in.asset >= asset_count) return Status::kErrorInvalidJob;
+    if (reinterpret_cast<uintptr_t>(in.positions) % alignof(float) != 0) return Status::kErrorAlignment;
+    if (in.stride_bytes < 3 * sizeof(float) || in.stride_bytes % sizeof(float) != 0) return Status::kErrorStride;
+    if (in.vertex_count != assets[in.asset]->vertex_count()) return Status::kErrorVertexCount;
+  }
+  return Status::kOk;
+}
+
+}  // namespace
+
+Status Batch::Init(const DeviceAsset* const* assets, uint32_t asset_count, const Instance* instances,
+                   uint32_t instance_count, uint32_t capacity) {
+  Release();
+  if (!assets || !instances || asset_count == 0 || instance_count == 0) return Status::kErrorNullArgument;
+  if (asset_count > 65536u || instance_count > (1u << 26)) return Status::kErrorInvalidJob;
+  for (uint32_t k = 0; k < asset_count; ++k)
+    if (!assets[k] || !assets[k]->valid()) return Status::kErrorInvalidJob;
+  if (Status s = CheckInstances(assets, asset_count, instances, instance_count); s != Status::kOk) return s;
+
+  uint64_t total_spheres = 0, pairs_bound = 0, pos_bytes = 0;
+  uint32_t max_s = 0, max_c = 0, max_len = 0;
+  try {
+    sphere_offsets_.resize(instance_count);
+  } catch (const std::bad_alloc&) {
+    return Status::kErrorOutOfMemory;
+  }
+  for (uint32_t i = 0; i < instance_count; ++i) {
+    const DeviceAssetDesc& d = assets[instances[i].asset]->desc();
+    sphere_offsets_[i] = static_cast<uint32_t>(total_spheres);
+    total_spheres += d.sphere_count;
+    pairs_bound += uint64_t{d.sphere_count} * (d.sphere_count - 1) / 2 - d.excluded_count;
+    pos_bytes += uint64_t{d.sphere_count} * 12 * 12;
+    max_s = std::max(max_s, d.sphere_count);
+    max_c = std::max(max_c, d.chain_count);
+    max_len = std::max(max_len, d.max_chain_length);
+  }
+  if (total_spheres > UINT32_MAX) {
+    Release();
+    return Status::kErrorInvalidJob;
+  }
+  if (capacity == 0) capacity = static_cast<uint32_t>(std::min<uint64_t>(std::max<uint64_t>(pairs_bound, 1), 1u << 31));
+
+  int dev = 0, sms = 1;
+  if (Status s = detail::CudaStatus(cudaGetDevice(&dev)); s != Status::kOk) return Release(), s;
+  if (Status s = detail::CudaStatus(cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, dev));
+      s != Status::kOk)
+    return Release(), s;
+
+  const size_t asset_bytes = sizeof(DeviceAssetDesc) * asset_count;
+  const size_t inst_off = (asset_bytes + 63) & ~size_t{63};
+  const size_t table_bytes = inst_off + sizeof(DeviceInstance) * instance_count;
+  Status st = detail::CudaStatus(cudaMalloc(&table_, table_bytes));
+  if (st == Status::kOk) st = detail::CudaStatus(cudaMalloc(reinterpret_cast<void**>(&pairs_), sizeof(BatchCollision) * capacity));
+  if (st == Status::kOk)
+    st = detail::CudaStatus(cudaMalloc(reinterpret_cast<void**>(&counters_), sizeof(uint32_t) * (2 + size_t{instance_count})));
+  if (st == Status::kOk) st = detail::CudaStatus(cudaMalloc(reinterpret_cast<void**>(&spheres_), sizeof(float4) * total_spheres));
+  if (st != Status::kOk) return Release(), st;
+  asset_table_ = table_;
+  instance_table_ = static_cast<char*>(table_) + inst_off;
+
+  try {
+    std::vector<DeviceAssetDesc> descs(asset_count);
+    for (uint32_t k = 0; k < asset_count; ++k) descs[k] = assets[k]->desc();
+    st = detail::CudaStatus(cudaMemcpy(asset_table_, descs.data(), asset_bytes, cudaMemcpyHostToDevice));
+  } catch (const std::bad_alloc&) {
+    st = Status::kErrorOutOfMemory;
+  }
+  if (st == Status::kOk) st = detail::CudaStatus(cudaMemset(counters_, 0, sizeof(uint32_t) * (2 + size_t{instance_count})));
+  if (st != Status::kOk) return Release(), st;
+
+  host_assets_ = assets;
+  asset_count_ = asset_count;
+  capacity_ = capacity;
+  total_spheres_ = static_cast<uint32_t>(total_spheres);
+  max_spheres_ = max_s;
+  max_chains_ = max_c;
+  max_chain_length_ = max_len;
+  sm_count_ = static_cast<uint32_t>(sms);
+  frame_position_bytes_ = pos_bytes;
+  instance_count_ = instance_count;
+  if (st = Upload(instances, instance_count); st != Status::kOk) Release();
+  return st;
+}
+
+Status Batch::Upload(const Instance* instances, uint32_t instance_count) {
+  try {
+    std::vector<DeviceInstance> table(instance_count);
+    for (uint32_t i = 0; i < instance_count; ++i)
+      table[i] = {static_cast<const char*>(instances[i].positions), instances[i].stride_bytes, instances[i].asset,
+                  sphere_offsets_[i], 0u};
+    return detail::CudaStatus(
+        cudaMemcpy(instance_table_, table.data(), sizeof(DeviceInstance) * instance_count, cudaMemcpyHostToDevice));
+  } catch (const std::bad_alloc&) {
+    return Status::kErrorOutOfMemory;
+  }
+}
+
+Status Batch::SetInstances(const Instance* instances, uint32_t instance_count) {
+  if (!initialized()) return Status::kErrorInvalidJob;
+  if (!instances) return Status::kErrorNullArgument;
+  if (instance_count != instance_count_) return Status::kErrorInvalidJob;
+  if (Status s = CheckInstances(host_assets_, asset_count_, instances, instance_count); s != Status::kOk) return s;
+  for (uint32_t i = 0; i < instance_count; ++i) {  // sphere layout must stay (same #S per instance)
+    const uint32_t next = i + 1 < instance_count ? sphere_offsets_[i + 1] : total_spheres_;
+    if (host_assets_[instances[i].asset]->sphere_count() != next - sphere_offsets_[i]) return Status::kErrorInvalidJob;
+  }
+  return Upload(instances, instance_count);
+}
+
+Status Batch::Run(const FrameParams& params, cudaStream_t stream) const {
+  if (!initialized()) return Status::kErrorInvalidJob;
+  if (params.mode != runtime::RefitMode::kPaper && params.mode != runtime::RefitMode::kPivotFrame)
+    return Status::kErrorInvalidJob;
+  const bool m1 = params.method == runtime::DetectMethod::kM1;
+  if (!m1 && params.method != runtime::DetectMethod::kM2) return Status::kErrorInvalidJob;
+  Strategy strategy = params.strategy;
+  const bool few = instance_count_ < 4 * sm_count_;
+  if (strategy == Strategy::kAuto)
+    strategy = few ? (m1 ? Strategy::kBlockPerChain : Strategy::kThreadPerSphere) : Strategy::kWarpPerInstance;
+  if (strategy == Strategy::kBlockPerChain && !m1) return Status::kErrorInvalidJob;
+  if (strategy != Strategy::kThreadPerSphere && strategy != Strategy::kBlockPerChain &&
+      strategy != Strategy::kWarpPerInstance)
+    return Status::kErrorInvalidJob;
+
+  KernelParams p;
+  p.assets = static_cast<const DeviceAssetDesc*>(asset_table_);
+  p.instances = static_cast<const DeviceInstance*>(instance_table_);
+  p.pairs = pairs_;
+  p.counters = counters_;
+  p.spheres = spheres_;
+  p.instance_count = instance_count_;
+  p.capacity = capacity_;
+  p.shared_spheres = max_spheres_;
+  p.chains_per_instance = std::max(max_chains_, 1u);
+  p.flags = (params.mode == runtime::RefitMode::kPivotFrame ? kFlagFrameMode : 0u) |
+            (params.write_spheres ? kFlagWriteSpheres : 0u) | (m1 ? kFlagM1 : 0u);
+
+  if (Status s = detail::CudaStatus(cudaMemsetAsync(counters_, 0, sizeof(uint32_t) * (2 + size_t{instance_count_}), stream));
+      s != Status::kOk)
+    return s;
+
+  switch (strategy) {
+    case Strategy::kThreadPerSphere: {
+      const uint32_t threads = std::clamp(RoundUp32(max_spheres_), 32u, 256u);
+      const size_t shm = sizeof(float4) * max_spheres_;
+      if (shm <= kSharedLimit)
+        GroupKernel<false, true><<<instance_count_, threads, shm, stream>>>(p);
+      else
+        GroupKernel<false, false><<<instance_count_, threads, 0, stream>>>(p);
+      break;
+    }
+    case Strategy::kWarpPerInstance: {
+      const uint32_t blocks = (instance_count_ + kWarpsPerBlock - 1) / kWarpsPerBlock;
+      const size_t shm = sizeof(float4) * max_spheres_ * kWarpsPerBlock;
+      if (shm <= kSharedLimit)
+        GroupKernel<true, true><<<blocks, 32 * kWarpsPerBlock, shm, stream>>>(p);
+      else
+        GroupKernel<true, false><<<blocks, 32 * kWarpsPerBlock, 0, stream>>>(p);
+      break;
+    }
+    case Strategy::kBlockPerChain: {
+      const uint32_t threads = std::clamp(RoundUp32(max_chain_length_), 32u, 256u);
+      const uint64_t blocks = uint64_t{instance_count_} * p.chains_per_instance;
+      if (blocks > 0x7fffffffu) return Status::kErrorInvalidJob;
+      const size_t shm = sizeof(float4) * max_chain_length_;
+      if (shm <= kSharedLimit)
+        ChainKernel<true><<<static_cast<uint32_t>(blocks), threads, shm, stream>>>(p);
+      else
+        ChainKernel<false><<<static_cast<uint32_t>(blocks), threads, 0, stream>>>(p);
+      break;
+    }
+    default: return Status::kErrorInvalidJob;
+  }
+  return detail::CudaStatus(cudaGetLastError());
+}
+
+Status Batch::Download(cudaStream_t stream, HostResults* out, bool with_spheres) const {
+  if (!out) return Status::kErrorNullArgument;
+  if (!initialized()) return Status::kErrorInvalidJob;
+  if (Status s = detail::CudaStatus(cudaStreamSynchronize(stream)); s != Status::kOk) return s;
+  try {
+    std::vector<uint32_t> counters(2 + size_t{instance_count_});
+    if (Status s = detail::CudaStatus(
+            cudaMemcpy(counters.data(), counters_, sizeof(uint32_t) * counters.size(), cudaMemcpyDeviceToHost));
+        s != Status::kOk)
+      return s;
+    out->total = counters[0];
+    out->overflow = counters[1] != 0;
+    out->instance_counts.assign(counters.begin() + 2, counters.end());
+    out->pairs.resize(std::min(out->total, capacity_));
+    if (!out->pairs.empty())
+      if (Status s = detail::CudaStatus(cudaMemcpy(out->pairs.data(), pairs_, sizeof(BatchCollision) * out->pairs.size(),
+                                                   cudaMemcpyDeviceToHost));
+          s != Status::kOk)
+        return s;
+    out->spheres.clear();
+    if (with_spheres) {
+      out->spheres.resize(total_spheres_);
+      if (Status s = detail::CudaStatus(
+              cudaMemcpy(out->spheres.data(), spheres_, sizeof(float4) * total_spheres_, cudaMemcpyDeviceToHost));
+          s != Status::kOk)
+        return s;
+    }
+  } catch (const std::bad_alloc&) {
+    return Status::kErrorOutOfMemory;
+  }
+  return out->overflow ? Status::kOkTruncated : Status::kOk;
+}
+
+}  // namespace spherechain::cuda

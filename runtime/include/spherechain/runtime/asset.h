@@ -1,0 +1,85 @@
+// spherechain runtime — loading a .sphc collision asset zero-copy.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "spherechain/runtime/schema/spherechain_generated.h"
+#include "spherechain/runtime/status.h"
+
+namespace spherechain::runtime {
+
+/// The schema version this SDK reads (schemas/spherechain.fbs, Asset.schema_version). Bump on any
+/// change old readers cannot read; keep a golden asset per version in tests/data/.
+inline constexpr uint32_t kSchemaVersion = 1;
+/// FlatBuffers file_identifier of a .sphc asset.
+inline constexpr char kFileIdentifier[5] = "SPHC";
+/// Largest asset LoadAsset accepts [bytes] (FlatBuffers' own limit is 2 GiB).
+inline constexpr size_t kMaxAssetBytes = size_t{1} << 30;
+/// Most spheres per asset (sphere indices are uint16 in the schema).
+inline constexpr uint32_t kMaxSpheres = 65535;
+/// Most chains per asset (Collision::chains is a 32-bit mask; the paper uses 6, Table 1).
+inline constexpr uint32_t kMaxChains = 32;
+/// Pivot polygons per sphere (§5.1; BakeParams.pivots_per_sphere must be 4 in schema v1).
+inline constexpr uint32_t kPivotsPerSphere = 4;
+
+/// Verified, read-only, zero-copy view of a loaded asset.
+/// Ownership: borrows the bytes passed to LoadAsset; they must stay alive and unmodified for as long
+/// as the view (or any pointer obtained from it) is used. Copying the view is cheap (POD).
+/// All counts below were checked against each other by LoadAsset.
+struct AssetView {
+  /// Root table of the FlatBuffer (schemas/spherechain.fbs `Asset`); null when not loaded.
+  const schema::Asset* asset = nullptr;
+  uint32_t sphere_count = 0;    ///< #S = len(Asset.spheres), 1..kMaxSpheres.
+  uint32_t vertex_count = 0;    ///< #V = Asset.fingerprint.vertex_count (the game's vertex buffer length).
+  uint32_t triangle_count = 0;  ///< #T = Asset.fingerprint.triangle_count.
+  uint32_t chain_count = 0;     ///< len(Asset.chains), 0..kMaxChains.
+
+  /// True after a successful LoadAsset.
+  bool valid() const { return asset != nullptr; }
+};
+
+/// Loads (checks, does not copy) a .sphc asset.
+///
+/// @param bytes  the whole file. [Limit: 8-byte aligned — the buffer holds uint64 fields and the
+///               accessors read them in place; memory from new/malloc/std::vector<uint8_t> or an
+///               mmap satisfies this] Borrowed for the lifetime of `*out`.
+/// @param size   [bytes] [Limit: 8..kMaxAssetBytes]
+/// @param out    receives the view; reset to an empty view on every failure.
+///
+/// Checks, in order (each failure its own status):
+///  1. envelope: kErrorNullArgument, kErrorAlignment, kErrorAssetTooSmall, kErrorAssetTooLarge,
+///     kErrorIdentifier ("SPHC"), kErrorCorrupt (root offset out of bounds),
+///     kErrorVersionTooOld / kErrorVersionTooNew (schema_version vs kSchemaVersion — read before the
+///     full verification so an asset from another SDK version gets the clear message);
+///  2. flatbuffers::Verifier (alignment checked, max depth 8 — the schema nests 3 deep — and max
+///     tables 16 + 1024 chains + 65536 mesh parts): kErrorCorrupt;
+///  3. semantics: kErrorMissingField, kErrorNoSpheres, kErrorTooManySpheres, kErrorTooManyChains,
+///     kErrorCountMismatch (#S in spheres, pivot_frames, 4·#S pivot_triangles, 12·#S pivot_vertices,
+///     #S+1 surrounding_offsets, optional spheres_phi1/phi2/sphere_regions/sphere_labels; #T in
+///     optional triangle_regions/triangle_spheres; pivots_per_sphere == 4 when params present),
+///     kErrorIndexOutOfRange (chain / excluded-pair / triangle_spheres sphere indices < #S,
+///     surrounding / pivot triangles < #T, pivot vertices < #V), kErrorOffsets, kErrorNonFinite,
+///     kErrorRadius, kErrorPivotFrame, kErrorChainOrder, kErrorExcludedPairs.
+/// Returns kOk with `*out` filled.
+/// Cost: O(size) reads, no allocation, no exceptions; thread-safe (pure function of its inputs).
+/// Untrusted input: every truncated prefix and bit flip returns an error, never crashes (tested).
+Status LoadAsset(const void* bytes, size_t size, AssetView* out);
+
+/// Span of triangle indices (into the source mesh's triangle order, < #T).
+struct TriangleSpan {
+  const uint32_t* data = nullptr;  ///< Borrowed from the asset bytes; null when count == 0.
+  uint32_t count = 0;
+};
+
+/// The triangles of sphere `sphere`'s surrounding region (§5.1: triangles whose nearest sphere it
+/// is) — what a narrow phase tests when the sphere collides. Source: Asset.surrounding_offsets /
+/// surrounding_triangles. [Limit: sphere < view.sphere_count; otherwise (programmer error) asserts in
+/// debug and returns an empty span]. Cost: O(1), no allocation. Lifetime: the asset bytes.
+TriangleSpan SurroundingTriangles(const AssetView& view, uint32_t sphere);
+
+/// The four pivot triangles of `sphere` (Asset.pivot_triangles[4·sphere ..]), each < #T; empty span
+/// on out-of-range `sphere`. Cost O(1). Lifetime: the asset bytes.
+TriangleSpan PivotTriangles(const AssetView& view, uint32_t sphere);
+
+}  // namespace spherechain::runtime

@@ -1,0 +1,73 @@
+// spherechain runtime — broad-phase self-collision: sphere overlap tests (paper §5.2).
+#pragma once
+
+#include <cstdint>
+
+#include "spherechain/runtime/asset.h"
+#include "spherechain/runtime/context.h"
+#include "spherechain/runtime/status.h"
+
+namespace spherechain::runtime {
+
+/// Which pairs are tested (§5.2). Both skip excluded (adjacent) pairs (Asset.excluded_pairs).
+enum class DetectMethod : uint8_t {
+  /// With chains: every pair inside each chain ζ_i (Table 1), brute force, O(n_c · n²). A pair in
+  /// several chains is tested (and counted in DetectStats::raw_pairs) once per chain, as the paper
+  /// does, but reported once.
+  kM1 = 0,
+  /// Without chains: every pair of the #S spheres, O(#S²).
+  kM2 = 1,
+};
+
+/// One colliding pair. POD, 12 bytes, shared with the CUDA path.
+struct Collision {
+  uint16_t a;      ///< sphere index, a < b
+  uint16_t b;      ///< sphere index
+  float depth;     ///< penetration depth rA + rB − ‖cA − cB‖ [Units: source units] (> 0)
+  uint32_t chains; ///< bit c set ⇔ Asset.chains[c] contains both a and b (M1: never 0; M2: may be 0)
+};
+static_assert(sizeof(Collision) == 12);
+
+/// Counters of one DetectJob::Run, complete even when the output was truncated.
+struct DetectStats {
+  uint32_t tests = 0;           ///< overlap tests performed (excluded pairs are tested, then skipped)
+  uint32_t raw_pairs = 0;       ///< M1: overlapping non-excluded (chain, pair) hits, duplicates across
+                                ///< chains included (the paper's count); M2: == distinct_pairs
+  uint32_t distinct_pairs = 0;  ///< overlapping non-excluded pairs (a < b); > capacity ⇔ truncated
+};
+
+/// Most Collision records a DetectJob with `method` can write for this asset: an upper bound, so a
+/// buffer of this size is never truncated. M2: #S(#S−1)/2; M1: min(Σ_chains n(n−1)/2, #S(#S−1)/2).
+/// 0 for an invalid view or method. Cost O(#chains), no allocation. (Context::m1_candidate_pairs() /
+/// m2_candidate_pairs() give the exact, smaller numbers.)
+uint32_t DetectBound(const AssetView& view, DetectMethod method);
+
+/// ozz-style job: reports overlapping non-excluded sphere pairs of the context's current spheres
+/// (after RefitJob::Run, or bind pose). Overlap: ‖cA − cB‖² < (rA + rB)² (11 operations).
+/// Output order (deterministic, identical with or without parallel_for): M1 — by chain, each pair
+/// under the first chain containing both a and b, rows i < j of that chain's ascending list;
+/// M2 — lexicographic (a, b).
+/// Cost: M1 Σ n²/2, M2 #S²/2 tests, SoA, vectorisable; no allocation, no exceptions.
+/// parallel_for [opt]: M1 runs one task index per chain into the context's per-chain scratch, then
+/// merges serially; M2 ignores parallel_for (serial; limitation of this version).
+struct DetectJob {
+  const Context* context = nullptr;  ///< initialised; spheres read, per-frame scratch written (mutable):
+                                     ///< one job per context at a time
+  DetectMethod method = DetectMethod::kM1;
+  Collision* output = nullptr;  ///< [opt when capacity == 0] caller buffer of `capacity` records
+  uint32_t capacity = 0;        ///< records `output` holds; DetectBound() never truncates
+  uint32_t* count = nullptr;    ///< out: records written (== min(distinct_pairs, capacity))
+  DetectStats* stats = nullptr; ///< [opt] out: counters
+  ParallelFor parallel_for;     ///< [opt]
+
+  /// True when Run() would not fail on arguments.
+  bool Validate() const { return Check() == Status::kOk; }
+  /// kErrorNullArgument (context or count null, or output null with capacity > 0),
+  /// kErrorInvalidJob (context not initialised, unknown method), else kOk.
+  Status Check() const;
+  /// Returns Check()'s error (outputs untouched), kOk, or kOkTruncated when more pairs overlapped
+  /// than `capacity`: output holds the first `capacity` in the documented order, *count == capacity.
+  Status Run() const;
+};
+
+}  // namespace spherechain::runtime

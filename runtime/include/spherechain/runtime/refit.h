@@ -1,0 +1,126 @@
+// spherechain runtime — sphere refit from pivot polygons (paper §5.1).
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+
+#include "spherechain/runtime/context.h"
+#include "spherechain/runtime/status.h"
+
+namespace spherechain::runtime {
+
+/// How a sphere follows its four pivot polygons (§5.1). Let p0..p3 be the current centroids of the
+/// sphere's pivot triangles (Asset.pivot_vertices, #S×4×3 vertex indices; centroid = mean of the 3
+/// vertices) and m their mean. In both modes the radius is
+///   r = (bind radius / PivotFrame.mean_distance) · mean_k ‖c − p_k‖
+/// — the paper's "average of the distances from the centre to the pivot polygons", scaled so the
+/// bind pose gives back the bind radius.
+enum class RefitMode : uint8_t {
+  /// Exactly the paper: c = bind centre + mean displacement of the 4 pivot centroids
+  ///   = m + PivotFrame.centroid_offset. Follows translation exactly, not rotation (a rotating limb
+  ///   drags its spheres off-centre by |centroid_offset|·angle).
+  kPaper = 0,
+  /// Variant (default): c = o + R · PivotFrame.local_center with (o, R) = BuildPivotFrame(p0..p3).
+  /// Exact under any rigid motion of the mesh (every sphere moves rigidly, radius unchanged); equal
+  /// to kPaper when the pivots only translate. Falls back to kPaper for a sphere whose pivots became
+  /// degenerate (BuildPivotFrame returns false).
+  kPivotFrame = 1,
+};
+
+/// An orthonormal frame in model space: origin plus three unit axes (right-handed).
+struct PivotFrameBasis {
+  float origin[3];   ///< mean of p0..p3
+  float axes[3][3];  ///< axes[0] = x, axes[1] = y, axes[2] = z = x × y (unit, orthogonal)
+};
+
+/// Builds the pivot frame of four pivot-polygon centroids p[0..3] (model space, source units):
+///   o = (p0 + p1 + p2 + p3) / 4
+///   x = normalize(p1 − p0)
+///   w = (p2 + p3)/2 − (p0 + p1)/2 ;  y = normalize(w − (w·x) x)      (Gram–Schmidt)
+///   z = x × y
+/// Returns false (frame undefined, `*out` holds o and unspecified axes) when |p1 − p0| or the
+/// residual |w − (w·x)x| is <= 1e-6 · (1 + max |p_k − o|) (collinear / coincident pivots).
+/// The baker MUST fill PivotFrame.local_center with PivotFrameToLocal(BuildPivotFrame(bind p), c)
+/// so runtime and baker agree bit for bit. Cost: ~60 flops, inline, no allocation.
+inline bool BuildPivotFrame(const float p[4][3], PivotFrameBasis* out) {
+  float scale = 0.0f;
+  for (int k = 0; k < 3; ++k) out->origin[k] = 0.25f * (p[0][k] + p[1][k] + p[2][k] + p[3][k]);
+  for (int i = 0; i < 4; ++i) {
+    const float dx = p[i][0] - out->origin[0], dy = p[i][1] - out->origin[1], dz = p[i][2] - out->origin[2];
+    const float d = std::sqrt(dx * dx + dy * dy + dz * dz);
+    scale = d > scale ? d : scale;
+  }
+  const float eps = 1e-6f * (1.0f + scale);
+  float x[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
+  const float xl = std::sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
+  if (!(xl > eps)) return false;
+  for (float& v : x) v /= xl;
+  float w[3];
+  for (int k = 0; k < 3; ++k) w[k] = 0.5f * (p[2][k] + p[3][k]) - 0.5f * (p[0][k] + p[1][k]);
+  const float wx = w[0] * x[0] + w[1] * x[1] + w[2] * x[2];
+  for (int k = 0; k < 3; ++k) w[k] -= wx * x[k];
+  const float yl = std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+  if (!(yl > eps)) return false;
+  for (float& v : w) v /= yl;
+  for (int k = 0; k < 3; ++k) {
+    out->axes[0][k] = x[k];
+    out->axes[1][k] = w[k];
+  }
+  out->axes[2][0] = x[1] * w[2] - x[2] * w[1];
+  out->axes[2][1] = x[2] * w[0] - x[0] * w[2];
+  out->axes[2][2] = x[0] * w[1] - x[1] * w[0];
+  return true;
+}
+
+/// Model-space point `c` → coordinates in frame `f` (local = Rᵀ (c − o)). Baker: local_center.
+inline void PivotFrameToLocal(const PivotFrameBasis& f, const float c[3], float local[3]) {
+  const float d[3] = {c[0] - f.origin[0], c[1] - f.origin[1], c[2] - f.origin[2]};
+  for (int a = 0; a < 3; ++a) local[a] = d[0] * f.axes[a][0] + d[1] * f.axes[a][1] + d[2] * f.axes[a][2];
+}
+
+/// Frame coordinates → model space (c = o + R local). What kPivotFrame refit computes.
+inline void PivotFrameToModel(const PivotFrameBasis& f, const float local[3], float c[3]) {
+  for (int k = 0; k < 3; ++k)
+    c[k] = f.origin[k] + local[0] * f.axes[0][k] + local[1] * f.axes[1][k] + local[2] * f.axes[2][k];
+}
+
+/// Mean distance from `c` to p[0..3]. Baker: PivotFrame.mean_distance = PivotMeanDistance(bind p,
+/// bind centre); centroid_offset = bind centre − mean(p). Runtime radius uses the same function.
+inline float PivotMeanDistance(const float p[4][3], const float c[3]) {
+  float s = 0.0f;
+  for (int i = 0; i < 4; ++i) {
+    const float dx = c[0] - p[i][0], dy = c[1] - p[i][1], dz = c[2] - p[i][2];
+    s += std::sqrt(dx * dx + dy * dy + dz * dz);
+  }
+  return 0.25f * s;
+}
+
+/// Centroid of triangle (a, b, c): (a + b + c) / 3, computed as the runtime does it.
+inline void TriangleCentroid(const float a[3], const float b[3], const float c[3], float out[3]) {
+  for (int k = 0; k < 3; ++k) out[k] = (a[k] + b[k] + c[k]) * (1.0f / 3.0f);
+}
+
+/// ozz-style job: refits every sphere of `context` to the deformed `positions` (§5.1).
+/// Inputs: positions (#V vertices, strided), mode, parallel_for [opt]. Output: context's spheres
+/// (Context::spheres(), SoA, same space/units as positions).
+/// Cost: O(#S) — 12 vertex reads + ~120 flops per sphere; no allocation, no exceptions. With
+/// parallel_for set, spheres are split into ranges (`parallel_grain` spheres per task index).
+struct RefitJob {
+  PositionsView positions;                    ///< deformed vertex positions (see PositionsView)
+  RefitMode mode = RefitMode::kPivotFrame;    ///< see RefitMode
+  Context* context = nullptr;                 ///< initialised workspace; its spheres are overwritten
+  ParallelFor parallel_for;                   ///< [opt]
+  uint32_t parallel_grain = 64;               ///< [Limit: > 0] spheres per parallel task index
+
+  /// True when Run() would not fail on arguments (does not read the positions).
+  bool Validate() const { return Check() == Status::kOk; }
+  /// The status Run() would return for bad arguments, or kOk: kErrorNullArgument (context or
+  /// positions.data null), kErrorInvalidJob (context not initialised, unknown mode, grain 0),
+  /// kErrorAlignment (positions.data not 4-byte aligned), kErrorStride, kErrorVertexCount.
+  Status Check() const;
+  /// Runs the refit. Returns Check()'s error (spheres untouched) or kOk. Non-finite positions give
+  /// non-finite spheres (which then never overlap); they are not checked per frame.
+  Status Run() const;
+};
+
+}  // namespace spherechain::runtime

@@ -1,0 +1,68 @@
+// spherechain runtime — status codes (Recast-style: an outcome plus detail).
+#pragma once
+
+#include <cstdint>
+
+namespace spherechain::runtime {
+
+/// Outcome of every fallible runtime call. Layout (Recast dtStatus-like):
+/// bit 31 set = failure; for failures the low 16 bits are the error code;
+/// for successes the low bits are detail flags (kDetailTruncated = 1).
+/// Never thrown; `[[nodiscard]]` so a caller cannot drop it silently.
+/// Use `Succeeded()` / `Failed()` / `IsTruncated()` rather than comparing with kOk when a
+/// success-with-detail is acceptable. `ToString()` names every value.
+enum class [[nodiscard]] Status : uint32_t {
+  // ---- successes (bit 31 clear) -----------------------------------------------------------------
+  kOk = 0x0000'0000u,           ///< Success, outputs complete.
+  kOkTruncated = 0x0000'0001u,  ///< Success, but the caller's output buffer was too small: it holds
+                                ///< the first `capacity` results and the count out equals `capacity`.
+
+  // ---- argument / programmer errors -------------------------------------------------------------
+  kErrorNullArgument = 0x8000'0001u,  ///< A required pointer was null (or size 0 with a non-null ask).
+  kErrorAlignment = 0x8000'0002u,     ///< Asset bytes not 8-byte aligned, or positions not 4-byte aligned.
+  kErrorInvalidJob = 0x8000'0003u,    ///< Job fields inconsistent (unknown mode/method, context not
+                                      ///< initialised, parallel_for hook half set).
+  kErrorVertexCount = 0x8000'0004u,   ///< PositionsView::count != asset fingerprint.vertex_count.
+  kErrorStride = 0x8000'0005u,        ///< PositionsView::stride_bytes < 12 or not a multiple of 4.
+  kErrorOutOfMemory = 0x8000'0006u,   ///< Context::Init could not allocate (the only allocating call).
+
+  // ---- asset envelope (LoadAsset) ---------------------------------------------------------------
+  kErrorAssetTooSmall = 0x8000'0101u,   ///< Fewer bytes than a FlatBuffer header (8) — truncated file.
+  kErrorAssetTooLarge = 0x8000'0102u,   ///< More than kMaxAssetBytes.
+  kErrorIdentifier = 0x8000'0103u,      ///< file_identifier is not "SPHC" (not a .sphc asset).
+  kErrorVersionTooOld = 0x8000'0104u,   ///< schema_version < kSchemaVersion (re-bake with this SDK).
+  kErrorVersionTooNew = 0x8000'0105u,   ///< schema_version > kSchemaVersion (asset from a newer SDK).
+  kErrorCorrupt = 0x8000'0106u,         ///< FlatBuffers Verifier rejected the buffer (offsets out of
+                                        ///< bounds, truncated, too deep, too many tables, misaligned).
+
+  // ---- asset semantics (LoadAsset) --------------------------------------------------------------
+  kErrorMissingField = 0x8000'0201u,     ///< A field the runtime needs is absent (fingerprint, spheres,
+                                         ///< chains, surrounding_*, pivot_*).
+  kErrorNoSpheres = 0x8000'0202u,        ///< spheres is empty.
+  kErrorTooManySpheres = 0x8000'0203u,   ///< #S > kMaxSpheres (indices are uint16).
+  kErrorTooManyChains = 0x8000'0204u,    ///< #chains > kMaxChains (chain bitmask is 32 bits).
+  kErrorCountMismatch = 0x8000'0205u,    ///< An array's length disagrees with #S, #T or 4·#S / 12·#S.
+  kErrorIndexOutOfRange = 0x8000'0206u,  ///< A sphere index >= #S, triangle index >= #T or vertex
+                                         ///< index >= #V.
+  kErrorOffsets = 0x8000'0207u,          ///< surrounding_offsets not starting at 0, not monotone, or
+                                         ///< not ending at len(surrounding_triangles).
+  kErrorNonFinite = 0x8000'0208u,        ///< A NaN or infinite float (centre, radius, pivot frame).
+  kErrorRadius = 0x8000'0209u,           ///< A sphere radius <= 0.
+  kErrorPivotFrame = 0x8000'020Au,       ///< PivotFrame.mean_distance <= 0.
+  kErrorChainOrder = 0x8000'020Bu,       ///< A chain's sphere list is not strictly ascending (sorted, unique).
+  kErrorExcludedPairs = 0x8000'020Cu,    ///< An excluded pair with a >= b, or the list not strictly
+                                         ///< ascending by (a, b).
+};
+
+/// True for kOk and every success-with-detail (kOkTruncated). Cost: one compare.
+constexpr bool Succeeded(Status s) { return (static_cast<uint32_t>(s) & 0x8000'0000u) == 0; }
+/// True for every kError*.
+constexpr bool Failed(Status s) { return !Succeeded(s); }
+/// True when a success carries the "output truncated" detail.
+constexpr bool IsTruncated(Status s) { return s == Status::kOkTruncated; }
+
+/// Static, NUL-terminated English name of `s` (e.g. "kErrorVersionTooNew: asset schema_version is
+/// newer than this SDK"). Never null; unknown values give "unknown status". Lifetime: static.
+const char* ToString(Status s);
+
+}  // namespace spherechain::runtime

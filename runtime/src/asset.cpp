@@ -1,0 +1,162 @@
+// LoadAsset: envelope, FlatBuffers verification, semantic pass (see asset.h).
+#include "spherechain/runtime/asset.h"
+
+#include <cassert>
+#include <cmath>
+#include <cstring>
+
+namespace spherechain::runtime {
+namespace {
+
+namespace fb = ::flatbuffers;
+using schema::Asset;
+
+constexpr fb::voffset_t kVtSchemaVersion = 4;  // Asset::VT_SCHEMA_VERSION (first field)
+static_assert(kVtSchemaVersion == Asset::VT_SCHEMA_VERSION);
+
+bool Finite(float v) { return std::isfinite(v); }
+bool Finite(const schema::Vec3& v) { return Finite(v.x()) && Finite(v.y()) && Finite(v.z()); }
+
+template <typename V>
+uint32_t Len(const V* v) { return v ? v->size() : 0; }
+
+Status ReadVersion(const uint8_t* buf, size_t size, uint32_t* version) {
+  // Verify only the root table header and the schema_version field, so that a buffer from another
+  // schema version gets a version status rather than a generic verification failure.
+  fb::Verifier v(buf, size, /*max_depth=*/8, /*max_tables=*/4, /*check_alignment=*/true);
+  const fb::uoffset_t root = fb::ReadScalar<fb::uoffset_t>(buf);
+  if (root % 4 != 0 || root > size - sizeof(fb::uoffset_t)) return Status::kErrorCorrupt;
+  const auto* table = reinterpret_cast<const fb::Table*>(buf + root);
+  if (!table->VerifyTableStart(v) || !table->VerifyField<uint32_t>(v, kVtSchemaVersion, 4))
+    return Status::kErrorCorrupt;
+  *version = table->GetField<uint32_t>(kVtSchemaVersion, 0);
+  return Status::kOk;
+}
+
+Status Semantics(const Asset& a, AssetView* view) {
+  const auto* fp = a.fingerprint();
+  const auto* spheres = a.spheres();
+  const auto* chains = a.chains();
+  const auto* offs = a.surrounding_offsets();
+  const auto* surr = a.surrounding_triangles();
+  const auto* piv_t = a.pivot_triangles();
+  const auto* piv_v = a.pivot_vertices();
+  const auto* frames = a.pivot_frames();
+  if (!fp || !spheres || !chains || !offs || !surr || !piv_t || !piv_v || !frames)
+    return Status::kErrorMissingField;
+
+  const uint32_t S = spheres->size();
+  const uint32_t V = fp->vertex_count();
+  const uint32_t T = fp->triangle_count();
+  if (S == 0) return Status::kErrorNoSpheres;
+  if (S > kMaxSpheres) return Status::kErrorTooManySpheres;
+  if (chains->size() > kMaxChains) return Status::kErrorTooManyChains;
+
+  // Counts.
+  if (frames->size() != S || piv_t->size() != size_t{4} * S || piv_v->size() != size_t{12} * S ||
+      offs->size() != S + 1)
+    return Status::kErrorCountMismatch;
+  if ((a.spheres_phi1() && a.spheres_phi1()->size() != S) || (a.spheres_phi2() && a.spheres_phi2()->size() != S) ||
+      (a.sphere_regions() && a.sphere_regions()->size() != S) || (a.sphere_labels() && a.sphere_labels()->size() != S))
+    return Status::kErrorCountMismatch;
+  if ((a.triangle_regions() && a.triangle_regions()->size() != T) ||
+      (a.triangle_spheres() && a.triangle_spheres()->size() != T))
+    return Status::kErrorCountMismatch;
+  if (a.params() && a.params()->pivots_per_sphere() != kPivotsPerSphere) return Status::kErrorCountMismatch;
+
+  // Floats.
+  for (const schema::Sphere* s : *spheres) {
+    if (!Finite(s->center()) || !Finite(s->radius())) return Status::kErrorNonFinite;
+    if (!(s->radius() > 0.0f)) return Status::kErrorRadius;
+  }
+  for (const schema::PivotFrame* f : *frames) {
+    if (!Finite(f->local_center()) || !Finite(f->centroid_offset()) || !Finite(f->mean_distance()))
+      return Status::kErrorNonFinite;
+    if (!(f->mean_distance() > 0.0f)) return Status::kErrorPivotFrame;
+  }
+
+  // Chains: present, sorted, unique, in range.
+  for (const schema::Chain* c : *chains) {
+    const auto* list = c->spheres();
+    if (!list) return Status::kErrorMissingField;
+    for (uint32_t i = 0; i < list->size(); ++i) {
+      if (list->Get(i) >= S) return Status::kErrorIndexOutOfRange;
+      if (i > 0 && list->Get(i) <= list->Get(i - 1)) return Status::kErrorChainOrder;
+    }
+  }
+  if (const auto* ex = a.excluded_pairs()) {
+    uint32_t prev = 0;
+    for (uint32_t i = 0; i < ex->size(); ++i) {
+      const schema::SpherePair* p = ex->Get(i);
+      if (p->a() >= S || p->b() >= S) return Status::kErrorIndexOutOfRange;
+      const uint32_t key = (uint32_t{p->a()} << 16) | p->b();
+      if (p->a() >= p->b() || (i > 0 && key <= prev)) return Status::kErrorExcludedPairs;
+      prev = key;
+    }
+  }
+  if (const auto* ts = a.triangle_spheres())
+    for (uint16_t s : *ts)
+      if (s >= S) return Status::kErrorIndexOutOfRange;
+
+  // Surrounding regions.
+  if (offs->Get(0) != 0 || offs->Get(S) != surr->size()) return Status::kErrorOffsets;
+  for (uint32_t i = 0; i < S; ++i)
+    if (offs->Get(i + 1) < offs->Get(i)) return Status::kErrorOffsets;
+  for (uint32_t t : *surr)
+    if (t >= T) return Status::kErrorIndexOutOfRange;
+
+  // Pivots.
+  for (uint32_t t : *piv_t)
+    if (t >= T) return Status::kErrorIndexOutOfRange;
+  for (uint32_t v : *piv_v)
+    if (v >= V) return Status::kErrorIndexOutOfRange;
+
+  view->asset = &a;
+  view->sphere_count = S;
+  view->vertex_count = V;
+  view->triangle_count = T;
+  view->chain_count = chains->size();
+  return Status::kOk;
+}
+
+}  // namespace
+
+Status LoadAsset(const void* bytes, size_t size, AssetView* out) {
+  if (!out) return Status::kErrorNullArgument;
+  *out = AssetView{};
+  if (!bytes) return Status::kErrorNullArgument;
+  if (reinterpret_cast<uintptr_t>(bytes) % 8 != 0) return Status::kErrorAlignment;
+  if (size < 2 * sizeof(fb::uoffset_t)) return Status::kErrorAssetTooSmall;
+  if (size > kMaxAssetBytes) return Status::kErrorAssetTooLarge;
+  const auto* buf = static_cast<const uint8_t*>(bytes);
+  if (!fb::BufferHasIdentifier(buf, kFileIdentifier)) return Status::kErrorIdentifier;
+
+  uint32_t version = 0;
+  if (Status s = ReadVersion(buf, size, &version); s != Status::kOk) return s;
+  if (version < kSchemaVersion) return Status::kErrorVersionTooOld;
+  if (version > kSchemaVersion) return Status::kErrorVersionTooNew;
+
+  fb::Verifier verifier(buf, size, /*max_depth=*/8, /*max_tables=*/16 + 1024 + 65536, /*check_alignment=*/true);
+  if (!schema::VerifyAssetBuffer(verifier)) return Status::kErrorCorrupt;
+
+  AssetView view;
+  if (Status s = Semantics(*schema::GetAsset(buf), &view); s != Status::kOk) return s;
+  *out = view;
+  return Status::kOk;
+}
+
+TriangleSpan SurroundingTriangles(const AssetView& view, uint32_t sphere) {
+  assert(view.valid() && sphere < view.sphere_count);
+  if (!view.valid() || sphere >= view.sphere_count) return {};
+  const auto* offs = view.asset->surrounding_offsets();
+  const uint32_t begin = offs->Get(sphere), end = offs->Get(sphere + 1);
+  if (begin == end) return {};
+  return {view.asset->surrounding_triangles()->data() + begin, end - begin};
+}
+
+TriangleSpan PivotTriangles(const AssetView& view, uint32_t sphere) {
+  if (!view.valid() || sphere >= view.sphere_count) return {};
+  return {view.asset->pivot_triangles()->data() + size_t{4} * sphere, kPivotsPerSphere};
+}
+
+}  // namespace spherechain::runtime

@@ -1,0 +1,37 @@
+#include "spherechain/runtime/status.h"
+
+namespace spherechain::runtime {
+
+const char* ToString(Status s) {
+  switch (s) {
+    case Status::kOk: return "kOk";
+    case Status::kOkTruncated: return "kOkTruncated: success, but the output buffer was too small";
+    case Status::kErrorNullArgument: return "kErrorNullArgument: a required pointer is null";
+    case Status::kErrorAlignment: return "kErrorAlignment: asset bytes must be 8-byte aligned, positions 4-byte aligned";
+    case Status::kErrorInvalidJob: return "kErrorInvalidJob: job fields inconsistent (context not initialised, bad mode)";
+    case Status::kErrorVertexCount: return "kErrorVertexCount: positions count differs from the asset's vertex count";
+    case Status::kErrorStride: return "kErrorStride: positions stride must be >= 12 and a multiple of 4";
+    case Status::kErrorOutOfMemory: return "kErrorOutOfMemory: context allocation failed";
+    case Status::kErrorAssetTooSmall: return "kErrorAssetTooSmall: asset truncated (smaller than a FlatBuffer header)";
+    case Status::kErrorAssetTooLarge: return "kErrorAssetTooLarge: asset larger than kMaxAssetBytes";
+    case Status::kErrorIdentifier: return "kErrorIdentifier: not a .sphc asset (file_identifier is not SPHC)";
+    case Status::kErrorVersionTooOld: return "kErrorVersionTooOld: asset schema_version is older than this SDK (re-bake)";
+    case Status::kErrorVersionTooNew: return "kErrorVersionTooNew: asset schema_version is newer than this SDK";
+    case Status::kErrorCorrupt: return "kErrorCorrupt: FlatBuffers verification failed (truncated or corrupted)";
+    case Status::kErrorMissingField: return "kErrorMissingField: a required asset field is absent";
+    case Status::kErrorNoSpheres: return "kErrorNoSpheres: the asset has no spheres";
+    case Status::kErrorTooManySpheres: return "kErrorTooManySpheres: more than kMaxSpheres spheres";
+    case Status::kErrorTooManyChains: return "kErrorTooManyChains: more than kMaxChains chains";
+    case Status::kErrorCountMismatch: return "kErrorCountMismatch: array lengths disagree (#S, #T, 4#S, 12#S)";
+    case Status::kErrorIndexOutOfRange: return "kErrorIndexOutOfRange: a sphere, triangle or vertex index is out of range";
+    case Status::kErrorOffsets: return "kErrorOffsets: surrounding_offsets malformed";
+    case Status::kErrorNonFinite: return "kErrorNonFinite: NaN or infinite value in the asset";
+    case Status::kErrorRadius: return "kErrorRadius: a sphere radius is <= 0";
+    case Status::kErrorPivotFrame: return "kErrorPivotFrame: PivotFrame.mean_distance is <= 0";
+    case Status::kErrorChainOrder: return "kErrorChainOrder: chain spheres not strictly ascending";
+    case Status::kErrorExcludedPairs: return "kErrorExcludedPairs: excluded pairs not a < b or not strictly ascending";
+  }
+  return "unknown status";
+}
+
+}  // namespace spherechain::runtime

@@ -1,0 +1,15 @@
+#!/usr/bin/env bash
+# Installs every build and test dependency of spherechain from Debian 12 packages.
+set -euo pipefail
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends \
+  build-essential cmake ninja-build pkg-config \
+  libassimp-dev libeigen3-dev libcgal-dev libtinygltf-dev libflatbuffers-dev flatbuffers-compiler \
+  doctest-dev nlohmann-json3-dev libcli11-dev libspdlog-dev libxxhash-dev \
+  libfcl-dev libbullet-dev \
+  clang libclang-rt-14-dev \
+  librsvg2-bin assimp-testmodels >/dev/null
+echo "spherechain: dependencies installed"

@@ -1,0 +1,171 @@
+// End to end: real characters bake, the asset round-trips through the runtime loader, two bakes are
+// byte-identical, and bad inputs give clear errors with nothing written.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+#include "spherechain/baker/bake.h"
+#include "spherechain/runtime/asset.h"
+#include "test_data.h"
+
+using namespace spherechain;
+using namespace spherechain::baker;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path TempDir(const std::string& name) {
+  fs::path d = fs::temp_directory_path() / ("spherechain_bake_test_" + name);
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+void WriteText(const fs::path& p, const std::string& text) { std::ofstream(p, std::ios::binary) << text; }
+
+// Loads the baked bytes through the runtime (aligned copy) and checks them against the bake result.
+void CheckRoundTrip(const BakeResult& r) {
+  std::vector<uint64_t> storage((r.asset.size() + 7) / 8);
+  std::memcpy(storage.data(), r.asset.data(), r.asset.size());
+  runtime::AssetView view;
+  const runtime::Status s = runtime::LoadAsset(storage.data(), r.asset.size(), &view);
+  REQUIRE_MESSAGE(runtime::Succeeded(s), runtime::ToString(s));
+  CHECK(view.vertex_count == r.mesh.vertex_count());
+  CHECK(view.triangle_count == r.mesh.triangle_count());
+  CHECK(view.sphere_count == r.fit.spheres.size());
+  CHECK(view.chain_count == r.chains.size());
+  const auto* spheres = view.asset->spheres();
+  for (uint32_t i = 0; i < view.sphere_count; ++i) {
+    CHECK(spheres->Get(i)->radius() == doctest::Approx(r.fit.spheres[i].radius).epsilon(1e-6));
+    CHECK(spheres->Get(i)->center().y() == doctest::Approx(r.fit.spheres[i].center.y()).epsilon(1e-6));
+  }
+  CHECK(view.asset->excluded_pairs()->size() == r.excluded.size());
+  CHECK(view.asset->fingerprint()->positions_hash() == ComputeFingerprint(r.mesh).positions_hash);
+  for (uint32_t c = 0; c < view.chain_count; ++c)
+    CHECK(view.asset->chains()->Get(c)->spheres()->size() == r.chains[c].spheres.size());
+}
+
+}  // namespace
+
+TEST_CASE("bake: MakeHuman base.obj — five regions, ~80 spheres, six chains, every triangle assigned") {
+  const std::string path = test::SharedData("makehuman/base.obj");
+  if (!test::Require(path)) return;
+  Context ctx;
+  auto r = Bake(path, BakeConfig{}, &ctx);
+  REQUIRE_MESSAGE(r.ok(), (r.ok() ? "" : r.error().message));
+  CHECK(r->mesh.vertex_count() == 13380);
+  CHECK(r->mesh.triangle_count() == 26756);
+  CHECK(r->unassigned_triangles == 0);
+  CHECK(r->chains.size() == 6);
+  for (int k = 0; k < kRegionCount; ++k) {
+    size_t n = 0;
+    for (const auto& s : r->fit.spheres) n += int(s.region) == k;
+    CHECK_MESSAGE(n >= 2, "region " << k << " has " << n << " spheres");
+  }
+  // "On the order of the paper's 80 spheres".
+  CHECK(r->fit.spheres.size() >= 40);
+  CHECK(r->fit.spheres.size() <= 160);
+  CHECK(r->fit.disk_step == doctest::Approx(0.25).epsilon(0.02));  // δ = 0.25 on MakeHuman
+  // φ2 encloses its surrounding region: F ≥ 0 everywhere (rounding aside).
+  CHECK(r->accuracy.phi2.min_f > -1e-4);
+  // The adjustment does not make the torso worse than φ1.
+  CHECK(r->accuracy.phi1_adjusted.mean_abs_f <= r->accuracy.phi1.mean_abs_f + 1e-9);
+  // Rig and geometry segmentation agree.
+  REQUIRE(r->agreement.has_value());
+  MESSAGE("MakeHuman: " << r->fit.spheres.size() << " spheres, rig/geometry agreement "
+                        << 100 * r->agreement->triangle_fraction << "% of triangles");
+  CHECK(r->agreement->triangle_fraction > 0.85);
+  CheckRoundTrip(r.value());
+  const auto report = MakeBakeReport(r.value(), BakeConfig{}, ctx);
+  for (const char* key : {"vertices", "triangles", "spheres", "regions", "chains", "unassigned_triangles", "accuracy",
+                          "timings_ms"})
+    CHECK(report.contains(key));
+  CHECK(report["accuracy"]["phi2"].contains("mean_abs_F"));
+  CHECK(TorsoRayCsv(r.value()).size() > 100);
+}
+
+TEST_CASE("bake: two bakes of one input are byte-identical") {
+  const std::string path = test::SharedData("gltf/CesiumMan.gltf");
+  if (!test::Require(path)) return;
+  auto a = Bake(path, BakeConfig{});
+  auto b = Bake(path, BakeConfig{});
+  REQUIRE_MESSAGE(a.ok(), (a.ok() ? "" : a.error().message));
+  REQUIRE(b.ok());
+  CHECK(a->asset == b->asset);
+  CHECK(a->mesh.vertex_count() == 3273);
+  CHECK(a->mesh.triangle_count() == 4672);
+  CheckRoundTrip(a.value());
+  // A different parameter gives a different asset.
+  BakeConfig other;
+  other.fit.penetration_depth = 0.2;
+  auto c = Bake(path, other);
+  REQUIRE(c.ok());
+  CHECK(c->asset != a->asset);
+}
+
+TEST_CASE("bake: BCN_Epileptic.X (three meshes joined) bakes") {
+  const std::string path = test::AssimpModel("X/BCN_Epileptic.X");
+  if (!test::Require(path)) return;
+  auto r = Bake(path, BakeConfig{});
+  REQUIRE_MESSAGE(r.ok(), (r.ok() ? "" : r.error().message));
+  CHECK(r->mesh.parts.size() == 3);
+  CHECK(r->unassigned_triangles == 0);
+  CHECK(r->chains.size() == 6);
+  CheckRoundTrip(r.value());
+}
+
+TEST_CASE("bake: bad inputs give a clear error") {
+  const fs::path dir = TempDir("bad");
+  auto expect = [&](const std::string& path, Error::Code code, const std::string& fragment) {
+    auto r = Bake(path, BakeConfig{});
+    REQUIRE_FALSE(r.ok());
+    CHECK_MESSAGE(r.error().code == code, r.error().message);
+    CHECK_MESSAGE(r.error().message.find(fragment) != std::string::npos, r.error().message);
+  };
+  expect((dir / "missing.obj").string(), Error::Code::kIo, "missing.obj");
+  WriteText(dir / "notes.txt", "hello");
+  expect((dir / "notes.txt").string(), Error::Code::kFormat, "notes.txt");
+  WriteText(dir / "empty.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n");
+  expect((dir / "empty.obj").string(), Error::Code::kInvalidMesh, "triangle");
+  WriteText(dir / "nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n");
+  expect((dir / "nan.obj").string(), Error::Code::kInvalidMesh, "");
+  WriteText(dir / "garbage.gltf", "{\"asset\": {\"version\": \"2.0\"}, \"meshes\": [");
+  expect((dir / "garbage.gltf").string(), Error::Code::kFormat, "garbage.gltf");
+  // A cube is not a standing body.
+  WriteText(dir / "cube.obj",
+            "v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\nv -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\n"
+            "f 1 2 3 4\nf 5 8 7 6\nf 1 5 6 2\nf 2 6 7 3\nf 3 7 8 4\nf 4 8 5 1\n");
+  expect((dir / "cube.obj").string(), Error::Code::kSegmentation, "");
+}
+
+TEST_CASE("bake: configuration errors name the key") {
+  auto c = ParseBakeConfig("{\"penetration_depth\": 3}", "cfg.json");
+  REQUIRE_FALSE(c.ok());
+  CHECK(c.error().message.find("penetration_depth") != std::string::npos);
+  CHECK_FALSE(ParseBakeConfig("{\"raysss\": 80}", "cfg.json").ok());
+  CHECK_FALSE(ParseBakeConfig("[1, 2]", "cfg.json").ok());
+  CHECK_FALSE(ParseBakeConfig("{\"chains\": [{\"members\": \"R0\"}]}", "cfg.json").ok());
+  auto ok = ParseBakeConfig("{\"rays\": 40, \"chains\": [{\"name\": \"arms\", \"members\": [\"R0\", \"R1\"]}]}", "cfg.json");
+  REQUIRE(ok.ok());
+  CHECK(ok->fit.rays == 40);
+  REQUIRE(ok->chains.size() == 1);
+  CHECK(ok->chains[0].name == "arms");
+}
+
+TEST_CASE("bake: atomic write leaves the old file intact when the folder is missing, and replaces it otherwise") {
+  const fs::path dir = TempDir("atomic");
+  const fs::path target = dir / "a.sphc";
+  REQUIRE(WriteFileAtomic(target.string(), std::string("old")).ok());
+  auto bad = WriteFileAtomic((dir / "nope" / "a.sphc").string(), std::string("new"));
+  CHECK_FALSE(bad.ok());
+  REQUIRE(WriteFileAtomic(target.string(), std::string("new")).ok());
+  std::ifstream in(target);
+  std::string text((std::istreambuf_iterator<char>(in)), {});
+  CHECK(text == "new");
+  size_t files = 0;
+  for ([[maybe_unused]] const auto& e : fs::directory_iterator(dir)) ++files;
+  CHECK(files == 1);  // no temporary left behind
+}

@@ -1,0 +1,552 @@
+// Segmentation into the paper's five regions (R0 left arm, R1 right arm, R2 left leg, R3 right leg,
+// R4 torso): synthetic bodies with known answers, the MakeHuman body by rig and by geometry, and the
+// documented errors. Set SPHERECHAIN_SEGMENT_DEBUG_DIR=/tmp to get front/back PNG renders (needs
+// ImageMagick `convert`); the library itself never writes or prints anything.
+#include <doctest/doctest.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <numeric>
+#include <sstream>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "spherechain/baker/import.h"
+#include "spherechain/baker/segment.h"
+#include "test_data.h"
+
+namespace sc = spherechain::baker;
+using spherechain::test::Require;
+using spherechain::test::SharedData;
+
+namespace {
+
+using Vec3 = std::array<double, 3>;
+Vec3 Sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+double Dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+double Norm(const Vec3& a) { return std::sqrt(Dot(a, a)); }
+
+// ---------------------------------------------------------------------------------------------------
+// Synthetic body: the zero set of min(capsule distances), meshed by marching tetrahedra. Y up, facing
+// +Z (feet point +Z), so the character's left is +X.
+struct Capsule {
+  Vec3 a, b;
+  double r;
+  sc::Region region;
+  double Distance(const Vec3& p, double* t_out = nullptr) const {
+    const Vec3 ab = Sub(b, a);
+    double t = std::clamp(Dot(Sub(p, a), ab) / std::max(Dot(ab, ab), 1e-12), 0.0, 1.0);
+    if (t_out) *t_out = t;
+    const Vec3 q{a[0] + t * ab[0], a[1] + t * ab[1], a[2] + t * ab[2]};
+    return Norm(Sub(p, q)) - r;
+  }
+};
+
+std::vector<Capsule> BodyParts(bool t_pose) {
+  using R = sc::Region;
+  std::vector<Capsule> c;
+  for (int s : {1, -1}) {
+    const R leg = s > 0 ? R::kLeftLeg : R::kRightLeg;
+    const R arm = s > 0 ? R::kLeftArm : R::kRightArm;
+    c.push_back({{s * 0.10, 0.86, 0.0}, {s * 0.11, 0.10, 0.0}, 0.07, leg});       // leg, hip → ankle
+    c.push_back({{s * 0.11, 0.05, -0.02}, {s * 0.12, 0.05, 0.16}, 0.045, leg});   // foot, pointing +Z
+    if (t_pose) c.push_back({{s * 0.18, 1.36, 0.0}, {s * 0.82, 1.36, 0.0}, 0.05, arm});
+    else c.push_back({{s * 0.18, 1.38, 0.0}, {s * 0.52, 0.92, 0.0}, 0.05, arm});
+  }
+  c.push_back({{0.0, 0.86, 0.0}, {0.0, 1.36, 0.0}, 0.17, R::kTorso});  // trunk
+  c.push_back({{0.0, 1.36, 0.0}, {0.0, 1.55, 0.0}, 0.05, R::kTorso});  // neck
+  c.push_back({{0.0, 1.63, 0.0}, {0.0, 1.63, 0.0}, 0.11, R::kTorso});  // head
+  return c;
+}
+
+int NearestPart(const std::vector<Capsule>& parts, const Vec3& p) {
+  int best = 0;
+  for (int i = 1; i < int(parts.size()); ++i)
+    if (parts[i].Distance(p) < parts[best].Distance(p)) best = i;
+  return best;
+}
+
+/// Marching tetrahedra (Freudenthal split of each cube, consistent across cubes) of f < 0.
+sc::Mesh MarchingTetrahedra(const std::function<double(const Vec3&)>& f, const Vec3& lo, const Vec3& hi, double step) {
+  const int nx = int(std::ceil((hi[0] - lo[0]) / step)) + 1, ny = int(std::ceil((hi[1] - lo[1]) / step)) + 1,
+            nz = int(std::ceil((hi[2] - lo[2]) / step)) + 1;
+  auto gid = [&](int i, int j, int k) { return (int64_t(k) * ny + j) * nx + i; };
+  auto gpos = [&](int64_t id) {
+    const int64_t i = id % nx, j = (id / nx) % ny, k = id / (int64_t(nx) * ny);
+    return Vec3{lo[0] + i * step, lo[1] + j * step, lo[2] + k * step};
+  };
+  std::vector<double> val(size_t(nx) * ny * nz);
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) val[gid(i, j, k)] = f(gpos(gid(i, j, k)));
+  sc::Mesh mesh;
+  std::unordered_map<uint64_t, uint32_t> edge_vertex;
+  auto vertex_on = [&](int64_t a, int64_t b) {
+    if (a > b) std::swap(a, b);
+    const uint64_t key = uint64_t(a) * uint64_t(val.size()) + uint64_t(b);
+    auto it = edge_vertex.find(key);
+    if (it != edge_vertex.end()) return it->second;
+    const double t = val[a] / (val[a] - val[b]);
+    const Vec3 pa = gpos(a), pb = gpos(b);
+    const uint32_t idx = mesh.vertex_count();
+    for (int d = 0; d < 3; ++d) mesh.positions.push_back(float(pa[d] + t * (pb[d] - pa[d])));
+    edge_vertex.emplace(key, idx);
+    return idx;
+  };
+  static const int corner[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+  static const int tets[6][4] = {{0, 1, 2, 6}, {0, 3, 2, 6}, {0, 3, 7, 6}, {0, 4, 7, 6}, {0, 4, 5, 6}, {0, 1, 5, 6}};
+  for (int k = 0; k + 1 < nz; ++k)
+    for (int j = 0; j + 1 < ny; ++j)
+      for (int i = 0; i + 1 < nx; ++i)
+        for (const auto& tet : tets) {
+          int64_t id[4];
+          std::vector<int> in, out;
+          for (int c = 0; c < 4; ++c) {
+            const int* o = corner[tet[c]];
+            id[c] = gid(i + o[0], j + o[1], k + o[2]);
+            (val[id[c]] < 0 ? in : out).push_back(c);
+          }
+          if (in.empty() || out.empty()) continue;
+          auto tri = [&](uint32_t a, uint32_t b, uint32_t c) {
+            mesh.indices.insert(mesh.indices.end(), {a, b, c});
+          };
+          if (in.size() == 1 || out.size() == 1) {
+            const auto& one = in.size() == 1 ? in : out;
+            const auto& three = in.size() == 1 ? out : in;
+            tri(vertex_on(id[one[0]], id[three[0]]), vertex_on(id[one[0]], id[three[1]]),
+                vertex_on(id[one[0]], id[three[2]]));
+          } else {
+            const uint32_t a = vertex_on(id[in[0]], id[out[0]]), b = vertex_on(id[in[0]], id[out[1]]),
+                           c = vertex_on(id[in[1]], id[out[1]]), d = vertex_on(id[in[1]], id[out[0]]);
+            tri(a, b, c);
+            tri(a, c, d);
+          }
+        }
+  return mesh;
+}
+
+struct SyntheticBody {
+  sc::Mesh mesh;
+  std::vector<Capsule> parts;
+  std::vector<int> part_of_triangle;
+  std::vector<double> along_part;  ///< per triangle: 0 at the part's root, 1 at its tip (before rotation)
+};
+
+/// `yaw_quarter_turns`: the body is rotated about +Y by that many quarter turns after meshing.
+SyntheticBody MakeSyntheticBody(bool t_pose, int yaw_quarter_turns = 0) {
+  SyntheticBody body;
+  body.parts = BodyParts(t_pose);
+  auto f = [&](const Vec3& p) {
+    double d = 1e9;
+    for (const Capsule& c : body.parts) d = std::min(d, c.Distance(p));
+    return d;
+  };
+  body.mesh = MarchingTetrahedra(f, {-0.95, -0.02, -0.25}, {0.95, 1.8, 0.25}, 0.016);
+  for (uint32_t t = 0; t < body.mesh.triangle_count(); ++t) {
+    Vec3 c{0, 0, 0};
+    for (int k = 0; k < 3; ++k)
+      for (int d = 0; d < 3; ++d) c[d] += body.mesh.positions[3 * body.mesh.indices[3 * t + k] + d] / 3.0;
+    body.part_of_triangle.push_back(NearestPart(body.parts, c));
+    double along = 0;
+    body.parts[size_t(body.part_of_triangle.back())].Distance(c, &along);
+    body.along_part.push_back(along);
+  }
+  for (int q = 0; q < (yaw_quarter_turns % 4 + 4) % 4; ++q) {
+    for (uint32_t v = 0; v < body.mesh.vertex_count(); ++v) {
+      float& x = body.mesh.positions[3 * v];
+      float& z = body.mesh.positions[3 * v + 2];
+      const float nx = z, nz = -x;  // +90° about +Y: +Z → +X
+      x = nx;
+      z = nz;
+    }
+  }
+  body.mesh.up_axis = sc::UpAxis::kY;
+  return body;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Private MakeHuman loader (base.obj group `body` + default_weights.mhw) so this test does not depend on
+// the importer's OBJ path.
+sc::Mesh LoadMakeHumanBody(bool with_rig) {
+  sc::Mesh mesh;
+  std::ifstream in(SharedData("makehuman/base.obj"));
+  std::string line;
+  bool in_body = false;
+  std::vector<float> all;
+  uint32_t max_v = 0;
+  while (std::getline(in, line)) {
+    if (line.rfind("v ", 0) == 0) {
+      std::istringstream s(line.substr(2));
+      float x, y, z;
+      s >> x >> y >> z;
+      all.insert(all.end(), {x, y, z});
+    } else if (line.rfind("g ", 0) == 0) {
+      in_body = line == "g body";
+    } else if (in_body && line.rfind("f ", 0) == 0) {
+      std::istringstream s(line.substr(2));
+      std::vector<uint32_t> f;
+      std::string tok;
+      while (s >> tok) f.push_back(uint32_t(std::stoul(tok.substr(0, tok.find('/')))) - 1);
+      for (size_t k = 1; k + 1 < f.size(); ++k) mesh.indices.insert(mesh.indices.end(), {f[0], f[k], f[k + 1]});
+      for (uint32_t v : f) max_v = std::max(max_v, v);
+    }
+  }
+  mesh.positions.assign(all.begin(), all.begin() + 3 * (size_t(max_v) + 1));
+  mesh.up_axis = sc::UpAxis::kY;
+  mesh.source_format = "obj";
+  if (!with_rig) return mesh;
+  std::ifstream win(SharedData("makehuman/default_weights.mhw"));
+  const nlohmann::json w = nlohmann::json::parse(win);
+  sc::Skin skin;
+  skin.source = "mhskel";
+  std::vector<std::vector<std::pair<uint32_t, float>>> rows(mesh.vertex_count());
+  for (const auto& [bone, list] : w["weights"].items()) {
+    const uint32_t j = uint32_t(skin.joints.size());
+    skin.nodes.push_back({bone});
+    skin.joints.push_back({int32_t(j)});
+    for (const auto& vw : list) {
+      const uint32_t v = vw[0].get<uint32_t>();
+      if (v < rows.size()) rows[v].emplace_back(j, vw[1].get<float>());
+    }
+  }
+  skin.weight_offsets.push_back(0);
+  for (auto& r : rows) {
+    float sum = 0;
+    for (auto& [j, x] : r) sum += x;
+    for (auto& [j, x] : r) {
+      skin.weight_joints.push_back(j);
+      skin.weights.push_back(sum > 0 ? x / sum : 0.0f);
+    }
+    skin.weight_offsets.push_back(uint32_t(skin.weights.size()));
+  }
+  mesh.skin = std::move(skin);
+  return mesh;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Checks and debug output.
+
+std::array<size_t, sc::kRegionCount> Counts(const sc::Segmentation& s) {
+  std::array<size_t, sc::kRegionCount> n{};
+  for (uint8_t r : s.triangle_regions) ++n.at(r);
+  return n;
+}
+
+/// Number of connected pieces of each region (triangles sharing a vertex at the same position).
+std::array<int, sc::kRegionCount> PieceCounts(const sc::Mesh& mesh, const sc::Segmentation& s) {
+  std::map<std::array<float, 3>, uint32_t> weld;
+  std::vector<uint32_t> rep(mesh.vertex_count());
+  for (uint32_t v = 0; v < mesh.vertex_count(); ++v)
+    rep[v] = weld.emplace(std::array<float, 3>{mesh.positions[3 * v], mesh.positions[3 * v + 1], mesh.positions[3 * v + 2]}, v)
+                 .first->second;
+  const uint32_t nt = mesh.triangle_count();
+  std::vector<uint32_t> parent(nt);
+  std::iota(parent.begin(), parent.end(), 0u);
+  std::function<uint32_t(uint32_t)> find = [&](uint32_t x) { return parent[x] == x ? x : parent[x] = find(parent[x]); };
+  std::vector<std::array<int64_t, sc::kRegionCount>> seen(mesh.vertex_count());
+  for (auto& a : seen) a.fill(-1);
+  for (uint32_t t = 0; t < nt; ++t)
+    for (int k = 0; k < 3; ++k) {
+      auto& slot = seen[rep[mesh.indices[3 * t + k]]][s.triangle_regions[t]];
+      if (slot < 0) slot = t;
+      else parent[find(uint32_t(slot))] = find(t);
+    }
+  std::array<int, sc::kRegionCount> n{};
+  for (uint32_t t = 0; t < nt; ++t)
+    if (find(t) == t) ++n[s.triangle_regions[t]];
+  return n;
+}
+
+std::string Describe(const sc::Segmentation& s) {
+  const auto n = Counts(s);
+  std::ostringstream o;
+  o << s.method << ": L-arm " << n[0] << ", R-arm " << n[1] << ", L-leg " << n[2] << ", R-leg " << n[3] << ", torso "
+    << n[4];
+  return o.str();
+}
+
+/// Front (looking along -forward) and back views side by side, z-buffered, coloured by region and
+/// shaded by normal. Written as PPM, converted to PNG with ImageMagick when available.
+void RenderDebug(const sc::Mesh& mesh, const sc::Segmentation& s, const std::string& name, int forward_axis = 2) {
+  const char* dir = std::getenv("SPHERECHAIN_SEGMENT_DEBUG_DIR");
+  if (!dir) return;
+  const int W = 400, H = 700;
+  std::vector<std::array<uint8_t, 3>> img(size_t(2 * W) * H, {255, 255, 255});
+  const int side_axis = forward_axis == 2 ? 0 : 2;
+  float lo[3] = {1e9f, 1e9f, 1e9f}, hi[3] = {-1e9f, -1e9f, -1e9f};
+  for (uint32_t v = 0; v < mesh.vertex_count(); ++v)
+    for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], mesh.positions[3 * v + d]), hi[d] = std::max(hi[d], mesh.positions[3 * v + d]);
+  const int up = mesh.up_axis == sc::UpAxis::kZ ? 2 : 1;
+  const float scale = 0.95f * std::min(W / std::max(1e-6f, hi[side_axis] - lo[side_axis]), H / std::max(1e-6f, hi[up] - lo[up]));
+  static const uint8_t colour[5][3] = {{220, 40, 40}, {40, 90, 220}, {240, 170, 20}, {30, 170, 80}, {170, 170, 170}};
+  for (int view = 0; view < 2; ++view) {
+    std::vector<float> zbuf(size_t(W) * H, -1e30f);
+    const float flip = view == 0 ? 1.0f : -1.0f;  // front: +forward towards the viewer
+    for (uint32_t t = 0; t < mesh.triangle_count(); ++t) {
+      float sx[3], sy[3], sz[3];
+      float p[3][3];
+      for (int k = 0; k < 3; ++k) {
+        for (int d = 0; d < 3; ++d) p[k][d] = mesh.positions[3 * mesh.indices[3 * t + k] + d];
+        // front view: viewer at +forward; the character's left (+X for +Z forward) appears on the image right
+        sx[k] = W / 2 + flip * (p[k][side_axis] - 0.5f * (lo[side_axis] + hi[side_axis])) * scale *
+                            (forward_axis == 2 ? 1.0f : -1.0f);
+        sy[k] = H - 10 - (p[k][up] - lo[up]) * scale;
+        sz[k] = flip * p[k][forward_axis];
+      }
+      const float e1[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
+      const float e2[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
+      float n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+      const float nl = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) + 1e-12f;
+      const float shade = 0.45f + 0.55f * std::abs(n[forward_axis] / nl);
+      const int x0 = std::max(0, int(std::floor(std::min({sx[0], sx[1], sx[2]})))),
+                x1 = std::min(W - 1, int(std::ceil(std::max({sx[0], sx[1], sx[2]}))));
+      const int y0 = std::max(0, int(std::floor(std::min({sy[0], sy[1], sy[2]})))),
+                y1 = std::min(H - 1, int(std::ceil(std::max({sy[0], sy[1], sy[2]}))));
+      const float den = (sy[1] - sy[2]) * (sx[0] - sx[2]) + (sx[2] - sx[1]) * (sy[0] - sy[2]);
+      if (std::abs(den) < 1e-12f) continue;
+      for (int y = y0; y <= y1; ++y)
+        for (int x = x0; x <= x1; ++x) {
+          const float a = ((sy[1] - sy[2]) * (x - sx[2]) + (sx[2] - sx[1]) * (y - sy[2])) / den;
+          const float b = ((sy[2] - sy[0]) * (x - sx[2]) + (sx[0] - sx[2]) * (y - sy[2])) / den;
+          const float c = 1 - a - b;
+          if (a < 0 || b < 0 || c < 0) continue;
+          const float z = a * sz[0] + b * sz[1] + c * sz[2];
+          if (z <= zbuf[size_t(y) * W + x]) continue;
+          zbuf[size_t(y) * W + x] = z;
+          const uint8_t* col = colour[std::min<int>(s.triangle_regions[t], 4)];
+          img[size_t(y) * 2 * W + view * W + x] = {uint8_t(col[0] * shade), uint8_t(col[1] * shade), uint8_t(col[2] * shade)};
+        }
+    }
+  }
+  const std::string base = std::string(dir) + "/seg_" + name;
+  {
+    std::ofstream out(base + ".ppm", std::ios::binary);
+    out << "P6\n" << 2 * W << ' ' << H << "\n255\n";
+    out.write(reinterpret_cast<const char*>(img.data()), std::streamsize(img.size() * 3));
+  }
+  const std::string cmd = "convert '" + base + ".ppm' '" + base + ".png' 2>/dev/null && rm -f '" + base + ".ppm'";
+  if (std::system(cmd.c_str()) == 0) MESSAGE("debug render: " << base << ".png (left: front, right: back)");
+}
+
+/// Checks the synthetic body's known answer: every triangle well inside a limb (beyond 30% of the
+/// capsule from its root) is in that limb's region; the head and chest are torso; ≥ 90% overall.
+void CheckSynthetic(const SyntheticBody& body, const sc::Segmentation& s) {
+  REQUIRE(s.triangle_regions.size() == body.mesh.triangle_count());
+  size_t agree = 0, wrong_limb = 0, limb_total = 0;
+  for (uint32_t t = 0; t < body.mesh.triangle_count(); ++t) {
+    const Capsule& part = body.parts[size_t(body.part_of_triangle[t])];
+    const uint8_t truth = static_cast<uint8_t>(part.region);
+    agree += s.triangle_regions[t] == truth;
+    if (part.region == sc::Region::kTorso || body.along_part[t] < 0.3) continue;
+    ++limb_total;
+    wrong_limb += s.triangle_regions[t] != truth;
+  }
+  const double fraction = double(agree) / double(body.mesh.triangle_count());
+  MESSAGE(Describe(s) << "; agreement with the construction " << fraction << "; limb triangles checked "
+                      << limb_total << ", wrong " << wrong_limb);
+  CHECK(limb_total > 1000);
+  CHECK(wrong_limb == 0);
+  CHECK(fraction >= 0.9);
+  const auto pieces = PieceCounts(body.mesh, s);
+  for (int r = 0; r < 4; ++r) CHECK_MESSAGE(pieces[r] == 1, "region " << r << " has " << pieces[r] << " pieces");
+}
+
+}  // namespace
+
+TEST_CASE("segment: synthetic A-pose body, geometry, known answer") {
+  const SyntheticBody body = MakeSyntheticBody(false);
+  auto seg = sc::SegmentByGeometry(body.mesh);
+  REQUIRE_MESSAGE(seg.ok(), (seg.ok() ? "" : seg.error().message));
+  MESSAGE(seg->notes);
+  CheckSynthetic(body, seg.value());
+  RenderDebug(body.mesh, seg.value(), "synthetic_apose");
+}
+
+TEST_CASE("segment: synthetic T-pose body, geometry, known answer") {
+  const SyntheticBody body = MakeSyntheticBody(true);
+  auto seg = sc::SegmentByGeometry(body.mesh);
+  REQUIRE_MESSAGE(seg.ok(), (seg.ok() ? "" : seg.error().message));
+  MESSAGE(seg->notes);
+  CheckSynthetic(body, seg.value());
+  RenderDebug(body.mesh, seg.value(), "synthetic_tpose");
+}
+
+TEST_CASE("segment: synthetic body facing +X, left/right from the feet not from a fixed axis") {
+  for (bool t_pose : {false, true}) {
+    CAPTURE(t_pose);
+    const SyntheticBody body = MakeSyntheticBody(t_pose, 1);
+    auto seg = sc::SegmentByGeometry(body.mesh);
+    REQUIRE_MESSAGE(seg.ok(), (seg.ok() ? "" : seg.error().message));
+    CheckSynthetic(body, seg.value());
+  }
+}
+
+TEST_CASE("segment: MakeHuman body by geometry and by rig agree") {
+  if (!Require(SharedData("makehuman/base.obj")) || !Require(SharedData("makehuman/default_weights.mhw"))) return;
+  const sc::Mesh mesh = LoadMakeHumanBody(true);
+  REQUIRE(mesh.vertex_count() == 13380);
+  REQUIRE(mesh.triangle_count() == 26756);
+  auto geo = sc::SegmentByGeometry(mesh);
+  REQUIRE_MESSAGE(geo.ok(), (geo.ok() ? "" : geo.error().message));
+  auto rig = sc::SegmentByRig(mesh);
+  REQUIRE_MESSAGE(rig.ok(), (rig.ok() ? "" : rig.error().message));
+  MESSAGE("geometry notes: " << geo->notes);
+  MESSAGE("rig notes: " << rig->notes);
+  for (const sc::Segmentation* s : {&geo.value(), &rig.value()}) {
+    const auto pieces = PieceCounts(mesh, *s);
+    for (int r = 0; r < 4; ++r) CHECK_MESSAGE(pieces[r] == 1, s->method << " region " << r << ": " << pieces[r] << " pieces");
+    for (uint8_t r : s->triangle_regions) REQUIRE(r < sc::kRegionCount);
+    // The character faces +Z, so its left arm (R0) lies at +X.
+    double x_left = 0, x_right = 0;
+    for (uint32_t t = 0; t < mesh.triangle_count(); ++t) {
+      const double x = mesh.positions[3 * mesh.indices[3 * t]];
+      if (s->triangle_regions[t] == 0) x_left += x;
+      if (s->triangle_regions[t] == 1) x_right += x;
+    }
+    CHECK(x_left > 0);
+    CHECK(x_right < 0);
+  }
+  const sc::SegmentationAgreement a = sc::CompareSegmentations(mesh, geo.value(), rig.value());
+  MESSAGE(Describe(geo.value()) << "\n" << Describe(rig.value()) << "\nagreement: triangles " << a.triangle_fraction
+                                << ", area " << a.area_fraction << ", IoU L-arm " << a.iou[0] << " R-arm " << a.iou[1]
+                                << " L-leg " << a.iou[2] << " R-leg " << a.iou[3] << " torso " << a.iou[4]);
+  CHECK(a.triangle_fraction >= 0.90);
+  for (int r = 0; r < sc::kRegionCount; ++r) CHECK(a.iou[r] >= 0.75);
+  RenderDebug(mesh, geo.value(), "makehuman_geometry");
+  RenderDebug(mesh, rig.value(), "makehuman_rig");
+}
+
+TEST_CASE("segment: Auto picks the rig when recognised, geometry otherwise") {
+  const SyntheticBody body = MakeSyntheticBody(false);
+  auto seg = sc::Segment(body.mesh, sc::SegmentMethod::kAuto);
+  REQUIRE(seg.ok());
+  CHECK(seg->method == "geometry");
+  sc::Mesh rigged = body.mesh;
+  rigged.skin = sc::Skin{};
+  rigged.skin->nodes = {{"spine"}};
+  rigged.skin->joints = {{0}};
+  rigged.skin->weight_offsets.assign(rigged.vertex_count() + 1, 0);
+  auto only_spine = sc::SegmentByRig(rigged);
+  REQUIRE_FALSE(only_spine.ok());
+  CHECK(only_spine.error().code == sc::Error::Code::kSegmentation);
+  CHECK(only_spine.error().message.find("left_arm") != std::string::npos);
+  auto fallback = sc::Segment(rigged, sc::SegmentMethod::kAuto);
+  REQUIRE(fallback.ok());
+  CHECK(fallback->method == "geometry");
+}
+
+namespace {
+void CheckRealCharacter(const std::string& path) {
+  {
+    CAPTURE(path);
+    if (!Require(path)) return;
+    auto mesh = sc::ImportMesh(path);
+    if (!mesh.ok()) {
+      MESSAGE("import failed (importer still in progress?): " << mesh.error().message);
+      return;
+    }
+    auto rig = sc::SegmentByRig(mesh.value());
+    REQUIRE_MESSAGE(rig.ok(), (rig.ok() ? "" : rig.error().message));
+    MESSAGE(path << " rig: " << Describe(rig.value()) << " — " << rig->notes);
+    const auto pieces = PieceCounts(mesh.value(), rig.value());
+    for (int r = 0; r < 4; ++r) CHECK(pieces[r] == 1);
+    const std::string name = std::filesystem::path(path).stem().string();
+    RenderDebug(mesh.value(), rig.value(), name + "_rig");
+    auto geo = sc::SegmentByGeometry(mesh.value());
+    if (geo.ok()) {
+      const auto a = sc::CompareSegmentations(mesh.value(), geo.value(), rig.value());
+      MESSAGE(path << " geometry: " << Describe(geo.value()) << "; agreement with rig " << a.triangle_fraction
+                   << " — " << geo->notes);
+      RenderDebug(mesh.value(), geo.value(), name + "_geometry");
+    } else {
+      MESSAGE(path << " geometry: " << geo.error().message);
+    }
+  }
+}
+}  // namespace
+
+TEST_CASE("segment: CesiumMan via ImportMesh, rig and geometry") { CheckRealCharacter(SharedData("gltf/CesiumMan.gltf")); }
+
+TEST_CASE("segment: BCN_Epileptic via ImportMesh, rig and geometry") {
+  CheckRealCharacter(spherechain::test::AssimpModel("X/BCN_Epileptic.X"));
+}
+
+TEST_CASE("segment: a cube and a sphere are not bodies") {
+  sc::Mesh cube;
+  cube.positions = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 0, 0, 1, 1, 0, 1, 1, 1, 1, 0, 1, 1};
+  cube.indices = {0, 2, 1, 0, 3, 2, 4, 5, 6, 4, 6, 7, 0, 1, 5, 0, 5, 4, 1, 2, 6, 1, 6, 5, 2, 3, 7, 2, 7, 6, 3, 0, 4, 3, 4, 7};
+  sc::Mesh sphere;
+  const int n = 24;
+  for (int i = 0; i <= n; ++i)
+    for (int j = 0; j < 2 * n; ++j) {
+      const double th = M_PI * i / n, ph = M_PI * j / n;
+      sphere.positions.insert(sphere.positions.end(),
+                              {float(std::sin(th) * std::cos(ph)), float(std::cos(th)), float(std::sin(th) * std::sin(ph))});
+    }
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < 2 * n; ++j) {
+      const uint32_t a = i * 2 * n + j, b = i * 2 * n + (j + 1) % (2 * n), c = a + 2 * n, d = b + 2 * n;
+      sphere.indices.insert(sphere.indices.end(), {a, c, b, b, c, d});
+    }
+  for (const sc::Mesh* m : {&cube, &sphere}) {
+    auto seg = sc::SegmentByGeometry(*m);
+    REQUIRE_FALSE(seg.ok());
+    CHECK(seg.error().code == sc::Error::Code::kSegmentation);
+    CHECK(seg.error().message.find("not a standing body") != std::string::npos);
+    MESSAGE(seg.error().message);
+    auto rig = sc::SegmentByRig(*m);
+    REQUIRE_FALSE(rig.ok());
+    CHECK(rig.error().code == sc::Error::Code::kSegmentation);
+  }
+}
+
+TEST_CASE("segment: region map, wrong length and bad values are config errors") {
+  const SyntheticBody body = MakeSyntheticBody(false);
+  const sc::Mesh& mesh = body.mesh;
+  const auto dir = std::filesystem::temp_directory_path();
+  auto write = [&](const std::string& name, const nlohmann::json& j) {
+    const std::string p = (dir / ("spherechain_segment_" + name + ".json")).string();
+    std::ofstream(p) << j.dump();
+    return p;
+  };
+  std::vector<int> tri(mesh.triangle_count());
+  for (size_t t = 0; t < tri.size(); ++t) tri[t] = int(body.parts[size_t(body.part_of_triangle[t])].region);
+  auto ok = sc::SegmentByMap(mesh, write("ok", {{"triangle_regions", tri}}));
+  REQUIRE_MESSAGE(ok.ok(), (ok.ok() ? "" : ok.error().message));
+  CHECK(ok->method == "map");
+  CHECK(std::equal(tri.begin(), tri.end(), ok->triangle_regions.begin()));
+
+  std::vector<int> short_map(tri.begin(), tri.end() - 1);
+  auto bad_len = sc::SegmentByMap(mesh, write("short", {{"triangle_regions", short_map}}));
+  REQUIRE_FALSE(bad_len.ok());
+  CHECK(bad_len.error().code == sc::Error::Code::kConfig);
+  CHECK(bad_len.error().message.find(std::to_string(mesh.triangle_count())) != std::string::npos);
+
+  std::vector<int> verts(mesh.vertex_count() + 3, 4);
+  auto bad_vlen = sc::SegmentByMap(mesh, write("vshort", {{"vertex_regions", verts}}));
+  REQUIRE_FALSE(bad_vlen.ok());
+  CHECK(bad_vlen.error().code == sc::Error::Code::kConfig);
+
+  tri[7] = 5;
+  auto bad_val = sc::SegmentByMap(mesh, write("badval", {{"triangle_regions", tri}}));
+  REQUIRE_FALSE(bad_val.ok());
+  CHECK(bad_val.error().code == sc::Error::Code::kConfig);
+
+  auto missing = sc::SegmentByMap(mesh, (dir / "spherechain_segment_no_such_file.json").string());
+  REQUIRE_FALSE(missing.ok());
+  CHECK(missing.error().code == sc::Error::Code::kIo);
+
+  std::vector<int> vert_torso(mesh.vertex_count(), 4);
+  auto by_vertex = sc::SegmentByMap(mesh, write("vok", {{"vertex_regions", vert_torso}}));
+  REQUIRE(by_vertex.ok());
+  CHECK(std::all_of(by_vertex->triangle_regions.begin(), by_vertex->triangle_regions.end(), [](uint8_t r) { return r == 4; }));
+}

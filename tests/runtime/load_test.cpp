@@ -1,0 +1,149 @@
+// LoadAsset: envelope, verification and semantic checks (runtime/include/spherechain/runtime/asset.h).
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "runtime/asset_builder.h"
+
+using namespace spherechain;
+using namespace spherechain::runtime;
+using spherechain::test::AlignedBytes;
+
+namespace {
+
+Status Load(const test::AssetData& d, AssetView* view) {
+  static AlignedBytes keep;  // the view borrows the bytes
+  keep = test::Serialize(d);
+  return LoadAsset(keep.data(), keep.size, view);
+}
+
+test::AssetData Valid(test::Mesh* mesh) { return test::TwoTubes(true, mesh); }
+
+}  // namespace
+
+TEST_CASE("LoadAsset accepts a valid synthetic asset and exposes its counts") {
+  test::Mesh mesh;
+  const test::AssetData d = Valid(&mesh);
+  AssetView view;
+  REQUIRE(Load(d, &view) == Status::kOk);
+  CHECK(view.valid());
+  CHECK(view.sphere_count == 16);
+  CHECK(view.vertex_count == mesh.vertex_count());
+  CHECK(view.triangle_count == mesh.triangle_count());
+  CHECK(view.chain_count == 3);
+  const TriangleSpan region = SurroundingTriangles(view, 2);
+  REQUIRE(region.count == 16);
+  CHECK(region.data[0] == 2 * 16);
+  CHECK(SurroundingTriangles(view, 7).count == 0);  // last ring of tube A owns no segment
+  CHECK(PivotTriangles(view, 0).count == 4);
+}
+
+TEST_CASE("LoadAsset: every truncated prefix is an error, never a crash") {
+  test::Mesh mesh;
+  const AlignedBytes full = test::Serialize(Valid(&mesh));
+  for (size_t n = 0; n < full.size; ++n) {
+    AlignedBytes prefix;
+    prefix.assign(full.data(), n);
+    AssetView view;
+    const Status s = LoadAsset(n ? prefix.data() : full.data(), n, &view);
+    CAPTURE(n);
+    REQUIRE(Failed(s));
+    REQUIRE(!view.valid());
+  }
+}
+
+TEST_CASE("LoadAsset: single bit flips never crash and a success is still semantically valid") {
+  test::Mesh mesh;
+  const AlignedBytes full = test::Serialize(Valid(&mesh));
+  uint32_t rejected = 0;
+  for (size_t i = 0; i < full.size; i += 3) {
+    AlignedBytes copy = full;
+    copy.data()[i] ^= uint8_t(1u << (i % 8));
+    AssetView view;
+    if (Failed(LoadAsset(copy.data(), copy.size, &view))) {
+      ++rejected;
+      continue;
+    }
+    Context ctx;  // a flipped-but-valid asset must still be usable safely
+    REQUIRE(ctx.Init(view) == Status::kOk);
+  }
+  CHECK(rejected > 0);
+}
+
+TEST_CASE("LoadAsset: envelope errors") {
+  test::Mesh mesh;
+  test::AssetData d = Valid(&mesh);
+  AssetView view;
+  AlignedBytes ok = test::Serialize(d);
+  CHECK(LoadAsset(nullptr, ok.size, &view) == Status::kErrorNullArgument);
+  CHECK(LoadAsset(ok.data(), ok.size, nullptr) == Status::kErrorNullArgument);
+  CHECK(LoadAsset(ok.data() + 4, ok.size - 8, &view) == Status::kErrorAlignment);
+  CHECK(LoadAsset(ok.data(), 7, &view) == Status::kErrorAssetTooSmall);
+  CHECK(LoadAsset(ok.data(), kMaxAssetBytes + 1, &view) == Status::kErrorAssetTooLarge);
+
+  test::AssetData wrong_id = d;
+  wrong_id.identifier = "GLTF";
+  CHECK(Load(wrong_id, &view) == Status::kErrorIdentifier);
+
+  test::AssetData old_v = d;
+  old_v.schema_version = 0;
+  CHECK(Load(old_v, &view) == Status::kErrorVersionTooOld);
+  test::AssetData new_v = d;
+  new_v.schema_version = kSchemaVersion + 1;
+  CHECK(Load(new_v, &view) == Status::kErrorVersionTooNew);
+  CHECK(std::string(ToString(Status::kErrorVersionTooNew)).find("newer") != std::string::npos);
+}
+
+TEST_CASE("LoadAsset: semantic errors each give their status") {
+  test::Mesh mesh;
+  const test::AssetData base = Valid(&mesh);
+  AssetView view;
+  auto expect = [&](auto mutate, Status want) {
+    test::AssetData d = base;
+    mutate(d);
+    const Status got = Load(d, &view);
+    CHECK_MESSAGE(got == want, ToString(got));
+    CHECK(!view.valid());
+  };
+  expect([](test::AssetData& d) { d.pivot_vertices[5] = d.vertex_count; }, Status::kErrorIndexOutOfRange);
+  expect([](test::AssetData& d) { d.pivot_triangles[1] = d.triangle_count; }, Status::kErrorIndexOutOfRange);
+  expect([](test::AssetData& d) { d.surrounding_triangles[0] = d.triangle_count + 7; }, Status::kErrorIndexOutOfRange);
+  expect([](test::AssetData& d) { d.chains[1].push_back(16); }, Status::kErrorIndexOutOfRange);
+  expect([](test::AssetData& d) { d.triangle_spheres[0] = 99; }, Status::kErrorIndexOutOfRange);
+  expect([](test::AssetData& d) { d.excluded.push_back(schema::SpherePair(15, 16)); }, Status::kErrorIndexOutOfRange);
+  expect([](test::AssetData& d) {
+    d.spheres[3] = schema::Sphere(d.spheres[3].center(), std::numeric_limits<float>::quiet_NaN());
+  }, Status::kErrorNonFinite);
+  expect([](test::AssetData& d) {
+    d.spheres[3] = schema::Sphere(schema::Vec3(INFINITY, 0, 0), 1.0f);
+  }, Status::kErrorNonFinite);
+  expect([](test::AssetData& d) { d.spheres[3] = schema::Sphere(d.spheres[3].center(), 0.0f); }, Status::kErrorRadius);
+  expect([](test::AssetData& d) { d.spheres[3] = schema::Sphere(d.spheres[3].center(), -1.0f); }, Status::kErrorRadius);
+  expect([](test::AssetData& d) {
+    d.frames[2] = schema::PivotFrame(d.frames[2].local_center(), d.frames[2].centroid_offset(), 0.0f);
+  }, Status::kErrorPivotFrame);
+  expect([](test::AssetData& d) { d.frames.pop_back(); }, Status::kErrorCountMismatch);
+  expect([](test::AssetData& d) { d.pivot_vertices.pop_back(); }, Status::kErrorCountMismatch);
+  expect([](test::AssetData& d) { d.triangle_spheres.pop_back(); }, Status::kErrorCountMismatch);
+  expect([](test::AssetData& d) { d.surrounding_offsets.pop_back(); }, Status::kErrorCountMismatch);
+  expect([](test::AssetData& d) { std::swap(d.surrounding_offsets[2], d.surrounding_offsets[3]); }, Status::kErrorOffsets);
+  expect([](test::AssetData& d) { d.surrounding_offsets.back() += 1; }, Status::kErrorOffsets);
+  expect([](test::AssetData& d) { std::swap(d.chains[1][0], d.chains[1][1]); }, Status::kErrorChainOrder);
+  expect([](test::AssetData& d) { d.chains[1][1] = d.chains[1][0]; }, Status::kErrorChainOrder);
+  expect([](test::AssetData& d) { std::swap(d.excluded[0], d.excluded[1]); }, Status::kErrorExcludedPairs);
+  expect([](test::AssetData& d) { d.excluded[0] = schema::SpherePair(1, 0); }, Status::kErrorExcludedPairs);
+  expect([](test::AssetData& d) { d.chains.resize(kMaxChains + 1, d.chains[0]); }, Status::kErrorTooManyChains);
+  expect([](test::AssetData& d) {
+    d.spheres.clear();
+  }, Status::kErrorNoSpheres);
+}
+
+TEST_CASE("ToString names every status and Succeeded/Failed split them") {
+  CHECK(Succeeded(Status::kOk));
+  CHECK(Succeeded(Status::kOkTruncated));
+  CHECK(IsTruncated(Status::kOkTruncated));
+  CHECK(Failed(Status::kErrorCorrupt));
+  CHECK(std::string(ToString(static_cast<Status>(0x1234u))) == "unknown status");
+  CHECK(std::string(ToString(Status::kErrorVertexCount)).rfind("kErrorVertexCount", 0) == 0);
+}
