@@ -31,7 +31,7 @@ namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
 struct PlayArgs {
-  std::string asset, mesh, clip, json, poses_dir, rig, method = "both", refit = "frame";
+  std::string asset, mesh, clip, json, poses_dir, rig, dump_frames, method = "both", refit = "frame";
   std::vector<std::string> morph;
   uint32_t frames = 40;
   uint32_t repeat = 5;
@@ -294,6 +294,14 @@ int RunPlay(const PlayArgs& a) {
     }
     row.label = label;
     if (!player.Run(positions.data(), &row, &error)) return Fail(error);
+    if (!a.dump_frames.empty()) {
+      // One raw frame per file: #V×3 little-endian float32, for bench/runtime_bench and the CUDA bench.
+      char name[32];
+      std::snprintf(name, sizeof name, "frame_%04u.f32", f);
+      const std::string path = (fs::path(a.dump_frames) / name).string();
+      if (auto s = baker::WriteFileAtomic(path, positions.data(), positions.size() * sizeof(float)); !s.ok())
+        return Fail(s.error());
+    }
   }
 
   // ---- report ------------------------------------------------------------------------------------
@@ -436,6 +444,9 @@ void RegisterPlay(CLI::App& app, Commands* commands) {
       ->check(CLI::IsMember({"paper", "frame"}));
   sub->add_option("--repeat", args->repeat, "Runs per job per frame; timings are the minimum (default 5)");
   sub->add_option("--rig", args->rig, "MakeHuman rig (.mhskel) for an OBJ; default: default.mhskel beside the OBJ");
+  sub->add_option("--dump-frames", args->dump_frames,
+                  "Folder to write each frame's deformed positions to (frame_NNNN.f32: #V×3 float32), for bench/")
+      ->check(CLI::ExistingDirectory);
   sub->add_option("--json", args->json, "Write the per-frame table and summary as JSON");
   commands->handlers.emplace_back(sub, [args] { return RunPlay(*args); });
 }

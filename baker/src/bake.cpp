@@ -315,6 +315,7 @@ json MakeBakeReport(const BakeResult& r, const BakeConfig& config, const Context
                    {"region", RegionSymbol(S.region)},
                    {"labels", LabelString(S.labels)},
                    {"sequence", S.sequence},
+                   {"level", S.level},
                    {"center", {S.center.x(), S.center.y(), S.center.z()}},
                    {"radius", S.radius},
                    {"radius_phi1", S.radius_phi1},

@@ -78,23 +78,20 @@ std::vector<SpherePair> ExcludedPairs(const std::vector<FittedSphere>& spheres,
       const FittedSphere& A = spheres[a];
       const FittedSphere& B = spheres[b];
       const bool same_region = A.region == B.region;
-      // Sequence neighbours.
-      if (same_region && IsTubular(A.region) && std::abs(A.sequence - B.sequence) == 1) add(a, b);
-      if (same_region && A.region == Region::kTorso && A.level >= 0 && B.level >= 0) {
-        // Same level, or consecutive levels (levels are consecutive in the torso's level order).
-        const int dl = std::abs(A.level - B.level);
-        if (dl == 0) add(a, b);
-        if (dl > 0) {
-          // consecutive *sphere* levels: no other torso sphere level strictly between them
-          bool between = false;
-          const int lo = std::min(A.level, B.level), hi = std::max(A.level, B.level);
-          for (const FittedSphere& s : spheres)
-            if (s.region == Region::kTorso && s.level > lo && s.level < hi) { between = true; break; }
-          if (!between) add(a, b);
-        }
-      }
-      // Overlap at the bind pose.
+      // Sequence neighbours, and the next-but-one: spheres around a joint (elbow, knee, wrist) are
+      // small and dense, and folding the joint makes i and i+2 meet though no surface interpenetrates.
+      if (same_region && IsTubular(A.region) && std::abs(A.sequence - B.sequence) <= 2) add(a, b);
+      // Torso: the same level, and levels up to two apart (a bending spine folds the torso onto itself).
+      if (same_region && A.region == Region::kTorso && A.level >= 0 && B.level >= 0 &&
+          std::abs(A.level - B.level) <= 2)
+        add(a, b);
+      // Overlap at the bind pose — and, across a limb's junction with the torso, near-overlap: a limb
+      // root and the torso spheres around the hip or shoulder come within half their radii sum at the
+      // bind pose and touch as soon as the joint flexes, with no surface interpenetrating.
       const double d = (A.center - B.center).norm();
+      const bool limb_torso_pair = (A.region == Region::kTorso) != (B.region == Region::kTorso);
+      const double junction_margin = limb_torso_pair ? 0.5 * (A.radius + B.radius) : 0.0;
+      if (limb_torso_pair && d < A.radius + B.radius + junction_margin) add(a, b);
       if (d < A.radius + B.radius) {
         add(a, b);
         const bool limb_torso = (A.region == Region::kTorso) != (B.region == Region::kTorso);

@@ -216,10 +216,11 @@ Status ExportDebugGltf(const Mesh& mesh, const runtime::AssetView& a, const std:
 
 std::string RenderDebugSvg(const Mesh& mesh, const runtime::AssetView& a, int width_px) {
   const Frame f = CharacterFrame(mesh, a);
-  // Views: front (screen x = −left as seen from the front: the character's left on the viewer's right),
-  // side (looking at the character's left side: screen x = front).
+  // Views (camera right = view direction × up): front, camera in front looking back, so screen x =
+  // the character's left (its left arm on the viewer's right); side, camera at the character's left
+  // looking across, so screen x = −front (the character faces the viewer's left).
   struct View { Eigen::Vector3f sx, sy, toward_viewer; const char* name; };
-  const View views[2] = {{-f.left, f.up, f.front, "front"}, {f.front, f.up, f.left, "side (character's left)"}};
+  const View views[2] = {{f.left, f.up, f.front, "front"}, {-f.front, f.up, f.left, "side (character's left)"}};
   // Common scale from the bind-pose extent.
   Eigen::Vector3f lo = Eigen::Vector3f::Constant(1e30f), hi = Eigen::Vector3f::Constant(-1e30f);
   for (uint32_t v = 0; v < mesh.vertex_count(); ++v) {
