@@ -31,8 +31,8 @@ std::vector<FittedSphere> StickFigure() {
       S(Region::kRightLeg, 0, -1, 3, 0.5), S(Region::kRightLeg, 1, -1, 0, 0.5),        // 6 7
       S(Region::kTorso, 0, 0.8, 6, 0.6, kLabelL | kLabelD, 0, 0),                        // 8
       S(Region::kTorso, 1, -0.8, 6, 0.6, kLabelR | kLabelD, 0, 1),                       // 9
-      S(Region::kTorso, 2, 0.8, 9, 0.6, kLabelL | kLabelT, 3, 0),                        // 10
-      S(Region::kTorso, 3, -0.8, 9, 0.6, kLabelR | kLabelT, 3, 1),                       // 11
+      S(Region::kTorso, 2, 0.8, 9, 0.6, kLabelL | kLabelT, 1, 0),                        // 10
+      S(Region::kTorso, 3, -0.8, 9, 0.6, kLabelR | kLabelT, 1, 1),                       // 11
   };
 }
 
@@ -66,6 +66,9 @@ TEST_CASE("chains: bad definitions are rejected with the chain named") {
 
 TEST_CASE("chains: excluded pairs are sequence neighbours and bind overlaps, nothing else") {
   auto spheres = StickFigure();
+  spheres.push_back(S(Region::kLeftArm, 2, 7, 10, 0.5));   // 12: two after sphere 0
+  spheres.push_back(S(Region::kLeftArm, 3, 9, 10, 0.5));   // 13: three after sphere 0
+  spheres.push_back(S(Region::kTorso, 4, 0.8, 14, 0.6, kLabelL, 4, 0));  // 14: three levels above 8/9
   std::vector<SpherePair> cross;
   const auto ex = ExcludedPairs(spheres, &cross);
   auto has = [&](uint16_t a, uint16_t b) { return std::binary_search(ex.begin(), ex.end(), SpherePair{a, b}); };
@@ -76,9 +79,19 @@ TEST_CASE("chains: excluded pairs are sequence neighbours and bind overlaps, not
   CHECK(has(9, 10));   // consecutive levels, across columns
   CHECK_FALSE(has(0, 2));   // left arm vs right arm: far apart
   CHECK_FALSE(has(1, 5));   // hand vs foot
-  CHECK_FALSE(has(0, 10));  // arm root vs top torso sphere: 2.2 apart, radii 1.1: not overlapping
+  CHECK_FALSE(has(0, 10));  // arm root vs top torso sphere: 2.42 apart > 1.5·(0.5 + 0.6)
+  CHECK(has(0, 12));        // i, i+2 in a limb: a joint's neighbourhood
+  CHECK_FALSE(has(0, 13));  // i, i+3: a real self-contact when the limb folds
+  CHECK(has(12, 13));       // neighbours
+  CHECK_FALSE(has(8, 14));  // torso levels 0 and 4
   CHECK(cross.empty());
   CHECK(std::is_sorted(ex.begin(), ex.end()));
+
+  // An arm root within half the radii sum of a torso sphere (a shoulder junction) is excluded.
+  auto near = StickFigure();
+  near[0].center = {2.2, 9.5, 0};  // 1.49 from sphere 10: > 1.1 (no overlap), < 1.65
+  const auto ex_near = ExcludedPairs(near);
+  CHECK(std::binary_search(ex_near.begin(), ex_near.end(), SpherePair{0, 10}));
 
   // Move the left hand onto the left thigh: an arm–leg bind overlap is excluded and flagged.
   spheres[1].center = {1, 3.5, 0};
