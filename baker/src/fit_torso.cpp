@@ -35,6 +35,8 @@ struct HalfFit {
   bool valid = false;
   Vector3d c = Vector3d::Zero();  // φ1 centre
   double r = 0.0;                 // φ1 radius
+  double r_spacing = 0.0;         // radius used to space levels: the half's nearest hit from the disk
+                                  // centre, about the size φ1' reaches once moved towards that centre
   std::vector<int> rays;          // ray ids of this half
   std::vector<uint32_t> hit_tris;
 };
@@ -217,6 +219,8 @@ Result<std::vector<FittedSphere>> FitTorso(const Mesh& mesh, const std::vector<u
         continue;
       }
       hf.c = sum / nh;
+      hf.r_spacing = kInf;
+      for (int k = col * nr / 2; k < (col + 1) * nr / 2; ++k) hf.r_spacing = std::min(hf.r_spacing, L.hit[k]);
       hf.valid = true;
     }
     L.valid = all;
@@ -257,8 +261,11 @@ Result<std::vector<FittedSphere>> FitTorso(const Mesh& mesh, const std::vector<u
   };
   auto far_enough = [&](size_t p, size_t j, double factor) {
     for (int col = 0; col < 2; ++col) {
+      // Spaced by the size the spheres will have after the adjustment (§3.2), not φ1's: φ1 is small
+      // where the cross-section is round (neck, head) and would stack levels there.
       const HalfFit &a = levels[p].half[col], &b = levels[j].half[col];
-      if ((a.c - b.c).norm() < factor * keep * (a.r + b.r)) return false;
+      const double ra = std::max(a.r, a.r_spacing), rb = std::max(b.r, b.r_spacing);
+      if ((a.c - b.c).norm() < factor * keep * (ra + rb)) return false;
     }
     return true;
   };

@@ -242,9 +242,27 @@ Result<std::vector<FittedSphere>> FitTubular(const Mesh& mesh, const std::vector
   std::vector<Vector3d> cand_c;
   std::vector<double> cand_r;
   for (double s = curve_s.front(); s <= curve_s.back() + 1e-12; s += h) {
+    // The level-set centroid is off-centre where the limb bends (elbow, knee, wrist): push the centre
+    // away from the nearest surface point, inside the cross-section plane (normal: the curve's
+    // tangent), while the inscribed radius grows — a few steps towards the section's medial centre.
+    Vector3d c = centre_at(s);
+    Vector3d tangent = centre_at(s + bin) - centre_at(s - bin);
+    tangent = tangent.norm() > 1e-12 ? Vector3d(tangent.normalized()) : Vector3d::Zero();
+    Vector3d q;
+    double r = grid.NearestDistance(c, &q);
+    for (int it = 0; it < 8 && r > 0.0; ++it) {
+      Vector3d away = c - q;
+      away -= away.dot(tangent) * tangent;
+      if (away.norm() < 1e-12) break;
+      const Vector3d c2 = c + 0.25 * r * away.normalized();
+      Vector3d q2;
+      const double r2 = grid.NearestDistance(c2, &q2);
+      if (!(r2 > r * (1.0 + 1e-3))) break;
+      c = c2, q = q2, r = r2;
+    }
     cand_s.push_back(s);
-    cand_c.push_back(centre_at(s));
-    cand_r.push_back(grid.NearestDistance(cand_c.back()));
+    cand_c.push_back(c);
+    cand_r.push_back(r);
   }
   // A sphere "fits" at s when it does not reach past the root boundary or the tip along the curve.
   // Where a level set splits (fingers, toes) its centroid falls between the branches and the radius
@@ -265,10 +283,30 @@ Result<std::vector<FittedSphere>> FitTubular(const Mesh& mesh, const std::vector
     i = static_cast<size_t>(std::max_element(cand_r.begin(), cand_r.end()) - cand_r.begin());
   }
   chosen.push_back(i);
-  for (size_t j = i + 1; j < cand_s.size(); ++j) {
-    if (!fits(j)) continue;
+  // The next sphere: among the positions whose sphere overlaps the previous one by at most PD but
+  // still touches it (keep·(r_p + r_j) ≤ d ≤ r_p + r_j), the largest — "the best place to construct
+  // a sphere" (§3.1). Taking the first admissible position instead lets a dip of the radius (a noisy
+  // centre near the elbow or wrist) seed a cluster of tiny spheres. A later position must be 5 %
+  // larger to win, so a uniform tube is spaced exactly keep·2r. When no position touches (a gap), the first admissible
+  // one is taken.
+  for (size_t j = i + 1; j < cand_s.size();) {
     const size_t p = chosen.back();
-    if ((cand_c[j] - cand_c[p]).norm() >= keep * (cand_r[p] + cand_r[j])) chosen.push_back(j);
+    size_t best = SIZE_MAX, first = SIZE_MAX;
+    for (size_t k = j; k < cand_s.size(); ++k) {
+      if (!fits(k)) continue;
+      const double d = (cand_c[k] - cand_c[p]).norm();
+      if (d < keep * (cand_r[p] + cand_r[k])) continue;
+      if (first == SIZE_MAX) first = k;
+      if (d > cand_r[p] + cand_r[k]) {
+        if (best != SIZE_MAX || cand_s[k] - cand_s[p] > 4.0 * (cand_r[p] + cand_r[k])) break;
+        continue;
+      }
+      if (best == SIZE_MAX || cand_r[k] > 1.05 * cand_r[best]) best = k;  // 5 %: tessellation noise
+    }
+    const size_t next = best != SIZE_MAX ? best : first;
+    if (next == SIZE_MAX) break;
+    chosen.push_back(next);
+    j = next + 1;
   }
   // The tip: the last position that still fits, unless it is already (nearly) covered.
   for (size_t j = cand_s.size(); j-- > chosen.back() + 1;) {
