@@ -341,15 +341,24 @@ json MakeBakeReport(const BakeResult& r, const BakeConfig& config, const Context
 std::string TorsoRayCsv(const BakeResult& r) {
   std::ostringstream out;
   out << "sphere,labels,ray,dir_x,dir_y,dir_z,surface,phi1,phi1_adjusted,phi2\n";
+  // Where the ray o + t·d (t ≥ 0) leaves the sphere (c, r): the larger root of |o + t d − c|² = r²;
+  // empty when the ray misses the sphere.
   auto exit_distance = [](const Eigen::Vector3d& o, const Eigen::Vector3d& d, const Eigen::Vector3d& c,
                           double rad) -> std::string {
-    // |o + t d − c|² = r², largest root; none when o is outside the sphere.
     const Eigen::Vector3d oc = o - c;
     const double b = oc.dot(d), cc = oc.squaredNorm() - rad * rad;
-    if (cc > 0) return "";
     const double disc = b * b - cc;
+    if (disc < 0) return "";
+    const double t = -b + std::sqrt(disc);
+    if (t < 0) return "";
     std::ostringstream s;
-    s << (-b + std::sqrt(std::max(disc, 0.0)));
+    s << t;
+    return s.str();
+  };
+  auto surface = [](double hit) -> std::string {
+    if (!std::isfinite(hit)) return "";  // the ray left through an opening (arm, leg)
+    std::ostringstream s;
+    s << hit;
     return s.str();
   };
   const auto& spheres = r.fit.spheres;
@@ -359,7 +368,7 @@ std::string TorsoRayCsv(const BakeResult& r) {
     for (size_t k = 0; k < S.ray_ids.size() && k < S.ray_dirs.size() && k < S.ray_hit.size(); ++k) {
       const Eigen::Vector3d& d = S.ray_dirs[k];
       out << s << ',' << LabelString(S.labels) << ',' << S.ray_ids[k] << ',' << d.x() << ',' << d.y() << ','
-          << d.z() << ',' << S.ray_hit[k] << ',' << exit_distance(S.disk_center, d, S.center_phi1, S.radius_phi1)
+          << d.z() << ',' << surface(S.ray_hit[k]) << ',' << exit_distance(S.disk_center, d, S.center_phi1, S.radius_phi1)
           << ',' << exit_distance(S.disk_center, d, S.center, S.radius) << ','
           << exit_distance(S.disk_center, d, r.phi2[s].center, r.phi2[s].radius) << '\n';
     }

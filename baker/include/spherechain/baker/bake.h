@@ -74,7 +74,8 @@ nlohmann::json MakeBakeReport(const BakeResult& result, const BakeConfig& config
 
 /// The paper's per-ray comparison (§6) for the torso spheres as CSV: for each torso sphere and each
 /// of its rays, the distance from the disk centre to the surface hit and to where the ray leaves the
-/// sphere for φ1, φ1' and φ2 (empty when the disk centre is outside that sphere).
+/// sphere for φ1, φ1' and φ2 (empty when the ray misses that sphere, or for the surface when the ray
+/// leaves through an opening).
 std::string TorsoRayCsv(const BakeResult& result);
 
 }  // namespace spherechain::baker
