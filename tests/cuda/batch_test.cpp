@@ -4,7 +4,10 @@
 
 #include <cuda_runtime_api.h>
 
+#include <algorithm>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <map>
 
 #include "cuda/cuda_test_util.h"
@@ -374,4 +377,62 @@ TEST_CASE("cuda: MakeHuman asset, CPU == GPU over randomised instances") {
         REQUIRE(batch.Download(0, &res, true) == sc::Status::kOk);
         CompareWithCpu({&mh}, inst, res, batch, fp);
       }
+}
+
+// Recorded animation frames (`spherechain play ... --dump-frames DIR`: frame_NNNN.f32, #V×3 float32),
+// each frame one instance of one batch: the MakeHuman morph and the CesiumMan walk, CPU == GPU.
+// SPHERECHAIN_GPU_FRAMES="a.sphc=framesdir;b.sphc=framesdir2" (scripts/gpu-carry.sh prepares both).
+TEST_CASE("cuda: recorded animation frames (MakeHuman morph, CesiumMan walk), CPU == GPU") {
+  if (!RequireDevice()) return;
+  const char* env = std::getenv("SPHERECHAIN_GPU_FRAMES");
+  if (!env || !*env) {
+    MESSAGE("SKIPPED: set SPHERECHAIN_GPU_FRAMES=asset.sphc=frames_dir[;...] (see scripts/gpu-carry.sh)");
+    return;
+  }
+  std::string spec = env;
+  size_t start = 0;
+  while (start < spec.size()) {
+    const size_t end = std::min(spec.find(';', start), spec.size());
+    const std::string item = spec.substr(start, end - start);
+    start = end + 1;
+    const size_t eq = item.find('=');
+    REQUIRE(eq != std::string::npos);
+    const std::string asset_path = item.substr(0, eq), dir = item.substr(eq + 1);
+    if (!test::Require(asset_path) || !test::Require(dir)) continue;
+    AssetSet set;
+    REQUIRE(test::ReadAligned(asset_path, &set.bytes));
+    REQUIRE(LoadAsset(set.bytes.data(), set.bytes.size, &set.view) == runtime::Status::kOk);
+    REQUIRE(set.ctx.Init(set.view) == runtime::Status::kOk);
+    REQUIRE(set.device.Upload(set.view) == sc::Status::kOk);
+    std::vector<std::string> files;
+    for (const auto& e : std::filesystem::directory_iterator(dir))
+      if (e.path().extension() == ".f32") files.push_back(e.path().string());
+    std::sort(files.begin(), files.end());
+    REQUIRE(!files.empty());
+    std::vector<std::vector<float>> frames;
+    for (const std::string& f : files) {
+      std::ifstream in(f, std::ios::binary);
+      std::vector<float> p(size_t{set.view.vertex_count} * 3);
+      in.read(reinterpret_cast<char*>(p.data()), std::streamsize(p.size() * sizeof(float)));
+      REQUIRE_MESSAGE(in.gcount() == std::streamsize(p.size() * sizeof(float)), f << " is not #V×3 float32");
+      frames.push_back(std::move(p));
+    }
+    set.mesh.positions = frames[0];
+    DeviceInstances inst;
+    inst.Build({&set}, static_cast<uint32_t>(frames.size()), 1u, /*rest=*/true);
+    for (size_t i = 0; i < frames.size(); ++i) inst.host[i] = frames[i];
+    inst.Upload();
+    const sc::DeviceAsset* dev[] = {&set.device};
+    sc::Batch batch;
+    REQUIRE(batch.Init(dev, 1, inst.table.data(), static_cast<uint32_t>(frames.size())) == sc::Status::kOk);
+    for (RefitMode mode : {RefitMode::kPaper, RefitMode::kPivotFrame})
+      for (DetectMethod method : {DetectMethod::kM1, DetectMethod::kM2}) {
+        const sc::FrameParams fp{mode, method, sc::Strategy::kAuto, true};
+        REQUIRE(batch.Run(fp, 0) == sc::Status::kOk);
+        sc::HostResults res;
+        REQUIRE(batch.Download(0, &res, true) == sc::Status::kOk);
+        CompareWithCpu({&set}, inst, res, batch, fp);
+      }
+    MESSAGE(asset_path << ": " << frames.size() << " recorded frames, CPU == GPU");
+  }
 }

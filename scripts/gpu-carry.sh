@@ -1,0 +1,30 @@
+#!/usr/bin/env bash
+# Prepares .carry/ (git-ignored) for the GPU machine, which has CMake, nvcc and a compiler but no
+# package registry: the FlatBuffers and doctest headers from this machine's Debian packages, doctest's
+# CMake package made relocatable, and baked MakeHuman / CesiumMan assets plus MakeHuman's body mesh
+# for the CPU == GPU tests and the bench. Run it here, then on the GPU machine (device tool, carry
+# [".carry"]):
+#   FLATBUFFERS_INCLUDE_DIR=$PWD/.carry/include cmake --preset cuda -DSPHERECHAIN_BUILD_BENCH=ON \
+#     -Ddoctest_DIR=$PWD/.carry/lib/cmake/doctest -DSPHERECHAIN_SHARED_DATA_DIR=$PWD/.carry/data &&
+#   cmake --build build/cuda --target cuda_tests cuda_bench -j16 &&
+#   SPHERECHAIN_MH_ASSET=$PWD/.carry/mh.sphc build/cuda/tests/cuda_tests &&
+#   build/cuda/bench/cuda_bench .carry/mh.sphc .carry/data/makehuman/base.obj --max-instances 100000
+set -euo pipefail
+cd "$(dirname "$0")/.."
+cli=${SPHERECHAIN_CLI:-build/dev/baker/spherechain}
+[ -x "$cli" ] || { echo "build the CLI first (bash scripts/test.sh, or set SPHERECHAIN_CLI)" >&2; exit 1; }
+rm -rf .carry && mkdir -p .carry/include .carry/lib/cmake .carry/data/makehuman .carry/data/gltf
+cp -r /usr/include/flatbuffers /usr/include/doctest .carry/include/
+cp -r /usr/lib/cmake/doctest .carry/lib/cmake/
+sed -i 's|^set(_IMPORT_PREFIX "/usr")|get_filename_component(_IMPORT_PREFIX "${CMAKE_CURRENT_LIST_DIR}/../../.." ABSOLUTE)|' \
+  .carry/lib/cmake/doctest/doctestTargets.cmake
+data=../shared/data
+cp $data/makehuman/base.obj $data/makehuman/default.mhskel $data/makehuman/default_weights.mhw .carry/data/makehuman/
+cp $data/gltf/CesiumMan.gltf .carry/data/gltf/
+"$cli" -q bake $data/makehuman/base.obj -o .carry/mh.sphc >/dev/null
+"$cli" -q bake $data/gltf/CesiumMan.gltf -o .carry/cesiumman.sphc >/dev/null
+mkdir -p .carry/frames/mh .carry/frames/cesiumman
+"$cli" -q play .carry/mh.sphc --mesh $data/makehuman/base.obj --repeat 1 --dump-frames .carry/frames/mh >/dev/null
+"$cli" -q play .carry/cesiumman.sphc --mesh $data/gltf/CesiumMan.gltf --repeat 1 --dump-frames .carry/frames/cesiumman >/dev/null
+echo "then, on the GPU machine, add: SPHERECHAIN_GPU_FRAMES=\"\$PWD/.carry/mh.sphc=\$PWD/.carry/frames/mh;\$PWD/.carry/cesiumman.sphc=\$PWD/.carry/frames/cesiumman\""
+du -sh .carry
