@@ -1,19 +1,26 @@
 // runtime_bench — per-frame cost of spherechain refit + detect against peers doing the same work.
 //
-//   runtime_bench --synthetic [--frames N] [--reps R]
-//   runtime_bench ASSET.sphc FRAMES [--reps R]
+//   runtime_bench --synthetic [--frames N] [--reps R] [--runs K]
+//   runtime_bench ASSET.sphc FRAMES [--reps R] [--runs K]
+//   runtime_bench ASSET.sphc FRAMES --profile R   (refit + M1 over all frames R times, nothing else:
+//                                                   for valgrind --tool=callgrind instruction counts)
 //     FRAMES: a .f32 file of #F×#V×3 little-endian float32 positions, or a folder of .f32 files (one
 //     frame each, #V×3, sorted by name).
 //
-// Rows (median µs per frame over frames × batches, one core):
+// Rows (median µs per frame over 5 rounds × frames of batches of R calls, one core; with --runs K the
+// whole table is measured K times and each row keeps its best median — for a loaded machine):
 //   sc refit            RefitJob (kPivotFrame), §5.1
-//   sc refit+M1         RefitJob + DetectJob M1 (chains, §5.2) — the paper's method
-//   sc refit+M2         RefitJob + DetectJob M2 (all spheres)
+//   sc M1 detect        DetectJob M1 (chains, §5.2) on stored spheres — the paper's method
+//   sc refit+M1         RefitJob + DetectJob M1
+//   sc M2 detect        DetectJob M2 (all spheres) on stored spheres
+//   sc refit+M2         RefitJob + DetectJob M2
 //   naive M2            AoS double loop + exclusion matrix over the refitted spheres
-//   FCL DynAABBTree M2  fcl::DynamicAABBTreeCollisionManager, spheres updated, overlap callback
+//   FCL DynAABBTree M2  fcl::DynamicAABBTreeCollisionManager, spheres updated, collide + sphere test
 //   Bullet btDbvt M2    btDbvtBroadphase, AABBs updated, overlapping pairs then the sphere test
 // Peers get the refitted spheres (refit not included) and apply the same excluded pairs; their pair
-// counts are checked against DetectJob M2 every frame. Ratios are peer / "sc M2 detect".
+// counts are checked against DetectJob M2 every frame, and M1's against a naive loop over the pairs
+// sharing a chain. Ratios: peer / sc M2 detect (the same all-pairs work) and peer / sc refit+M1 (the
+// per-frame cost of the paper's pipeline against the peer's broad phase alone).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -152,7 +159,7 @@ volatile uint32_t g_sink = 0;
 
 int main(int argc, char** argv) {
   bool synthetic = false;
-  int reps = 200;
+  int reps = 200, runs = 1, profile = 0;
   uint32_t frame_count = 40;
   std::vector<std::string> positional;
   for (int i = 1; i < argc; ++i) {
@@ -160,6 +167,8 @@ int main(int argc, char** argv) {
     if (a == "--synthetic") synthetic = true;
     else if (a == "--reps" && i + 1 < argc) reps = std::max(1, std::atoi(argv[++i]));
     else if (a == "--frames" && i + 1 < argc) frame_count = std::max(1, std::atoi(argv[++i]));
+    else if (a == "--runs" && i + 1 < argc) runs = std::max(1, std::atoi(argv[++i]));
+    else if (a == "--profile" && i + 1 < argc) profile = std::max(1, std::atoi(argv[++i]));
     else positional.push_back(a);
   }
   Workload w;
@@ -168,8 +177,9 @@ int main(int argc, char** argv) {
   } else if (positional.size() == 2) {
     if (!FromFiles(positional[0], positional[1], &w)) return 1;
   } else {
-    std::fprintf(stderr, "usage: runtime_bench --synthetic [--frames N] [--reps R]\n"
-                         "       runtime_bench ASSET.sphc FRAMES(.f32 file | folder) [--reps R]\n");
+    std::fprintf(stderr, "usage: runtime_bench --synthetic [--frames N] [--reps R] [--runs K]\n"
+                         "       runtime_bench ASSET.sphc FRAMES(.f32 file | folder) [--reps R] [--runs K]\n"
+                         "       runtime_bench ASSET.sphc FRAMES --profile R\n");
     return 2;
   }
 
@@ -199,6 +209,17 @@ int main(int argc, char** argv) {
   sc::DetectJob m2 = m1;
   m2.method = sc::DetectMethod::kM2;
   auto set_frame = [&](size_t f) { refit.positions = {w.frames[f].data(), w.vertex_count, 12}; };
+  if (profile) {  // callgrind: Ir(RefitJob::Run + DetectJob::Run) / (profile × #F) = instructions per frame
+    for (int r = 0; r < profile; ++r)
+      for (size_t f = 0; f < w.frames.size(); ++f) {
+        set_frame(f);
+        (void)refit.Run();
+        (void)m1.Run();
+        g_sink = g_sink + count;
+      }
+    std::printf("profile: %d × %zu frames of refit + M1\n", profile, w.frames.size());
+    return 0;
+  }
 
   // Refitted spheres per frame (inputs of the peers) and the reference M2 counts.
   std::vector<std::vector<float>> sx(w.frames.size()), sy = sx, sz = sx, sr = sx;
@@ -216,6 +237,24 @@ int main(int argc, char** argv) {
   std::vector<uint8_t> excluded(size_t{S} * S, 0);
   for (uint32_t a = 0; a < S; ++a)
     for (uint32_t b = 0; b < S; ++b) excluded[size_t{a} * S + b] = ctx.IsExcluded(a, b);
+  // M1 cross-check: naive loop over the distinct pairs sharing a chain.
+  uint32_t m1_distinct_tests = 0, excluded_pairs = 0;
+  for (uint32_t a = 0; a < S; ++a)
+    for (uint32_t b = a + 1; b < S; ++b) {
+      m1_distinct_tests += (ctx.chain_mask(a) & ctx.chain_mask(b)) != 0;
+      excluded_pairs += excluded[size_t{a} * S + b];
+    }
+  bool mismatch = false;
+  for (size_t f = 0; f < w.frames.size(); ++f) {
+    uint32_t n = 0;
+    for (uint32_t a = 0; a < S; ++a)
+      for (uint32_t b = a + 1; b < S; ++b) {
+        const float dx = sx[f][b] - sx[f][a], dy = sy[f][b] - sy[f][a], dz = sz[f][b] - sz[f][a], rr = sr[f][b] + sr[f][a];
+        n += (ctx.chain_mask(a) & ctx.chain_mask(b)) && dx * dx + dy * dy + dz * dz < rr * rr && !excluded[size_t{a} * S + b];
+      }
+    if (n != m1_count[f]) mismatch = true;
+  }
+  if (mismatch) std::fprintf(stderr, "MISMATCH: DetectJob M1 differs from a naive loop over the chain pairs\n");
   auto load_spheres = [&](size_t f) {
     std::copy(sx[f].begin(), sx[f].end(), ctx.mutable_x());
     std::copy(sy[f].begin(), sy[f].end(), ctx.mutable_y());
@@ -227,55 +266,67 @@ int main(int argc, char** argv) {
     return dx * dx + dy * dy + dz * dz < rr * rr && !excluded[size_t{a} * S + b];
   };
   const size_t F = w.frames.size();
-  bool mismatch = false;
+  uint64_t fcl_tests = 0, bullet_tests = 0;  // sphere tests the peers ran after their AABB culling
 
   struct Row {
     const char* name;
     double us;
   };
   std::vector<Row> rows;
-  rows.push_back({"sc refit", MedianMicros(F, reps, [&](size_t f) { set_frame(f); (void)refit.Run(); })});
-  rows.push_back({"sc refit+M1", MedianMicros(F, reps, [&](size_t f) {
-                    set_frame(f);
-                    (void)refit.Run();
-                    (void)m1.Run();
-                    g_sink = g_sink + count;
-                  })});
-  rows.push_back({"sc refit+M2", MedianMicros(F, reps, [&](size_t f) {
-                    set_frame(f);
-                    (void)refit.Run();
-                    (void)m2.Run();
-                    g_sink = g_sink + count;
-                  })});
+  // Best median of `runs` measurements (a loaded machine only ever makes a median slower).
+  auto measure = [&](const char* name, const std::function<void(size_t)>& fn) {
+    double best = 1e300;
+    for (int k = 0; k < runs; ++k) best = std::min(best, MedianMicros(F, reps, fn));
+    rows.push_back({name, best});
+    return best;
+  };
+  const double refit_us = measure("sc refit", [&](size_t f) { set_frame(f); (void)refit.Run(); });
   // Detect-only rows reuse the stored spheres (copying 4·#S floats costs ~20 ns, included for all).
-  rows.push_back({"sc M1 detect", MedianMicros(F, reps, [&](size_t f) {
-                    load_spheres(f);
-                    (void)m1.Run();
-                    g_sink = g_sink + count;
-                  })});
-  const double m2_us = MedianMicros(F, reps, [&](size_t f) {
+  measure("sc M1 detect", [&](size_t f) {
+    load_spheres(f);
+    (void)m1.Run();
+    g_sink = g_sink + count;
+  });
+  const double m1_us = measure("sc refit+M1", [&](size_t f) {
+    set_frame(f);
+    (void)refit.Run();
+    (void)m1.Run();
+    g_sink = g_sink + count;
+  });
+  const double m2_us = measure("sc M2 detect", [&](size_t f) {
     load_spheres(f);
     (void)m2.Run();
     g_sink = g_sink + count;
   });
-  rows.push_back({"sc M2 detect", m2_us});
+  measure("sc refit+M2", [&](size_t f) {
+    set_frame(f);
+    (void)refit.Run();
+    (void)m2.Run();
+    g_sink = g_sink + count;
+  });
+  (void)refit_us;
 
   struct Aos {
     float x, y, z, r;
   };
   std::vector<Aos> aos(S);
-  rows.push_back({"naive M2", MedianMicros(F, reps, [&](size_t f) {
-                    for (uint32_t i = 0; i < S; ++i) aos[i] = {sx[f][i], sy[f][i], sz[f][i], sr[f][i]};
-                    uint32_t n = 0;
-                    for (uint32_t a = 0; a < S; ++a)
-                      for (uint32_t b = a + 1; b < S; ++b) {
-                        const float dx = aos[a].x - aos[b].x, dy = aos[a].y - aos[b].y, dz = aos[a].z - aos[b].z;
-                        const float rr = aos[a].r + aos[b].r;
-                        if (dx * dx + dy * dy + dz * dz < rr * rr && !excluded[size_t{a} * S + b]) ++n;
-                      }
-                    if (n != m2_count[f]) mismatch = true;
-                    g_sink = g_sink + n;
-                  })});
+  struct Peer {
+    const char* name;
+    double us;
+  };
+  std::vector<Peer> peers;
+  peers.push_back({"naive M2", measure("naive M2", [&](size_t f) {
+                     for (uint32_t i = 0; i < S; ++i) aos[i] = {sx[f][i], sy[f][i], sz[f][i], sr[f][i]};
+                     uint32_t n = 0;
+                     for (uint32_t a = 0; a < S; ++a)
+                       for (uint32_t b = a + 1; b < S; ++b) {
+                         const float dx = aos[a].x - aos[b].x, dy = aos[a].y - aos[b].y, dz = aos[a].z - aos[b].z;
+                         const float rr = aos[a].r + aos[b].r;
+                         if (dx * dx + dy * dy + dz * dz < rr * rr && !excluded[size_t{a} * S + b]) ++n;
+                       }
+                     if (n != m2_count[f]) mismatch = true;
+                     g_sink = g_sink + n;
+                   })});
 
 #if SPHERECHAIN_BENCH_FCL
   {
@@ -294,29 +345,33 @@ int main(int argc, char** argv) {
     struct Data {
       std::function<bool(size_t, uint32_t, uint32_t)>* test;
       size_t frame;
-      uint32_t n;
+      uint32_t n, tests;
     };
     std::function<bool(size_t, uint32_t, uint32_t)> test_fn = overlap;
-    rows.push_back({"FCL DynAABBTree M2", MedianMicros(F, reps, [&](size_t f) {
-                      for (uint32_t i = 0; i < S; ++i) {
-                        shapes[i]->radius = sr[f][i];
-                        shapes[i]->computeLocalAABB();
-                        objects[i]->setTranslation(fcl::Vector3<float>(sx[f][i], sy[f][i], sz[f][i]));
-                        objects[i]->computeAABB();
-                      }
-                      manager.update();
-                      Data data{&test_fn, f, 0};
-                      manager.collide(&data, [](fcl::CollisionObject<float>* o1, fcl::CollisionObject<float>* o2, void* p) {
-                        auto* d = static_cast<Data*>(p);
-                        uint32_t a = uint32_t(reinterpret_cast<uintptr_t>(o1->getUserData()));
-                        uint32_t b = uint32_t(reinterpret_cast<uintptr_t>(o2->getUserData()));
-                        if (a > b) std::swap(a, b);
-                        if ((*d->test)(d->frame, a, b)) ++d->n;
-                        return false;
-                      });
-                      if (data.n != m2_count[f]) mismatch = true;
-                      g_sink = g_sink + data.n;
-                    })});
+    auto frame = [&](size_t f) {
+      for (uint32_t i = 0; i < S; ++i) {
+        shapes[i]->radius = sr[f][i];
+        shapes[i]->computeLocalAABB();
+        objects[i]->setTranslation(fcl::Vector3<float>(sx[f][i], sy[f][i], sz[f][i]));
+        objects[i]->computeAABB();
+      }
+      manager.update();
+      Data data{&test_fn, f, 0, 0};
+      manager.collide(&data, [](fcl::CollisionObject<float>* o1, fcl::CollisionObject<float>* o2, void* p) {
+        auto* d = static_cast<Data*>(p);
+        uint32_t a = uint32_t(reinterpret_cast<uintptr_t>(o1->getUserData()));
+        uint32_t b = uint32_t(reinterpret_cast<uintptr_t>(o2->getUserData()));
+        if (a > b) std::swap(a, b);
+        ++d->tests;
+        if ((*d->test)(d->frame, a, b)) ++d->n;
+        return false;
+      });
+      if (data.n != m2_count[f]) mismatch = true;
+      g_sink = g_sink + data.n;
+      return data.tests;
+    };
+    for (size_t f = 0; f < F; ++f) fcl_tests += frame(f);
+    peers.push_back({"FCL DynAABBTree M2", measure("FCL DynAABBTree M2", [&](size_t f) { (void)frame(f); })});
   }
 #endif
 #if SPHERECHAIN_BENCH_BULLET
@@ -327,35 +382,54 @@ int main(int argc, char** argv) {
       const btVector3 c(sx[0][i], sy[0][i], sz[0][i]), e(sr[0][i], sr[0][i], sr[0][i]);
       proxies.push_back(broadphase.createProxy(c - e, c + e, 0, reinterpret_cast<void*>(uintptr_t{i}), 1, 1, nullptr));
     }
-    rows.push_back({"Bullet btDbvt M2", MedianMicros(F, reps, [&](size_t f) {
-                      for (uint32_t i = 0; i < S; ++i) {
-                        const btVector3 c(sx[f][i], sy[f][i], sz[f][i]), e(sr[f][i], sr[f][i], sr[f][i]);
-                        broadphase.setAabb(proxies[i], c - e, c + e, nullptr);
-                      }
-                      broadphase.calculateOverlappingPairs(nullptr);
-                      btOverlappingPairCache* cache = broadphase.getOverlappingPairCache();
-                      const int np = cache->getNumOverlappingPairs();
-                      btBroadphasePair* pairs = cache->getOverlappingPairArrayPtr();
-                      uint32_t n = 0;
-                      for (int k = 0; k < np; ++k) {
-                        uint32_t a = uint32_t(reinterpret_cast<uintptr_t>(pairs[k].m_pProxy0->m_clientObject));
-                        uint32_t b = uint32_t(reinterpret_cast<uintptr_t>(pairs[k].m_pProxy1->m_clientObject));
-                        if (a > b) std::swap(a, b);
-                        if (overlap(f, a, b)) ++n;
-                      }
-                      if (n != m2_count[f]) mismatch = true;
-                      g_sink = g_sink + n;
-                    })});
+    auto frame = [&](size_t f) {
+      for (uint32_t i = 0; i < S; ++i) {
+        const btVector3 c(sx[f][i], sy[f][i], sz[f][i]), e(sr[f][i], sr[f][i], sr[f][i]);
+        broadphase.setAabb(proxies[i], c - e, c + e, nullptr);
+      }
+      broadphase.calculateOverlappingPairs(nullptr);
+      btOverlappingPairCache* cache = broadphase.getOverlappingPairCache();
+      const int np = cache->getNumOverlappingPairs();
+      btBroadphasePair* pairs = cache->getOverlappingPairArrayPtr();
+      uint32_t n = 0;
+      for (int k = 0; k < np; ++k) {
+        uint32_t a = uint32_t(reinterpret_cast<uintptr_t>(pairs[k].m_pProxy0->m_clientObject));
+        uint32_t b = uint32_t(reinterpret_cast<uintptr_t>(pairs[k].m_pProxy1->m_clientObject));
+        if (a > b) std::swap(a, b);
+        if (overlap(f, a, b)) ++n;
+      }
+      if (n != m2_count[f]) mismatch = true;
+      g_sink = g_sink + n;
+      return static_cast<uint32_t>(np);
+    };
+    for (size_t f = 0; f < F; ++f) bullet_tests += frame(f);
+    peers.push_back({"Bullet btDbvt M2", measure("Bullet btDbvt M2", [&](size_t f) { (void)frame(f); })});
   }
 #endif
 
   uint64_t m1_total = 0, m2_total = 0;
   for (size_t f = 0; f < F; ++f) m1_total += m1_count[f], m2_total += m2_count[f];
-  std::printf("pairs per frame (mean): M1 %.2f distinct, M2 %.2f\n", double(m1_total) / F, double(m2_total) / F);
+  sc::DetectStats st1, st2;
+  m1.stats = &st1, m2.stats = &st2;
+  (void)m1.Run(), (void)m2.Run();
+  std::printf("pairs per frame (mean): M1 %.2f distinct, M2 %.2f; excluded pairs %u\n", double(m1_total) / F,
+              double(m2_total) / F, excluded_pairs);
+  std::printf("tests per frame: M1 %u (paper count, per chain; %u distinct pairs sharing a chain, each tested once), "
+              "M2 %u, naive %u",
+              st1.tests, m1_distinct_tests, st2.tests, st2.tests);
+#if SPHERECHAIN_BENCH_FCL
+  std::printf(", FCL %.1f sphere tests after AABB culling", double(fcl_tests) / F);
+#endif
+#if SPHERECHAIN_BENCH_BULLET
+  std::printf(", Bullet %.1f", double(bullet_tests) / F);
+#endif
+  std::printf("\n%s\n", runs > 1 ? "(each row: best of the medians of several runs)" : "");
   std::printf("%-22s %12s %10s\n", "", "median us", "vs M2");
   for (const Row& r : rows) std::printf("%-22s %12.3f %10.2f\n", r.name, r.us, r.us / m2_us);
+  std::printf("\n%-22s %14s %14s\n", "ratio (peer / sc)", "/ sc M2 det.", "/ sc refit+M1");
+  for (const Peer& p : peers) std::printf("%-22s %13.1fx %13.1fx\n", p.name, p.us / m2_us, p.us / m1_us);
   if (mismatch) {
-    std::fprintf(stderr, "MISMATCH: a peer's pair count differs from DetectJob M2\n");
+    std::fprintf(stderr, "MISMATCH: a pair count differs (see above)\n");
     return 1;
   }
   return 0;

@@ -6,7 +6,9 @@
 // target is compiled with --fmad=false (no FMA contraction, IEEE division and square root by
 // default), like the host build (-std=c++20 → -ffp-contract=off, no FMA on baseline x86-64), so the
 // GPU spheres are expected to match the CPU ones bit for bit; the tests allow 1e-5 relative.
-// KEEP IN SYNC with runtime/include/spherechain/runtime/refit.h and runtime/src/{refit,detect}.cpp.
+// KEEP IN SYNC with runtime/include/spherechain/runtime/refit.h and runtime/src/kernels.inl (the CPU
+// refit/detect kernels: the same formulas evaluated several spheres per instruction, bit-identical to
+// refit.h's scalar helpers; its sqrt(max d²) for the frame scale equals max sqrt(d²) used here).
 #pragma once
 
 #include <cstdint>
@@ -110,7 +112,7 @@ __device__ __forceinline__ float4 DevRefitSphere(const DeviceAssetDesc& a, const
 }
 
 /// The DetectJob overlap test for a < b: ‖c_b − c_a‖² < (r_b + r_a)² (11 operations, §5.2), same
-/// operand order as OverlapRow in runtime/src/detect.cpp.
+/// operand order as Overlap8 in runtime/src/kernels.cpp.
 __device__ __forceinline__ bool DevOverlap(const float4& A, const float4& B) {
   const float dx = B.x - A.x, dy = B.y - A.y, dz = B.z - A.z;
   const float rr = B.w + A.w;

@@ -1,4 +1,5 @@
 // DetectJob: brute-force sphere overlap tests, M1 (per chain) and M2 (all spheres), paper §5.2.
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstring>
@@ -8,132 +9,85 @@
 namespace spherechain::runtime {
 namespace {
 
-// Overlap flags of sphere (xi, yi, zi, ri) against spheres [0, n) of an SoA block, in blocks of 8
-// (the arrays are padded with far-away spheres of radius 0, so reading up to n rounded up to 8 is in
-// bounds and yields 0): branch-free, fixed-width inner loop the compiler vectorises even at -O2
-// (11 operations per pair, as in §5.2).
-inline void OverlapRow(float xi, float yi, float zi, float ri, const float* __restrict x, const float* __restrict y,
-                       const float* __restrict z, const float* __restrict r, uint32_t n, uint8_t* __restrict flags) {
-  for (uint32_t j0 = 0; j0 < n; j0 += 8)
-    for (uint32_t k = 0; k < 8; ++k) {
-      const uint32_t j = j0 + k;
-      const float dx = x[j] - xi, dy = y[j] - yi, dz = z[j] - zi;
-      const float rr = r[j] + ri;
-      flags[j] = (dx * dx + dy * dy + dz * dz) < rr * rr;
-    }
-}
-
-// Index of each set flag in [0, n), skipping 8 zero flags at a time.
-template <typename F>
-inline void ForEachFlag(const uint8_t* flags, uint32_t n, F&& f) {
-  for (uint32_t j0 = 0; j0 < n; j0 += 8) {
-    uint64_t w;
-    std::memcpy(&w, flags + j0, 8);
-    if (!w) continue;
-    const uint32_t e = n - j0 < 8 ? n - j0 : 8;
-    for (uint32_t k = 0; k < e; ++k)
-      if (flags[j0 + k]) f(j0 + k);
-  }
-}
-
 struct DetectTaskData {
   const Context* ctx;
 };
 
-void DetectChainTask(void* data, uint32_t begin, uint32_t end) {
+void DetectSpanTask(void* data, uint32_t begin, uint32_t end) {
   const Context& ctx = *static_cast<DetectTaskData*>(data)->ctx;
-  for (uint32_t c = begin; c < end; ++c) Context::Internal::DetectChain(ctx, c);
-}
-
-inline Collision MakeCollision(const Context& ctx, uint32_t a, uint32_t b, uint32_t chains) {
-  const SphereArrays s = ctx.spheres();
-  const float dx = s.x[b] - s.x[a], dy = s.y[b] - s.y[a], dz = s.z[b] - s.z[a];
-  return {static_cast<uint16_t>(a), static_cast<uint16_t>(b), s.r[a] + s.r[b] - std::sqrt(dx * dx + dy * dy + dz * dz),
-          chains};
+  for (uint32_t s = begin; s < end; ++s) Context::Internal::DetectSpan(ctx, s);
 }
 
 }  // namespace
 
-// One chain: gather its spheres (SoA), test all i < j, keep non-excluded hits whose first common
-// chain is this one (the distinct pairs), count all non-excluded hits (raw, the paper's count).
-void Context::Internal::DetectChain(const Context& c, uint32_t chain) {
-  const uint32_t off = c.chain_offsets_[chain], n = c.chain_offsets_[chain + 1] - off;
-  const uint16_t* ids = c.chain_spheres_.data() + off;
-  const uint32_t goff = c.gather_offsets_[chain];
-  float* gx = c.gx_.data() + goff;
-  float* gy = c.gy_.data() + goff;
-  float* gz = c.gz_.data() + goff;
-  float* gr = c.gr_.data() + goff;
-  for (uint32_t i = 0; i < n; ++i) {
-    gx[i] = c.x_[ids[i]];
-    gy[i] = c.y_[ids[i]];
-    gz[i] = c.z_[ids[i]];
-    gr[i] = c.r_[ids[i]];
-  }
-  uint8_t row_flags[256 + 8];  // chains longer than 256 use several passes per row
-  uint32_t* hits = c.chain_hits_.data() + c.chain_hits_offsets_[chain];
-  uint32_t nhits = 0, raw = 0;
-  for (uint32_t i = 0; i + 1 < n; ++i) {
-    const uint32_t a = ids[i];
-    for (uint32_t j0 = i + 1; j0 < n; j0 += 256) {
-      const uint32_t m = n - j0 < 256 ? n - j0 : 256;
-      OverlapRow(gx[i], gy[i], gz[i], gr[i], gx + j0, gy + j0, gz + j0, gr + j0, m, row_flags);
-      ForEachFlag(row_flags, m, [&](uint32_t j) {
-        const uint32_t b = ids[j0 + j];
-        if (c.IsExcluded(a, b)) return;
-        ++raw;
-        if (static_cast<uint32_t>(std::countr_zero(c.chain_mask_[a] & c.chain_mask_[b])) == chain)
-          hits[nhits++] = (a << 16) | b;
-      });
-    }
-  }
-  c.chain_hit_counts_[chain] = nhits;
-  c.chain_raw_counts_[chain] = raw;
+// M1 tests each distinct pair sharing a chain once: spheres are grouped by chain-membership class and
+// each class's span holds the class then every later class sharing a chain with it (Context::Init),
+// so those pairs are (row of the class) × (later column of its span). Hits are keyed by (first common
+// chain, a, b) and sorted, which is exactly the documented order (chain lists are ascending);
+// raw_pairs adds, per hit, the number of chains holding the pair (the paper's per-chain count).
+void Context::Internal::DetectSpan(const Context& c, uint32_t span) {
+  const uint32_t* sp = c.spans_.data() + size_t{6} * span;
+  const kernels::SpanArgs args{c.gx_.data(), c.gy_.data(), c.gz_.data(), c.gr_.data(), c.m1_order_.data(),
+                               c.chain_mask_.data(), sp[0], sp[1], sp[2], sp[3], c.m1_excl_.data() + sp[4],
+                               c.m1_keys_.data() + sp[5]};
+  c.span_hits_[span] = c.use_avx_ ? kernels::SpanAvx(args) : kernels::SpanSse(args);
 }
 
 Status Context::Internal::DetectM1(const DetectJob& job) {
   const Context& c = *job.context;
-  const uint32_t C = c.chain_count_;
+  const uint32_t G = static_cast<uint32_t>(c.m1_order_.size());
+  for (uint32_t g = 0; g < G; ++g) {  // (padding lanes gather sphere 0; the skip stream masks them)
+    const uint32_t s = c.m1_order_[g];
+    c.gx_[g] = c.x_[s], c.gy_[g] = c.y_[s], c.gz_[g] = c.z_[s], c.gr_[g] = c.r_[s];
+  }
+  const uint32_t P = static_cast<uint32_t>(c.span_hits_.size());
   if (job.parallel_for.run) {
     DetectTaskData data{&c};
-    job.parallel_for.run(job.parallel_for.user, C, &DetectChainTask, &data);
+    job.parallel_for.run(job.parallel_for.user, P, &DetectSpanTask, &data);
   } else {
-    for (uint32_t ch = 0; ch < C; ++ch) DetectChain(c, ch);
+    for (uint32_t p = 0; p < P; ++p) DetectSpan(c, p);
   }
-  uint32_t written = 0, distinct = 0, raw = 0, tests = 0;
-  for (uint32_t ch = 0; ch < C; ++ch) {
-    const uint32_t n = c.chain_offsets_[ch + 1] - c.chain_offsets_[ch];
-    tests += n * (n > 0 ? n - 1 : 0) / 2;
-    raw += c.chain_raw_counts_[ch];
-    const uint32_t nh = c.chain_hit_counts_[ch];
-    distinct += nh;
-    const uint32_t* hits = c.chain_hits_.data() + c.chain_hits_offsets_[ch];
-    for (uint32_t k = 0; k < nh && written < job.capacity; ++k) {
-      const uint32_t a = hits[k] >> 16, b = hits[k] & 0xffffu;
-      job.output[written++] = MakeCollision(c, a, b, c.chain_mask_[a] & c.chain_mask_[b]);
+  uint64_t* keys = c.m1_keys_.data();
+  uint32_t distinct = 0, raw = 0;
+  for (uint32_t p = 0; p < P; ++p) {  // compact the per-span key blocks
+    const uint32_t slot = c.spans_[size_t{6} * p + 5], n = c.span_hits_[p];
+    if (n && slot != distinct) std::memmove(keys + distinct, keys + slot, sizeof(uint64_t) * n);
+    distinct += n;
+  }
+  if (distinct <= 32) {  // a handful of hits per frame: insertion sort
+    for (uint32_t i = 1; i < distinct; ++i) {
+      const uint64_t k = keys[i];
+      uint32_t j = i;
+      for (; j > 0 && keys[j - 1] > k; --j) keys[j] = keys[j - 1];
+      keys[j] = k;
     }
+  } else {
+    std::sort(keys, keys + distinct);
+  }
+  const uint32_t written = distinct < job.capacity ? distinct : job.capacity;
+  const SphereArrays s = c.spheres();
+  for (uint32_t k = 0; k < written; ++k) {
+    const uint32_t a = static_cast<uint32_t>(keys[k] >> 16) & 0xffffu, b = static_cast<uint32_t>(keys[k]) & 0xffffu;
+    const float dx = s.x[b] - s.x[a], dy = s.y[b] - s.y[a], dz = s.z[b] - s.z[a];
+    job.output[k] = {static_cast<uint16_t>(a), static_cast<uint16_t>(b),
+                     s.r[a] + s.r[b] - std::sqrt(dx * dx + dy * dy + dz * dz), c.chain_mask_[a] & c.chain_mask_[b]};
+  }
+  for (uint32_t k = 0; k < distinct; ++k) {
+    const uint32_t a = static_cast<uint32_t>(keys[k] >> 16) & 0xffffu, b = static_cast<uint32_t>(keys[k]) & 0xffffu;
+    raw += static_cast<uint32_t>(std::popcount(c.chain_mask_[a] & c.chain_mask_[b]));
   }
   *job.count = written;
-  if (job.stats) *job.stats = {tests, raw, distinct};
+  if (job.stats) *job.stats = {c.m1_tests_, raw, distinct};
   return distinct > written ? Status::kOkTruncated : Status::kOk;
 }
 
 Status Context::Internal::DetectM2(const DetectJob& job) {
   const Context& c = *job.context;
   const uint32_t S = c.sphere_count_;
-  uint8_t* flags = c.flags_.data();
-  const float *x = c.x_.data(), *y = c.y_.data(), *z = c.z_.data(), *r = c.r_.data();
-  uint32_t written = 0, distinct = 0;
-  for (uint32_t a = 0; a + 1 < S; ++a) {
-    const uint32_t m = S - a - 1;
-    OverlapRow(x[a], y[a], z[a], r[a], x + a + 1, y + a + 1, z + a + 1, r + a + 1, m, flags);
-    ForEachFlag(flags, m, [&](uint32_t j) {
-      const uint32_t b = a + 1 + j;
-      if (c.IsExcluded(a, b)) return;
-      ++distinct;
-      if (written < job.capacity) job.output[written++] = MakeCollision(c, a, b, c.chain_mask_[a] & c.chain_mask_[b]);
-    });
-  }
+  const kernels::AllPairsArgs args{c.x_.data(), c.y_.data(), c.z_.data(), c.r_.data(), S, c.m2_excl_.data(),
+                                   c.chain_mask_.data(), job.output, job.capacity};
+  const uint32_t distinct = c.use_avx_ ? kernels::AllPairsAvx(args) : kernels::AllPairsSse(args);
+  const uint32_t written = distinct < job.capacity ? distinct : job.capacity;
   *job.count = written;
   if (job.stats) *job.stats = {static_cast<uint32_t>(uint64_t{S} * (S - 1) / 2), distinct, distinct};
   return distinct > written ? Status::kOkTruncated : Status::kOk;

@@ -1,6 +1,4 @@
 // RefitJob: sphere update from the four pivot polygons (paper §5.1), see refit.h.
-#include <cstring>
-
 #include "internal.h"
 
 namespace spherechain::runtime {
@@ -19,37 +17,20 @@ void RefitTask(void* data, uint32_t begin, uint32_t end) {
 
 }  // namespace
 
+// One SoA pass over [begin, end): the SIMD kernel (kernels.inl) evaluates refit.h's BuildPivotFrame /
+// PivotFrameToModel / PivotMeanDistance / TriangleCentroid with the same operations in the same order,
+// several spheres per instruction (bit-identical to the scalar formulas).
 void Context::Internal::Refit(const RefitJob& job, uint32_t begin, uint32_t end) {
   Context& c = *job.context;
-  const char* base = static_cast<const char*>(job.positions.data);
-  const size_t stride = job.positions.stride_bytes;
-  const uint32_t* pv = c.pivot_vertices_.data();
-  const bool frame_mode = job.mode == RefitMode::kPivotFrame;
-  for (uint32_t s = begin; s < end; ++s) {
-    float p[4][3];
-    const uint32_t* idx = pv + size_t{12} * s;
-    for (int k = 0; k < 4; ++k) {
-      float v[3][3];
-      for (int t = 0; t < 3; ++t) std::memcpy(v[t], base + idx[3 * k + t] * stride, sizeof(float) * 3);
-      TriangleCentroid(v[0], v[1], v[2], p[k]);
-    }
-    float centre[3];
-    PivotFrameBasis f;
-    if (frame_mode && BuildPivotFrame(p, &f)) {
-      const float local[3] = {c.local_x_[s], c.local_y_[s], c.local_z_[s]};
-      PivotFrameToModel(f, local, centre);
-    } else {
-      // Paper §5.1: c += mean displacement of the pivots  ⇔  c = mean(p) + (c_bind − mean(p_bind)).
-      for (int k = 0; k < 3; ++k) centre[k] = 0.25f * (p[0][k] + p[1][k] + p[2][k] + p[3][k]);
-      centre[0] += c.offset_x_[s];
-      centre[1] += c.offset_y_[s];
-      centre[2] += c.offset_z_[s];
-    }
-    c.x_[s] = centre[0];
-    c.y_[s] = centre[1];
-    c.z_[s] = centre[2];
-    c.r_[s] = c.radius_scale_[s] * PivotMeanDistance(p, centre);
-  }
+  const kernels::RefitArgs args{static_cast<const char*>(job.positions.data), job.positions.stride_bytes,
+                                c.pivot_vertices_.data(), c.local_x_.data(), c.local_y_.data(), c.local_z_.data(),
+                                c.offset_x_.data(), c.offset_y_.data(), c.offset_z_.data(), c.radius_scale_.data(),
+                                c.x_.data(), c.y_.data(), c.z_.data(), c.r_.data(), job.mode == RefitMode::kPivotFrame};
+  if (begin >= end) return;
+  if (c.use_avx_)
+    kernels::RefitAvx(args, begin, end);
+  else
+    kernels::RefitSse(args, begin, end);
 }
 
 Status RefitJob::Check() const {

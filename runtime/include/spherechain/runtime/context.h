@@ -41,10 +41,11 @@ struct SphereArrays {
 };
 
 /// Per-asset workspace, created once per asset (and per character instance when several share an
-/// asset): SoA sphere state, the refit data copied out of the asset into SoA, per-chain sphere lists
-/// with the excluded (adjacent) pairs as per-sphere neighbour lists, per-sphere chain-membership masks
-/// (used to de-duplicate M1 pairs across chains and to tag results), and per-chain scratch for the
-/// parallel M1 path.
+/// asset): SoA sphere state, the refit data copied out of the asset into SoA, per-sphere
+/// chain-membership masks (used to de-duplicate M1 pairs across chains and to tag results), the M1
+/// layout (spheres grouped by chain mask, so M1's distinct candidate pairs are row × span blocks), the
+/// excluded (adjacent) pairs as per-sphere neighbour lists and as per-8-lane-chunk masks of the
+/// M1/M2 test sequences, and scratch for M1 hits (also used by the parallel M1 path).
 /// Ownership: owns its memory; after Init it no longer reads the asset bytes (jobs never touch the
 /// AssetView), so the bytes may be released if no one calls SurroundingTriangles any more.
 /// Thread safety: one job at a time per context; different contexts are independent.
@@ -59,7 +60,8 @@ class Context {
   /// Sizes and fills the workspace for `view` and sets the spheres to the bind pose
   /// (Asset.spheres). The only allocating call of the runtime (catches std::bad_alloc).
   /// Returns kOk; kErrorNullArgument when `!view.valid()`; kErrorOutOfMemory (context left empty).
-  /// Cost: O(#S + Σ|chain| + #excluded) time and memory (~100 B per sphere).
+  /// Cost: O(#S + Σ|chain|²·degree) time; memory ~100 B per sphere + 8 B per distinct M1 candidate
+  /// pair (Σ|chain|²/2 at most) + 8 B per excluded pair + 18 B per (sphere, class sharing a chain).
   Status Init(const AssetView& view);
 
   /// True after a successful Init.
@@ -99,21 +101,26 @@ class Context {
   std::vector<float> x_, y_, z_, r_;                  // current spheres, #S + kPad each (far-away padding)
   std::vector<float> bind_x_, bind_y_, bind_z_, bind_r_;  // Asset.spheres, #S each
   std::vector<uint32_t> pivot_vertices_;              // #S×12, Asset.pivot_vertices
-  std::vector<float> local_x_, local_y_, local_z_;    // PivotFrame.local_center, #S each
-  std::vector<float> offset_x_, offset_y_, offset_z_; // PivotFrame.centroid_offset, #S each
-  std::vector<float> radius_scale_;                   // bind radius / PivotFrame.mean_distance, #S
+  std::vector<float> local_x_, local_y_, local_z_;    // PivotFrame.local_center, #S + kPad each (0 padding)
+  std::vector<float> offset_x_, offset_y_, offset_z_; // PivotFrame.centroid_offset, #S + kPad each
+  std::vector<float> radius_scale_;                   // bind radius / PivotFrame.mean_distance, #S + kPad
   std::vector<uint32_t> chain_mask_;                  // #S
-  std::vector<uint32_t> chain_offsets_;               // #chains+1 into chain_spheres_
-  std::vector<uint16_t> chain_spheres_;               // Σ|chain|
   std::vector<uint32_t> excl_offsets_;                // #S+1 into excl_neighbors_
-  std::vector<uint16_t> excl_neighbors_;              // 2·#excluded, sorted per sphere
-  std::vector<uint32_t> gather_offsets_;              // #chains+1: chain c's padded block (|c| + kPad)
-  mutable std::vector<float> gx_, gy_, gz_, gr_;              // per-chain gathered spheres, padded
-  std::vector<uint32_t> chain_hits_offsets_;          // #chains+1 into chain_hits_ (M1 parallel)
-  mutable std::vector<uint32_t> chain_hits_;                  // packed (a << 16 | b), Σ |c|(|c|−1)/2
-  mutable std::vector<uint32_t> chain_hit_counts_;            // #chains
-  mutable std::vector<uint32_t> chain_raw_counts_;            // #chains
-  mutable std::vector<uint8_t> flags_;                        // #S + kPad overlap flags (one row)
+  std::vector<uint16_t> excl_neighbors_;              // #excluded: partners b > a of each sphere a, sorted
+  bool use_avx_ = false;                              // kernels: AVX (runtime dispatch) or SSE2 baseline
+  uint32_t m1_tests_ = 0;                             // Σ_chains n(n−1)/2 (DetectStats::tests of M1)
+  // M1 layout: spheres grouped in classes of equal chain_mask; per class A a span [A's spheres, then
+  // those of every later class sharing a chain with A], gathered contiguously each frame: M1's distinct
+  // candidate pairs are exactly (row i of A, column j > i of A's span).
+  std::vector<uint16_t> m1_order_;                    // #G sphere id at each gathered position (spans
+                                                      // padded to multiples of 8 with 0)
+  std::vector<uint32_t> spans_;                       // 6 per class: begin, rows, columns, first chunk,
+                                                      // first skip entry, first key slot
+  std::vector<uint64_t> m1_excl_, m2_excl_;           // skip streams (chunk << 32 | lane bits), UINT64_MAX ends
+  mutable std::vector<float> gx_, gy_, gz_, gr_;      // #G: spheres gathered in M1 order (scratch)
+  mutable std::vector<uint64_t> m1_keys_;             // per class pair block of candidate slots (scratch):
+                                                      // (first common chain << 32 | a << 16 | b) per hit
+  mutable std::vector<uint32_t> span_hits_;           // hits per span (scratch)
 };
 
 }  // namespace spherechain::runtime

@@ -1,0 +1,111 @@
+// SIMD kernels of RefitJob and DetectJob (see internal.h): kernels.inl compiled for SSE2 (baseline
+// x86-64) and AVX (function-level target, chosen at Context::Init), or scalar on other targets.
+#include <bit>
+#include <cmath>
+#include <cstring>
+
+#include "internal.h"
+
+#if defined(__GNUC__) && defined(__x86_64__)
+#define SPHERECHAIN_X86_KERNELS 1
+#include <immintrin.h>
+#endif
+
+namespace spherechain::runtime::kernels {
+
+#if SPHERECHAIN_X86_KERNELS
+
+namespace sse {
+using V = __m128;
+using M = __m128;
+constexpr uint32_t kW = 4;
+inline V Set1(float v) { return _mm_set1_ps(v); }
+inline V Load(const float* p) { return _mm_loadu_ps(p); }
+inline void Store(float* p, V v) { _mm_storeu_ps(p, v); }
+inline V Sqrt(V v) { return _mm_sqrt_ps(v); }
+inline M Gt(V a, V b) { return _mm_cmpgt_ps(a, b); }
+inline M And(M a, M b) { return _mm_and_ps(a, b); }
+inline V Blend(M m, V a, V b) { return _mm_or_ps(_mm_and_ps(m, a), _mm_andnot_ps(m, b)); }
+inline uint32_t Overlap4(V xi, V yi, V zi, V ri, const float* x, const float* y, const float* z, const float* r) {
+  const V dx = Load(x) - xi, dy = Load(y) - yi, dz = Load(z) - zi, rr = Load(r) + ri;
+  return static_cast<uint32_t>(_mm_movemask_ps(_mm_cmplt_ps(dx * dx + dy * dy + dz * dz, rr * rr)));
+}
+inline uint32_t Overlap8(V xi, V yi, V zi, V ri, const float* x, const float* y, const float* z, const float* r) {
+  return Overlap4(xi, yi, zi, ri, x, y, z, r) | Overlap4(xi, yi, zi, ri, x + 4, y + 4, z + 4, r + 4) << 4;
+}
+#include "kernels.inl"
+}  // namespace sse
+
+namespace avx {
+#pragma GCC push_options
+#pragma GCC target("avx")
+#ifdef __clang__
+#pragma clang attribute push(__attribute__((target("avx"))), apply_to = function)
+#endif
+using V = __m256;
+using M = __m256;
+constexpr uint32_t kW = 8;
+inline V Set1(float v) { return _mm256_set1_ps(v); }
+inline V Load(const float* p) { return _mm256_loadu_ps(p); }
+inline void Store(float* p, V v) { _mm256_storeu_ps(p, v); }
+inline V Sqrt(V v) { return _mm256_sqrt_ps(v); }
+inline M Gt(V a, V b) { return _mm256_cmp_ps(a, b, _CMP_GT_OQ); }
+inline M And(M a, M b) { return _mm256_and_ps(a, b); }
+inline V Blend(M m, V a, V b) { return _mm256_blendv_ps(b, a, m); }
+inline uint32_t Overlap8(V xi, V yi, V zi, V ri, const float* x, const float* y, const float* z, const float* r) {
+  const V dx = Load(x) - xi, dy = Load(y) - yi, dz = Load(z) - zi, rr = Load(r) + ri;
+  return static_cast<uint32_t>(_mm256_movemask_ps(_mm256_cmp_ps(dx * dx + dy * dy + dz * dz, rr * rr, _CMP_LT_OQ)));
+}
+#include "kernels.inl"
+#ifdef __clang__
+#pragma clang attribute pop
+#endif
+#pragma GCC pop_options
+}  // namespace avx
+
+void RefitSse(const RefitArgs& a, uint32_t begin, uint32_t end) { sse::Refit(a, begin, end); }
+void RefitAvx(const RefitArgs& a, uint32_t begin, uint32_t end) { avx::Refit(a, begin, end); }
+uint32_t SpanSse(const SpanArgs& a) { return sse::Span(a); }
+uint32_t SpanAvx(const SpanArgs& a) { return avx::Span(a); }
+uint32_t AllPairsSse(const AllPairsArgs& a) { return sse::AllPairs(a); }
+uint32_t AllPairsAvx(const AllPairsArgs& a) { return avx::AllPairs(a); }
+bool HasAvx() {
+  __builtin_cpu_init();
+  return __builtin_cpu_supports("avx");
+}
+
+#else  // scalar: one lane at a time, the same formulas
+
+namespace scalar {
+using V = float;
+using M = bool;
+constexpr uint32_t kW = 1;
+inline V Set1(float v) { return v; }
+inline V Load(const float* p) { return *p; }
+inline void Store(float* p, V v) { *p = v; }
+inline V Sqrt(V v) { return std::sqrt(v); }
+inline M Gt(V a, V b) { return a > b; }
+inline M And(M a, M b) { return a && b; }
+inline V Blend(M m, V a, V b) { return m ? a : b; }
+inline uint32_t Overlap8(V xi, V yi, V zi, V ri, const float* x, const float* y, const float* z, const float* r) {
+  uint32_t bits = 0;
+  for (uint32_t k = 0; k < 8; ++k) {
+    const float dx = x[k] - xi, dy = y[k] - yi, dz = z[k] - zi, rr = r[k] + ri;
+    bits |= static_cast<uint32_t>(dx * dx + dy * dy + dz * dz < rr * rr) << k;
+  }
+  return bits;
+}
+#include "kernels.inl"
+}  // namespace scalar
+
+void RefitSse(const RefitArgs& a, uint32_t begin, uint32_t end) { scalar::Refit(a, begin, end); }
+void RefitAvx(const RefitArgs& a, uint32_t begin, uint32_t end) { scalar::Refit(a, begin, end); }
+uint32_t SpanSse(const SpanArgs& a) { return scalar::Span(a); }
+uint32_t SpanAvx(const SpanArgs& a) { return scalar::Span(a); }
+uint32_t AllPairsSse(const AllPairsArgs& a) { return scalar::AllPairs(a); }
+uint32_t AllPairsAvx(const AllPairsArgs& a) { return scalar::AllPairs(a); }
+bool HasAvx() { return false; }
+
+#endif
+
+}  // namespace spherechain::runtime::kernels

@@ -1,0 +1,160 @@
+// DetectJob M1 / M2 against a direct transcription of their documented semantics (per-chain loops,
+// all-pairs loop), on irregular layouts: overlapping chains of odd sizes, spheres in no chain, classes
+// of one sphere, many excluded pairs, dense overlaps; serial and parallel_for, every capacity.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "runtime/asset_builder.h"
+
+using namespace spherechain;
+using namespace spherechain::runtime;
+
+namespace {
+
+struct Reference {
+  std::vector<Collision> pairs;
+  DetectStats stats;
+};
+
+bool Excluded(const test::AssetData& d, uint32_t a, uint32_t b) {
+  for (const schema::SpherePair& p : d.excluded)
+    if (p.a() == std::min(a, b) && p.b() == std::max(a, b)) return true;
+  return false;
+}
+
+// DetectJob's documentation, literally: M1 tests every pair of every chain (chains ascending), counts
+// each non-excluded hit (raw) and reports it under the first chain holding both.
+Reference ReferenceDetect(const test::AssetData& d, const SphereArrays& s, DetectMethod method) {
+  Reference ref;
+  auto mask = [&](uint32_t x) {
+    uint32_t m = 0;
+    for (size_t c = 0; c < d.chains.size(); ++c)
+      if (std::binary_search(d.chains[c].begin(), d.chains[c].end(), x)) m |= 1u << c;
+    return m;
+  };
+  auto hit = [&](uint32_t a, uint32_t b) {
+    const float dx = s.x[b] - s.x[a], dy = s.y[b] - s.y[a], dz = s.z[b] - s.z[a], rr = s.r[b] + s.r[a];
+    return dx * dx + dy * dy + dz * dz < rr * rr && !Excluded(d, a, b);
+  };
+  auto record = [&](uint32_t a, uint32_t b) {
+    const float dx = s.x[b] - s.x[a], dy = s.y[b] - s.y[a], dz = s.z[b] - s.z[a];
+    ref.pairs.push_back({static_cast<uint16_t>(a), static_cast<uint16_t>(b),
+                         s.r[a] + s.r[b] - std::sqrt(dx * dx + dy * dy + dz * dz), mask(a) & mask(b)});
+  };
+  if (method == DetectMethod::kM1) {
+    for (size_t c = 0; c < d.chains.size(); ++c) {
+      const auto& list = d.chains[c];
+      ref.stats.tests += static_cast<uint32_t>(list.size() * (list.size() - 1) / 2);
+      for (size_t i = 0; i < list.size(); ++i)
+        for (size_t j = i + 1; j < list.size(); ++j) {
+          if (!hit(list[i], list[j])) continue;
+          ++ref.stats.raw_pairs;
+          if (static_cast<size_t>(std::countr_zero(mask(list[i]) & mask(list[j]))) == c) record(list[i], list[j]);
+        }
+    }
+  } else {
+    ref.stats.tests = s.count * (s.count - 1) / 2;
+    for (uint32_t a = 0; a < s.count; ++a)
+      for (uint32_t b = a + 1; b < s.count; ++b)
+        if (hit(a, b)) record(a, b);
+    ref.stats.raw_pairs = static_cast<uint32_t>(ref.pairs.size());
+  }
+  ref.stats.distinct_pairs = static_cast<uint32_t>(ref.pairs.size());
+  return ref;
+}
+
+}  // namespace
+
+TEST_CASE("DetectJob M1 and M2 equal the reference loops on irregular chains and exclusions") {
+  std::mt19937 rng(12345);
+  for (int trial = 0; trial < 12; ++trial) {
+    test::Mesh mesh;
+    std::vector<test::Tube> tubes(3);
+    for (size_t t = 0; t < tubes.size(); ++t) tubes[t].rings = 9 + 7 * static_cast<uint32_t>(t) + trial;
+    test::AssetData d = test::MakeTubes(tubes, {}, &mesh);
+    const uint32_t S = static_cast<uint32_t>(d.spheres.size());
+    // Random chains (sorted, unique, some spheres in none) and random excluded pairs.
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    const uint32_t C = 1 + trial % 7;
+    d.chains.assign(C, {});
+    for (uint32_t c = 0; c < C; ++c) {
+      const float p = 0.15f + 0.6f * u(rng);
+      for (uint32_t s = 0; s < S; ++s)
+        if (u(rng) < p) d.chains[c].push_back(static_cast<uint16_t>(s));
+      if (d.chains[c].size() < 2) d.chains[c] = {0, static_cast<uint16_t>(S - 1)};
+    }
+    d.excluded.clear();
+    for (uint32_t a = 0; a < S; ++a)
+      for (uint32_t b = a + 1; b < S; ++b)
+        if (b - a <= 2 || u(rng) < 0.03f) d.excluded.emplace_back(a, b);
+    const test::AlignedBytes bytes = test::Serialize(d);
+    AssetView view;
+    REQUIRE(LoadAsset(bytes.data(), bytes.size, &view) == Status::kOk);
+    Context ctx;
+    REQUIRE(ctx.Init(view) == Status::kOk);
+    uint32_t m1_candidates = 0;
+    for (uint32_t a = 0; a < S; ++a)
+      for (uint32_t b = a + 1; b < S; ++b) {
+        bool shared = false;
+        for (const auto& list : d.chains)
+          shared = shared ||
+                   (std::binary_search(list.begin(), list.end(), a) && std::binary_search(list.begin(), list.end(), b));
+        m1_candidates += shared && !Excluded(d, a, b);
+      }
+    CHECK(ctx.m1_candidate_pairs() == m1_candidates);
+    CHECK(ctx.m2_candidate_pairs() == S * (S - 1) / 2 - d.excluded.size());
+    // Dense random spheres in a small box: many overlaps, some exactly touching (never overlapping).
+    for (uint32_t s = 0; s < S; ++s) {
+      ctx.mutable_x()[s] = 6.0f * u(rng);
+      ctx.mutable_y()[s] = 6.0f * u(rng);
+      ctx.mutable_z()[s] = (s % 5 == 0) ? 0.0f : 6.0f * u(rng);
+      ctx.mutable_r()[s] = 0.2f + 0.8f * u(rng);
+    }
+    ctx.mutable_x()[1] = ctx.mutable_x()[0] + 2.0f, ctx.mutable_y()[1] = ctx.mutable_y()[0];
+    ctx.mutable_z()[1] = ctx.mutable_z()[0], ctx.mutable_r()[0] = ctx.mutable_r()[1] = 1.0f;  // touching
+    for (DetectMethod m : {DetectMethod::kM1, DetectMethod::kM2}) {
+      const Reference ref = ReferenceDetect(d, ctx.spheres(), m);
+      for (int parallel = 0; parallel < 2; ++parallel) {
+        std::vector<Collision> out(DetectBound(view, m));
+        uint32_t n = 0;
+        DetectStats st;
+        DetectJob job;
+        job.context = &ctx;
+        job.method = m;
+        job.output = out.data();
+        job.capacity = static_cast<uint32_t>(out.size());
+        job.count = &n;
+        job.stats = &st;
+        if (parallel)
+          job.parallel_for.run = [](void*, uint32_t count, ParallelFor::Task task, void* data) {
+            for (uint32_t i = count; i-- > 0;) task(data, i, i + 1);  // reverse order, one index a task
+          };
+        REQUIRE(job.Run() == Status::kOk);
+        CAPTURE(trial);
+        CAPTURE(static_cast<int>(m));
+        CHECK(st.tests == ref.stats.tests);
+        CHECK(st.raw_pairs == ref.stats.raw_pairs);
+        CHECK(st.distinct_pairs == ref.stats.distinct_pairs);
+        REQUIRE(n == ref.pairs.size());
+        for (uint32_t k = 0; k < n; ++k) {
+          CHECK(out[k].a == ref.pairs[k].a);
+          CHECK(out[k].b == ref.pairs[k].b);
+          CHECK(out[k].chains == ref.pairs[k].chains);
+          CHECK(std::bit_cast<uint32_t>(out[k].depth) == std::bit_cast<uint32_t>(ref.pairs[k].depth));
+        }
+        if (m == DetectMethod::kM1) CHECK(n <= ctx.m1_candidate_pairs());
+        // Truncation keeps the documented prefix.
+        const uint32_t cap = n / 2;
+        job.capacity = cap;
+        CHECK(job.Run() == (cap < ref.pairs.size() ? Status::kOkTruncated : Status::kOk));
+        REQUIRE(n == cap);
+        for (uint32_t k = 0; k < n; ++k) CHECK((out[k].a == ref.pairs[k].a && out[k].b == ref.pairs[k].b));
+      }
+    }
+  }
+}
