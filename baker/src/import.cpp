@@ -5,6 +5,8 @@
 #include <cctype>
 #include <cmath>
 #include <exception>
+#include <iterator>
+#include <vector>
 #include <filesystem>
 #include <new>
 #include <string>
@@ -115,6 +117,39 @@ Status ValidateMesh(const Mesh& mesh) {
   return Ok{};
 }
 
+MeshIssues InspectMesh(const Mesh& mesh) {
+  MeshIssues issues;
+  const uint32_t nt = mesh.triangle_count();
+  std::vector<uint64_t> edges;
+  edges.reserve(size_t{nt} * 3);
+  for (uint32_t t = 0; t < nt; ++t) {
+    const uint32_t* i = mesh.indices.data() + size_t{t} * 3;
+    if (i[0] == i[1] || i[1] == i[2] || i[0] == i[2]) {
+      ++issues.degenerate_triangles;
+      continue;
+    }
+    const float* a = mesh.positions.data() + size_t{i[0]} * 3;
+    const float* b = mesh.positions.data() + size_t{i[1]} * 3;
+    const float* c = mesh.positions.data() + size_t{i[2]} * 3;
+    const double u[3] = {double{b[0]} - a[0], double{b[1]} - a[1], double{b[2]} - a[2]};
+    const double v[3] = {double{c[0]} - a[0], double{c[1]} - a[1], double{c[2]} - a[2]};
+    const double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+    if (n[0] == 0.0 && n[1] == 0.0 && n[2] == 0.0) ++issues.degenerate_triangles;
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t p = i[k], q = i[(k + 1) % 3];
+      edges.push_back(p < q ? (uint64_t{p} << 32 | q) : (uint64_t{q} << 32 | p));
+    }
+  }
+  std::sort(edges.begin(), edges.end());
+  for (size_t e = 0; e < edges.size();) {
+    size_t f = e;
+    while (f < edges.size() && edges[f] == edges[e]) ++f;
+    if (f - e > 2) ++issues.non_manifold_edges;
+    e = f;
+  }
+  return issues;
+}
+
 Result<Mesh> ImportMesh(const std::string& path, const ImportOptions& options, Context* ctx) {
   Context::Timer timer(ctx, "import");
   try {
@@ -124,6 +159,17 @@ Result<Mesh> ImportMesh(const std::string& path, const ImportOptions& options, C
     if (!std::filesystem::is_regular_file(st)) return detail::FileError(Error::Code::kIo, path, "not a regular file");
 
     const std::string ext = detail::LowerExtension(path);
+    if (std::find(std::begin(kSupportedExtensions), std::end(kSupportedExtensions), ext) ==
+        std::end(kSupportedExtensions))
+      return detail::FileError(Error::Code::kFormat, path,
+                               "unsupported format '" + (ext.empty() ? std::string("(no extension)") : "." + ext) +
+                                   "': the baker reads glTF/GLB, FBX, DAE, X, OBJ, BLEND, 3DS, PLY and STL");
+    const uintmax_t bytes = std::filesystem::file_size(path, ec);
+    if (ec) return detail::FileError(Error::Code::kIo, path, "cannot stat file: " + ec.message());
+    if (bytes > kMaxInputBytes)
+      return detail::FileError(Error::Code::kFormat, path,
+                               "file is " + std::to_string(bytes) + " bytes, over the input limit of " +
+                                   std::to_string(kMaxInputBytes) + " bytes (512 MiB)");
     Result<Mesh> mesh = MakeError(Error::Code::kInternal, path + ": not imported");
     if (ext == "gltf" || ext == "glb") {
       mesh = detail::ImportGltf(path, options, ctx);
@@ -135,8 +181,23 @@ Result<Mesh> ImportMesh(const std::string& path, const ImportOptions& options, C
     if (!mesh.ok()) return mesh;
     mesh->source_path = path;
     if (mesh->source_format.empty()) mesh->source_format = ext;
+    if (mesh->positions.size() / 3 > kMaxInputVertices)
+      return detail::FileError(Error::Code::kInvalidMesh, path,
+                               std::to_string(mesh->positions.size() / 3) + " vertices, over the limit of " +
+                                   std::to_string(kMaxInputVertices));
+    if (mesh->indices.size() / 3 > kMaxInputTriangles)
+      return detail::FileError(Error::Code::kInvalidMesh, path,
+                               std::to_string(mesh->indices.size() / 3) + " triangles, over the limit of " +
+                                   std::to_string(kMaxInputTriangles));
     Status valid = ValidateMesh(mesh.value());
     if (!valid.ok()) return valid.error();
+    const MeshIssues issues = InspectMesh(mesh.value());
+    if (ctx && issues.degenerate_triangles)
+      ctx->Warn("import: " + path + ": " + std::to_string(issues.degenerate_triangles) +
+                " degenerate triangle(s) (repeated index or zero area): kept, never used as pivots");
+    if (ctx && issues.non_manifold_edges)
+      ctx->Warn("import: " + path + ": " + std::to_string(issues.non_manifold_edges) +
+                " non-manifold edge(s) (shared by more than two triangles): kept");
     if (ctx) {
       ctx->Info("import: " + path + ": " + std::to_string(mesh->vertex_count()) + " vertices, " +
                 std::to_string(mesh->triangle_count()) + " triangles, " + std::to_string(mesh->parts.size()) +

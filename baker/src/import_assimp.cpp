@@ -8,7 +8,9 @@
 // One SkinJoint per (mesh instance, aiBone): node = the bone's node, inverse_bind = mOffsetMatrix · B⁻¹
 // (B: the mesh's bind transform above), so Σ w · Global_rest(node) · inverse_bind · p = p at rest. Meshes without bones in a skinned scene follow their node rigidly.
 // Clips: aiAnimation, times ticks / mTicksPerSecond (25 when 0).
+#include <assimp/BaseImporter.h>
 #include <assimp/Importer.hpp>
+#include <assimp/importerdesc.h>
 #include <assimp/anim.h>
 #include <assimp/config.h>
 #include <assimp/postprocess.h>
@@ -17,6 +19,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <sstream>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -36,14 +39,37 @@ std::string NodeName(const aiNode* n, size_t slot) {
   return n->mName.length ? std::string(n->mName.C_Str()) : "node" + std::to_string(slot);
 }
 
+/// Leaves registered in `importer` only the assimp importers of the formats the baker allows through
+/// assimp (kSupportedExtensions minus glTF and OBJ, which have their own readers), so that assimp's
+/// content sniffing can never hand a file to any other of its ~60 parsers. The removed importers are
+/// deleted here (Importer only deletes those still registered).
+void KeepAllowedImporters(Assimp::Importer& importer) {
+  static constexpr const char* kAssimpFormats[] = {"fbx", "dae", "x", "blend", "3ds", "ply", "stl"};
+  std::vector<Assimp::BaseImporter*> drop;
+  for (size_t i = 0; i < importer.GetImporterCount(); ++i) {
+    const aiImporterDesc* desc = importer.GetImporterInfo(i);
+    bool keep = false;
+    if (desc && desc->mFileExtensions) {
+      std::istringstream words(desc->mFileExtensions);
+      for (std::string w; words >> w;)
+        for (const char* f : kAssimpFormats) keep = keep || w == f;
+    }
+    if (!keep) drop.push_back(importer.GetImporter(i));
+  }
+  for (Assimp::BaseImporter* imp : drop) {
+    if (imp && importer.UnregisterLoader(imp) == aiReturn_SUCCESS) delete imp;
+  }
+}
+
 }  // namespace
 
 Result<Mesh> ImportAssimp(const std::string& path, const ImportOptions& options, Context* ctx) {
   Assimp::Importer importer;
+  KeepAllowedImporters(importer);
   const std::string ext = LowerExtension(path);
   if (ext.empty() || !importer.IsExtensionSupported("." + ext))
     return FileError(Error::Code::kFormat, path,
-                     "unsupported file extension '" + ext + "' (glTF/GLB, OBJ or a format assimp reads)");
+                     "unsupported file extension '" + ext + "' (the baker reads glTF/GLB, FBX, DAE, X, OBJ, BLEND, 3DS, PLY and STL)");
   // No skeleton placeholder meshes (BVH etc.): only real geometry is imported.
   importer.SetPropertyBool(AI_CONFIG_IMPORT_NO_SKELETON_MESHES, true);
   const aiScene* scene = importer.ReadFile(path, aiProcess_Triangulate);

@@ -30,13 +30,41 @@ bool SkipImage(tinygltf::Image*, const int, std::string*, std::string*, int, int
   return true;
 }
 
-// Filesystem callbacks (the Debian tinygltf build sets none by default). Reads only; never writes.
-bool FsFileExists(const std::string& abs_filename, void*) {
+// Filesystem callbacks (the Debian tinygltf build sets none by default). Reads only; never writes;
+// confined to the input's own folder (`user_data`: its canonical path): a buffer URI with `..`, an
+// absolute path or a symlink that leads outside it is refused, as is a file over kMaxInputBytes.
+struct FsRoot {
+  std::filesystem::path root;  // canonical folder of the input file
+  std::string refused;         // the first path refused for leaving it (for the error message)
+};
+bool InsideRoot(const std::string& filename, void* user_data) {
+  auto* fs_root = static_cast<FsRoot*>(user_data);
+  if (!fs_root) return false;
   std::error_code ec;
-  return std::filesystem::is_regular_file(abs_filename, ec);
+  const std::filesystem::path p = std::filesystem::weakly_canonical(filename, ec);
+  bool inside = !ec;
+  auto r = fs_root->root.begin(), q = p.begin();
+  for (; inside && r != fs_root->root.end(); ++r, ++q)
+    if (q == p.end() || *q != *r) inside = false;
+  if (!inside && fs_root->refused.empty()) fs_root->refused = filename;
+  return inside;
+}
+bool FsFileExists(const std::string& abs_filename, void* user_data) {
+  std::error_code ec;
+  return InsideRoot(abs_filename, user_data) && std::filesystem::is_regular_file(abs_filename, ec);
 }
 std::string FsExpandFilePath(const std::string& filepath, void*) { return filepath; }
-bool FsReadWholeFile(std::vector<unsigned char>* out, std::string* err, const std::string& filepath, void*) {
+bool FsReadWholeFile(std::vector<unsigned char>* out, std::string* err, const std::string& filepath, void* user_data) {
+  if (!InsideRoot(filepath, user_data)) {
+    if (err) *err += "refused to read " + filepath + ": outside the input file's folder\n";
+    return false;
+  }
+  std::error_code ec;
+  const uintmax_t bytes = std::filesystem::file_size(filepath, ec);
+  if (!ec && bytes > kMaxInputBytes) {
+    if (err) *err += "refused to read " + filepath + ": over the 512 MiB input limit\n";
+    return false;
+  }
   std::ifstream in(filepath, std::ios::binary);
   if (!in) {
     if (err) *err += "cannot open " + filepath + "\n";
@@ -184,7 +212,12 @@ Eigen::Matrix4d LocalMatrix(const tinygltf::Node& n) {
 Result<Mesh> ImportGltf(const std::string& path, const ImportOptions& options, Context* ctx) {
   tinygltf::TinyGLTF loader;
   loader.SetImageLoader(&SkipImage, nullptr);
-  loader.SetFsCallbacks(tinygltf::FsCallbacks{&FsFileExists, &FsExpandFilePath, &FsReadWholeFile, &FsWriteWholeFile, nullptr});
+  std::error_code ec;
+  FsRoot root;
+  root.root = std::filesystem::weakly_canonical(std::filesystem::absolute(path, ec).parent_path(), ec);
+  if (ec) return FileError(Error::Code::kIo, path, "cannot resolve the file's folder: " + ec.message());
+  loader.SetFsCallbacks(
+      tinygltf::FsCallbacks{&FsFileExists, &FsExpandFilePath, &FsReadWholeFile, &FsWriteWholeFile, &root});
   tinygltf::Model model;
   std::string err, warn;
   const bool binary = LowerExtension(path) == "glb";
@@ -193,6 +226,8 @@ Result<Mesh> ImportGltf(const std::string& path, const ImportOptions& options, C
   if (!warn.empty() && ctx) ctx->Warn("import: " + path + ": tinygltf: " + warn);
   if (!ok) {
     while (!err.empty() && (err.back() == '\n' || err.back() == '\r')) err.pop_back();
+    if (!root.refused.empty())
+      err += " (refused " + root.refused + ": a glTF may only reference files inside its own folder)";
     return FileError(Error::Code::kFormat, path, "not a readable glTF file: " + (err.empty() ? "unknown error" : err));
   }
 

@@ -75,7 +75,9 @@ Status Semantics(const Asset& a, AssetView* view) {
     if (!(f->mean_distance() > 0.0f)) return Status::kErrorPivotFrame;
   }
 
-  // Chains: present, sorted, unique, in range.
+  // Chains: present, sorted, unique, in range, and with a bounded number of candidate pairs (the M1
+  // workspace and DetectBound grow with Σ|ζ|(|ζ|−1)/2: a small hostile asset must not ask for gigabytes).
+  uint64_t chain_pairs = 0;
   for (const schema::Chain* c : *chains) {
     const auto* list = c->spheres();
     if (!list) return Status::kErrorMissingField;
@@ -83,7 +85,9 @@ Status Semantics(const Asset& a, AssetView* view) {
       if (list->Get(i) >= S) return Status::kErrorIndexOutOfRange;
       if (i > 0 && list->Get(i) <= list->Get(i - 1)) return Status::kErrorChainOrder;
     }
+    chain_pairs += uint64_t{list->size()} * (list->size() - (list->size() ? 1 : 0)) / 2;
   }
+  if (chain_pairs > kMaxChainPairs) return Status::kErrorTooManyChains;
   if (const auto* ex = a.excluded_pairs()) {
     uint32_t prev = 0;
     for (uint32_t i = 0; i < ex->size(); ++i) {

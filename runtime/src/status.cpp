@@ -21,7 +21,7 @@ const char* ToString(Status s) {
     case Status::kErrorMissingField: return "kErrorMissingField: a required asset field is absent";
     case Status::kErrorNoSpheres: return "kErrorNoSpheres: the asset has no spheres";
     case Status::kErrorTooManySpheres: return "kErrorTooManySpheres: more than kMaxSpheres spheres";
-    case Status::kErrorTooManyChains: return "kErrorTooManyChains: more than kMaxChains chains";
+    case Status::kErrorTooManyChains: return "kErrorTooManyChains: more than kMaxChains chains, or more than kMaxChainPairs candidate pairs in them";
     case Status::kErrorCountMismatch: return "kErrorCountMismatch: array lengths disagree (#S, #T, 4#S, 12#S)";
     case Status::kErrorIndexOutOfRange: return "kErrorIndexOutOfRange: a sphere, triangle or vertex index is out of range";
     case Status::kErrorOffsets: return "kErrorOffsets: surrounding_offsets malformed";

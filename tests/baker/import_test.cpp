@@ -282,7 +282,8 @@ TEST_CASE("import: an unsupported extension is kFormat") {
 
 TEST_CASE("import: truncated and garbage glTF/GLB files are kFormat, never a crash") {
   TempDir tmp("gltf");
-  const std::string garbage("\x00\xff\x13garbage{{[[\x7f\x80", 20);
+  static const char kGarbage[] = "\x00\xff\x13garbage{{[[\x7f\x80";  // 16 bytes, a NUL first
+  const std::string garbage(kGarbage, sizeof kGarbage - 1);
   for (const char* name : {"garbage.gltf", "garbage.glb"}) {
     auto r = ImportMesh(tmp.Write(name, garbage));
     REQUIRE(!r.ok());

@@ -134,6 +134,17 @@ TEST_CASE("LoadAsset: semantic errors each give their status") {
   expect([](test::AssetData& d) { std::swap(d.excluded[0], d.excluded[1]); }, Status::kErrorExcludedPairs);
   expect([](test::AssetData& d) { d.excluded[0] = schema::SpherePair(1, 0); }, Status::kErrorExcludedPairs);
   expect([](test::AssetData& d) { d.chains.resize(kMaxChains + 1, d.chains[0]); }, Status::kErrorTooManyChains);
+  // One chain of 2,100 spheres: 2.2 M candidate pairs > kMaxChainPairs (the M1 workspace would be huge).
+  expect([](test::AssetData& d) {
+    const uint32_t n = 2100;
+    d.spheres.resize(n, d.spheres[0]);
+    d.frames.resize(n, d.frames[0]);
+    d.pivot_triangles.resize(4 * n, d.pivot_triangles[0]);
+    d.pivot_vertices.resize(12 * n, d.pivot_vertices[0]);
+    d.surrounding_offsets.resize(n + 1, d.surrounding_offsets.back());
+    d.chains = {std::vector<uint16_t>(n)};
+    for (uint32_t i = 0; i < n; ++i) d.chains[0][i] = static_cast<uint16_t>(i);
+  }, Status::kErrorTooManyChains);
   expect([](test::AssetData& d) {
     d.spheres.clear();
   }, Status::kErrorNoSpheres);

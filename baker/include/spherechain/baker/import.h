@@ -7,6 +7,30 @@
 
 namespace spherechain::baker {
 
+/// Input policy (README "Bad input"): the baker reads untrusted files, so it bounds what it reads.
+/// Largest input file [bytes]; bigger files are refused (kFormat) before any parser sees them.
+inline constexpr uint64_t kMaxInputBytes = uint64_t{512} << 20;
+/// Most vertices / triangles an imported mesh may have (2^26); more is refused (kInvalidMesh).
+inline constexpr uint32_t kMaxInputVertices = uint32_t{1} << 26;
+inline constexpr uint32_t kMaxInputTriangles = uint32_t{1} << 26;
+/// The formats the baker reads (lower-case extensions), and through what: gltf/glb → tinygltf,
+/// obj → our own reader, fbx/dae/x/blend/3ds/ply/stl → assimp with only those importers registered
+/// (content sniffing can never reach another assimp importer). Everything else: kFormat.
+inline constexpr const char* kSupportedExtensions[] = {"gltf", "glb", "obj", "fbx", "dae", "x",
+                                                       "blend", "3ds", "ply", "stl"};
+
+/// Quality findings on an imported mesh that the baker keeps (they are legal input) but reports.
+struct MeshIssues {
+  /// Triangles with a repeated vertex index or zero area (cross product exactly 0). Kept: indices
+  /// must stay the source's; pivot polygons never use them (regions.cpp skips negligible areas).
+  uint32_t degenerate_triangles = 0;
+  /// Undirected edges used by more than two triangles (non-manifold). Reported only.
+  uint32_t non_manifold_edges = 0;
+};
+
+/// Counts the MeshIssues of a mesh that passed ValidateMesh. O(#T log #T), allocates.
+MeshIssues InspectMesh(const Mesh& mesh);
+
 struct ImportOptions {
   /// [opt] MakeHuman rig: a `.mhskel` path. Empty: for a MakeHuman `base.obj`, `default.mhskel` and
   /// `default_weights.mhw` beside the OBJ are used when present.
@@ -29,8 +53,12 @@ struct ImportOptions {
 /// - MakeHuman `base.obj`: only group `obj_group` ("body"); its vertices are the OBJ's vertices in file
 ///   order restricted to those the group references (for base.obj: the first 13,380, order kept).
 ///   The rig (mhskel + mhw) becomes Mesh::skin.
-/// Errors: kIo (missing / unreadable), kFormat (unsupported or corrupt), kInvalidMesh (no triangles,
-/// NaN/Inf coordinates, index out of range). Nothing is written.
+/// Policy: only kSupportedExtensions; files over kMaxInputBytes and meshes over kMaxInputVertices /
+/// kMaxInputTriangles are refused; glTF may read only files inside the input's own folder (URIs with
+/// `..` or absolute paths that leave it are refused) and never decodes images; degenerate triangles
+/// and non-manifold edges are kept and reported through `ctx` (InspectMesh).
+/// Errors: kIo (missing / unreadable), kFormat (unsupported, too large or corrupt), kInvalidMesh (no
+/// triangles, too many vertices / triangles, NaN/Inf coordinates, index out of range). Nothing is written.
 Result<Mesh> ImportMesh(const std::string& path, const ImportOptions& options = {}, Context* ctx = nullptr);
 
 /// Checks a mesh the way every importer does: at least one triangle, finite coordinates, indices in

@@ -20,6 +20,9 @@ inline constexpr size_t kMaxAssetBytes = size_t{1} << 30;
 inline constexpr uint32_t kMaxSpheres = 65535;
 /// Most chains per asset (Collision::chains is a 32-bit mask; the paper uses 6, Table 1).
 inline constexpr uint32_t kMaxChains = 32;
+/// Σ over chains of |ζ|(|ζ|−1)/2 [Limit]: bounds the M1 workspace and DetectBound (a 4,096-sphere
+/// character in 32 chains of 256 spheres is 1.04 M pairs). Larger → kErrorTooManyChains.
+inline constexpr uint64_t kMaxChainPairs = uint64_t{1} << 21;
 /// Pivot polygons per sphere (§5.1; BakeParams.pivots_per_sphere must be 4 in schema v1).
 inline constexpr uint32_t kPivotsPerSphere = 4;
 

@@ -40,7 +40,8 @@ enum class [[nodiscard]] Status : uint32_t {
                                          ///< chains, surrounding_*, pivot_*).
   kErrorNoSpheres = 0x8000'0202u,        ///< spheres is empty.
   kErrorTooManySpheres = 0x8000'0203u,   ///< #S > kMaxSpheres (indices are uint16).
-  kErrorTooManyChains = 0x8000'0204u,    ///< #chains > kMaxChains (chain bitmask is 32 bits).
+  kErrorTooManyChains = 0x8000'0204u,    ///< #chains > kMaxChains (chain bitmask is 32 bits), or the chains'
+                                         ///< candidate pairs Σ|ζ|(|ζ|−1)/2 > kMaxChainPairs.
   kErrorCountMismatch = 0x8000'0205u,    ///< An array's length disagrees with #S, #T or 4·#S / 12·#S.
   kErrorIndexOutOfRange = 0x8000'0206u,  ///< A sphere index >= #S, triangle index >= #T or vertex
                                          ///< index >= #V.

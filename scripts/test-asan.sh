@@ -1,0 +1,14 @@
+#!/usr/bin/env bash
+# The whole test suite under AddressSanitizer + UndefinedBehaviorSanitizer (the `asan` preset: Debug,
+# SPHERECHAIN_SANITIZE=ON, no CUDA, no bench). Any finding fails its test (UBSan does not recover;
+# LeakSanitizer runs at exit). Third-party suppressions, if any, live in scripts/sanitizer/.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:strict_string_checks=1:detect_stack_use_after_return=1:check_initialization_order=1}"
+export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
+if [ -f scripts/sanitizer/lsan.supp ]; then
+  export LSAN_OPTIONS="${LSAN_OPTIONS:-suppressions=$(pwd)/scripts/sanitizer/lsan.supp:print_suppressions=0}"
+fi
+cmake --preset asan >/dev/null
+cmake --build --preset asan -j"$(nproc)"
+ctest --preset asan -j"$(nproc)"
