@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -154,6 +155,107 @@ TEST_CASE("DetectJob M1 and M2 equal the reference loops on irregular chains and
         CHECK(job.Run() == (cap < ref.pairs.size() ? Status::kOkTruncated : Status::kOk));
         REQUIRE(n == cap);
         for (uint32_t k = 0; k < n; ++k) CHECK((out[k].a == ref.pairs[k].a && out[k].b == ref.pairs[k].b));
+      }
+    }
+  }
+}
+
+// M1's broad cull (per-chunk bounding boxes, kernels.inl) against the brute-force reference: scenes
+// with tight clusters far apart (most chunks skipped), spheres straddling clusters, pairs touching or
+// within a few ulps of touching, huge and tiny magnitudes, negative / zero radii, NaN and infinite
+// spheres. Outputs must be identical (pairs, order, depth bits, stats) to testing every pair.
+TEST_CASE("DetectJob M1 broad cull equals brute force on clustered, far, degenerate and non-finite spheres") {
+  std::mt19937 rng(777);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  for (int trial = 0; trial < 40; ++trial) {
+    test::Mesh mesh;
+    std::vector<test::Tube> tubes(3);
+    for (size_t t = 0; t < tubes.size(); ++t) tubes[t].rings = 11 + 9 * static_cast<uint32_t>(t) + trial % 13;
+    test::AssetData d = test::MakeTubes(tubes, {}, &mesh);
+    const uint32_t S = static_cast<uint32_t>(d.spheres.size());
+    const uint32_t C = 1 + trial % 6;
+    d.chains.assign(C, {});
+    for (uint32_t c = 0; c < C; ++c) {
+      const float p = 0.3f + 0.6f * u(rng);
+      for (uint32_t s = 0; s < S; ++s)
+        if (u(rng) < p) d.chains[c].push_back(static_cast<uint16_t>(s));
+      if (d.chains[c].size() < 2) d.chains[c] = {0, static_cast<uint16_t>(S - 1)};
+    }
+    d.excluded.clear();
+    for (uint32_t a = 0; a < S; ++a)
+      for (uint32_t b = a + 1; b < S; ++b)
+        if (b - a == 1 || u(rng) < 0.02f) d.excluded.emplace_back(a, b);
+    const test::AlignedBytes bytes = test::Serialize(d);
+    AssetView view;
+    REQUIRE(LoadAsset(bytes.data(), bytes.size, &view) == Status::kOk);
+    Context ctx;
+    REQUIRE(ctx.Init(view) == Status::kOk);
+    float *x = ctx.mutable_x(), *y = ctx.mutable_y(), *z = ctx.mutable_z(), *r = ctx.mutable_r();
+    // Scale of the scene: ordinary, huge (ulp ≫ 1) or tiny (near the subnormal range).
+    const float scale = trial % 5 == 3 ? 3e15f : trial % 5 == 4 ? 1e-19f : 1.0f;
+    const uint32_t clusters = 2 + trial % 5;
+    for (uint32_t s = 0; s < S; ++s) {
+      const uint32_t k = trial % 2 ? (s * 7 + static_cast<uint32_t>(trial)) % clusters  // interleaved
+                                   : s * clusters / S;  // contiguous: whole chunks in one cluster
+      x[s] = scale * (100.0f * static_cast<float>(k) + 3.0f * u(rng));
+      y[s] = scale * (50.0f * static_cast<float>(k % 2) + 3.0f * u(rng));
+      z[s] = scale * 3.0f * u(rng);
+      r[s] = scale * (0.1f + 0.9f * u(rng));
+    }
+    // Pairs exactly touching (never reported) and one ulp inside / outside touching, each pair alone
+    // far below the clusters along y, so that the partner's chunk box ends exactly at the contact.
+    for (uint32_t s = 0; s + 3 < S; s += 9) {
+      const uint32_t b = (s + 5 + static_cast<uint32_t>(trial)) % S;
+      if (b % 9 == 0) continue;
+      const float gap = r[s] + r[b];
+      y[s] = -scale * (1000.0f + 10.0f * static_cast<float>(s));
+      x[b] = x[s], y[b] = y[s] + gap, z[b] = z[s];
+      if (s % 3 == 1) y[b] = std::nextafter(y[b], -INFINITY);
+      if (s % 3 == 2) y[b] = std::nextafter(y[b], INFINITY);
+    }
+    if (trial % 4 == 1) {  // degenerate and non-finite spheres
+      const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+      r[2] = -r[2];         // negative radius: (rA + rB)² still decides
+      r[5] = 0.0f;
+      x[7] = nan;
+      r[11] = nan;
+      y[13] = inf;
+      r[17] = inf;          // overlaps every finite sphere
+      x[19] = -inf, r[19] = inf;
+      r[23] = -50.0f * scale;  // a big negative radius
+      z[29] = 3e38f;        // overflowing magnitudes
+      x[31] = 3e38f, r[31] = 3e38f;
+      x[37] = std::numeric_limits<float>::denorm_min(), r[37] = 1e-38f;
+    }
+    if (trial % 4 == 2) {  // one giant sphere spanning the clusters
+      x[S / 2] = 150.0f * scale, r[S / 2] = 120.0f * scale;
+    }
+    const Reference ref = ReferenceDetect(d, ctx.spheres(), DetectMethod::kM1);
+    for (int parallel = 0; parallel < 2; ++parallel) {
+      std::vector<Collision> out(DetectBound(view, DetectMethod::kM1));
+      uint32_t n = 0;
+      DetectStats st;
+      DetectJob job;
+      job.context = &ctx;
+      job.output = out.data();
+      job.capacity = static_cast<uint32_t>(out.size());
+      job.count = &n;
+      job.stats = &st;
+      if (parallel)
+        job.parallel_for.run = [](void*, uint32_t count, ParallelFor::Task task, void* data) {
+          for (uint32_t i = count; i-- > 0;) task(data, i, i + 1);
+        };
+      REQUIRE(job.Run() == Status::kOk);
+      CAPTURE(trial);
+      CHECK(st.tests == ref.stats.tests);
+      CHECK(st.raw_pairs == ref.stats.raw_pairs);
+      CHECK(st.distinct_pairs == ref.stats.distinct_pairs);
+      REQUIRE(n == ref.pairs.size());
+      for (uint32_t k = 0; k < n; ++k) {
+        CHECK(out[k].a == ref.pairs[k].a);
+        CHECK(out[k].b == ref.pairs[k].b);
+        CHECK(out[k].chains == ref.pairs[k].chains);
+        CHECK(std::bit_cast<uint32_t>(out[k].depth) == std::bit_cast<uint32_t>(ref.pairs[k].depth));
       }
     }
   }
