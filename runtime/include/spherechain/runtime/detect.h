@@ -12,8 +12,8 @@ namespace spherechain::runtime {
 /// Which pairs are tested (§5.2). Both skip excluded (adjacent) pairs (Asset.excluded_pairs).
 enum class DetectMethod : uint8_t {
   /// With chains: every pair inside each chain ζ_i (Table 1), brute force, O(n_c · n²). A pair in
-  /// several chains is tested (and counted in DetectStats::raw_pairs) once per chain, as the paper
-  /// does, but reported once.
+  /// several chains is counted (DetectStats::tests, DetectStats::raw_pairs) once per chain, as the
+  /// paper does, but evaluated once and reported once.
   kM1 = 0,
   /// Without chains: every pair of the #S spheres, O(#S²).
   kM2 = 1,
@@ -30,7 +30,8 @@ static_assert(sizeof(Collision) == 12);
 
 /// Counters of one DetectJob::Run, complete even when the output was truncated.
 struct DetectStats {
-  uint32_t tests = 0;           ///< overlap tests performed (excluded pairs are tested, then skipped)
+  uint32_t tests = 0;           ///< overlap tests in the paper's count (M1: Σ n(n−1)/2 over chains,
+                                ///< M2: #S(#S−1)/2; excluded pairs included)
   uint32_t raw_pairs = 0;       ///< M1: overlapping non-excluded (chain, pair) hits, duplicates across
                                 ///< chains included (the paper's count); M2: == distinct_pairs
   uint32_t distinct_pairs = 0;  ///< overlapping non-excluded pairs (a < b); > capacity ⇔ truncated
@@ -48,8 +49,8 @@ uint32_t DetectBound(const AssetView& view, DetectMethod method);
 /// under the first chain containing both a and b, rows i < j of that chain's ascending list;
 /// M2 — lexicographic (a, b).
 /// Cost: M1 Σ n²/2, M2 #S²/2 tests, SoA, vectorisable; no allocation, no exceptions.
-/// parallel_for [opt]: M1 runs one task index per chain into the context's per-chain scratch, then
-/// merges serially; M2 ignores parallel_for (serial; limitation of this version).
+/// parallel_for [opt]: M1 runs one task index per group of spheres sharing the same chains into the
+/// context's scratch, then merges serially; M2 ignores parallel_for (serial; limitation of this version).
 struct DetectJob {
   const Context* context = nullptr;  ///< initialised; spheres read, per-frame scratch written (mutable):
                                      ///< one job per context at a time
