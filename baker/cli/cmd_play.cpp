@@ -6,6 +6,7 @@
 // the spheres to the skinned vertices, detect overlapping sphere pairs with M1 (chains) and/or M2 (all
 // spheres) (§5.2). Prints a per-frame table (pairs, timings, which regions touch) and a summary.
 #include <algorithm>
+#include <cmath>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -71,8 +72,52 @@ struct FrameRow {
   std::string label;  // "t=0.533s" or "arms_crossed t=0.50"
   runtime::DetectStats m1, m2;
   double refit_us = 0, detect_m1_us = 0, detect_m2_us = 0;
+  double tracking_mean = 0, tracking_max = 0;  // |ΔF| vs the bind pose (see RefitTracking)
   std::set<std::pair<int, int>> regions;
   std::vector<runtime::Collision> pairs;  // of M2 when run, else M1
+};
+
+/// How well the refitted spheres follow the deformed surface (§5.1, and the pivot-frame variant):
+/// for every vertex v of a sphere's surrounding region, F = r − ‖c − v‖ at the bind pose and at the
+/// frame; |ΔF| = 0 when the sphere moves and scales exactly with its surface. Mean and max over all
+/// (sphere, vertex) of a frame, in source units.
+class RefitTracking {
+ public:
+  RefitTracking(const runtime::AssetView& view, const baker::Mesh& mesh, const runtime::SphereArrays& bind) {
+    offsets_.push_back(0);
+    for (uint32_t s = 0; s < view.sphere_count; ++s) {
+      const runtime::TriangleSpan tris = runtime::SurroundingTriangles(view, s);
+      std::vector<uint32_t> vs;
+      for (uint32_t k = 0; k < tris.count; ++k)
+        for (int j = 0; j < 3; ++j) vs.push_back(mesh.indices[3 * tris.data[k] + j]);
+      std::sort(vs.begin(), vs.end());
+      vs.erase(std::unique(vs.begin(), vs.end()), vs.end());
+      for (uint32_t v : vs) {
+        verts_.push_back(v);
+        f0_.push_back(F(bind, s, mesh.positions.data(), v));
+      }
+      offsets_.push_back(static_cast<uint32_t>(verts_.size()));
+    }
+  }
+  void Measure(const runtime::SphereArrays& now, const float* positions, double* mean, double* max) const {
+    double sum = 0, mx = 0;
+    for (uint32_t s = 0; s + 1 < offsets_.size(); ++s)
+      for (uint32_t k = offsets_[s]; k < offsets_[s + 1]; ++k) {
+        const double d = std::abs(F(now, s, positions, verts_[k]) - f0_[k]);
+        sum += d;
+        mx = std::max(mx, d);
+      }
+    *mean = verts_.empty() ? 0.0 : sum / double(verts_.size());
+    *max = mx;
+  }
+
+ private:
+  static double F(const runtime::SphereArrays& sp, uint32_t s, const float* p, uint32_t v) {
+    const double dx = sp.x[s] - p[3 * v], dy = sp.y[s] - p[3 * v + 1], dz = sp.z[s] - p[3 * v + 2];
+    return sp.r[s] - std::sqrt(dx * dx + dy * dy + dz * dz);
+  }
+  std::vector<uint32_t> offsets_, verts_;
+  std::vector<double> f0_;
 };
 
 /// Refit + detect on `positions`, timing each job as the minimum over `repeat` runs.
@@ -274,6 +319,7 @@ int RunPlay(const PlayArgs& a) {
   FrameRow bind;
   bind.label = "bind";
   if (!player.Run(mesh.positions.data(), &bind, &error)) return Fail(error);
+  const RefitTracking tracking(view, mesh, ctx.spheres());
 
   for (uint32_t f = 0; f < frames; ++f) {
     FrameRow& row = rows[f];
@@ -294,6 +340,7 @@ int RunPlay(const PlayArgs& a) {
     }
     row.label = label;
     if (!player.Run(positions.data(), &row, &error)) return Fail(error);
+    tracking.Measure(ctx.spheres(), positions.data(), &row.tracking_mean, &row.tracking_max);
     if (!a.dump_frames.empty()) {
       // One raw frame per file: #V×3 little-endian float32, for bench/runtime_bench and the CUDA bench.
       char name[32];
@@ -351,7 +398,10 @@ int RunPlay(const PlayArgs& a) {
   if (m2)
     std::printf("  M2: mean %.1f pairs (max %u), %u tests, detect mean %.1f us\n", sum_pm2 / n, max_pm2,
                 rows.empty() ? 0u : rows[0].m2.tests, sum_m2 / n);
-  std::printf("  refit (%s): mean %.1f us\n", a.refit.c_str(), sum_refit / n);
+  double track_sum = 0, track_max = 0;
+  for (const FrameRow& r : rows) track_sum += r.tracking_mean, track_max = std::max(track_max, r.tracking_max);
+  std::printf("  refit (%s): mean %.1f us; tracking |dF| vs bind over surrounding-region vertices: mean %.4f, max %.4f\n",
+              a.refit.c_str(), sum_refit / n, rows.empty() ? 0.0 : track_sum / n, track_max);
   std::printf("  regions touching (frames):");
   if (region_frames.empty()) std::printf(" none");
   for (const auto& [p, c] : region_frames) std::printf(" R%d-R%d(%u)", p.first, p.second, c);
@@ -385,6 +435,8 @@ int RunPlay(const PlayArgs& a) {
                           {"refit_us", r.refit_us},
                           {"detect_m1_us", r.detect_m1_us},
                           {"detect_m2_us", r.detect_m2_us},
+                          {"tracking_mean_abs_dF", r.tracking_mean},
+                          {"tracking_max_abs_dF", r.tracking_max},
                           {"regions_touching", regions}};
       const auto* sr = view.asset->sphere_regions();
       nlohmann::json pairs = nlohmann::json::array();
@@ -410,6 +462,8 @@ int RunPlay(const PlayArgs& a) {
                     {"mean_pairs_m1", sum_dist / n},
                     {"mean_pairs_m2", sum_pm2 / n},
                     {"mean_refit_us", sum_refit / n},
+                    {"tracking_mean_abs_dF", rows.empty() ? 0.0 : track_sum / n},
+                    {"tracking_max_abs_dF", track_max},
                     {"mean_detect_m1_us", sum_m1 / n},
                     {"mean_detect_m2_us", sum_m2 / n},
                     {"regions_touching_frames", rf}};
