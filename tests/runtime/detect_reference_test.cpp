@@ -69,6 +69,26 @@ Reference ReferenceDetect(const test::AssetData& d, const SphereArrays& s, Detec
   return ref;
 }
 
+/// Random chains (sorted, unique; each sphere joins chain c with a probability drawn in
+/// [p_min, p_min + 0.6); a chain that ends up with < 2 spheres becomes {0, S−1}) and random excluded
+/// pairs (every pair at most `neighbour_span` apart in index, plus each other pair with `p_excluded`).
+void RandomChainsAndExclusions(test::AssetData* d, std::mt19937* rng, uint32_t chain_count, float p_min,
+                               uint32_t neighbour_span, float p_excluded) {
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  const uint32_t S = static_cast<uint32_t>(d->spheres.size());
+  d->chains.assign(chain_count, {});
+  for (uint32_t c = 0; c < chain_count; ++c) {
+    const float p = p_min + 0.6f * u(*rng);
+    for (uint32_t s = 0; s < S; ++s)
+      if (u(*rng) < p) d->chains[c].push_back(static_cast<uint16_t>(s));
+    if (d->chains[c].size() < 2) d->chains[c] = {0, static_cast<uint16_t>(S - 1)};
+  }
+  d->excluded.clear();
+  for (uint32_t a = 0; a < S; ++a)
+    for (uint32_t b = a + 1; b < S; ++b)
+      if (b - a <= neighbour_span || u(*rng) < p_excluded) d->excluded.emplace_back(a, b);
+}
+
 }  // namespace
 
 TEST_CASE("DetectJob M1 and M2 equal the reference loops on irregular chains and exclusions") {
@@ -80,19 +100,8 @@ TEST_CASE("DetectJob M1 and M2 equal the reference loops on irregular chains and
     test::AssetData d = test::MakeTubes(tubes, {}, &mesh);
     const uint32_t S = static_cast<uint32_t>(d.spheres.size());
     // Random chains (sorted, unique, some spheres in none) and random excluded pairs.
+    RandomChainsAndExclusions(&d, &rng, 1 + trial % 7, 0.15f, 2, 0.03f);
     std::uniform_real_distribution<float> u(0.0f, 1.0f);
-    const uint32_t C = 1 + trial % 7;
-    d.chains.assign(C, {});
-    for (uint32_t c = 0; c < C; ++c) {
-      const float p = 0.15f + 0.6f * u(rng);
-      for (uint32_t s = 0; s < S; ++s)
-        if (u(rng) < p) d.chains[c].push_back(static_cast<uint16_t>(s));
-      if (d.chains[c].size() < 2) d.chains[c] = {0, static_cast<uint16_t>(S - 1)};
-    }
-    d.excluded.clear();
-    for (uint32_t a = 0; a < S; ++a)
-      for (uint32_t b = a + 1; b < S; ++b)
-        if (b - a <= 2 || u(rng) < 0.03f) d.excluded.emplace_back(a, b);
     const test::AlignedBytes bytes = test::Serialize(d);
     AssetView view;
     REQUIRE(LoadAsset(bytes.data(), bytes.size, &view) == Status::kOk);
@@ -173,18 +182,7 @@ TEST_CASE("DetectJob M1 broad cull equals brute force on clustered, far, degener
     for (size_t t = 0; t < tubes.size(); ++t) tubes[t].rings = 11 + 9 * static_cast<uint32_t>(t) + trial % 13;
     test::AssetData d = test::MakeTubes(tubes, {}, &mesh);
     const uint32_t S = static_cast<uint32_t>(d.spheres.size());
-    const uint32_t C = 1 + trial % 6;
-    d.chains.assign(C, {});
-    for (uint32_t c = 0; c < C; ++c) {
-      const float p = 0.3f + 0.6f * u(rng);
-      for (uint32_t s = 0; s < S; ++s)
-        if (u(rng) < p) d.chains[c].push_back(static_cast<uint16_t>(s));
-      if (d.chains[c].size() < 2) d.chains[c] = {0, static_cast<uint16_t>(S - 1)};
-    }
-    d.excluded.clear();
-    for (uint32_t a = 0; a < S; ++a)
-      for (uint32_t b = a + 1; b < S; ++b)
-        if (b - a == 1 || u(rng) < 0.02f) d.excluded.emplace_back(a, b);
+    RandomChainsAndExclusions(&d, &rng, 1 + trial % 6, 0.3f, 1, 0.02f);
     const test::AlignedBytes bytes = test::Serialize(d);
     AssetView view;
     REQUIRE(LoadAsset(bytes.data(), bytes.size, &view) == Status::kOk);
