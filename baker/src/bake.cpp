@@ -137,6 +137,7 @@ Result<BakeResult> Bake(const std::string& input_path, const BakeConfig& config,
     auto mesh = ImportMesh(input_path, config.import, ctx);
     if (!mesh.ok()) return mesh.error();
     r.mesh = std::move(mesh).value();
+    r.mesh_issues = InspectMesh(r.mesh);
   }
   const Mesh& mesh = r.mesh;
   {
@@ -305,6 +306,8 @@ json MakeBakeReport(const BakeResult& r, const BakeConfig& config, const Context
     j["warnings"]["cross_region_bind_overlaps"] = w;
   }
   j["unassigned_triangles"] = r.unassigned_triangles;
+  j["mesh_issues"] = {{"degenerate_triangles", r.mesh_issues.degenerate_triangles},
+                      {"non_manifold_edges", r.mesh_issues.non_manifold_edges}};
   j["accuracy"] = {{"phi1", StatsJson(r.accuracy.phi1)},
                    {"phi1_adjusted", StatsJson(r.accuracy.phi1_adjusted)},
                    {"phi2", StatsJson(r.accuracy.phi2)}};

@@ -81,9 +81,10 @@ TEST_CASE("bake: MakeHuman base.obj — five regions, ~80 spheres, six chains, e
   CheckRoundTrip(r.value());
   const auto report = MakeBakeReport(r.value(), BakeConfig{}, ctx);
   for (const char* key : {"vertices", "triangles", "spheres", "regions", "chains", "unassigned_triangles", "accuracy",
-                          "timings_ms"})
+                          "timings_ms", "mesh_issues"})
     CHECK(report.contains(key));
   CHECK(report["accuracy"]["phi2"].contains("mean_abs_F"));
+  CHECK(report["mesh_issues"]["degenerate_triangles"] == 0);  // the MakeHuman body has none
   CHECK(TorsoRayCsv(r.value()).size() > 100);
 }
 

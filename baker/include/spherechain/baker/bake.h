@@ -61,6 +61,7 @@ struct BakeResult {
   AccuracySummary accuracy;
   std::vector<uint8_t> asset;                          ///< the .sphc bytes
   uint32_t unassigned_triangles = 0;
+  MeshIssues mesh_issues;                              ///< degenerate triangles, non-manifold edges (kept)
 };
 
 /// Runs import → segment → fit → φ2 + accuracy → chains → surrounding regions → pivots → asset.
@@ -68,7 +69,8 @@ struct BakeResult {
 Result<BakeResult> Bake(const std::string& input_path, const BakeConfig& config, Context* ctx = nullptr);
 
 /// The JSON bake report: vertices, triangles, spheres, regions{name: {triangles, spheres}}, chains[{name,
-/// spheres}], unassigned_triangles, accuracy{phi1, phi1_adjusted, phi2: {mean_abs_F, rms_F, min_F,
+/// spheres}], unassigned_triangles, mesh_issues{degenerate_triangles, non_manifold_edges},
+/// accuracy{phi1, phi1_adjusted, phi2: {mean_abs_F, rms_F, min_F,
 /// max_F}}, per-sphere table, segmentation (method, agreement), timings_ms.
 nlohmann::json MakeBakeReport(const BakeResult& result, const BakeConfig& config, const Context& ctx);
 

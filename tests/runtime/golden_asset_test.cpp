@@ -1,0 +1,68 @@
+// Golden assets, one per schema version (tests/data/golden/v<N>/): what an SDK once baked must keep
+// loading — or be refused with the version status — when the schema or the loader changes.
+#include <doctest/doctest.h>
+
+#include <cstring>
+#include <fstream>
+#include <vector>
+
+#include "spherechain/runtime/runtime.h"
+#include "test_data.h"
+
+using namespace spherechain::runtime;
+
+namespace {
+
+std::vector<uint64_t> ReadAligned(const std::string& path, size_t* size) {
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
+  *size = in ? static_cast<size_t>(in.tellg()) : 0;
+  std::vector<uint64_t> bytes((*size + 7) / 8);
+  in.seekg(0);
+  in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(*size));
+  return bytes;
+}
+
+}  // namespace
+
+TEST_CASE("golden v1 asset (CesiumMan, baked by spherechain 0.1.0) loads with its counts and runs") {
+  const std::string path = spherechain::test::SourceFile("tests/data/golden/v1/cesium_man.sphc");
+  REQUIRE_MESSAGE(spherechain::test::Require(path), "the golden asset is part of the repository");
+  size_t size = 0;
+  std::vector<uint64_t> bytes = ReadAligned(path, &size);
+  AssetView view;
+  REQUIRE(LoadAsset(bytes.data(), size, &view) == Status::kOk);
+  CHECK(view.asset->schema_version() == 1);
+  CHECK(view.vertex_count == 3273);   // CesiumMan.gltf as imported
+  CHECK(view.triangle_count == 4672);
+  CHECK(view.sphere_count == 101);
+  CHECK(view.chain_count == 6);
+  Context ctx;
+  REQUIRE(ctx.Init(view) == Status::kOk);
+  // At the bind pose (spheres as baked) nothing collides.
+  std::vector<Collision> out(DetectBound(view, DetectMethod::kM2));
+  uint32_t count = 99;
+  DetectJob job;
+  job.context = &ctx;
+  job.method = DetectMethod::kM2;
+  job.output = out.data();
+  job.capacity = static_cast<uint32_t>(out.size());
+  job.count = &count;
+  REQUIRE(job.Run() == Status::kOk);
+  CHECK(count == 0);
+
+  // The same bytes stamped with another schema version are refused with the version status.
+  std::vector<uint64_t> other = bytes;
+  const auto* root = view.asset;
+  const uint8_t* base = reinterpret_cast<const uint8_t*>(bytes.data());
+  const auto* field = reinterpret_cast<const flatbuffers::Table*>(root)->GetAddressOf(
+      spherechain::schema::Asset::VT_SCHEMA_VERSION);
+  REQUIRE(field != nullptr);
+  const size_t offset = static_cast<size_t>(field - base);
+  uint32_t v = 2;
+  std::memcpy(reinterpret_cast<uint8_t*>(other.data()) + offset, &v, 4);
+  AssetView newer;
+  CHECK(LoadAsset(other.data(), size, &newer) == Status::kErrorVersionTooNew);
+  v = 0;
+  std::memcpy(reinterpret_cast<uint8_t*>(other.data()) + offset, &v, 4);
+  CHECK(LoadAsset(other.data(), size, &newer) == Status::kErrorVersionTooOld);
+}
