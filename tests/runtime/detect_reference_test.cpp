@@ -69,6 +69,20 @@ Reference ReferenceDetect(const test::AssetData& d, const SphereArrays& s, Detec
   return ref;
 }
 
+/// DetectJob's stats and records equal the reference, pair for pair, depths to the bit.
+void CheckEqualsReference(const Collision* out, uint32_t n, const DetectStats& st, const Reference& ref) {
+  CHECK(st.tests == ref.stats.tests);
+  CHECK(st.raw_pairs == ref.stats.raw_pairs);
+  CHECK(st.distinct_pairs == ref.stats.distinct_pairs);
+  REQUIRE(n == ref.pairs.size());
+  for (uint32_t k = 0; k < n; ++k) {
+    CHECK(out[k].a == ref.pairs[k].a);
+    CHECK(out[k].b == ref.pairs[k].b);
+    CHECK(out[k].chains == ref.pairs[k].chains);
+    CHECK(std::bit_cast<uint32_t>(out[k].depth) == std::bit_cast<uint32_t>(ref.pairs[k].depth));
+  }
+}
+
 /// Random chains (sorted, unique; each sphere joins chain c with a probability drawn in
 /// [p_min, p_min + 0.6); a chain that ends up with < 2 spheres becomes {0, S−1}) and random excluded
 /// pairs (every pair at most `neighbour_span` apart in index, plus each other pair with `p_excluded`).
@@ -147,16 +161,7 @@ TEST_CASE("DetectJob M1 and M2 equal the reference loops on irregular chains and
         REQUIRE(job.Run() == Status::kOk);
         CAPTURE(trial);
         CAPTURE(static_cast<int>(m));
-        CHECK(st.tests == ref.stats.tests);
-        CHECK(st.raw_pairs == ref.stats.raw_pairs);
-        CHECK(st.distinct_pairs == ref.stats.distinct_pairs);
-        REQUIRE(n == ref.pairs.size());
-        for (uint32_t k = 0; k < n; ++k) {
-          CHECK(out[k].a == ref.pairs[k].a);
-          CHECK(out[k].b == ref.pairs[k].b);
-          CHECK(out[k].chains == ref.pairs[k].chains);
-          CHECK(std::bit_cast<uint32_t>(out[k].depth) == std::bit_cast<uint32_t>(ref.pairs[k].depth));
-        }
+        CheckEqualsReference(out.data(), n, st, ref);
         if (m == DetectMethod::kM1) CHECK(n <= ctx.m1_candidate_pairs());
         // Truncation keeps the documented prefix.
         const uint32_t cap = n / 2;
@@ -245,16 +250,7 @@ TEST_CASE("DetectJob M1 broad cull equals brute force on clustered, far, degener
         };
       REQUIRE(job.Run() == Status::kOk);
       CAPTURE(trial);
-      CHECK(st.tests == ref.stats.tests);
-      CHECK(st.raw_pairs == ref.stats.raw_pairs);
-      CHECK(st.distinct_pairs == ref.stats.distinct_pairs);
-      REQUIRE(n == ref.pairs.size());
-      for (uint32_t k = 0; k < n; ++k) {
-        CHECK(out[k].a == ref.pairs[k].a);
-        CHECK(out[k].b == ref.pairs[k].b);
-        CHECK(out[k].chains == ref.pairs[k].chains);
-        CHECK(std::bit_cast<uint32_t>(out[k].depth) == std::bit_cast<uint32_t>(ref.pairs[k].depth));
-      }
+      CheckEqualsReference(out.data(), n, st, ref);
     }
   }
 }
