@@ -1,7 +1,8 @@
-// runtime_bench — per-frame cost of spherechain refit + detect against peers doing the same work.
+// runtime_bench — per-frame cost of spherechain refit + detect and of the narrow phase against peers
+// doing the same work.
 //
-//   runtime_bench --synthetic [--frames N] [--reps R] [--runs K]
-//   runtime_bench ASSET.sphc FRAMES [--reps R] [--runs K]
+//   runtime_bench --synthetic [--frames N] [--reps R] [--runs K] [--narrow-only] [--cgal-frames N] [--per-frame]
+//   runtime_bench ASSET.sphc FRAMES [--reps R] [--runs K] [--narrow-only] [--cgal-frames N] [--per-frame]
 //   runtime_bench ASSET.sphc FRAMES --profile R   (refit + M1 over all frames R times, nothing else:
 //                                                   for valgrind --tool=callgrind instruction counts)
 //     FRAMES: a .f32 file of #F×#V×3 little-endian float32 positions, or a folder of .f32 files (one
@@ -21,6 +22,18 @@
 // counts are checked against DetectJob M2 every frame, and M1's against a naive loop over the pairs
 // sharing a chain. Ratios: peer / sc M2 detect (the same all-pairs work) and peer / sc refit+M1 (the
 // per-frame cost of the paper's pipeline against the peer's broad phase alone).
+//
+// Section "narrow phase" (skip the sphere rows with --narrow-only): NarrowPhaseJob::Run (asset
+// exclusions, 2^20 contacts of capacity) on every frame, each frame the fastest of K passes over the
+// frames in turn: time, candidate sphere pairs, exact triangle tests against all #T(#T−1)/2 pairs,
+// contacts; a breakdown (region boxes: Run on an empty pair list; exact tests: TrianglesIntersect alone
+// on a bench-side replica of the tested pairs, which must match stats.triangle_tests and contacts; the
+// rest: candidates, triangle boxes, culling). Peer: CGAL PMP::self_intersections (sequential) on a
+// Surface_mesh of the asset's triangles over welded vertices, first N frames (--cgal-frames, default
+// 10; 0 = off), 1 run each. CGAL reports every self-intersection; its pairs are split into what our
+// contact definition leaves out (degenerate faces, same region, excluded sphere pairs, no region) and
+// the rest, which is compared with our contacts (printed, never fails the run). --per-frame: one line
+// per frame (time, breakdown, counters).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -29,11 +42,14 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <numeric>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "runtime/asset_builder.h"
 #include "spherechain/runtime/runtime.h"
+#include "spherechain/runtime/triangle_intersect.h"
 
 #if SPHERECHAIN_BENCH_FCL
 #include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>
@@ -43,6 +59,13 @@
 #if SPHERECHAIN_BENCH_BULLET
 #include <BulletCollision/BroadphaseCollision/btDbvtBroadphase.h>
 #include <BulletCollision/BroadphaseCollision/btOverlappingPairCache.h>
+#endif
+#if SPHERECHAIN_BENCH_CGAL
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
+#include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
+#include <CGAL/Polygon_mesh_processing/self_intersections.h>
+#include <CGAL/Surface_mesh.h>
 #endif
 
 namespace sc = spherechain::runtime;
@@ -155,11 +178,392 @@ double MedianMicros(size_t frames, int reps, const std::function<void(size_t)>& 
 
 volatile uint32_t g_sink = 0;
 
+// ---------------------------------------------------------------------------------------------------
+// Narrow phase: NarrowPhaseJob on every frame, CGAL self_intersections on the first frames.
+
+using Clock = std::chrono::steady_clock;
+
+template <class Fn>
+double Micros(Fn&& fn) {
+  const auto t0 = Clock::now();
+  fn();
+  return std::chrono::duration<double, std::micro>(Clock::now() - t0).count();
+}
+
+struct Summary {
+  double mean = 0, median = 0, max = 0;
+  size_t argmax = 0;
+};
+
+Summary Summarize(const std::vector<double>& v) {
+  Summary s;
+  if (v.empty()) return s;
+  for (size_t i = 0; i < v.size(); ++i) {
+    s.mean += v[i] / double(v.size());
+    if (v[i] > s.max) s.max = v[i], s.argmax = i;
+  }
+  std::vector<double> sorted = v;
+  std::sort(sorted.begin(), sorted.end());
+  const size_t n = sorted.size();
+  s.median = n % 2 ? sorted[n / 2] : 0.5 * (sorted[n / 2 - 1] + sorted[n / 2]);
+  return s;
+}
+
+template <class Field>
+std::vector<double> Column(const std::vector<sc::NarrowPhaseStats>& stats, Field field) {
+  std::vector<double> v;
+  for (const sc::NarrowPhaseStats& s : stats) v.push_back(double(s.*field));
+  return v;
+}
+
+using TrianglePair = std::pair<uint32_t, uint32_t>;  // source triangle indices, first < second
+
+// What one asset's narrow phase sees, for the bench-side replica and the CGAL classification.
+struct NarrowAsset {
+  const sc::NarrowPhaseContext* context;
+  const uint32_t* triangles;  // Asset.triangles, #T×3
+  uint32_t triangle_count;
+  bool Adjacent(uint32_t s, uint32_t t) const {  // a welded corner in common
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        if (context->weld_id(triangles[3 * s + i]) == context->weld_id(triangles[3 * t + j])) return true;
+    return false;
+  }
+  bool IndexDegenerate(uint32_t t) const {
+    const uint32_t a = context->weld_id(triangles[3 * t]), b = context->weld_id(triangles[3 * t + 1]),
+                   c = context->weld_id(triangles[3 * t + 2]);
+    return a == b || b == c || a == c;
+  }
+  const float* Corner(const float* positions, uint32_t t, int k) const {
+    return positions + 3 * size_t{triangles[3 * t + k]};
+  }
+};
+
+// The triangle pairs NarrowPhaseJob::Run hands to TrianglesIntersect, found independently: triangles
+// of a surrounding region, not (index or exactly) degenerate, owned by different, non-excluded spheres,
+// closed boxes overlapping, no welded corner in common. Sweep and prune on the longest axis. Sorted.
+std::vector<TrianglePair> TestedPairs(const NarrowAsset& m, const float* positions) {
+  struct Box {
+    float lo[3], hi[3];
+    uint32_t t;
+    uint16_t sphere;
+  };
+  std::vector<Box> boxes;
+  float lo[3] = {1e30f, 1e30f, 1e30f}, hi[3] = {-1e30f, -1e30f, -1e30f};
+  for (uint32_t t = 0; t < m.triangle_count; ++t) {
+    const uint16_t s = m.context->triangle_sphere(t);
+    if (s == 0xFFFF || m.IndexDegenerate(t)) continue;
+    const float *p = m.Corner(positions, t, 0), *q = m.Corner(positions, t, 1), *r = m.Corner(positions, t, 2);
+    if (sc::TriangleIsDegenerate(p, q, r)) continue;
+    Box b;
+    for (int k = 0; k < 3; ++k) {
+      b.lo[k] = std::min(std::min(p[k], q[k]), r[k]);
+      b.hi[k] = std::max(std::max(p[k], q[k]), r[k]);
+      lo[k] = std::min(lo[k], b.lo[k]);
+      hi[k] = std::max(hi[k], b.hi[k]);
+    }
+    b.t = t;
+    b.sphere = s;
+    boxes.push_back(b);
+  }
+  int axis = 0;
+  for (int k = 1; k < 3; ++k)
+    if (hi[k] - lo[k] > hi[axis] - lo[axis]) axis = k;
+  std::sort(boxes.begin(), boxes.end(), [&](const Box& a, const Box& b) { return a.lo[axis] < b.lo[axis]; });
+  std::vector<TrianglePair> pairs;
+  for (size_t i = 0; i < boxes.size(); ++i) {
+    const Box& a = boxes[i];
+    for (size_t j = i + 1; j < boxes.size() && boxes[j].lo[axis] <= a.hi[axis]; ++j) {
+      const Box& b = boxes[j];
+      if (a.sphere == b.sphere) continue;
+      bool overlap = true;
+      for (int k = 0; k < 3; ++k) overlap &= a.lo[k] <= b.hi[k] && b.lo[k] <= a.hi[k];
+      if (!overlap || m.context->IsExcluded(a.sphere, b.sphere) || m.Adjacent(a.t, b.t)) continue;
+      pairs.emplace_back(std::min(a.t, b.t), std::max(a.t, b.t));
+    }
+  }
+  std::sort(pairs.begin(), pairs.end());
+  return pairs;
+}
+
+#if SPHERECHAIN_BENCH_CGAL
+namespace PMP = CGAL::Polygon_mesh_processing;
+using Epick = CGAL::Exact_predicates_inexact_constructions_kernel;
+using CgalMesh = CGAL::Surface_mesh<Epick::Point_3>;
+
+// The asset's triangles as a CGAL surface mesh over the welded vertices (seams closed, so CGAL's
+// topological adjacency is ours), index-degenerate triangles left out. Built once; per frame only the
+// points change.
+struct CgalPeer {
+  CgalMesh mesh;
+  std::vector<uint32_t> vertex_source;  // mesh vertex → source vertex (a weld representative)
+  std::vector<uint32_t> face_source;    // mesh face → source triangle
+  size_t duplicated_points = 0;         // added by orient_polygon_soup (non-manifold vertices)
+  bool oriented = true;                 // orient_polygon_soup's answer
+
+  // Empty string on success, else why the soup could not become a surface mesh.
+  std::string Build(const NarrowAsset& m, uint32_t vertex_count) {
+    // Point i carries its source index in x: orient_polygon_soup only copies points (combinatorial),
+    // so every point it appends still says where it came from.
+    std::vector<Epick::Point_3> points(vertex_count);
+    for (uint32_t v = 0; v < vertex_count; ++v) points[v] = Epick::Point_3(double(v), 0, 0);
+    std::vector<std::vector<std::size_t>> polygons;
+    for (uint32_t t = 0; t < m.triangle_count; ++t) {
+      if (m.IndexDegenerate(t)) continue;
+      polygons.push_back({m.context->weld_id(m.triangles[3 * t]), m.context->weld_id(m.triangles[3 * t + 1]),
+                          m.context->weld_id(m.triangles[3 * t + 2])});
+      face_source.push_back(t);
+    }
+    oriented = PMP::orient_polygon_soup(points, polygons);
+    duplicated_points = points.size() - vertex_count;
+    if (polygons.size() != face_source.size()) return "orient_polygon_soup changed the polygon count";
+    if (!PMP::is_polygon_soup_a_polygon_mesh(polygons)) return "not a polygon mesh after orient_polygon_soup";
+    PMP::polygon_soup_to_polygon_mesh(points, polygons, mesh);  // vertex i = point i, face i = polygon i
+    if (mesh.number_of_vertices() != points.size() || mesh.number_of_faces() != polygons.size())
+      return "polygon_soup_to_polygon_mesh did not keep one vertex per point and one face per polygon";
+    for (CgalMesh::Vertex_index v : mesh.vertices())
+      vertex_source.push_back(static_cast<uint32_t>(mesh.point(v).x()));
+    return {};
+  }
+
+  void SetFrame(const float* positions) {
+    for (CgalMesh::Vertex_index v : mesh.vertices()) {
+      const float* p = positions + 3 * size_t{vertex_source[v.idx()]};
+      mesh.point(v) = Epick::Point_3(p[0], p[1], p[2]);
+    }
+  }
+};
+
+// CGAL's pairs of one frame, sorted into what our definition leaves out and what it keeps.
+struct CgalClasses {
+  size_t all = 0, degenerate = 0, unassigned = 0, same_region = 0, excluded = 0, weld_adjacent = 0;
+  std::vector<TrianglePair> ours;  // different, non-excluded spheres, no welded corner in common; sorted
+};
+
+CgalClasses Classify(const NarrowAsset& m, const CgalPeer& peer,
+                     const std::vector<std::pair<CgalMesh::Face_index, CgalMesh::Face_index>>& pairs) {
+  CgalClasses c;
+  c.all = pairs.size();
+  for (const auto& [f, g] : pairs) {
+    if (f == g) {  // CGAL reports a degenerate face as (f, f) and tests it against nothing else
+      ++c.degenerate;
+      continue;
+    }
+    const uint32_t s = peer.face_source[f.idx()], t = peer.face_source[g.idx()];
+    const uint16_t a = m.context->triangle_sphere(s), b = m.context->triangle_sphere(t);
+    if (a == 0xFFFF || b == 0xFFFF) ++c.unassigned;
+    else if (a == b) ++c.same_region;
+    else if (m.context->IsExcluded(a, b)) ++c.excluded;
+    else if (m.Adjacent(s, t)) ++c.weld_adjacent;
+    else c.ours.emplace_back(std::min(s, t), std::max(s, t));
+  }
+  std::sort(c.ours.begin(), c.ours.end());
+  return c;
+}
+#endif
+
+// Prints the "narrow phase" section; false when a cross-check failed.
+bool NarrowPhase(const Workload& w, const sc::AssetView& view, int runs, int cgal_frames, bool per_frame) {
+  sc::NarrowPhaseContext np;
+  if (sc::Status s = np.Init(view); s != sc::Status::kOk) {
+    std::printf("\nnarrow phase: skipped (NarrowPhaseContext::Init: %s%s)\n", sc::ToString(s),
+                s == sc::Status::kErrorMissingField ? "; the asset has no triangles / weld_ids: re-bake it" : "");
+    return true;
+  }
+  const NarrowAsset m{&np, view.asset->triangles()->data(), np.triangle_count()};
+  const size_t F = w.frames.size();
+  const double T = np.triangle_count(), all_pairs = T * (T - 1) / 2;
+  std::vector<sc::TriangleContact> out(size_t{1} << 20);
+  uint32_t count = 0;
+  sc::NarrowPhaseStats st;
+  sc::NarrowPhaseJob job;
+  job.context = &np;
+  job.exclusions = sc::Exclusions::kAsset;
+  job.output = out.data();
+  job.capacity = static_cast<uint32_t>(out.size());
+  job.count = &count;
+  job.stats = &st;
+  // Region boxes alone: an explicit, empty list of candidate sphere pairs.
+  const sc::Collision no_pair{};
+  sc::NarrowPhaseJob boxes_only = job;
+  boxes_only.sphere_pairs = &no_pair;
+  boxes_only.sphere_pair_count = 0;
+  auto set_frame = [&](size_t f) {
+    job.positions = boxes_only.positions = {w.frames[f].data(), w.vertex_count, 12};
+  };
+
+  // Untimed pass: statistics and contact sets.
+  bool ok = true;
+  std::vector<sc::NarrowPhaseStats> stats(F);
+  std::vector<std::vector<TrianglePair>> contacts(F);
+  for (size_t f = 0; f < F; ++f) {
+    set_frame(f);
+    if (sc::Status s = job.Run(); s != sc::Status::kOk) {
+      std::fprintf(stderr, "narrow phase, frame %zu: %s\n", f, sc::ToString(s));
+      return false;
+    }
+    stats[f] = st;
+    for (uint32_t i = 0; i < count; ++i)
+      contacts[f].emplace_back(std::min(out[i].triangle_a, out[i].triangle_b),
+                               std::max(out[i].triangle_a, out[i].triangle_b));
+    std::sort(contacts[f].begin(), contacts[f].end());
+  }
+  // Timed: `runs` passes over the frames in turn (caches as warm as a game's, not warmer); per frame
+  // the fastest pass. Same for the region boxes alone.
+  std::vector<double> us(F, 1e300), boxes_us(F, 1e300);
+  for (int k = 0; k < runs; ++k)
+    for (size_t f = 0; f < F; ++f) {
+      set_frame(f);
+      us[f] = std::min(us[f], Micros([&] { (void)job.Run(); }));
+      g_sink = g_sink + count;
+      boxes_us[f] = std::min(boxes_us[f], Micros([&] { (void)boxes_only.Run(); }));
+    }
+  // Replica of the tested pairs: checks stats.triangle_tests and times the exact test alone.
+  std::vector<double> exact_us(F, 1e300);
+  for (size_t f = 0; f < F; ++f) {
+    const float* p = w.frames[f].data();
+    const std::vector<TrianglePair> pairs = TestedPairs(m, p);
+    uint32_t hits = 0;
+    for (int k = 0; k < runs; ++k)
+      exact_us[f] = std::min(exact_us[f], Micros([&] {
+                               hits = 0;
+                               for (const auto& [s, t] : pairs)
+                                 hits += sc::TrianglesIntersect(m.Corner(p, s, 0), m.Corner(p, s, 1), m.Corner(p, s, 2),
+                                                                m.Corner(p, t, 0), m.Corner(p, t, 1), m.Corner(p, t, 2));
+                             }));
+    if (pairs.size() != stats[f].triangle_tests || hits != stats[f].contacts) {
+      std::fprintf(stderr, "MISMATCH narrow phase, frame %zu: %u tests, %u contacts; replica %zu pairs, %u intersect\n",
+                   f, stats[f].triangle_tests, stats[f].contacts, pairs.size(), hits);
+      ok = false;
+    }
+  }
+
+  const Summary time = Summarize(us), boxes = Summarize(boxes_us), exact = Summarize(exact_us);
+  const Summary cand = Summarize(Column(stats, &sc::NarrowPhaseStats::candidate_pairs));
+  const Summary tests = Summarize(Column(stats, &sc::NarrowPhaseStats::triangle_tests));
+  const Summary hits = Summarize(Column(stats, &sc::NarrowPhaseStats::contacts));
+  const Summary box_tests = Summarize(Column(stats, &sc::NarrowPhaseStats::box_tests));
+  const Summary culled = Summarize(Column(stats, &sc::NarrowPhaseStats::culled_triangles));
+  const Summary adjacent = Summarize(Column(stats, &sc::NarrowPhaseStats::adjacent_skipped));
+  const Summary degenerate = Summarize(Column(stats, &sc::NarrowPhaseStats::degenerate_triangles));
+  std::vector<double> rest_us(F);
+  for (size_t f = 0; f < F; ++f) rest_us[f] = std::max(0.0, us[f] - boxes_us[f] - exact_us[f]);
+  const Summary rest = Summarize(rest_us);
+
+  std::printf("\nnarrow phase (NarrowPhaseJob, asset exclusions, capacity %u contacts, one core)\n", job.capacity);
+  std::printf("triangles %.0f (all pairs %.4g), %u spheres, %u index-degenerate, %u in no surrounding region; "
+              "%zu frames, each the fastest of %d pass%s over the frames in turn\n",
+              T, all_pairs, np.sphere_count(), np.index_degenerate_triangles(), np.unassigned_triangles(), F, runs,
+              runs > 1 ? "es" : "");
+  std::printf("%-26s %12s %12s %12s\n", "per frame", "median", "mean", "max");
+  std::printf("%-26s %12.1f %12.1f %12.1f  (frame %zu)\n", "time us", time.median, time.mean, time.max, time.argmax);
+  std::printf("%-26s %12.0f %12.1f %12.0f\n", "candidate sphere pairs", cand.median, cand.mean, cand.max);
+  std::printf("%-26s %12.0f %12.1f %12.0f\n", "exact triangle tests", tests.median, tests.mean, tests.max);
+  std::printf("%-26s %12.0f %12.1f %12.0f\n", "contacts", hits.median, hits.mean, hits.max);
+  std::printf("%-26s %12.0f %12.1f %12.0f\n", "triangle box tests", box_tests.median, box_tests.mean, box_tests.max);
+  std::printf("%-26s %12.0f %12.1f %12.0f\n", "culled-in triangles", culled.median, culled.mean, culled.max);
+  std::printf("%-26s %12.0f %12.1f %12.0f\n", "adjacent pairs skipped", adjacent.median, adjacent.mean, adjacent.max);
+  std::printf("%-26s %12.0f %12.1f %12.0f\n", "degenerate triangles", degenerate.median, degenerate.mean,
+              degenerate.max);
+  std::printf("all pairs / exact tests: %.0fx at the mean, %.0fx on the worst frame (target >= 1000x)\n",
+              all_pairs / std::max(1.0, tests.mean), all_pairs / std::max(1.0, tests.max));
+  std::printf("breakdown us (median / max over frames): region boxes %.1f / %.1f (Run on an empty pair list); "
+              "exact tests %.1f / %.1f (TrianglesIntersect alone on the same pairs, %.0f ns a test); "
+              "rest %.1f / %.1f (candidates, triangle boxes, culling, box tests)\n",
+              boxes.median, boxes.max, exact.median, exact.max,
+              1000.0 * std::accumulate(exact_us.begin(), exact_us.end(), 0.0) /
+                  std::max(1.0, tests.mean * double(F)),
+              rest.median, rest.max);
+  std::vector<size_t> slow(F);
+  std::iota(slow.begin(), slow.end(), size_t{0});
+  std::sort(slow.begin(), slow.end(), [&](size_t a, size_t b) { return us[a] > us[b]; });
+  std::printf("slowest frames:");
+  for (size_t i = 0; i < std::min<size_t>(3, F); ++i) {
+    const size_t f = slow[i];
+    std::printf("%s %zu (%.1f us: boxes %.1f, tests %.1f, rest %.1f; %u candidates, %u box tests, %u tests, %u contacts)",
+                i ? ";" : "", f, us[f], boxes_us[f], exact_us[f], rest_us[f], stats[f].candidate_pairs,
+                stats[f].box_tests, stats[f].triangle_tests, stats[f].contacts);
+  }
+  std::printf("\n");
+  if (per_frame) {
+    std::printf("%5s %9s %7s %7s %7s %10s %11s %7s %8s\n", "frame", "us", "boxes", "tests", "rest", "candidates",
+                "box tests", "exact", "contacts");
+    for (size_t f = 0; f < F; ++f)
+      std::printf("%5zu %9.1f %7.1f %7.1f %7.1f %10u %11u %7u %8u\n", f, us[f], boxes_us[f], exact_us[f], rest_us[f],
+                  stats[f].candidate_pairs, stats[f].box_tests, stats[f].triangle_tests, stats[f].contacts);
+  }
+  std::printf("replica (bench-side sweep over all triangle boxes): tested pairs and contacts %s on every frame\n",
+              ok ? "equal" : "DIFFER (see stderr)");
+
+#if SPHERECHAIN_BENCH_CGAL
+  const size_t G = std::min(F, size_t(std::max(0, cgal_frames)));
+  if (G == 0) return ok;
+  CgalPeer peer;
+  std::string why;
+  try {
+    why = peer.Build(m, w.vertex_count);
+  } catch (const std::exception& e) {
+    why = e.what();
+  }
+  if (!why.empty()) {
+    std::printf("CGAL self_intersections: skipped (%s)\n", why.c_str());
+    return ok;
+  }
+  std::printf("\nCGAL PMP::self_intersections (Epick, Sequential_tag, Surface_mesh over welded vertices, %zu faces; "
+              "orient_polygon_soup %s, %zu points duplicated), first %zu of %zu frames, 1 run each "
+              "(points set before the clock)\n",
+              size_t{peer.mesh.number_of_faces()}, peer.oriented ? "ok" : "false", peer.duplicated_points, G, F);
+  std::printf("%5s %9s %9s %8s %9s %11s | CGAL pairs: %6s %9s %8s %8s %7s %6s  %s\n", "frame", "sc us", "CGAL ms",
+              "CGAL/sc", "contacts", "CGAL pairs", "degen.", "no region", "1 region", "excluded", "welded", "ours",
+              "ours = contacts");
+  std::vector<double> cgal_ms, sc_us;
+  std::vector<std::pair<CgalMesh::Face_index, CgalMesh::Face_index>> pairs;
+  size_t agree = 0;
+  for (size_t f = 0; f < G; ++f) {
+    peer.SetFrame(w.frames[f].data());
+    pairs.clear();
+    double t_us = 0;
+    try {
+      t_us = Micros([&] { PMP::self_intersections<CGAL::Sequential_tag>(faces(peer.mesh), peer.mesh, std::back_inserter(pairs)); });
+    } catch (const std::exception& e) {
+      std::printf("%5zu CGAL threw: %s\n", f, e.what());
+      continue;
+    }
+    const CgalClasses c = Classify(m, peer, pairs);
+    const bool same = c.ours == contacts[f];
+    agree += same;
+    cgal_ms.push_back(t_us / 1000.0);
+    sc_us.push_back(us[f]);
+    std::printf("%5zu %9.1f %9.1f %7.0fx %9zu %11zu | %18zu %9zu %8zu %8zu %7zu %6zu  %s\n", f, us[f], t_us / 1000.0,
+                t_us / us[f], contacts[f].size(), c.all, c.degenerate, c.unassigned, c.same_region, c.excluded,
+                c.weld_adjacent, c.ours.size(), same ? "yes" : "NO");
+  }
+  const Summary cg = Summarize(cgal_ms), ours = Summarize(sc_us);
+  std::printf("CGAL ms per frame: median %.1f, max %.1f (frame %zu); narrow phase on the same frames: median %.1f us, "
+              "max %.1f us\n",
+              cg.median, cg.max, cg.argmax, ours.median, ours.max);
+  std::printf("ratio CGAL / narrow phase: %.0fx (medians), %.0fx (maxima)\n", 1000.0 * cg.median / ours.median,
+              1000.0 * cg.max / ours.max);
+  std::printf("CGAL pairs = every self-intersection (degenerate faces as (f, f), pairs in one surrounding region, in "
+              "excluded sphere pairs, with a triangle in no region, across a welded corner CGAL sees as two "
+              "vertices); \"ours\" = the rest, our contact definition: equal to the narrow phase's contacts on %zu of "
+              "%zu frames\n",
+              agree, cgal_ms.size());
+  if (agree != cgal_ms.size())
+    std::fprintf(stderr, "note: on %zu frame(s) CGAL's pairs under our contact definition differ from the narrow "
+                         "phase's contacts (rows marked NO)\n", cgal_ms.size() - agree);
+#else
+  (void)cgal_frames;
+  std::printf("CGAL self_intersections: not built (libcgal-dev not found at configure time)\n");
+#endif
+  return ok;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  bool synthetic = false;
-  int reps = 200, runs = 1, profile = 0;
+  bool synthetic = false, narrow_only = false, per_frame = false;
+  int reps = 200, runs = 1, profile = 0, cgal_frames = 10;
   uint32_t frame_count = 40;
   std::vector<std::string> positional;
   for (int i = 1; i < argc; ++i) {
@@ -169,6 +573,9 @@ int main(int argc, char** argv) {
     else if (a == "--frames" && i + 1 < argc) frame_count = std::max(1, std::atoi(argv[++i]));
     else if (a == "--runs" && i + 1 < argc) runs = std::max(1, std::atoi(argv[++i]));
     else if (a == "--profile" && i + 1 < argc) profile = std::max(1, std::atoi(argv[++i]));
+    else if (a == "--narrow-only") narrow_only = true;
+    else if (a == "--per-frame") per_frame = true;
+    else if (a == "--cgal-frames" && i + 1 < argc) cgal_frames = std::max(0, std::atoi(argv[++i]));
     else positional.push_back(a);
   }
   Workload w;
@@ -177,8 +584,10 @@ int main(int argc, char** argv) {
   } else if (positional.size() == 2) {
     if (!FromFiles(positional[0], positional[1], &w)) return 1;
   } else {
-    std::fprintf(stderr, "usage: runtime_bench --synthetic [--frames N] [--reps R] [--runs K]\n"
-                         "       runtime_bench ASSET.sphc FRAMES(.f32 file | folder) [--reps R] [--runs K]\n"
+    std::fprintf(stderr, "usage: runtime_bench --synthetic [--frames N] [--reps R] [--runs K] [--narrow-only] "
+                         "[--cgal-frames N] [--per-frame]\n"
+                         "       runtime_bench ASSET.sphc FRAMES(.f32 file | folder) [--reps R] [--runs K] "
+                         "[--narrow-only] [--cgal-frames N] [--per-frame]\n"
                          "       runtime_bench ASSET.sphc FRAMES --profile R\n");
     return 2;
   }
@@ -220,6 +629,7 @@ int main(int argc, char** argv) {
     std::printf("profile: %d × %zu frames of refit + M1\n", profile, w.frames.size());
     return 0;
   }
+  if (narrow_only) return NarrowPhase(w, view, runs, cgal_frames, per_frame) ? 0 : 1;
 
   // Refitted spheres per frame (inputs of the peers) and the reference M2 counts.
   std::vector<std::vector<float>> sx(w.frames.size()), sy = sx, sz = sx, sr = sx;
@@ -428,6 +838,7 @@ int main(int argc, char** argv) {
   for (const Row& r : rows) std::printf("%-22s %12.3f %10.2f\n", r.name, r.us, r.us / m2_us);
   std::printf("\n%-22s %14s %14s\n", "ratio (peer / sc)", "/ sc M2 det.", "/ sc refit+M1");
   for (const Peer& p : peers) std::printf("%-22s %13.1fx %13.1fx\n", p.name, p.us / m2_us, p.us / m1_us);
+  if (!NarrowPhase(w, view, runs, cgal_frames, per_frame)) mismatch = true;
   if (mismatch) {
     std::fprintf(stderr, "MISMATCH: a pair count differs (see above)\n");
     return 1;

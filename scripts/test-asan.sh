@@ -11,4 +11,5 @@ if [ -f scripts/sanitizer/lsan.supp ]; then
 fi
 cmake --preset asan >/dev/null
 cmake --build --preset asan -j"$(nproc)"
-ctest --preset asan -j"$(nproc)"
+# Heavy checks (exact ground truth over many frames, names containing "heavy") ran in the normal suite.
+ctest --preset asan -j"$(nproc)" -E heavy

@@ -16,12 +16,14 @@
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
+#include "animation_source.h"
 #include "asset_file.h"
 #include "commands.h"
 #include "spherechain/baker/animation.h"
 #include "spherechain/baker/import.h"
 #include "spherechain/baker/morph.h"
 #include "spherechain/baker/write.h"
+#include "spherechain/runtime/narrow_phase.h"
 #include "spherechain/runtime/runtime.h"
 
 namespace spherechain::cli {
@@ -36,26 +38,8 @@ struct PlayArgs {
   std::vector<std::string> morph;
   uint32_t frames = 40;
   uint32_t repeat = 5;
+  bool narrow_phase = false;
 };
-
-/// Folder of the character's default key poses: --poses-dir, else data/poses/<character> found by
-/// walking up from the current directory and from the executable's folder (build/<dir>/baker/).
-std::string FindPosesDir(const std::string& character, const std::string& explicit_dir) {
-  if (!explicit_dir.empty()) return explicit_dir;
-  const fs::path rel = fs::path("data") / "poses" / character;
-  std::vector<fs::path> starts;
-  std::error_code ec;
-  starts.push_back(fs::current_path(ec));
-  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  if (!ec) starts.push_back(exe.parent_path());
-  for (fs::path p : starts) {
-    for (int up = 0; up < 6 && !p.empty(); ++up, p = p.parent_path()) {
-      if (fs::is_directory(p / rel, ec)) return (p / rel).string();
-      if (p == p.parent_path()) break;
-    }
-  }
-  return {};
-}
 
 /// "R0-R4 R1-R4": the region pairs of the given colliding sphere pairs, sorted, each once.
 std::string RegionsTouching(const std::set<std::pair<int, int>>& pairs) {
@@ -75,6 +59,9 @@ struct FrameRow {
   double tracking_mean = 0, tracking_max = 0;  // |ΔF| vs the bind pose (see RefitTracking)
   std::set<std::pair<int, int>> regions;
   std::vector<runtime::Collision> pairs;  // of M2 when run, else M1
+  runtime::NarrowPhaseStats narrow;       // with --narrow-phase
+  double narrow_us = 0;
+  std::set<std::pair<int, int>> contact_regions;  // region pairs of the narrow phase's contacts
 };
 
 /// How well the refitted spheres follow the deformed surface (§5.1, and the pivot-frame variant):
@@ -124,10 +111,11 @@ class RefitTracking {
 class Player {
  public:
   Player(const runtime::AssetView& view, runtime::Context* ctx, runtime::RefitMode mode, bool m1, bool m2,
-         uint32_t repeat)
-      : view_(view), ctx_(ctx), mode_(mode), run_m1_(m1), run_m2_(m2), repeat_(std::max(1u, repeat)) {
+         uint32_t repeat, runtime::NarrowPhaseContext* narrow)
+      : view_(view), ctx_(ctx), mode_(mode), run_m1_(m1), run_m2_(m2), repeat_(std::max(1u, repeat)), narrow_(narrow) {
     out_m1_.resize(runtime::DetectBound(view, runtime::DetectMethod::kM1));
     out_m2_.resize(runtime::DetectBound(view, runtime::DetectMethod::kM2));
+    if (narrow_) contacts_.resize(1u << 16);
   }
 
   /// Fills row counters, timings and touching regions; returns false with `*error` on a runtime error.
@@ -153,6 +141,22 @@ class Player {
       regions_count = count_m2_;
     }
     const auto* sr = view_.asset->sphere_regions();
+    if (narrow_) {
+      runtime::NarrowPhaseJob job;
+      job.context = narrow_;
+      job.positions = refit.positions;
+      job.output = contacts_.data();
+      job.capacity = static_cast<uint32_t>(contacts_.size());
+      job.count = &count_contacts_;
+      job.stats = &row->narrow;
+      row->narrow_us = Time([&] { return job.Run(); }, error);
+      if (row->narrow_us < 0) return false;
+      row->contact_regions.clear();
+      for (uint32_t i = 0; i < count_contacts_; ++i) {
+        const int ra = sr ? sr->Get(contacts_[i].sphere_a) : -1, rb = sr ? sr->Get(contacts_[i].sphere_b) : -1;
+        row->contact_regions.emplace(std::min(ra, rb), std::max(ra, rb));
+      }
+    }
     row->regions.clear();
     row->pairs.assign(regions_from, regions_from + regions_count);
     for (uint32_t i = 0; i < regions_count; ++i) {
@@ -198,40 +202,12 @@ class Player {
   uint32_t repeat_;
   std::vector<runtime::Collision> out_m1_, out_m2_;
   uint32_t count_m1_ = 0, count_m2_ = 0;
+  runtime::NarrowPhaseContext* narrow_ = nullptr;
+  std::vector<runtime::TriangleContact> contacts_;
+  uint32_t count_contacts_ = 0;
 };
 
-std::string Hex(uint64_t v) {
-  char b[24];
-  std::snprintf(b, sizeof b, "%016llx", static_cast<unsigned long long>(v));
-  return b;
-}
-
-/// The mesh must be the one the asset was baked from (DESIGN.md: a mismatched pairing is an error).
-bool CheckFingerprint(const runtime::AssetView& view, const baker::Mesh& mesh, const PlayArgs& a, std::string* error) {
-  const baker::Fingerprint f = baker::ComputeFingerprint(mesh);
-  const auto* af = view.asset->fingerprint();
-  const std::string pair = "mesh '" + a.mesh + "' does not match asset '" + a.asset + "': ";
-  if (f.vertex_count != af->vertex_count()) {
-    *error = pair + "the mesh has " + std::to_string(f.vertex_count) + " vertices, the asset was baked from " +
-             std::to_string(af->vertex_count());
-    return false;
-  }
-  if (f.triangle_count != af->triangle_count()) {
-    *error = pair + "the mesh has " + std::to_string(f.triangle_count) + " triangles, the asset was baked from " +
-             std::to_string(af->triangle_count());
-    return false;
-  }
-  if (f.positions_hash != af->positions_hash() || f.indices_hash != af->indices_hash()) {
-    *error = pair + "same counts but different content (positions hash " + Hex(f.positions_hash) + " vs " +
-             Hex(af->positions_hash()) + ", indices hash " + Hex(f.indices_hash) + " vs " + Hex(af->indices_hash()) +
-             "); re-bake the asset from this mesh";
-    return false;
-  }
-  return true;
-}
-
 int RunPlay(const PlayArgs& a) {
-  if (!a.clip.empty() && !a.morph.empty()) return Fail("--clip and --morph exclude each other");
   LoadedAsset asset;
   std::string error;
   if (!LoadAssetFile(a.asset, &asset, &error)) return Fail(error);
@@ -243,65 +219,19 @@ int RunPlay(const PlayArgs& a) {
   auto imported = baker::ImportMesh(a.mesh, opts, &log);
   if (!imported.ok()) return Fail(imported.error());
   const baker::Mesh& mesh = imported.value();
-  if (!CheckFingerprint(view, mesh, a, &error)) return Fail(error);
-  if (!mesh.skin)
-    return Fail("'" + a.mesh + "' has no skin: play needs a rigged character (glTF skin, assimp bones, or a "
-                "MakeHuman .mhskel beside base.obj / --rig)");
+  if (!CheckFingerprint(view, mesh, a.asset, a.mesh, &error)) return Fail(error);
 
-  // ---- the animation ----------------------------------------------------------------------------
-  const baker::Clip* clip = nullptr;
-  std::vector<baker::Pose> poses;
-  std::string poses_from;
-  if (!a.clip.empty()) {
-    for (const auto& c : mesh.clips)
-      if (c.name == a.clip) clip = &c;
-    if (!clip) {
-      std::string names;
-      for (const auto& c : mesh.clips) names += (names.empty() ? "" : ", ") + ("'" + c.name + "'");
-      return Fail("no clip named '" + a.clip + "' in '" + a.mesh + "' (clips: " + (names.empty() ? "none" : names) + ")");
-    }
-  } else if (a.morph.empty() && !mesh.clips.empty()) {
-    clip = &mesh.clips.front();
-  }
-  if (!clip) {
-    const std::string character = mesh.skin->source == "mhskel" ? "makehuman" : fs::path(a.mesh).stem().string();
-    const std::string dir = FindPosesDir(character, a.poses_dir);
-    if (a.morph.empty()) {
-      if (dir.empty())
-        return Fail("'" + a.mesh + "' has no clips and no default key poses (data/poses/" + character +
-                    " not found from the current directory or the executable); pass --morph POSE.json... or "
-                    "--poses-dir DIR");
-      auto loaded = baker::LoadPoseFolder(dir, *mesh.skin);
-      if (!loaded.ok()) return Fail(loaded.error());
-      poses = std::move(loaded).value();
-      poses_from = dir;
-    } else {
-      for (const std::string& m : a.morph) {
-        std::string path = m;
-        if (!fs::exists(path) && !dir.empty() && fs::exists(fs::path(dir) / (m + ".json")))
-          path = (fs::path(dir) / (m + ".json")).string();
-        if (fs::is_directory(path)) {
-          auto loaded = baker::LoadPoseFolder(path, *mesh.skin);
-          if (!loaded.ok()) return Fail(loaded.error());
-          for (auto& p : loaded.value()) poses.push_back(std::move(p));
-        } else {
-          auto p = baker::LoadPose(path, *mesh.skin);
-          if (!p.ok()) return Fail(p.error());
-          poses.push_back(std::move(p).value());
-        }
-      }
-      poses_from = "--morph";
-    }
-  }
-  const uint32_t frames = a.frames;
-  if (frames == 0) return Fail("--frames must be > 0");
-  if (!clip && frames < 2 * poses.size())
-    return Fail("--frames " + std::to_string(frames) + " is too few for " + std::to_string(poses.size()) +
-                " key poses (each needs a rest frame and its key frame: at least " + std::to_string(2 * poses.size()) +
-                ")");
-  if (clip) {
-    if (auto s = baker::ValidateClip(*mesh.skin, *clip); !s.ok()) return Fail(s.error());
-  }
+  AnimationArgs anim_args;
+  anim_args.mesh = a.mesh;
+  anim_args.clip = a.clip;
+  anim_args.morph = a.morph;
+  anim_args.poses_dir = a.poses_dir;
+  anim_args.frames = a.frames;
+  AnimationSource anim;
+  if (!OpenAnimation(mesh, anim_args, &anim, &error)) return Fail(error);
+  const baker::Clip* clip = anim.clip;
+  const std::vector<baker::Pose>& poses = anim.poses;
+  const uint32_t frames = anim.frames;
 
   // ---- runtime ------------------------------------------------------------------------------------
   runtime::Context ctx;
@@ -309,7 +239,13 @@ int RunPlay(const PlayArgs& a) {
     return Fail(std::string("runtime Context::Init: ") + runtime::ToString(s));
   const bool m1 = a.method != "m2", m2 = a.method != "m1";
   const runtime::RefitMode mode = a.refit == "paper" ? runtime::RefitMode::kPaper : runtime::RefitMode::kPivotFrame;
-  Player player(view, &ctx, mode, m1, m2, a.repeat);
+  runtime::NarrowPhaseContext narrow;
+  if (a.narrow_phase) {
+    if (runtime::Status s = narrow.Init(view); runtime::Failed(s))
+      return Fail("'" + a.asset + "': narrow phase: " + runtime::ToString(s) +
+                  (s == runtime::Status::kErrorMissingField ? " (baked before the narrow phase existed: re-bake it)" : ""));
+  }
+  Player player(view, &ctx, mode, m1, m2, a.repeat, a.narrow_phase ? &narrow : nullptr);
 
   std::vector<float> positions(mesh.positions.size());
   baker::SkinningScratch scratch;
@@ -324,21 +260,7 @@ int RunPlay(const PlayArgs& a) {
   for (uint32_t f = 0; f < frames; ++f) {
     FrameRow& row = rows[f];
     row.frame = f;
-    char label[96];
-    if (clip) {
-      const float t = clip->duration_s * float(f) / float(frames);
-      std::snprintf(label, sizeof label, "t=%.3fs", t);
-      if (auto s = baker::SkinClip(mesh, *clip, t, &scratch, positions.data(), positions.size()); !s.ok())
-        return Fail(s.error());
-    } else {
-      auto mf = baker::MorphFrameAt(f, frames, static_cast<uint32_t>(poses.size()));
-      if (!mf.ok()) return Fail(mf.error());
-      std::snprintf(label, sizeof label, "%s t=%.3f", poses[mf->key].name.c_str(), mf->t);
-      if (auto s = baker::SkinMorphFrame(mesh, poses, f, frames, &scratch, positions.data(), positions.size());
-          !s.ok())
-        return Fail(s.error());
-    }
-    row.label = label;
+    if (auto s = anim.Frame(mesh, f, &scratch, &positions, &row.label); !s.ok()) return Fail(s.error());
     if (!player.Run(positions.data(), &row, &error)) return Fail(error);
     tracking.Measure(ctx.spheres(), positions.data(), &row.tracking_mean, &row.tracking_max);
     if (!a.dump_frames.empty()) {
@@ -354,8 +276,7 @@ int RunPlay(const PlayArgs& a) {
   // ---- report ------------------------------------------------------------------------------------
   std::printf("play: %s + %s — %s, %u frames, %u spheres, %u chains, refit %s, timings = min of %u runs\n",
               a.asset.c_str(), a.mesh.c_str(),
-              clip ? ("clip '" + clip->name + "' (" + std::to_string(clip->duration_s) + " s)").c_str()
-                   : ("morph through " + std::to_string(poses.size()) + " key poses from " + poses_from).c_str(),
+              anim.Describe().c_str(),
               frames, view.sphere_count, view.chain_count, a.refit.c_str(), std::max(1u, a.repeat));
   if (!clip) {
     std::printf("key poses:");
@@ -364,12 +285,18 @@ int RunPlay(const PlayArgs& a) {
                   baker::MorphKeyFrame(uint32_t(k), frames, uint32_t(poses.size())));
     std::printf("\n");
   }
-  std::printf("\n%5s  %-26s %7s %7s %8s %7s %8s %8s %9s %9s  %s\n", "frame", "pose", "testsM1", "M1 raw",
-              "M1 dist", "M2", "testsM2", "refit us", "M1 us", "M2 us", "regions touching");
+  std::printf("\n%5s  %-26s %7s %7s %8s %7s %8s %8s %9s %9s", "frame", "pose", "testsM1", "M1 raw", "M1 dist", "M2",
+              "testsM2", "refit us", "M1 us", "M2 us");
+  if (a.narrow_phase) std::printf(" %8s %8s %9s", "contacts", "tri tests", "narrow us");
+  std::printf("  %s%s\n", "regions touching", a.narrow_phase ? " | regions in contact (narrow phase)" : "");
   auto print_row = [&](const FrameRow& r, const std::string& frame) {
-    std::printf("%5s  %-26s %7u %7u %8u %7u %8u %8.1f %9.1f %9.1f  %s\n", frame.c_str(), r.label.c_str(), r.m1.tests,
+    std::printf("%5s  %-26s %7u %7u %8u %7u %8u %8.1f %9.1f %9.1f", frame.c_str(), r.label.c_str(), r.m1.tests,
                 r.m1.raw_pairs, r.m1.distinct_pairs, r.m2.distinct_pairs, r.m2.tests, r.refit_us, r.detect_m1_us,
-                r.detect_m2_us, RegionsTouching(r.regions).c_str());
+                r.detect_m2_us);
+    if (a.narrow_phase) std::printf(" %8u %8u %9.1f", r.narrow.contacts, r.narrow.triangle_tests, r.narrow_us);
+    std::printf("  %s", RegionsTouching(r.regions).c_str());
+    if (a.narrow_phase) std::printf(" | %s", RegionsTouching(r.contact_regions).c_str());
+    std::printf("\n");
   };
   print_row(bind, "bind");
   for (const FrameRow& r : rows) print_row(r, std::to_string(r.frame));
@@ -402,6 +329,19 @@ int RunPlay(const PlayArgs& a) {
   for (const FrameRow& r : rows) track_sum += r.tracking_mean, track_max = std::max(track_max, r.tracking_max);
   std::printf("  refit (%s): mean %.1f us; tracking |dF| vs bind over surrounding-region vertices: mean %.4f, max %.4f\n",
               a.refit.c_str(), sum_refit / n, rows.empty() ? 0.0 : track_sum / n, track_max);
+  if (a.narrow_phase) {
+    std::vector<double> us;
+    uint64_t contacts = 0, frames_with_contacts = 0;
+    for (const FrameRow& r : rows) {
+      us.push_back(r.narrow_us);
+      contacts += r.narrow.contacts;
+      frames_with_contacts += r.narrow.contacts > 0;
+    }
+    std::sort(us.begin(), us.end());
+    std::printf("  narrow phase: %llu contacts (triangle pairs) in %llu frames; median %.1f us, max %.1f us a frame\n",
+                static_cast<unsigned long long>(contacts), static_cast<unsigned long long>(frames_with_contacts),
+                us.empty() ? 0.0 : us[us.size() / 2], us.empty() ? 0.0 : us.back());
+  }
   std::printf("  regions touching (frames):");
   if (region_frames.empty()) std::printf(" none");
   for (const auto& [p, c] : region_frames) std::printf(" R%d-R%d(%u)", p.first, p.second, c);
@@ -421,7 +361,7 @@ int RunPlay(const PlayArgs& a) {
       for (size_t k = 0; k < poses.size(); ++k)
         keys.push_back({{"name", poses[k].name},
                         {"frame", baker::MorphKeyFrame(uint32_t(k), frames, uint32_t(poses.size()))}});
-      j["animation"] = {{"kind", "morph"}, {"poses_from", poses_from}, {"keys", keys}};
+      j["animation"] = {{"kind", "morph"}, {"poses_from", anim.poses_from}, {"keys", keys}};
     }
     auto row_json = [&](const FrameRow& r) {
       nlohmann::json regions = nlohmann::json::array();
@@ -438,6 +378,16 @@ int RunPlay(const PlayArgs& a) {
                           {"tracking_mean_abs_dF", r.tracking_mean},
                           {"tracking_max_abs_dF", r.tracking_max},
                           {"regions_touching", regions}};
+      if (a.narrow_phase) {
+        nlohmann::json cr = nlohmann::json::array();
+        for (const auto& [ra, rb] : r.contact_regions) cr.push_back("R" + std::to_string(ra) + "-R" + std::to_string(rb));
+        o["narrow_phase"] = {{"contacts", r.narrow.contacts},
+                             {"candidate_pairs", r.narrow.candidate_pairs},
+                             {"triangle_tests", r.narrow.triangle_tests},
+                             {"degenerate_triangles", r.narrow.degenerate_triangles},
+                             {"us", r.narrow_us},
+                             {"regions_in_contact", cr}};
+      }
       const auto* sr = view.asset->sphere_regions();
       nlohmann::json pairs = nlohmann::json::array();
       for (const runtime::Collision& c : r.pairs)
@@ -502,6 +452,9 @@ void RegisterPlay(CLI::App& app, Commands* commands) {
                   "Folder to write each frame's deformed positions to (frame_NNNN.f32: #V×3 float32), for bench/")
       ->check(CLI::ExistingDirectory);
   sub->add_option("--json", args->json, "Write the per-frame table and summary as JSON");
+  sub->add_flag("--narrow-phase", args->narrow_phase,
+                "Also find the exact triangle contacts between surrounding regions (runtime NarrowPhaseJob): "
+                "contacts per frame in the table and the JSON");
   commands->handlers.emplace_back(sub, [args] { return RunPlay(*args); });
 }
 

@@ -10,6 +10,7 @@ void Register(CLI::App& app, Commands* commands) {
   RegisterExportDebug(app, commands);
   RegisterPlay(app, commands);
   RegisterValidate(app, commands);
+  RegisterEvaluate(app, commands);
 }
 
 int Dispatch(const Commands& commands) {

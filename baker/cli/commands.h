@@ -24,6 +24,7 @@ void RegisterInspect(CLI::App& app, Commands* commands);
 void RegisterExportDebug(CLI::App& app, Commands* commands);
 void RegisterPlay(CLI::App& app, Commands* commands);
 void RegisterValidate(CLI::App& app, Commands* commands);
+void RegisterEvaluate(CLI::App& app, Commands* commands);
 
 /// A baker::Context whose log lines go to spdlog.
 baker::Context MakeLoggingContext();

@@ -1,4 +1,4 @@
-// spherechain — the command-line tool: bake, inspect, export-debug, play, validate.
+// spherechain — the command-line tool: bake, inspect, export-debug, play, validate, evaluate.
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <numeric>
 #include <sstream>
 
@@ -20,10 +21,6 @@
 namespace spherechain::baker {
 
 namespace {
-
-Eigen::Vector3f Pos(const Mesh& m, uint32_t v) {
-  return {m.positions[3 * v], m.positions[3 * v + 1], m.positions[3 * v + 2]};
-}
 
 Eigen::Vector3f UpOf(UpAxis a) {
   return a == UpAxis::kZ ? Eigen::Vector3f::UnitZ() : a == UpAxis::kX ? Eigen::Vector3f::UnitX() : Eigen::Vector3f::UnitY();
@@ -214,26 +211,39 @@ Status ExportDebugGltf(const Mesh& mesh, const runtime::AssetView& a, const std:
   return WriteFileAtomic(out_path, text.str());
 }
 
-std::string RenderDebugSvg(const Mesh& mesh, const runtime::AssetView& a, int width_px) {
+namespace {
+
+/// What one picture shows: per-triangle colours of the two panels of a view (left: `tri_left`,
+/// right: `tri_right` + the spheres), over the mesh at `positions` (#V×3).
+struct Picture {
+  const float* positions = nullptr;
+  std::function<std::array<float, 3>(uint32_t)> tri_left, tri_right;
+  std::vector<FrameSphere> spheres;
+  const char* left_name = "regions";
+  const char* right_name = "spheres";
+  std::string caption;
+};
+
+std::string RenderSvg(const Mesh& mesh, const runtime::AssetView& a, const Picture& pic, int width_px) {
   const Frame f = CharacterFrame(mesh, a);
+  auto P = [&](uint32_t v) {
+    return Eigen::Vector3f(pic.positions[3 * size_t{v}], pic.positions[3 * size_t{v} + 1], pic.positions[3 * size_t{v} + 2]);
+  };
   // Views (camera right = view direction × up): front, camera in front looking back, so screen x =
   // the character's left (its left arm on the viewer's right); side, camera at the character's left
   // looking across, so screen x = −front (the character faces the viewer's left).
   struct View { Eigen::Vector3f sx, sy, toward_viewer; const char* name; };
   const View views[2] = {{f.left, f.up, f.front, "front"}, {-f.front, f.up, f.left, "side (character's left)"}};
-  // Common scale from the bind-pose extent.
+  // Common scale from the extent of the positions shown.
   Eigen::Vector3f lo = Eigen::Vector3f::Constant(1e30f), hi = Eigen::Vector3f::Constant(-1e30f);
   for (uint32_t v = 0; v < mesh.vertex_count(); ++v) {
-    lo = lo.cwiseMin(Pos(mesh, v));
-    hi = hi.cwiseMax(Pos(mesh, v));
+    lo = lo.cwiseMin(P(v));
+    hi = hi.cwiseMax(P(v));
   }
   const float extent = (hi - lo).maxCoeff();
   const Eigen::Vector3f mid = 0.5f * (lo + hi);
   const int panel = width_px / 4, height = int(panel * 1.9f);
   const float scale = 0.9f * height / extent;
-  const auto* tri_regions = a.asset->triangle_regions();
-  const auto* spheres = a.asset->spheres();
-  const auto* sphere_regions = a.asset->sphere_regions();
 
   std::ostringstream svg;
   svg << "<svg xmlns='http://www.w3.org/2000/svg' width='" << panel * 4 << "' height='" << height + 40
@@ -251,20 +261,18 @@ std::string RenderDebugSvg(const Mesh& mesh, const runtime::AssetView& a, int wi
     std::iota(order.begin(), order.end(), 0u);
     std::vector<float> depth(order.size());
     for (uint32_t t : order)
-      depth[t] = (Pos(mesh, mesh.indices[3 * t]) + Pos(mesh, mesh.indices[3 * t + 1]) + Pos(mesh, mesh.indices[3 * t + 2]))
-                     .dot(V.toward_viewer);
+      depth[t] = (P(mesh.indices[3 * t]) + P(mesh.indices[3 * t + 1]) + P(mesh.indices[3 * t + 2])).dot(V.toward_viewer);
     std::stable_sort(order.begin(), order.end(), [&](uint32_t x, uint32_t y) { return depth[x] < depth[y]; });
     for (int pass = 0; pass < 2; ++pass) {
       const float ox = float(panel * (2 * vi + pass));
       svg << "<g>\n";
       for (uint32_t t : order) {
-        const Eigen::Vector3f p0 = Pos(mesh, mesh.indices[3 * t]), p1 = Pos(mesh, mesh.indices[3 * t + 1]),
-                              p2 = Pos(mesh, mesh.indices[3 * t + 2]);
+        const Eigen::Vector3f p0 = P(mesh.indices[3 * t]), p1 = P(mesh.indices[3 * t + 1]), p2 = P(mesh.indices[3 * t + 2]);
         const Eigen::Vector3f n = (p1 - p0).cross(p2 - p0);
         const float nn = n.norm();
         if (nn <= 0) continue;
         const float lambert = std::abs(n.dot(V.toward_viewer)) / nn;
-        const auto col = pass == 0 ? RegionColor(static_cast<Region>(tri_regions->Get(t))) : std::array<float, 3>{0.85f, 0.85f, 0.85f};
+        const auto col = pass == 0 ? pic.tri_left(t) : pic.tri_right(t);
         const std::string fill = Hex(col, 0.35f + 0.65f * lambert);
         const Eigen::Vector2f a2 = project(p0, ox), b2 = project(p1, ox), c2 = project(p2, ox);
         svg << "<path d='M" << a2.x() << ',' << a2.y() << 'L' << b2.x() << ',' << b2.y() << 'L' << c2.x() << ','
@@ -272,36 +280,72 @@ std::string RenderDebugSvg(const Mesh& mesh, const runtime::AssetView& a, int wi
       }
       svg << "</g>\n";
       if (pass == 1) {
-        std::vector<uint32_t> so(a.sphere_count);
+        std::vector<uint32_t> so(pic.spheres.size());
         std::iota(so.begin(), so.end(), 0u);
-        auto sdepth = [&](uint32_t s) {
-          const auto& c = spheres->Get(s)->center();
-          return Eigen::Vector3f(c.x(), c.y(), c.z()).dot(V.toward_viewer);
-        };
+        auto sdepth = [&](uint32_t s) { return Eigen::Vector3f(pic.spheres[s].center.data()).dot(V.toward_viewer); };
         std::stable_sort(so.begin(), so.end(), [&](uint32_t x, uint32_t y) { return sdepth(x) < sdepth(y); });
         for (uint32_t s : so) {
-          const auto* S = spheres->Get(s);
-          const Eigen::Vector2f c2 = project({S->center().x(), S->center().y(), S->center().z()}, ox);
-          const std::string col = Hex(RegionColor(static_cast<Region>(sphere_regions->Get(s))));
-          svg << "<circle cx='" << c2.x() << "' cy='" << c2.y() << "' r='" << scale * S->radius() << "' fill='" << col
-              << "' fill-opacity='0.45' stroke='" << Hex(RegionColor(static_cast<Region>(sphere_regions->Get(s))), 0.6f)
-              << "' stroke-width='1'/>\n";
+          const FrameSphere& S = pic.spheres[s];
+          const Eigen::Vector2f c2 = project(Eigen::Vector3f(S.center.data()), ox);
+          svg << "<circle cx='" << c2.x() << "' cy='" << c2.y() << "' r='" << scale * S.radius << "' fill='"
+              << Hex(S.color) << "' fill-opacity='" << S.opacity << "' stroke='" << Hex(S.color, 0.6f)
+              << "' stroke-width='" << (S.opacity > 0.5f ? 2 : 1) << "'/>\n";
         }
       }
-      svg << "<text x='" << ox + 10 << "' y='16' font-family='sans-serif' font-size='14'>" << V.name
-          << (pass == 0 ? ": regions" : ": spheres") << "</text>\n";
+      svg << "<text x='" << ox + 10 << "' y='16' font-family='sans-serif' font-size='14'>" << V.name << ": "
+          << (pass == 0 ? pic.left_name : pic.right_name) << "</text>\n";
     }
   }
-  svg << "<text x='10' y='" << height + 32 << "' font-family='sans-serif' font-size='13'>"
-      << "R0 left arm (orange)  R1 right arm (blue)  R2 left leg (green)  R3 right leg (purple)  R4 torso (grey) — "
-      << a.sphere_count << " spheres</text>\n</svg>\n";
+  svg << "<text x='10' y='" << height + 32 << "' font-family='sans-serif' font-size='13'>" << pic.caption
+      << "</text>\n</svg>\n";
   return svg.str();
 }
 
-Status RenderDebugPng(const Mesh& mesh, const runtime::AssetView& a, const std::string& png_path, bool keep_svg) {
+}  // namespace
+
+std::string RenderDebugSvg(const Mesh& mesh, const runtime::AssetView& a, int width_px) {
+  const auto* tri_regions = a.asset->triangle_regions();
+  const auto* spheres = a.asset->spheres();
+  const auto* sphere_regions = a.asset->sphere_regions();
+  Picture pic;
+  pic.positions = mesh.positions.data();
+  pic.tri_left = [&](uint32_t t) { return RegionColor(static_cast<Region>(tri_regions->Get(t))); };
+  pic.tri_right = [](uint32_t) { return std::array<float, 3>{0.85f, 0.85f, 0.85f}; };
+  for (uint32_t s = 0; s < a.sphere_count; ++s) {
+    const auto* S = spheres->Get(s);
+    pic.spheres.push_back({{S->center().x(), S->center().y(), S->center().z()}, S->radius(),
+                           RegionColor(static_cast<Region>(sphere_regions->Get(s))), 0.45f});
+  }
+  pic.caption = "R0 left arm (orange)  R1 right arm (blue)  R2 left leg (green)  R3 right leg (purple)  R4 torso "
+                "(grey) — " + std::to_string(a.sphere_count) + " spheres";
+  return RenderSvg(mesh, a, pic, width_px);
+}
+
+std::string RenderFrameSvg(const Mesh& mesh, const runtime::AssetView& a, const float* positions,
+                           const std::vector<FrameSphere>& spheres, const std::vector<uint8_t>& triangle_marks,
+                           const std::string& caption, int width_px) {
+  const auto* tri_regions = a.asset->triangle_regions();
+  Picture pic;
+  pic.positions = positions;
+  auto marked = [&](uint32_t t, std::array<float, 3> otherwise) {
+    const uint8_t m = t < triangle_marks.size() ? triangle_marks[t] : 0;
+    return m == 1 ? std::array<float, 3>{0.95f, 0.05f, 0.05f} : m == 2 ? std::array<float, 3>{1.0f, 0.75f, 0.0f} : otherwise;
+  };
+  pic.tri_left = [&](uint32_t t) {
+    return marked(t, tri_regions ? RegionColor(static_cast<Region>(tri_regions->Get(t))) : std::array<float, 3>{0.8f, 0.8f, 0.8f});
+  };
+  pic.tri_right = [&](uint32_t t) { return marked(t, {0.85f, 0.85f, 0.85f}); };
+  pic.spheres = spheres;
+  pic.left_name = "regions + contacts";
+  pic.right_name = "contacts + spheres";
+  pic.caption = caption;
+  return RenderSvg(mesh, a, pic, width_px);
+}
+
+Status SvgToPng(const std::string& svg, const std::string& png_path, bool keep_svg) {
   namespace fs = std::filesystem;
   const std::string svg_path = png_path + ".svg";
-  if (Status s = WriteFileAtomic(svg_path, RenderDebugSvg(mesh, a)); !s.ok()) return s;
+  if (Status s = WriteFileAtomic(svg_path, svg); !s.ok()) return s;
   const std::string tmp_png = png_path + ".tmp.png";
   // rsvg-convert -f png -o TMP SVG, without a shell (paths are passed as they are).
   std::vector<std::string> args = {"rsvg-convert", "-f", "png", "-o", tmp_png, svg_path};
@@ -323,6 +367,10 @@ Status RenderDebugPng(const Mesh& mesh, const runtime::AssetView& a, const std::
   fs::rename(tmp_png, png_path, ec);
   if (ec) return MakeError(Error::Code::kIo, "cannot move the PNG onto '" + png_path + "': " + ec.message());
   return Ok{};
+}
+
+Status RenderDebugPng(const Mesh& mesh, const runtime::AssetView& a, const std::string& png_path, bool keep_svg) {
+  return SvgToPng(RenderDebugSvg(mesh, a), png_path, keep_svg);
 }
 
 }  // namespace spherechain::baker

@@ -1,7 +1,9 @@
 #include "spherechain/baker/write.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <numeric>
 #include <fstream>
 #include <system_error>
 
@@ -25,6 +27,27 @@ Fingerprint ComputeFingerprint(const Mesh& mesh) {
   f.positions_hash = Hash64(mesh.positions.data(), mesh.positions.size() * sizeof(float));
   f.indices_hash = Hash64(mesh.indices.data(), mesh.indices.size() * sizeof(uint32_t));
   return f;
+}
+
+std::vector<uint32_t> ComputeWeldIds(const std::vector<float>& positions) {
+  const uint32_t n = static_cast<uint32_t>(positions.size() / 3);
+  std::vector<uint32_t> order(n);
+  std::iota(order.begin(), order.end(), 0u);
+  const auto key = [&](uint32_t v) {
+    return std::array<float, 3>{positions[3 * size_t{v}], positions[3 * size_t{v} + 1], positions[3 * size_t{v} + 2]};
+  };
+  // Sort by position, then index: each run of equal positions starts with its lowest index.
+  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+    const auto ka = key(a), kb = key(b);
+    return ka != kb ? ka < kb : a < b;
+  });
+  std::vector<uint32_t> weld(n);
+  for (uint32_t i = 0; i < n;) {
+    uint32_t j = i;
+    while (j < n && key(order[j]) == key(order[i])) weld[order[j++]] = order[i];
+    i = j;
+  }
+  return weld;
 }
 
 namespace {
@@ -101,6 +124,8 @@ std::vector<uint8_t> BuildAsset(const AssetInputs& in) {
     frames.emplace_back(fb::Vec3(f.local_center[0], f.local_center[1], f.local_center[2]),
                         fb::Vec3(f.centroid_offset[0], f.centroid_offset[1], f.centroid_offset[2]), f.mean_distance);
   auto frames_v = b.CreateVectorOfStructs(frames);
+  auto triangles_v = b.CreateVector(mesh.indices);
+  auto weld_v = b.CreateVector(ComputeWeldIds(mesh.positions));
 
   auto accuracy = fb::CreateAccuracy(b, ToStats(b, in.accuracy.phi1), ToStats(b, in.accuracy.phi1_adjusted),
                                      ToStats(b, in.accuracy.phi2));
@@ -131,6 +156,8 @@ std::vector<uint8_t> BuildAsset(const AssetInputs& in) {
   ab.add_pivot_vertices(piv_v_v);
   ab.add_pivot_frames(frames_v);
   ab.add_accuracy(accuracy);
+  ab.add_triangles(triangles_v);
+  ab.add_weld_ids(weld_v);
   fb::FinishAssetBuffer(b, ab.Finish());
   return {b.GetBufferPointer(), b.GetBufferPointer() + b.GetSize()};
 }

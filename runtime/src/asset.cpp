@@ -109,6 +109,20 @@ Status Semantics(const Asset& a, AssetView* view) {
   for (uint32_t t : *surr)
     if (t >= T) return Status::kErrorIndexOutOfRange;
 
+  // Narrow-phase topology (optional): the index buffer and the weld ids.
+  if (const auto* tris = a.triangles()) {
+    if (tris->size() != size_t{3} * T) return Status::kErrorCountMismatch;
+    for (uint32_t v : *tris)
+      if (v >= V) return Status::kErrorIndexOutOfRange;
+  }
+  if (const auto* weld = a.weld_ids()) {
+    if (weld->size() != V) return Status::kErrorCountMismatch;
+    for (uint32_t v = 0; v < V; ++v) {
+      const uint32_t w = weld->Get(v);
+      if (w > v || weld->Get(w) != w) return Status::kErrorIndexOutOfRange;
+    }
+  }
+
   // Pivots.
   for (uint32_t t : *piv_t)
     if (t >= T) return Status::kErrorIndexOutOfRange;

@@ -12,6 +12,7 @@ const char* ToString(Status s) {
     case Status::kErrorVertexCount: return "kErrorVertexCount: positions count differs from the asset's vertex count";
     case Status::kErrorStride: return "kErrorStride: positions stride must be >= 12 and a multiple of 4";
     case Status::kErrorOutOfMemory: return "kErrorOutOfMemory: context allocation failed";
+    case Status::kErrorNonFinitePositions: return "kErrorNonFinitePositions: a deformed vertex position is NaN or infinite";
     case Status::kErrorAssetTooSmall: return "kErrorAssetTooSmall: asset truncated (smaller than a FlatBuffer header)";
     case Status::kErrorAssetTooLarge: return "kErrorAssetTooLarge: asset larger than kMaxAssetBytes";
     case Status::kErrorIdentifier: return "kErrorIdentifier: not a .sphc asset (file_identifier is not SPHC)";

@@ -61,6 +61,8 @@ struct AssetData {
   std::vector<uint32_t> surrounding_offsets, surrounding_triangles, pivot_triangles, pivot_vertices;
   std::vector<schema::PivotFrame> frames;
   std::vector<uint32_t> tube_first_sphere;  // per tube
+  std::vector<uint32_t> triangles;  // [opt] Asset.triangles (#T×3): empty = field absent
+  std::vector<uint32_t> weld_ids;   // [opt] Asset.weld_ids (#V): empty = field absent
 };
 
 inline void Orthonormal(const float d[3], float u[3], float v[3]) {
@@ -157,6 +159,9 @@ inline AssetData MakeTubes(const std::vector<Tube>& tubes, const std::vector<std
   }
   d.vertex_count = mesh->vertex_count();
   d.triangle_count = mesh->triangle_count();
+  d.triangles = mesh->triangles;
+  d.weld_ids.resize(d.vertex_count);
+  for (uint32_t v = 0; v < d.vertex_count; ++v) d.weld_ids[v] = v;  // tubes share vertices: nothing to weld
   return d;
 }
 
@@ -177,6 +182,9 @@ inline AlignedBytes Serialize(const AssetData& d) {
   auto pt = b.CreateVector(d.pivot_triangles);
   auto pv = b.CreateVector(d.pivot_vertices);
   auto pf = b.CreateVectorOfStructs(d.frames);
+  flatbuffers::Offset<flatbuffers::Vector<uint32_t>> tris, weld;
+  if (!d.triangles.empty()) tris = b.CreateVector(d.triangles);
+  if (!d.weld_ids.empty()) weld = b.CreateVector(d.weld_ids);
   auto gen = b.CreateString("asset_builder.h");
   auto units = b.CreateString("unknown");
   schema::AssetBuilder ab(b);
@@ -194,6 +202,8 @@ inline AlignedBytes Serialize(const AssetData& d) {
   ab.add_pivot_triangles(pt);
   ab.add_pivot_vertices(pv);
   ab.add_pivot_frames(pf);
+  if (!d.triangles.empty()) ab.add_triangles(tris);
+  if (!d.weld_ids.empty()) ab.add_weld_ids(weld);
   b.Finish(ab.Finish(), d.identifier.c_str());
   AlignedBytes out;
   out.assign(b.GetBufferPointer(), b.GetSize());

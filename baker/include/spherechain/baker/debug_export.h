@@ -2,6 +2,8 @@
 // spheres) viewable in any glTF viewer, and front/side PNG views rendered from SVG by rsvg-convert.
 #pragma once
 
+#include <array>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -22,6 +24,27 @@ Status ExportDebugGltf(const Mesh& mesh, const runtime::AssetView& asset, const 
 /// Renders a 4-panel picture — front: regions | spheres; side: regions | spheres — as SVG text.
 /// Orthographic, painter's algorithm, Lambert shading. `width_px` is the whole picture's width.
 std::string RenderDebugSvg(const Mesh& mesh, const runtime::AssetView& asset, int width_px = 1600);
+
+/// A sphere drawn in a frame picture: centre (model space, source units), radius, sRGB colour, opacity.
+struct FrameSphere {
+  std::array<float, 3> center;
+  float radius = 0;
+  std::array<float, 3> color{0.5f, 0.5f, 0.5f};
+  float opacity = 0.35f;
+};
+
+/// One animation frame as a 4-panel SVG (front and side; each: mesh coloured by region with marked
+/// triangles, then the mesh in grey with marked triangles and `spheres`). `positions`: the deformed
+/// mesh, #V×3 (model space). `triangle_marks`: #T entries (shorter = unmarked), 0 none, 1 red (e.g. a
+/// contact the proxy missed), 2 amber (a contact it found). `caption` is printed under the panels
+/// (plain text, no markup). What `spherechain evaluate --png` shows.
+std::string RenderFrameSvg(const Mesh& mesh, const runtime::AssetView& asset, const float* positions,
+                           const std::vector<FrameSphere>& spheres, const std::vector<uint8_t>& triangle_marks,
+                           const std::string& caption, int width_px = 1600);
+
+/// Writes `svg` to PNG with `rsvg-convert` (Debian librsvg2-bin), atomically (nothing is left at
+/// `png_path` on failure). Errors: kIo when the tool is missing or fails.
+Status SvgToPng(const std::string& svg, const std::string& png_path, bool keep_svg = false);
 
 /// Renders RenderDebugSvg to PNG with `rsvg-convert` (Debian librsvg2-bin). Errors: kIo when the tool
 /// is missing or fails (the SVG is still written beside the PNG when `keep_svg`).

@@ -23,6 +23,12 @@ struct Fingerprint {
 };
 Fingerprint ComputeFingerprint(const Mesh& mesh);
 
+/// Weld ids (schema Asset.weld_ids) of bind positions `positions` (#V×3): for every vertex the lowest
+/// vertex index whose position compares equal (==, so +0 and −0 weld) — UV seams and triangle soups
+/// get the adjacency a narrow phase needs to skip triangles that share a corner. Nothing is merged:
+/// the index buffer keeps the source's vertices. Cost O(#V log #V), deterministic.
+std::vector<uint32_t> ComputeWeldIds(const std::vector<float>& positions);
+
 /// XXH3-64 of arbitrary bytes (the canonical bake configuration, ...).
 uint64_t Hash64(const void* data, size_t size);
 

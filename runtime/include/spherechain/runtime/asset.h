@@ -62,7 +62,9 @@ struct AssetView {
 ///     #S+1 surrounding_offsets, optional spheres_phi1/phi2/sphere_regions/sphere_labels; #T in
 ///     optional triangle_regions/triangle_spheres; pivots_per_sphere == 4 when params present),
 ///     kErrorIndexOutOfRange (chain / excluded-pair / triangle_spheres sphere indices < #S,
-///     surrounding / pivot triangles < #T, pivot vertices < #V), kErrorOffsets, kErrorNonFinite,
+///     surrounding / pivot triangles < #T, pivot vertices < #V, optional `triangles` indices < #V —
+///     3·#T of them, else kErrorCountMismatch —, optional `weld_ids`: #V entries, weld_ids[v] <= v and
+///     weld_ids[weld_ids[v]] == weld_ids[v], else kErrorIndexOutOfRange), kErrorOffsets, kErrorNonFinite,
 ///     kErrorRadius, kErrorPivotFrame, kErrorChainOrder, kErrorExcludedPairs.
 /// Returns kOk with `*out` filled.
 /// Cost: O(size) reads, no allocation, no exceptions; thread-safe (pure function of its inputs).

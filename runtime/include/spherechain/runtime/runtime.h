@@ -10,5 +10,6 @@
 #include "spherechain/runtime/asset.h"
 #include "spherechain/runtime/context.h"
 #include "spherechain/runtime/detect.h"
+#include "spherechain/runtime/narrow_phase.h"
 #include "spherechain/runtime/refit.h"
 #include "spherechain/runtime/status.h"

@@ -25,6 +25,8 @@ enum class [[nodiscard]] Status : uint32_t {
   kErrorVertexCount = 0x8000'0004u,   ///< PositionsView::count != asset fingerprint.vertex_count.
   kErrorStride = 0x8000'0005u,        ///< PositionsView::stride_bytes < 12 or not a multiple of 4.
   kErrorOutOfMemory = 0x8000'0006u,   ///< Context::Init could not allocate (the only allocating call).
+  kErrorNonFinitePositions = 0x8000'0007u,  ///< A deformed vertex position is NaN or infinite
+                                            ///< (NarrowPhaseJob checks the positions it reads).
 
   // ---- asset envelope (LoadAsset) ---------------------------------------------------------------
   kErrorAssetTooSmall = 0x8000'0101u,   ///< Fewer bytes than a FlatBuffer header (8) — truncated file.

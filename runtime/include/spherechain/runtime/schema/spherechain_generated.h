@@ -711,7 +711,9 @@ struct Asset FLATBUFFERS_FINAL_CLASS : private flatbuffers::Table {
     VT_PIVOT_TRIANGLES = 42,
     VT_PIVOT_VERTICES = 44,
     VT_PIVOT_FRAMES = 46,
-    VT_ACCURACY = 48
+    VT_ACCURACY = 48,
+    VT_TRIANGLES = 50,
+    VT_WELD_IDS = 52
   };
   uint32_t schema_version() const {
     return GetField<uint32_t>(VT_SCHEMA_VERSION, 0);
@@ -782,6 +784,12 @@ struct Asset FLATBUFFERS_FINAL_CLASS : private flatbuffers::Table {
   const spherechain::schema::Accuracy *accuracy() const {
     return GetPointer<const spherechain::schema::Accuracy *>(VT_ACCURACY);
   }
+  const flatbuffers::Vector<uint32_t> *triangles() const {
+    return GetPointer<const flatbuffers::Vector<uint32_t> *>(VT_TRIANGLES);
+  }
+  const flatbuffers::Vector<uint32_t> *weld_ids() const {
+    return GetPointer<const flatbuffers::Vector<uint32_t> *>(VT_WELD_IDS);
+  }
   bool Verify(flatbuffers::Verifier &verifier) const {
     return VerifyTableStart(verifier) &&
            VerifyField<uint32_t>(verifier, VT_SCHEMA_VERSION, 4) &&
@@ -829,6 +837,10 @@ struct Asset FLATBUFFERS_FINAL_CLASS : private flatbuffers::Table {
            verifier.VerifyVector(pivot_frames()) &&
            VerifyOffset(verifier, VT_ACCURACY) &&
            verifier.VerifyTable(accuracy()) &&
+           VerifyOffset(verifier, VT_TRIANGLES) &&
+           verifier.VerifyVector(triangles()) &&
+           VerifyOffset(verifier, VT_WELD_IDS) &&
+           verifier.VerifyVector(weld_ids()) &&
            verifier.EndTable();
   }
 };
@@ -906,6 +918,12 @@ struct AssetBuilder {
   void add_accuracy(flatbuffers::Offset<spherechain::schema::Accuracy> accuracy) {
     fbb_.AddOffset(Asset::VT_ACCURACY, accuracy);
   }
+  void add_triangles(flatbuffers::Offset<flatbuffers::Vector<uint32_t>> triangles) {
+    fbb_.AddOffset(Asset::VT_TRIANGLES, triangles);
+  }
+  void add_weld_ids(flatbuffers::Offset<flatbuffers::Vector<uint32_t>> weld_ids) {
+    fbb_.AddOffset(Asset::VT_WELD_IDS, weld_ids);
+  }
   explicit AssetBuilder(flatbuffers::FlatBufferBuilder &_fbb)
         : fbb_(_fbb) {
     start_ = fbb_.StartTable();
@@ -941,8 +959,12 @@ inline flatbuffers::Offset<Asset> CreateAsset(
     flatbuffers::Offset<flatbuffers::Vector<uint32_t>> pivot_triangles = 0,
     flatbuffers::Offset<flatbuffers::Vector<uint32_t>> pivot_vertices = 0,
     flatbuffers::Offset<flatbuffers::Vector<const spherechain::schema::PivotFrame *>> pivot_frames = 0,
-    flatbuffers::Offset<spherechain::schema::Accuracy> accuracy = 0) {
+    flatbuffers::Offset<spherechain::schema::Accuracy> accuracy = 0,
+    flatbuffers::Offset<flatbuffers::Vector<uint32_t>> triangles = 0,
+    flatbuffers::Offset<flatbuffers::Vector<uint32_t>> weld_ids = 0) {
   AssetBuilder builder_(_fbb);
+  builder_.add_weld_ids(weld_ids);
+  builder_.add_triangles(triangles);
   builder_.add_accuracy(accuracy);
   builder_.add_pivot_frames(pivot_frames);
   builder_.add_pivot_vertices(pivot_vertices);
@@ -993,7 +1015,9 @@ inline flatbuffers::Offset<Asset> CreateAssetDirect(
     const std::vector<uint32_t> *pivot_triangles = nullptr,
     const std::vector<uint32_t> *pivot_vertices = nullptr,
     const std::vector<spherechain::schema::PivotFrame> *pivot_frames = nullptr,
-    flatbuffers::Offset<spherechain::schema::Accuracy> accuracy = 0) {
+    flatbuffers::Offset<spherechain::schema::Accuracy> accuracy = 0,
+    const std::vector<uint32_t> *triangles = nullptr,
+    const std::vector<uint32_t> *weld_ids = nullptr) {
   auto generator__ = generator ? _fbb.CreateString(generator) : 0;
   auto parts__ = parts ? _fbb.CreateVector<flatbuffers::Offset<spherechain::schema::MeshPart>>(*parts) : 0;
   auto units__ = units ? _fbb.CreateString(units) : 0;
@@ -1011,6 +1035,8 @@ inline flatbuffers::Offset<Asset> CreateAssetDirect(
   auto pivot_triangles__ = pivot_triangles ? _fbb.CreateVector<uint32_t>(*pivot_triangles) : 0;
   auto pivot_vertices__ = pivot_vertices ? _fbb.CreateVector<uint32_t>(*pivot_vertices) : 0;
   auto pivot_frames__ = pivot_frames ? _fbb.CreateVectorOfStructs<spherechain::schema::PivotFrame>(*pivot_frames) : 0;
+  auto triangles__ = triangles ? _fbb.CreateVector<uint32_t>(*triangles) : 0;
+  auto weld_ids__ = weld_ids ? _fbb.CreateVector<uint32_t>(*weld_ids) : 0;
   return spherechain::schema::CreateAsset(
       _fbb,
       schema_version,
@@ -1035,7 +1061,9 @@ inline flatbuffers::Offset<Asset> CreateAssetDirect(
       pivot_triangles__,
       pivot_vertices__,
       pivot_frames__,
-      accuracy);
+      accuracy,
+      triangles__,
+      weld_ids__);
 }
 
 inline const spherechain::schema::Asset *GetAsset(const void *buf) {

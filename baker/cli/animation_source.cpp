@@ -1,0 +1,152 @@
+#include "animation_source.h"
+
+#include <cstdio>
+#include <filesystem>
+
+#include "spherechain/baker/write.h"
+
+namespace spherechain::cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+/// Folder of the character's default key poses: --poses-dir, else data/poses/<character> found by
+/// walking up from the current directory and from the executable's folder (build/<dir>/baker/).
+std::string FindPosesDir(const std::string& character, const std::string& explicit_dir) {
+  if (!explicit_dir.empty()) return explicit_dir;
+  const fs::path rel = fs::path("data") / "poses" / character;
+  std::vector<fs::path> starts;
+  std::error_code ec;
+  starts.push_back(fs::current_path(ec));
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (!ec) starts.push_back(exe.parent_path());
+  for (fs::path p : starts) {
+    for (int up = 0; up < 6 && !p.empty(); ++up, p = p.parent_path()) {
+      if (fs::is_directory(p / rel, ec)) return (p / rel).string();
+      if (p == p.parent_path()) break;
+    }
+  }
+  return {};
+}
+
+std::string Hex(uint64_t v) {
+  char b[24];
+  std::snprintf(b, sizeof b, "%016llx", static_cast<unsigned long long>(v));
+  return b;
+}
+
+}  // namespace
+
+std::string AnimationSource::Describe() const {
+  if (clip) return "clip '" + clip->name + "' (" + std::to_string(clip->duration_s) + " s)";
+  return "morph through " + std::to_string(poses.size()) + " key poses from " + poses_from;
+}
+
+baker::Status AnimationSource::Frame(const baker::Mesh& mesh, uint32_t f, baker::SkinningScratch* scratch,
+                                     std::vector<float>* out, std::string* label) const {
+  out->resize(mesh.positions.size());
+  char text[96];
+  if (clip) {
+    const float t = clip->duration_s * float(f) / float(frames);
+    std::snprintf(text, sizeof text, "t=%.3fs", t);
+    if (auto s = baker::SkinClip(mesh, *clip, t, scratch, out->data(), out->size()); !s.ok()) return s;
+  } else {
+    auto mf = baker::MorphFrameAt(f, frames, static_cast<uint32_t>(poses.size()));
+    if (!mf.ok()) return mf.error();
+    std::snprintf(text, sizeof text, "%s t=%.3f", poses[mf->key].name.c_str(), mf->t);
+    if (auto s = baker::SkinMorphFrame(mesh, poses, f, frames, scratch, out->data(), out->size()); !s.ok()) return s;
+  }
+  *label = text;
+  return baker::Ok{};
+}
+
+bool OpenAnimation(const baker::Mesh& mesh, const AnimationArgs& a, AnimationSource* out, std::string* error) {
+  *out = AnimationSource{};
+  if (!a.clip.empty() && !a.morph.empty()) return *error = "--clip and --morph exclude each other", false;
+  if (!mesh.skin)
+    return *error = "'" + a.mesh + "' has no skin: animating it needs a rigged character (glTF skin, assimp bones, "
+                    "or a MakeHuman .mhskel beside base.obj / --rig)",
+           false;
+  if (!a.clip.empty()) {
+    for (const auto& c : mesh.clips)
+      if (c.name == a.clip) out->clip = &c;
+    if (!out->clip) {
+      std::string names;
+      for (const auto& c : mesh.clips) names += (names.empty() ? "" : ", ") + ("'" + c.name + "'");
+      return *error = "no clip named '" + a.clip + "' in '" + a.mesh + "' (clips: " + (names.empty() ? "none" : names) +
+                      ")",
+             false;
+    }
+  } else if (a.morph.empty() && !mesh.clips.empty()) {
+    out->clip = &mesh.clips.front();
+  }
+  if (!out->clip) {
+    const std::string character = mesh.skin->source == "mhskel" ? "makehuman" : fs::path(a.mesh).stem().string();
+    const std::string dir = FindPosesDir(character, a.poses_dir);
+    if (a.morph.empty()) {
+      if (dir.empty())
+        return *error = "'" + a.mesh + "' has no clips and no default key poses (data/poses/" + character +
+                        " not found from the current directory or the executable); pass --morph POSE.json... or "
+                        "--poses-dir DIR",
+               false;
+      auto loaded = baker::LoadPoseFolder(dir, *mesh.skin);
+      if (!loaded.ok()) return *error = loaded.error().message, false;
+      out->poses = std::move(loaded).value();
+      out->poses_from = dir;
+    } else {
+      for (const std::string& m : a.morph) {
+        std::string path = m;
+        if (!fs::exists(path) && !dir.empty() && fs::exists(fs::path(dir) / (m + ".json")))
+          path = (fs::path(dir) / (m + ".json")).string();
+        if (fs::is_directory(path)) {
+          auto loaded = baker::LoadPoseFolder(path, *mesh.skin);
+          if (!loaded.ok()) return *error = loaded.error().message, false;
+          for (auto& p : loaded.value()) out->poses.push_back(std::move(p));
+        } else {
+          auto p = baker::LoadPose(path, *mesh.skin);
+          if (!p.ok()) return *error = p.error().message, false;
+          out->poses.push_back(std::move(p).value());
+        }
+      }
+      out->poses_from = "--morph";
+    }
+  }
+  out->frames = a.frames;
+  if (a.frames == 0) return *error = "--frames must be > 0", false;
+  if (!out->clip && a.frames < 2 * out->poses.size())
+    return *error = "--frames " + std::to_string(a.frames) + " is too few for " + std::to_string(out->poses.size()) +
+                    " key poses (each needs a rest frame and its key frame: at least " +
+                    std::to_string(2 * out->poses.size()) + ")",
+           false;
+  if (out->clip) {
+    if (auto s = baker::ValidateClip(*mesh.skin, *out->clip); !s.ok()) return *error = s.error().message, false;
+  }
+  return true;
+}
+
+bool CheckFingerprint(const runtime::AssetView& view, const baker::Mesh& mesh, const std::string& asset_path,
+                      const std::string& mesh_path, std::string* error) {
+  const baker::Fingerprint f = baker::ComputeFingerprint(mesh);
+  const auto* af = view.asset->fingerprint();
+  const std::string pair = "mesh '" + mesh_path + "' does not match asset '" + asset_path + "': ";
+  if (f.vertex_count != af->vertex_count()) {
+    *error = pair + "the mesh has " + std::to_string(f.vertex_count) + " vertices, the asset was baked from " +
+             std::to_string(af->vertex_count());
+    return false;
+  }
+  if (f.triangle_count != af->triangle_count()) {
+    *error = pair + "the mesh has " + std::to_string(f.triangle_count) + " triangles, the asset was baked from " +
+             std::to_string(af->triangle_count());
+    return false;
+  }
+  if (f.positions_hash != af->positions_hash() || f.indices_hash != af->indices_hash()) {
+    *error = pair + "same counts but different content (positions hash " + Hex(f.positions_hash) + " vs " +
+             Hex(af->positions_hash()) + ", indices hash " + Hex(f.indices_hash) + " vs " + Hex(af->indices_hash()) +
+             "); re-bake the asset from this mesh";
+    return false;
+  }
+  return true;
+}
+
+}  // namespace spherechain::cli

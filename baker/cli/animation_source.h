@@ -1,0 +1,47 @@
+// spherechain CLI — the animation a command plays (a skinned clip or the paper's morph through key
+// poses), shared by `play` and `evaluate`, and the mesh ↔ asset fingerprint check.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "spherechain/baker/animation.h"
+#include "spherechain/baker/morph.h"
+#include "spherechain/runtime/asset.h"
+
+namespace spherechain::cli {
+
+/// What the user asked for on the command line.
+struct AnimationArgs {
+  std::string mesh;                ///< the character file (for messages and the poses folder's name)
+  std::string clip;                ///< --clip NAME (empty: the first clip, or the morph when none)
+  std::vector<std::string> morph;  ///< --morph POSES... (files, names in the poses folder, folders)
+  std::string poses_dir;           ///< --poses-dir
+  uint32_t frames = 40;            ///< --frames
+};
+
+/// The chosen animation: a clip sampled uniformly, or the Bézier morph through key poses.
+struct AnimationSource {
+  const baker::Clip* clip = nullptr;  ///< points into the mesh's clips when playing a clip
+  std::vector<baker::Pose> poses;     ///< the morph's key poses otherwise
+  std::string poses_from;             ///< folder or "--morph"
+  uint32_t frames = 0;
+
+  /// One line: "clip 'Walk' (2.0 s)" or "morph through 8 key poses from DIR".
+  std::string Describe() const;
+  /// Deforms frame `f` (< frames) of `mesh` into `out` (#V×3) and names it ("t=0.533s" or
+  /// "arms_crossed t=0.50"). Errors: those of the skinning.
+  baker::Status Frame(const baker::Mesh& mesh, uint32_t f, baker::SkinningScratch* scratch, std::vector<float>* out,
+                      std::string* label) const;
+};
+
+/// Picks the animation (unknown clip, missing poses, too few frames: false with `*error` saying what).
+/// `mesh` must have a skin.
+bool OpenAnimation(const baker::Mesh& mesh, const AnimationArgs& args, AnimationSource* out, std::string* error);
+
+/// The mesh must be the one the asset was baked from (DESIGN.md: a mismatched pairing is an error):
+/// counts, then the hashes of positions and indices. False with `*error` naming both files.
+bool CheckFingerprint(const runtime::AssetView& view, const baker::Mesh& mesh, const std::string& asset_path,
+                      const std::string& mesh_path, std::string* error);
+
+}  // namespace spherechain::cli

@@ -1,0 +1,480 @@
+// spherechain evaluate ASSET --mesh INPUT [--clip NAME | --morph POSES...] [--frames N] [--margin REL]
+//                      [--refit paper|frame] [--json OUT] [--png OUT] [--min-recall R] [--no-coverage]
+//
+// Measures the proxy against the truth. Every frame of the animation `play` would run: the deformed
+// mesh's exact self-intersections (ground truth: every intersecting pair of triangles that share no
+// welded corner, CGAL box intersection + exact predicates), the runtime's narrow phase on the same
+// frame, and the proxy's sphere pairs (M1 chains, M2 all spheres) after the refit. A *contact* is an
+// intersecting pair whose owning spheres (surrounding regions, §5.1) differ and are not an excluded
+// pair; the other intersections (same sphere, excluded pair: skinning artefacts at joints) are counted
+// apart. Summary: the proxy's recall (region pairs and sphere pairs), its false alarms (a region pair
+// reported where no triangles of the two regions come within --margin), the narrow phase's recall and
+// precision (triangle pairs), and bind-pose coverage / protrusion of φ1, φ1', φ2.
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <map>
+#include <set>
+
+#include <nlohmann/json.hpp>
+
+#include "animation_source.h"
+#include "asset_file.h"
+#include "commands.h"
+#include "spherechain/baker/contacts.h"
+#include "spherechain/baker/coverage.h"
+#include "spherechain/baker/debug_export.h"
+#include "spherechain/baker/import.h"
+#include "spherechain/baker/write.h"
+#include "spherechain/runtime/narrow_phase.h"
+#include "spherechain/runtime/runtime.h"
+
+namespace spherechain::cli {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using RegionPair = std::pair<int, int>;
+using SpherePairKey = std::pair<uint32_t, uint32_t>;
+
+struct EvaluateArgs {
+  std::string asset, mesh, clip, poses_dir, rig, json, png, refit = "frame";
+  std::vector<std::string> morph;
+  uint32_t frames = 40;
+  double margin = 0.01;
+  double min_recall = std::numeric_limits<double>::quiet_NaN();
+  bool coverage = true;
+};
+
+std::string RegionName(const RegionPair& p) { return "R" + std::to_string(p.first) + "-R" + std::to_string(p.second); }
+
+nlohmann::json RegionList(const std::set<RegionPair>& s) {
+  nlohmann::json j = nlohmann::json::array();
+  for (const auto& p : s) j.push_back(RegionName(p));
+  return j;
+}
+
+std::string RegionText(const std::set<RegionPair>& s) {
+  std::string t;
+  for (const auto& p : s) t += (t.empty() ? "" : " ") + RegionName(p);
+  return t.empty() ? "-" : t;
+}
+
+template <class T>
+size_t CountIn(const std::set<T>& of, const std::set<T>& in) {
+  size_t n = 0;
+  for (const T& x : of) n += in.count(x);
+  return n;
+}
+
+/// Ratio with the vacuous case stated: nothing to find → 1.
+double Ratio(double hit, double total) { return total > 0 ? hit / total : 1.0; }
+
+struct FrameEval {
+  std::string label;
+  // Ground truth.
+  uint32_t contacts = 0, same_sphere = 0, excluded = 0, unassigned = 0, degenerate = 0;
+  std::set<RegionPair> exact_regions;
+  std::set<SpherePairKey> exact_spheres;
+  // Narrow phase.
+  runtime::NarrowPhaseStats narrow;
+  uint32_t narrow_true = 0;  // contacts also in the ground truth
+  std::set<RegionPair> narrow_regions;
+  double narrow_us = 0, exact_ms = 0;
+  // Proxy.
+  std::set<RegionPair> m1_regions, m2_regions;
+  std::set<SpherePairKey> m1_spheres, m2_spheres;
+  std::set<RegionPair> false_m1, false_m2;
+  uint32_t missed_contacts = 0;  // contacts in region pairs M2 did not report
+  uint32_t missed_sphere_contacts = 0;  // contacts whose sphere pair M2 did not report
+};
+
+/// The exact-predicate coverage measure of one sphere set (bind pose).
+nlohmann::json CoverageJson(const baker::CoverageStats& c) {
+  return {{"coverage", c.coverage},       {"protrusion", c.protrusion},       {"outside_p95_rel", c.outside_p95_rel},
+          {"outside_max_rel", c.outside_max_rel}, {"voxel_size", c.voxel_size}, {"voxels_undecided", c.voxels_undecided}};
+}
+
+int RunEvaluate(const EvaluateArgs& a) {
+  // ---- arguments that need no file ---------------------------------------------------------------
+  if (!std::isnan(a.min_recall) && !(a.min_recall >= 0.0 && a.min_recall <= 1.0))
+    return Fail("--min-recall " + std::to_string(a.min_recall) + " is outside [0, 1]");
+  if (!(a.margin >= 0.0 && a.margin < 1.0)) return Fail("--margin must be in [0, 1) (a fraction of the body height)");
+  if (!a.png.empty() && a.png == a.json) return Fail("--png and --json name the same file");
+
+  LoadedAsset asset;
+  std::string error;
+  if (!LoadAssetFile(a.asset, &asset, &error)) return Fail(error);
+  const runtime::AssetView& view = asset.view;
+  baker::ImportOptions opts;
+  opts.rig_path = a.rig;
+  baker::Context log = MakeLoggingContext();
+  auto imported = baker::ImportMesh(a.mesh, opts, &log);
+  if (!imported.ok()) return Fail(imported.error());
+  const baker::Mesh& mesh = imported.value();
+  if (!CheckFingerprint(view, mesh, a.asset, a.mesh, &error)) return Fail(error);
+
+  AnimationArgs anim_args{a.mesh, a.clip, a.morph, a.poses_dir, a.frames};
+  AnimationSource anim;
+  if (!OpenAnimation(mesh, anim_args, &anim, &error)) return Fail(error);
+
+  runtime::Context ctx;
+  if (runtime::Status s = ctx.Init(view); runtime::Failed(s))
+    return Fail("'" + a.asset + "': runtime Context::Init: " + runtime::ToString(s));
+  runtime::NarrowPhaseContext narrow;
+  if (runtime::Status s = narrow.Init(view); runtime::Failed(s))
+    return Fail("'" + a.asset + "': narrow phase: " + runtime::ToString(s) +
+                (s == runtime::Status::kErrorMissingField ? " (baked before the narrow phase existed: re-bake it)" : ""));
+
+  const uint32_t V = view.vertex_count, T = view.triangle_count;
+  std::vector<uint32_t> weld(V);
+  for (uint32_t v = 0; v < V; ++v) weld[v] = narrow.weld_id(v);
+  const auto* sphere_regions = view.asset->sphere_regions();
+  auto sphere_region = [&](uint32_t s) { return sphere_regions ? int(sphere_regions->Get(s)) : -1; };
+  auto region_pair = [&](uint32_t sa, uint32_t sb) {
+    const int ra = sphere_region(sa), rb = sphere_region(sb);
+    return RegionPair(std::min(ra, rb), std::max(ra, rb));
+  };
+  // Triangles by the region of their owning sphere (for the false-alarm distance test).
+  std::map<int, std::vector<uint32_t>> region_triangles;
+  for (uint32_t t = 0; t < T; ++t)
+    if (narrow.triangle_sphere(t) != 0xFFFF) region_triangles[sphere_region(narrow.triangle_sphere(t))].push_back(t);
+
+  double lo = 1e300, hi = -1e300;
+  const int up = mesh.up_axis == baker::UpAxis::kZ ? 2 : mesh.up_axis == baker::UpAxis::kX ? 0 : 1;
+  for (uint32_t v = 0; v < V; ++v) lo = std::min(lo, double(mesh.positions[3 * v + up])), hi = std::max(hi, double(mesh.positions[3 * v + up]));
+  const double height = hi - lo, margin = a.margin * height;
+  const runtime::RefitMode mode = a.refit == "paper" ? runtime::RefitMode::kPaper : runtime::RefitMode::kPivotFrame;
+
+  std::vector<runtime::Collision> out_m1(runtime::DetectBound(view, runtime::DetectMethod::kM1)),
+      out_m2(runtime::DetectBound(view, runtime::DetectMethod::kM2));
+  std::vector<runtime::TriangleContact> contacts(1u << 20);
+  std::vector<float> positions;
+  baker::SkinningScratch scratch;
+  std::vector<FrameEval> rows(anim.frames);
+  const bool tty = isatty(2);
+  const auto t_start = Clock::now();
+
+  for (uint32_t f = 0; f < anim.frames; ++f) {
+    FrameEval& row = rows[f];
+    if (auto s = anim.Frame(mesh, f, &scratch, &positions, &row.label); !s.ok()) return Fail(s.error());
+    // Proxy: refit, M1, M2.
+    runtime::RefitJob refit;
+    refit.context = &ctx;
+    refit.mode = mode;
+    refit.positions = {positions.data(), V, 12};
+    if (runtime::Status s = refit.Run(); runtime::Failed(s)) return Fail(std::string("refit: ") + runtime::ToString(s));
+    for (int m = 0; m < 2; ++m) {
+      auto& out = m == 0 ? out_m1 : out_m2;
+      uint32_t n = 0;
+      runtime::DetectJob det;
+      det.context = &ctx;
+      det.method = m == 0 ? runtime::DetectMethod::kM1 : runtime::DetectMethod::kM2;
+      det.output = out.data();
+      det.capacity = static_cast<uint32_t>(out.size());
+      det.count = &n;
+      if (runtime::Status s = det.Run(); runtime::Failed(s)) return Fail(std::string("detect: ") + runtime::ToString(s));
+      for (uint32_t i = 0; i < n; ++i) {
+        (m == 0 ? row.m1_regions : row.m2_regions).insert(region_pair(out[i].a, out[i].b));
+        (m == 0 ? row.m1_spheres : row.m2_spheres).insert({out[i].a, out[i].b});
+      }
+    }
+    // Narrow phase.
+    uint32_t n_contacts = 0;
+    runtime::NarrowPhaseJob job;
+    job.context = &narrow;
+    job.positions = refit.positions;
+    job.output = contacts.data();
+    job.capacity = static_cast<uint32_t>(contacts.size());
+    job.count = &n_contacts;
+    job.stats = &row.narrow;
+    const auto t0 = Clock::now();
+    const runtime::Status ns = job.Run();
+    row.narrow_us = std::chrono::duration<double, std::micro>(Clock::now() - t0).count();
+    if (runtime::Failed(ns)) return Fail(std::string("narrow phase: ") + runtime::ToString(ns));
+    if (runtime::IsTruncated(ns))
+      log.Warn("frame " + std::to_string(f) + ": more than " + std::to_string(contacts.size()) +
+               " narrow-phase contacts; precision counts only the first ones");
+    std::set<baker::TrianglePair> narrow_pairs;
+    for (uint32_t i = 0; i < n_contacts; ++i) {
+      const auto& c = contacts[i];
+      narrow_pairs.insert({std::min(c.triangle_a, c.triangle_b), std::max(c.triangle_a, c.triangle_b)});
+      row.narrow_regions.insert(region_pair(c.sphere_a, c.sphere_b));
+    }
+    // Ground truth.
+    const auto t1 = Clock::now();
+    auto exact = baker::ExactSelfIntersections(positions.data(), V, mesh.indices, weld, &row.degenerate);
+    row.exact_ms = std::chrono::duration<double, std::milli>(Clock::now() - t1).count();
+    if (!exact.ok()) return Fail(baker::Error{exact.error().code, "frame " + std::to_string(f) + ": " + exact.error().message});
+    for (const baker::TrianglePair& p : exact.value()) {
+      const uint32_t sa = narrow.triangle_sphere(p.a), sb = narrow.triangle_sphere(p.b);
+      if (sa == 0xFFFF || sb == 0xFFFF) {
+        ++row.unassigned;
+      } else if (sa == sb) {
+        ++row.same_sphere;
+      } else if (narrow.IsExcluded(sa, sb)) {
+        ++row.excluded;
+      } else {
+        ++row.contacts;
+        const SpherePairKey key{std::min(sa, sb), std::max(sa, sb)};
+        const RegionPair rp = region_pair(sa, sb);
+        row.exact_spheres.insert(key);
+        row.exact_regions.insert(rp);
+        row.narrow_true += narrow_pairs.count(p);
+        row.missed_contacts += !row.m2_regions.count(rp);
+        row.missed_sphere_contacts += !row.m2_spheres.count(key);
+      }
+    }
+    // False alarms: region pairs the proxy reports with no contact, where nothing comes within the margin.
+    std::set<RegionPair> reported = row.m1_regions;
+    reported.insert(row.m2_regions.begin(), row.m2_regions.end());
+    for (const RegionPair& rp : reported) {
+      if (row.exact_regions.count(rp)) continue;
+      auto near = baker::AnyTrianglesWithin(
+          positions.data(), V, mesh.indices, weld, region_triangles[rp.first], region_triangles[rp.second], margin,
+          [&](uint32_t s, uint32_t t) {
+            const uint32_t sa = narrow.triangle_sphere(s), sb = narrow.triangle_sphere(t);
+            return sa != sb && !narrow.IsExcluded(sa, sb);
+          });
+      if (!near.ok()) return Fail(near.error());
+      if (near.value()) continue;
+      if (row.m1_regions.count(rp)) row.false_m1.insert(rp);
+      if (row.m2_regions.count(rp)) row.false_m2.insert(rp);
+    }
+    const double elapsed = std::chrono::duration<double>(Clock::now() - t_start).count();
+    if (tty) {
+      std::fprintf(stderr, "\revaluate: frame %u/%u  %.1f s", f + 1, anim.frames, elapsed);
+      if (f + 1 == anim.frames) std::fprintf(stderr, "\n");
+    } else if ((f + 1) % 10 == 0 || f + 1 == anim.frames) {
+      std::fprintf(stderr, "evaluate: frame %u/%u  %.1f s\n", f + 1, anim.frames, elapsed);
+    }
+  }
+
+  // ---- bind-pose coverage and protrusion of φ1, φ1', φ2 ------------------------------------------------
+  nlohmann::json coverage = nlohmann::json::object(), protrusion = nlohmann::json::object(),
+                 coverage_detail = nlohmann::json::object();
+  if (a.coverage) {
+    const std::pair<const char*, const flatbuffers::Vector<const schema::Sphere*>*> sets[3] = {
+        {"phi1", view.asset->spheres_phi1()}, {"phi1_adjusted", view.asset->spheres()}, {"phi2", view.asset->spheres_phi2()}};
+    for (const auto& [name, list] : sets) {
+      if (!list) continue;
+      std::vector<baker::Ball> spheres;
+      for (const schema::Sphere* s : *list) {
+        baker::Ball b;
+        b.center = Eigen::Vector3d(s->center().x(), s->center().y(), s->center().z());
+        b.radius = s->radius();
+        spheres.push_back(b);
+      }
+      auto c = baker::MeasureCoverage(mesh.positions, mesh.indices, spheres);
+      if (!c.ok()) return Fail(c.error());
+      coverage[name] = c->coverage;
+      protrusion[name] = c->protrusion;
+      coverage_detail[name] = CoverageJson(c.value());
+    }
+  }
+
+  // ---- summary -------------------------------------------------------------------------------------
+  size_t exact_regions = 0, found_m1 = 0, found_m2 = 0, exact_spheres = 0, sfound_m1 = 0, sfound_m2 = 0;
+  size_t false_m1 = 0, false_m2 = 0, gt = 0, narrow_total = 0, narrow_true = 0, excluded = 0, same = 0, unassigned = 0;
+  nlohmann::json false_frames = nlohmann::json::array();
+  std::vector<double> narrow_us;
+  double exact_ms = 0;
+  uint32_t worst = 0;
+  for (uint32_t f = 0; f < anim.frames; ++f) {
+    const FrameEval& r = rows[f];
+    exact_regions += r.exact_regions.size();
+    found_m1 += CountIn(r.exact_regions, r.m1_regions);
+    found_m2 += CountIn(r.exact_regions, r.m2_regions);
+    exact_spheres += r.exact_spheres.size();
+    sfound_m1 += CountIn(r.exact_spheres, r.m1_spheres);
+    sfound_m2 += CountIn(r.exact_spheres, r.m2_spheres);
+    false_m1 += r.false_m1.size();
+    false_m2 += r.false_m2.size();
+    if (!r.false_m1.empty() || !r.false_m2.empty()) false_frames.push_back(f);
+    gt += r.contacts;
+    narrow_total += r.narrow.contacts;
+    narrow_true += r.narrow_true;
+    excluded += r.excluded;
+    same += r.same_sphere;
+    unassigned += r.unassigned;
+    narrow_us.push_back(r.narrow_us);
+    exact_ms += r.exact_ms;
+    const auto misses = [](const FrameEval& x) { return std::pair(x.missed_contacts, x.missed_sphere_contacts); };
+    if (misses(r) > misses(rows[worst])) worst = f;
+  }
+  std::sort(narrow_us.begin(), narrow_us.end());
+  const double recall_m1 = Ratio(double(found_m1), double(exact_regions)), recall_m2 = Ratio(double(found_m2), double(exact_regions));
+  const double srecall_m1 = Ratio(double(sfound_m1), double(exact_spheres)), srecall_m2 = Ratio(double(sfound_m2), double(exact_spheres));
+  const double n_recall = Ratio(double(narrow_true), double(gt)), n_precision = Ratio(double(narrow_true), double(narrow_total));
+
+  std::printf("evaluate: %s + %s — %s, %u frames, %u spheres, %u triangles, body height %.4g, margin %.4g (%.2f %%)\n",
+              a.asset.c_str(), a.mesh.c_str(), anim.Describe().c_str(), anim.frames, view.sphere_count, T, height, margin,
+              100.0 * a.margin);
+  std::printf("\n%5s  %-26s %8s %8s %8s %8s  %-22s %-22s %-22s %s\n", "frame", "pose", "contacts", "narrow", "excluded",
+              "same sph", "exact regions", "proxy M1", "proxy M2", "missed by M2 / false alarms");
+  for (uint32_t f = 0; f < anim.frames; ++f) {
+    const FrameEval& r = rows[f];
+    std::set<RegionPair> missed;
+    for (const RegionPair& p : r.exact_regions)
+      if (!r.m2_regions.count(p)) missed.insert(p);
+    std::set<RegionPair> falses = r.false_m1;
+    falses.insert(r.false_m2.begin(), r.false_m2.end());
+    std::printf("%5u  %-26s %8u %8u %8u %8u  %-22s %-22s %-22s %s / %s\n", f, r.label.c_str(), r.contacts, r.narrow.contacts,
+                r.excluded, r.same_sphere, RegionText(r.exact_regions).c_str(), RegionText(r.m1_regions).c_str(),
+                RegionText(r.m2_regions).c_str(), RegionText(missed).c_str(), RegionText(falses).c_str());
+  }
+  std::printf("\nground truth: %zu contacts (triangle pairs) in %zu (frame, region pair)s and %zu (frame, sphere pair)s; "
+              "apart: %zu in excluded pairs, %zu inside one sphere's region, %zu with an unassigned triangle\n",
+              gt, exact_regions, exact_spheres, excluded, same, unassigned);
+  std::printf("proxy recall, region pairs: M1 %.1f %% (%zu/%zu), M2 %.1f %% (%zu/%zu); sphere pairs: M1 %.1f %%, M2 %.1f %%\n",
+              100 * recall_m1, found_m1, exact_regions, 100 * recall_m2, found_m2, exact_regions, 100 * srecall_m1,
+              100 * srecall_m2);
+  std::printf("proxy false alarms (nothing within the margin): M1 %zu, M2 %zu, in %zu frames\n", false_m1, false_m2,
+              false_frames.size());
+  std::printf("narrow phase: recall %.2f %% (%zu/%zu), precision %.2f %% (%zu/%zu); median %.1f us, max %.1f us a frame "
+              "(exact ground truth: %.1f ms a frame)\n",
+              100 * n_recall, narrow_true, gt, 100 * n_precision, narrow_true, narrow_total,
+              narrow_us.empty() ? 0.0 : narrow_us[narrow_us.size() / 2], narrow_us.empty() ? 0.0 : narrow_us.back(),
+              anim.frames ? exact_ms / anim.frames : 0.0);
+  if (a.coverage)
+    for (const char* name : {"phi1", "phi1_adjusted", "phi2"})
+      if (coverage_detail.contains(name))
+        std::printf("bind pose %-13s coverage %.1f %%, protrusion %.1f %% (outside: p95 %.2f %%, max %.2f %% of height)\n",
+                    name, 100 * coverage_detail[name]["coverage"].get<double>(),
+                    100 * coverage_detail[name]["protrusion"].get<double>(),
+                    100 * coverage_detail[name]["outside_p95_rel"].get<double>(),
+                    100 * coverage_detail[name]["outside_max_rel"].get<double>());
+
+  // ---- outputs (nothing is written before every frame succeeded) ----------------------------------------
+  if (!a.png.empty()) {
+    const uint32_t f = worst;
+    std::string label;
+    if (auto s = anim.Frame(mesh, f, &scratch, &positions, &label); !s.ok()) return Fail(s.error());
+    runtime::RefitJob refit;
+    refit.context = &ctx;
+    refit.mode = mode;
+    refit.positions = {positions.data(), V, 12};
+    if (runtime::Failed(refit.Run())) return Fail("refit failed on the picture's frame");
+    auto exact = baker::ExactSelfIntersections(positions.data(), V, mesh.indices, weld);
+    if (!exact.ok()) return Fail(exact.error());
+    std::vector<uint8_t> marks(T, 0);
+    for (const baker::TrianglePair& p : exact.value()) {
+      const uint32_t sa = narrow.triangle_sphere(p.a), sb = narrow.triangle_sphere(p.b);
+      if (sa == 0xFFFF || sb == 0xFFFF || sa == sb || narrow.IsExcluded(sa, sb)) continue;
+      const bool found = rows[f].m2_spheres.count({std::min(sa, sb), std::max(sa, sb)}) > 0;
+      for (uint32_t t : {p.a, p.b}) marks[t] = std::max<uint8_t>(marks[t], found ? 2 : 1);
+    }
+    const runtime::SphereArrays sp = ctx.spheres();
+    std::vector<baker::FrameSphere> spheres;
+    for (uint32_t s = 0; s < sp.count; ++s)
+      spheres.push_back({{sp.x[s], sp.y[s], sp.z[s]}, sp.r[s],
+                         baker::RegionColor(static_cast<baker::Region>(std::clamp(sphere_region(s), 0, 4))), 0.35f});
+    char caption[256];
+    std::snprintf(caption, sizeof caption,
+                  "frame %u (%s): %u contacts, %u missed by the proxy's sphere pairs (red), the rest found (amber); "
+                  "refit spheres (M2)",
+                  f, label.c_str(), rows[f].contacts, rows[f].missed_sphere_contacts);
+    if (auto s = baker::SvgToPng(baker::RenderFrameSvg(mesh, view, positions.data(), spheres, marks, caption), a.png);
+        !s.ok())
+      return Fail(s.error());
+    std::printf("wrote %s (frame %u)\n", a.png.c_str(), f);
+  }
+  if (!a.json.empty()) {
+    nlohmann::json j;
+    j["asset"] = a.asset;
+    j["mesh"] = a.mesh;
+    j["animation"] = anim.Describe();
+    j["refit"] = a.refit;
+    j["body_height"] = height;
+    j["margin_rel"] = a.margin;
+    nlohmann::json fr = nlohmann::json::array();
+    for (uint32_t f = 0; f < anim.frames; ++f) {
+      const FrameEval& r = rows[f];
+      fr.push_back({{"frame", f},
+                    {"label", r.label},
+                    {"contacts", r.contacts},
+                    {"excluded_intersections", r.excluded},
+                    {"same_sphere_intersections", r.same_sphere},
+                    {"unassigned_intersections", r.unassigned},
+                    {"degenerate_triangles", r.degenerate},
+                    {"exact_region_pairs", RegionList(r.exact_regions)},
+                    {"narrow_region_pairs", RegionList(r.narrow_regions)},
+                    {"proxy_region_pairs_m1", RegionList(r.m1_regions)},
+                    {"proxy_region_pairs_m2", RegionList(r.m2_regions)},
+                    {"false_alarms_m1", RegionList(r.false_m1)},
+                    {"false_alarms_m2", RegionList(r.false_m2)},
+                    {"exact_sphere_pairs", r.exact_spheres.size()},
+                    {"missed_contacts_m2", r.missed_contacts},
+                    {"narrow", {{"contacts", r.narrow.contacts}, {"true_contacts", r.narrow_true},
+                                {"candidate_pairs", r.narrow.candidate_pairs}, {"triangle_tests", r.narrow.triangle_tests},
+                                {"us", r.narrow_us}}},
+                    {"exact_ms", r.exact_ms}});
+    }
+    j["frames"] = fr;
+    j["summary"] = {
+        {"frames", anim.frames},
+        {"contacts", gt},
+        {"excluded_intersections", excluded},
+        {"same_sphere_intersections", same},
+        {"exact_region_pairs", exact_regions},
+        {"proxy", {{"recall_m1", recall_m1}, {"recall_m2", recall_m2}, {"sphere_recall_m1", srecall_m1},
+                   {"sphere_recall_m2", srecall_m2}, {"false_alarms_m1", false_m1}, {"false_alarms_m2", false_m2},
+                   {"false_alarm_frames", false_frames}}},
+        {"narrow", {{"recall", n_recall}, {"precision", n_precision}, {"contacts", narrow_total},
+                    {"median_us", narrow_us.empty() ? 0.0 : narrow_us[narrow_us.size() / 2]},
+                    {"max_us", narrow_us.empty() ? 0.0 : narrow_us.back()}}},
+        {"coverage", coverage},
+        {"protrusion", protrusion},
+        {"bind_pose", coverage_detail}};
+    if (auto s = baker::WriteFileAtomic(a.json, j.dump(2) + "\n"); !s.ok()) return Fail(s.error());
+    std::printf("wrote %s\n", a.json.c_str());
+  }
+  if (!std::isnan(a.min_recall)) {
+    const double recall = std::min(recall_m1, recall_m2);
+    if (recall < a.min_recall) {
+      std::fprintf(stderr, "error: proxy recall %.3f (region pairs, min of M1 and M2) is below --min-recall %.3f\n", recall,
+                   a.min_recall);
+      return 1;
+    }
+    std::printf("proxy recall %.3f >= --min-recall %.3f\n", recall, a.min_recall);
+  }
+  return 0;
+}
+
+}  // namespace
+
+void RegisterEvaluate(CLI::App& app, Commands* commands) {
+  auto args = std::make_shared<EvaluateArgs>();
+  CLI::App* sub = app.add_subcommand(
+      "evaluate",
+      "Measure the proxy against exact triangle intersection of the deformed mesh, frame by frame: the proxy's "
+      "recall and false alarms, the narrow phase's recall and precision, bind-pose coverage and protrusion");
+  sub->add_option("asset", args->asset, ".sphc asset baked from the mesh")->required()->check(CLI::ExistingFile);
+  sub->add_option("--mesh", args->mesh, "The character file the asset was baked from (checked by fingerprint)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  sub->add_option("--clip", args->clip, "Clip to play (default: the first clip; none: the morph)");
+  sub->add_option("--morph", args->morph, "Key pose files (.json), pose names in the poses folder, or folders");
+  sub->add_option("--poses-dir", args->poses_dir, "Folder of default key poses (default: data/poses/<character>)");
+  sub->add_option("--frames", args->frames, "Frames: the morph's length, or uniform samples of the clip (default 40)");
+  sub->add_option("--margin", args->margin,
+                  "A reported region pair is a false alarm when no triangles of the two regions come within this "
+                  "distance, as a fraction of the body height (default 0.01)");
+  sub->add_option("--refit", args->refit, "Refit: paper or frame (default)")->check(CLI::IsMember({"paper", "frame"}));
+  sub->add_option("--rig", args->rig, "MakeHuman rig (.mhskel) for an OBJ; default: default.mhskel beside the OBJ");
+  sub->add_option("--json", args->json, "Write per-frame results and the summary as JSON");
+  sub->add_option("--png", args->png,
+                  "Write a picture of the frame with the most missed contacts: contact triangles red (missed) / amber "
+                  "(found) and the refit spheres");
+  sub->add_option("--min-recall", args->min_recall,
+                  "Exit 1 when the proxy's region-pair recall (the lower of M1 and M2) is below this, in [0, 1] "
+                  "(for a game's CI)");
+  sub->add_flag("!--no-coverage", args->coverage, "Skip the bind-pose coverage / protrusion measurement");
+  commands->handlers.emplace_back(sub, [args] { return RunEvaluate(*args); });
+}
+
+}  // namespace spherechain::cli

@@ -1,0 +1,153 @@
+// spherechain runtime — exact self-contacts: a narrow phase on the surrounding regions.
+//
+// The sphere chains (§5.2) are a broad phase: spheres sit inside the body, so a shallow contact of the
+// skin can happen with no sphere pair overlapping. The paper points at the surrounding regions for
+// finer work (§5.1, conclusions); this is that work, exact:
+//   1. conservative bounds — per frame, the axis-aligned box of each sphere's surrounding region,
+//      recomputed from the region's deformed vertices (so it contains every triangle of the region
+//      whatever the deformation: no baked bound, no slack to prove);
+//   2. candidate sphere pairs — boxes that overlap (closed intervals: touching counts), minus the
+//      excluded pairs (the asset's, or none): #S(#S−1)/2 box tests (4,560 for 96 spheres, ~3 µs);
+//   3. per candidate (a, b): the triangles of a whose box meets b's region box, and vice versa;
+//      triangle boxes tested; pairs sharing a corner (weld ids: Asset.weld_ids) skipped; the rest
+//      tested exactly by TrianglesIntersect (Guigue–Devillers 2003, exact orientation predicates).
+// A contact is two triangles that share no (welded) corner and intersect (closed triangles: touching
+// counts), owned by different spheres that are not an excluded pair (Asset.surrounding_*): exactly
+// what `spherechain evaluate` counts as ground truth, so the two agree triangle pair for triangle pair.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "spherechain/runtime/asset.h"
+#include "spherechain/runtime/context.h"
+#include "spherechain/runtime/detect.h"
+#include "spherechain/runtime/status.h"
+
+namespace spherechain::runtime {
+
+/// Which sphere pairs the narrow phase may report.
+enum class Exclusions : uint8_t {
+  kAsset = 0,  ///< skip Asset.excluded_pairs (joint neighbourhoods): what the proxy skips too
+  kNone = 1,   ///< test every pair of different spheres (shows skinning artefacts at joints)
+};
+
+/// One contact: two intersecting triangles of different surrounding regions. POD, 12 bytes.
+struct TriangleContact {
+  uint32_t triangle_a;  ///< source triangle index (< #T), in sphere_a's surrounding region
+  uint32_t triangle_b;  ///< source triangle index (< #T), in sphere_b's surrounding region
+  uint16_t sphere_a;    ///< sphere_a < sphere_b
+  uint16_t sphere_b;
+};
+static_assert(sizeof(TriangleContact) == 12);
+
+/// Counters of one NarrowPhaseJob::Run, complete even when the output was truncated.
+struct NarrowPhaseStats {
+  uint32_t candidate_pairs = 0;       ///< sphere pairs whose region boxes overlap (after exclusions)
+  uint32_t culled_triangles = 0;      ///< Σ over candidates of the triangles kept by the box cull (both sides)
+  uint32_t box_tests = 0;             ///< triangle-box vs triangle-box tests
+  uint32_t adjacent_skipped = 0;      ///< box-overlapping triangle pairs skipped for sharing a welded corner
+  uint32_t triangle_tests = 0;        ///< exact triangle–triangle tests (TrianglesIntersect calls)
+  uint32_t degenerate_triangles = 0;  ///< culled-in triangles dropped as degenerate (zero area, exact):
+                                      ///< degenerate triangles never make contacts
+  uint32_t contacts = 0;              ///< intersecting triangle pairs; > capacity ⇔ truncated
+};
+
+/// What the narrow phase needs of one asset: the index buffer and weld ids (Asset.triangles,
+/// Asset.weld_ids), the surrounding regions in sphere order, each region's vertex list, the excluded
+/// pairs; plus per-frame scratch (region boxes, triangle boxes, candidate pairs, culled lists).
+/// Ownership: owns its memory; after Init it no longer reads the asset bytes.
+/// Thread safety: one job at a time per context (Run writes the scratch); contexts are independent.
+struct NarrowPhaseJob;
+
+class NarrowPhaseContext {
+ public:
+  NarrowPhaseContext() = default;
+  NarrowPhaseContext(const NarrowPhaseContext&) = delete;
+  NarrowPhaseContext& operator=(const NarrowPhaseContext&) = delete;
+  NarrowPhaseContext(NarrowPhaseContext&&) noexcept = default;
+  NarrowPhaseContext& operator=(NarrowPhaseContext&&) noexcept = default;
+
+  /// Sizes and fills the context for `view`. The only allocating call (catches std::bad_alloc).
+  /// Returns kOk; kErrorNullArgument when `!view.valid()`; kErrorMissingField when the asset has no
+  /// `triangles` or `weld_ids` (baked before the narrow phase existed: re-bake); kErrorOutOfMemory
+  /// (context left empty). Cost: O(#T + #V + #S) time; memory ~60 B per triangle + 8 B per
+  /// (sphere, region vertex) + 40 B per sphere + 8 B per triangle of the largest region.
+  Status Init(const AssetView& view);
+
+  bool initialized() const { return sphere_count_ != 0; }
+  uint32_t sphere_count() const { return sphere_count_; }      ///< #S
+  uint32_t vertex_count() const { return vertex_count_; }      ///< #V the positions must have
+  uint32_t triangle_count() const { return triangle_count_; }  ///< #T
+  /// Triangles of the asset whose corners repeat a weld id (index-degenerate): never tested.
+  uint32_t index_degenerate_triangles() const { return index_degenerate_; }
+  /// Triangles in no surrounding region (Asset.unassigned at bake time): the narrow phase cannot see them.
+  uint32_t unassigned_triangles() const { return unassigned_; }
+  /// True if (a, b) is an excluded pair of the asset, either order. O(log degree).
+  bool IsExcluded(uint32_t a, uint32_t b) const;
+  /// Owning sphere of source triangle `t` (< #T), or 0xFFFF when unassigned.
+  uint16_t triangle_sphere(uint32_t t) const { return tri_sphere_[t]; }
+  /// Weld id of vertex `v` (< #V): see Asset.weld_ids.
+  uint32_t weld_id(uint32_t v) const { return weld_[v]; }
+
+  struct Internal;
+  friend struct Internal;
+  friend struct NarrowPhaseJob;
+
+ private:
+  uint32_t sphere_count_ = 0, vertex_count_ = 0, triangle_count_ = 0;
+  uint32_t index_degenerate_ = 0, unassigned_ = 0;
+  std::vector<uint32_t> weld_;                 // #V
+  std::vector<uint16_t> tri_sphere_;           // #T source triangle → owning sphere (0xFFFF none)
+  // Surrounding regions in sphere order (CSR, region_offsets_ #S+1): source triangle id, its three
+  // vertex indices and three weld ids; index-degenerate triangles left out.
+  std::vector<uint32_t> region_offsets_, region_tri_, region_v_, region_w_;
+  std::vector<uint32_t> vert_offsets_, vert_ids_;  // CSR #S+1: distinct vertices of each region
+  std::vector<uint32_t> excl_offsets_;             // CSR #S+1: excluded partners b > a of each a
+  std::vector<uint16_t> excl_partners_;
+  // Per-frame scratch.
+  std::vector<float> box_;                     // #S×6 region boxes (min xyz, max xyz)
+  std::vector<float> tri_box_;                 // per region-order triangle: 6 floats
+  std::vector<uint8_t> tri_state_;             // per region-order triangle: 0 unchecked, 1 ok, 2 degenerate
+  std::vector<uint32_t> tri_box_frame_;        // per sphere: frame stamp of its triangle boxes
+  uint32_t frame_ = 0;
+  std::vector<uint32_t> list_a_, list_b_;      // culled region-order triangle slots
+};
+
+/// ozz-style job: exact triangle contacts between the surrounding regions of different spheres
+/// (see the file comment for the three stages and the definition of a contact).
+/// Output order (deterministic): by sphere pair (a, b) ascending, then triangle_a in a's surrounding
+/// order, then triangle_b in b's surrounding order.
+/// Cost: O(#V) for the region boxes, #S(#S−1)/2 box tests for the candidates, then per candidate the
+/// two regions' triangles (boxes computed once per frame per sphere) and the culled pairs; the exact
+/// test is ~20–60 ns (filtered double orientation tests, exact expansions only near degeneracy).
+/// MakeHuman morph: see README "Exact self-contacts". No allocation, no exceptions; serial.
+struct NarrowPhaseJob {
+  NarrowPhaseContext* context = nullptr;  ///< initialised; scratch written: one job per context at a time
+  PositionsView positions;                ///< deformed vertex positions, same as RefitJob's
+  Exclusions exclusions = Exclusions::kAsset;
+  /// [opt] restrict the candidates to these sphere pairs (e.g. a DetectJob's output — then only the
+  /// contacts behind the proxy's pairs are searched); null = every sphere pair (the exact answer).
+  const Collision* sphere_pairs = nullptr;
+  uint32_t sphere_pair_count = 0;         ///< records in `sphere_pairs`
+  TriangleContact* output = nullptr;      ///< [opt when capacity == 0] caller buffer of `capacity` records
+  uint32_t capacity = 0;                  ///< records `output` holds (no useful upper bound exists:
+                                          ///< size it for the worst frame you expect; stats stay complete)
+  uint32_t* count = nullptr;              ///< out: records written (== min(stats.contacts, capacity))
+  NarrowPhaseStats* stats = nullptr;      ///< [opt] out: counters
+
+  /// True when Run() would not fail on arguments (does not read the positions).
+  bool Validate() const { return Check() == Status::kOk; }
+  /// kErrorNullArgument (context, count or positions.data null; output null with capacity > 0;
+  /// sphere_pairs null with sphere_pair_count > 0), kErrorInvalidJob (context not initialised, unknown
+  /// exclusions), kErrorAlignment (positions not 4-byte aligned), kErrorStride, kErrorVertexCount,
+  /// kErrorIndexOutOfRange (a sphere_pairs record with a >= b or b >= #S), else kOk.
+  Status Check() const;
+  /// Returns Check()'s error (outputs untouched); kErrorNonFinitePositions when a vertex of a
+  /// surrounding region is NaN/Inf (count 0, stats zero); kOk; or kOkTruncated when more contacts than
+  /// `capacity` exist: output holds the first `capacity` in the documented order, *count == capacity,
+  /// stats complete.
+  Status Run() const;
+};
+
+}  // namespace spherechain::runtime

@@ -1,0 +1,258 @@
+#include "spherechain/runtime/narrow_phase.h"
+
+#include <algorithm>
+#include <new>
+
+#include "spherechain/runtime/triangle_intersect.h"
+
+namespace spherechain::runtime {
+
+namespace {
+
+constexpr uint16_t kNoSphere = 0xFFFF;
+
+inline const float* Vertex(const char* base, size_t stride, uint32_t v) {
+  return reinterpret_cast<const float*>(base + size_t{v} * stride);
+}
+
+// Closed-interval box overlap (touching counts): conservative for closed triangles.
+inline bool BoxesOverlap(const float* a, const float* b) {
+  return a[0] <= b[3] && b[0] <= a[3] && a[1] <= b[4] && b[1] <= a[4] && a[2] <= b[5] && b[2] <= a[5];
+}
+
+}  // namespace
+
+struct NarrowPhaseContext::Internal {
+  /// Region boxes of every sphere; false when a position is not finite.
+  static bool RegionBoxes(NarrowPhaseContext& c, const char* base, size_t stride) {
+    bool finite = true;
+    for (uint32_t s = 0; s < c.sphere_count_; ++s) {
+      float* box = &c.box_[6 * size_t{s}];
+      box[0] = box[1] = box[2] = 1.0f;  // empty region: an inverted box that overlaps nothing
+      box[3] = box[4] = box[5] = -1.0f;
+      const uint32_t begin = c.vert_offsets_[s], end = c.vert_offsets_[s + 1];
+      if (begin == end) continue;
+      float lo[3], hi[3];
+      const float* p0 = Vertex(base, stride, c.vert_ids_[begin]);
+      for (int k = 0; k < 3; ++k) lo[k] = hi[k] = p0[k];
+      float check = 0.0f;  // NaN/Inf propagate into it: one test per region
+      for (uint32_t i = begin; i < end; ++i) {
+        const float* p = Vertex(base, stride, c.vert_ids_[i]);
+        for (int k = 0; k < 3; ++k) {
+          lo[k] = p[k] < lo[k] ? p[k] : lo[k];
+          hi[k] = p[k] > hi[k] ? p[k] : hi[k];
+          check += p[k] - p[k];
+        }
+      }
+      if (!(check == 0.0f)) finite = false;
+      for (int k = 0; k < 3; ++k) box[k] = lo[k], box[3 + k] = hi[k];
+    }
+    return finite;
+  }
+
+  /// Triangle boxes of sphere s's region (once per frame), degeneracy state reset.
+  static void TriangleBoxes(NarrowPhaseContext& c, uint32_t s, const char* base, size_t stride) {
+    if (c.tri_box_frame_[s] == c.frame_) return;
+    c.tri_box_frame_[s] = c.frame_;
+    for (uint32_t k = c.region_offsets_[s]; k < c.region_offsets_[s + 1]; ++k) {
+      const float* p = Vertex(base, stride, c.region_v_[3 * size_t{k}]);
+      const float* q = Vertex(base, stride, c.region_v_[3 * size_t{k} + 1]);
+      const float* r = Vertex(base, stride, c.region_v_[3 * size_t{k} + 2]);
+      float* box = &c.tri_box_[6 * size_t{k}];
+      for (int j = 0; j < 3; ++j) {
+        box[j] = std::min(std::min(p[j], q[j]), r[j]);
+        box[3 + j] = std::max(std::max(p[j], q[j]), r[j]);
+      }
+      c.tri_state_[k] = 0;
+    }
+  }
+
+  /// Region-order slots of sphere s whose triangle box meets `clip`, degenerate ones dropped.
+  static uint32_t Cull(NarrowPhaseContext& c, uint32_t s, const float* clip, const char* base, size_t stride,
+                       uint32_t* out, NarrowPhaseStats* st) {
+    uint32_t n = 0;
+    for (uint32_t k = c.region_offsets_[s]; k < c.region_offsets_[s + 1]; ++k) {
+      if (!BoxesOverlap(&c.tri_box_[6 * size_t{k}], clip)) continue;
+      if (c.tri_state_[k] == 0) {
+        const float* p = Vertex(base, stride, c.region_v_[3 * size_t{k}]);
+        const float* q = Vertex(base, stride, c.region_v_[3 * size_t{k} + 1]);
+        const float* r = Vertex(base, stride, c.region_v_[3 * size_t{k} + 2]);
+        c.tri_state_[k] = TriangleIsDegenerate(p, q, r) ? 2 : 1;
+        if (c.tri_state_[k] == 2) ++st->degenerate_triangles;
+      }
+      if (c.tri_state_[k] == 2) continue;
+      out[n++] = k;
+    }
+    return n;
+  }
+
+  /// Every contact of candidate (a, b), a < b.
+  static void Pair(NarrowPhaseContext& c, uint32_t a, uint32_t b, const char* base, size_t stride,
+                   const NarrowPhaseJob& job, NarrowPhaseStats* st) {
+    TriangleBoxes(c, a, base, stride);
+    TriangleBoxes(c, b, base, stride);
+    const float* ba = &c.box_[6 * size_t{a}];
+    const float* bb = &c.box_[6 * size_t{b}];
+    const uint32_t na = Cull(c, a, bb, base, stride, c.list_a_.data(), st);
+    if (na == 0) return;
+    const uint32_t nb = Cull(c, b, ba, base, stride, c.list_b_.data(), st);
+    st->culled_triangles += na + nb;
+    for (uint32_t i = 0; i < na; ++i) {
+      const uint32_t ka = c.list_a_[i];
+      const float* box_a = &c.tri_box_[6 * size_t{ka}];
+      const uint32_t* wa = &c.region_w_[3 * size_t{ka}];
+      const uint32_t* va = &c.region_v_[3 * size_t{ka}];
+      for (uint32_t j = 0; j < nb; ++j) {
+        const uint32_t kb = c.list_b_[j];
+        ++st->box_tests;
+        if (!BoxesOverlap(box_a, &c.tri_box_[6 * size_t{kb}])) continue;
+        const uint32_t* wb = &c.region_w_[3 * size_t{kb}];
+        if (wa[0] == wb[0] || wa[0] == wb[1] || wa[0] == wb[2] || wa[1] == wb[0] || wa[1] == wb[1] ||
+            wa[1] == wb[2] || wa[2] == wb[0] || wa[2] == wb[1] || wa[2] == wb[2]) {
+          ++st->adjacent_skipped;
+          continue;
+        }
+        const uint32_t* vb = &c.region_v_[3 * size_t{kb}];
+        ++st->triangle_tests;
+        if (!TrianglesIntersect(Vertex(base, stride, va[0]), Vertex(base, stride, va[1]), Vertex(base, stride, va[2]),
+                                Vertex(base, stride, vb[0]), Vertex(base, stride, vb[1]), Vertex(base, stride, vb[2])))
+          continue;
+        if (st->contacts < job.capacity)
+          job.output[st->contacts] = {c.region_tri_[ka], c.region_tri_[kb], static_cast<uint16_t>(a),
+                                      static_cast<uint16_t>(b)};
+        ++st->contacts;
+      }
+    }
+  }
+};
+
+Status NarrowPhaseContext::Init(const AssetView& view) {
+  *this = NarrowPhaseContext{};
+  if (!view.valid()) return Status::kErrorNullArgument;
+  const schema::Asset& a = *view.asset;
+  const auto* tris = a.triangles();
+  const auto* weld = a.weld_ids();
+  if (!tris || !weld) return Status::kErrorMissingField;  // LoadAsset checked their sizes and ranges
+  try {
+    const uint32_t S = view.sphere_count, T = view.triangle_count, V = view.vertex_count;
+    weld_.assign(weld->begin(), weld->end());
+    tri_sphere_.assign(T, kNoSphere);
+    region_offsets_.assign(1, 0);
+    vert_offsets_.assign(1, 0);
+    std::vector<uint32_t> verts;
+    for (uint32_t s = 0; s < S; ++s) {
+      const TriangleSpan span = SurroundingTriangles(view, s);
+      verts.clear();
+      for (uint32_t i = 0; i < span.count; ++i) {
+        const uint32_t t = span.data[i];
+        if (tri_sphere_[t] != kNoSphere) continue;  // listed twice: the first region owns it
+        tri_sphere_[t] = static_cast<uint16_t>(s);
+        uint32_t v[3], w[3];
+        for (int j = 0; j < 3; ++j) v[j] = tris->Get(3 * t + j), w[j] = weld_[v[j]];
+        if (w[0] == w[1] || w[1] == w[2] || w[0] == w[2]) {
+          ++index_degenerate_;
+          continue;
+        }
+        region_tri_.push_back(t);
+        for (int j = 0; j < 3; ++j) region_v_.push_back(v[j]), region_w_.push_back(w[j]), verts.push_back(v[j]);
+      }
+      region_offsets_.push_back(static_cast<uint32_t>(region_tri_.size()));
+      std::sort(verts.begin(), verts.end());
+      verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
+      vert_ids_.insert(vert_ids_.end(), verts.begin(), verts.end());
+      vert_offsets_.push_back(static_cast<uint32_t>(vert_ids_.size()));
+    }
+    unassigned_ = static_cast<uint32_t>(std::count(tri_sphere_.begin(), tri_sphere_.end(), kNoSphere));
+    excl_offsets_.assign(S + 1, 0);
+    if (const auto* ex = a.excluded_pairs()) {
+      for (const schema::SpherePair* p : *ex) ++excl_offsets_[p->a() + 1];
+      for (uint32_t s = 0; s < S; ++s) excl_offsets_[s + 1] += excl_offsets_[s];
+      excl_partners_.resize(ex->size());
+      for (uint32_t i = 0; i < ex->size(); ++i) excl_partners_[i] = ex->Get(i)->b();  // sorted by (a, b)
+    }
+    uint32_t largest = 0;
+    for (uint32_t s = 0; s < S; ++s) largest = std::max(largest, region_offsets_[s + 1] - region_offsets_[s]);
+    box_.assign(6 * size_t{S}, 0.0f);
+    tri_box_.assign(6 * region_tri_.size(), 0.0f);
+    tri_state_.assign(region_tri_.size(), 0);
+    tri_box_frame_.assign(S, 0);
+    list_a_.assign(largest, 0);
+    list_b_.assign(largest, 0);
+    sphere_count_ = S;
+    vertex_count_ = V;
+    triangle_count_ = T;
+  } catch (const std::bad_alloc&) {
+    *this = NarrowPhaseContext{};
+    return Status::kErrorOutOfMemory;
+  }
+  return Status::kOk;
+}
+
+bool NarrowPhaseContext::IsExcluded(uint32_t a, uint32_t b) const {
+  if (a > b) std::swap(a, b);
+  if (b >= sphere_count_) return false;
+  const uint16_t* begin = excl_partners_.data() + excl_offsets_[a];
+  const uint16_t* end = excl_partners_.data() + excl_offsets_[a + 1];
+  return std::binary_search(begin, end, static_cast<uint16_t>(b));
+}
+
+Status NarrowPhaseJob::Check() const {
+  if (!context || !count || !positions.data) return Status::kErrorNullArgument;
+  if (!output && capacity > 0) return Status::kErrorNullArgument;
+  if (!sphere_pairs && sphere_pair_count > 0) return Status::kErrorNullArgument;
+  if (!context->initialized()) return Status::kErrorInvalidJob;
+  if (exclusions != Exclusions::kAsset && exclusions != Exclusions::kNone) return Status::kErrorInvalidJob;
+  if (reinterpret_cast<uintptr_t>(positions.data) % 4 != 0) return Status::kErrorAlignment;
+  if (positions.stride_bytes < 12 || positions.stride_bytes % 4 != 0) return Status::kErrorStride;
+  if (positions.count != context->vertex_count()) return Status::kErrorVertexCount;
+  for (uint32_t i = 0; i < sphere_pair_count; ++i)
+    if (sphere_pairs[i].a >= sphere_pairs[i].b || sphere_pairs[i].b >= context->sphere_count())
+      return Status::kErrorIndexOutOfRange;
+  return Status::kOk;
+}
+
+Status NarrowPhaseJob::Run() const {
+  if (Status s = Check(); s != Status::kOk) return s;
+  NarrowPhaseContext& c = *context;
+  NarrowPhaseStats st;
+  *count = 0;
+  if (stats) *stats = st;
+  const char* base = static_cast<const char*>(positions.data);
+  const size_t stride = positions.stride_bytes;
+  if (!NarrowPhaseContext::Internal::RegionBoxes(c, base, stride)) return Status::kErrorNonFinitePositions;
+  if (++c.frame_ == 0) {  // stamp wrapped: forget every stamp
+    std::fill(c.tri_box_frame_.begin(), c.tri_box_frame_.end(), 0u);
+    c.frame_ = 1;
+  }
+  const uint32_t S = c.sphere_count_;
+  const bool skip_excluded = exclusions == Exclusions::kAsset;
+  auto consider = [&](uint32_t a, uint32_t b) {
+    if (!BoxesOverlap(&c.box_[6 * size_t{a}], &c.box_[6 * size_t{b}])) return;
+    if (skip_excluded && c.IsExcluded(a, b)) return;
+    ++st.candidate_pairs;
+    NarrowPhaseContext::Internal::Pair(c, a, b, base, stride, *this, &st);
+  };
+  if (sphere_pairs) {
+    for (uint32_t i = 0; i < sphere_pair_count; ++i) consider(sphere_pairs[i].a, sphere_pairs[i].b);
+  } else {
+    for (uint32_t a = 0; a < S; ++a) {
+      const float* ba = &c.box_[6 * size_t{a}];
+      const uint16_t* ex = c.excl_partners_.data() + c.excl_offsets_[a];
+      const uint16_t* ex_end = c.excl_partners_.data() + c.excl_offsets_[a + 1];
+      for (uint32_t b = a + 1; b < S; ++b) {
+        if (!BoxesOverlap(ba, &c.box_[6 * size_t{b}])) continue;
+        if (skip_excluded) {  // partners ascending: walk the list alongside b
+          while (ex != ex_end && *ex < b) ++ex;
+          if (ex != ex_end && *ex == b) continue;
+        }
+        ++st.candidate_pairs;
+        NarrowPhaseContext::Internal::Pair(c, a, b, base, stride, *this, &st);
+      }
+    }
+  }
+  *count = std::min(st.contacts, capacity);
+  if (stats) *stats = st;
+  return st.contacts > capacity ? Status::kOkTruncated : Status::kOk;
+}
+
+}  // namespace spherechain::runtime

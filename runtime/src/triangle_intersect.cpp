@@ -1,0 +1,513 @@
+// Exact triangle–triangle intersection: Guigue & Devillers 2003 on filtered exact orientation predicates
+// (Shewchuk 1997). See triangle_intersect.h for the contract.
+//
+// Layout: (1) floating-point expansions, the exact arithmetic; (2) exact orient3d / orient2d on them,
+// out of line (rare); (3) the filtered predicates, inline; (4) the 2D (coplanar) test; (5) the 3D test.
+//
+// Why float inputs never break the arithmetic: coordinates converted to double are multiples of 2^-149
+// with |x| < 2^128, so every difference is a multiple of 2^-149, every product of three differences a
+// multiple of 2^-447 below 2^387: no overflow, no underflow (doubles are normal down to 2^-1022), hence
+// the error bounds hold and TwoSum / TwoProduct are exact throughout.
+//
+// Floating-point environment: IEEE double with round-to-nearest and no extended precision (SSE2 and
+// later, ARM, CUDA). Contraction into FMA (-ffp-contract=fast) only removes roundings from the filtered
+// expressions, so the bounds still hold; the error-free transformations keep their product out of reach
+// (every product feeds std::fma). -ffast-math (reassociation) would break them: refused below.
+#include "spherechain/runtime/triangle_intersect.h"
+
+#include <cfloat>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+#if defined(__FAST_MATH__)
+#error "triangle_intersect.cpp must not be compiled with -ffast-math: its exact arithmetic relies on IEEE rounding"
+#endif
+#if defined(FLT_EVAL_METHOD) && (FLT_EVAL_METHOD == 1 || FLT_EVAL_METHOD == 2)
+#error "triangle_intersect.cpp needs double evaluated in double precision (x87 extended precision breaks TwoSum)"
+#endif
+
+#if defined(__GNUC__) || defined(__clang__)
+#define SPHERECHAIN_NOINLINE __attribute__((noinline))
+#elif defined(_MSC_VER)
+#define SPHERECHAIN_NOINLINE __declspec(noinline)
+#else
+#define SPHERECHAIN_NOINLINE
+#endif
+
+namespace spherechain::runtime {
+
+namespace {
+
+// ---------------------------------------------------------------------------------------------------
+// (1) Floating-point expansions (Shewchuk 1997 §2). An expansion is a sum of doubles, stored by
+// increasing magnitude, pairwise non-overlapping (strongly, with round-to-nearest-even), zero components
+// removed; zero itself is the one component {0}. Its sign is the sign of its last (largest) component.
+
+/// x + y = a + b exactly, x = fl(a + b) (Knuth's TwoSum: no precondition on |a|, |b|).
+inline void TwoSum(double a, double b, double& x, double& y) {
+  x = a + b;
+  const double b_virtual = x - a;
+  const double a_virtual = x - b_virtual;
+  y = (a - a_virtual) + (b - b_virtual);
+}
+
+/// x + y = a − b exactly, x = fl(a − b).
+inline void TwoDiff(double a, double b, double& x, double& y) {
+  x = a - b;
+  const double b_virtual = a - x;
+  const double a_virtual = x + b_virtual;
+  y = (a - a_virtual) + (b_virtual - b);
+}
+
+/// x + y = a · b exactly, x = fl(a · b) (the fused multiply-add returns the exact rounding error).
+inline void TwoProduct(double a, double b, double& x, double& y) {
+  x = a * b;
+  y = std::fma(a, b, -x);
+}
+
+template <int N>
+struct Expansion {
+  double c[N];
+  int n;
+};
+
+inline int Sign(double v) { return (v > 0) - (v < 0); }
+
+template <int N>
+int Sign(const Expansion<N>& e) {
+  return Sign(e.c[e.n - 1]);
+}
+
+/// a − b as an expansion of one or two components.
+inline Expansion<2> Diff(double a, double b) {
+  Expansion<2> e;
+  double x, y;
+  TwoDiff(a, b, x, y);
+  if (y != 0) {
+    e.c[0] = y;
+    e.c[1] = x;
+    e.n = 2;
+  } else {
+    e.c[0] = x;
+    e.n = 1;
+  }
+  return e;
+}
+
+template <int N>
+void Negate(Expansion<N>& e) {
+  for (int i = 0; i < e.n; ++i) e.c[i] = -e.c[i];
+}
+
+/// e + f: merge by magnitude, then one pass of TwoSum carrying the running sum upward
+/// (Fast-Expansion-Sum with zero elimination, Shewchuk 1997 Theorem 13).
+template <int A, int B>
+Expansion<A + B> Sum(const Expansion<A>& e, const Expansion<B>& f) {
+  Expansion<A + B> h;
+  h.n = 0;
+  int i = 0, j = 0;
+  auto next = [&]() {
+    if (j >= f.n || (i < e.n && std::fabs(e.c[i]) <= std::fabs(f.c[j]))) return e.c[i++];
+    return f.c[j++];
+  };
+  double q = next();
+  while (i < e.n || j < f.n) {
+    double s, err;
+    TwoSum(q, next(), s, err);
+    if (err != 0) h.c[h.n++] = err;
+    q = s;
+  }
+  if (q != 0 || h.n == 0) h.c[h.n++] = q;
+  return h;
+}
+
+/// e · b (Scale-Expansion with zero elimination, Shewchuk 1997 Theorem 19).
+template <int A>
+Expansion<2 * A> Scale(const Expansion<A>& e, double b) {
+  Expansion<2 * A> h;
+  h.n = 0;
+  double q, err;
+  TwoProduct(e.c[0], b, q, err);
+  if (err != 0) h.c[h.n++] = err;
+  for (int i = 1; i < e.n; ++i) {
+    double hi, lo, s;
+    TwoProduct(e.c[i], b, hi, lo);
+    TwoSum(q, lo, s, err);
+    if (err != 0) h.c[h.n++] = err;
+    TwoSum(hi, s, q, err);
+    if (err != 0) h.c[h.n++] = err;
+  }
+  if (q != 0 || h.n == 0) h.c[h.n++] = q;
+  return h;
+}
+
+/// e · f for f of at most two components (a coordinate difference).
+template <int A>
+Expansion<4 * A> Product(const Expansion<A>& e, const Expansion<2>& f) {
+  const Expansion<2 * A> low = Scale(e, f.c[0]);
+  if (f.n == 2) return Sum(low, Scale(e, f.c[1]));
+  Expansion<4 * A> h;
+  h.n = low.n;
+  for (int i = 0; i < low.n; ++i) h.c[i] = low.c[i];
+  return h;
+}
+
+/// u_i · v_j − u_j · v_i, exactly.
+inline Expansion<16> Minor(const Expansion<2>& ui, const Expansion<2>& uj, const Expansion<2>& vi,
+                           const Expansion<2>& vj) {
+  Expansion<8> right = Product(uj, vi);
+  Negate(right);
+  return Sum(Product(ui, vj), right);
+}
+
+// ---------------------------------------------------------------------------------------------------
+// (2) Exact predicates. Points are double[3] holding float values. Two stages: (a) the plain double
+// evaluation with the rounding error of every operation computed (TwoDiff, TwoProduct, TwoSum): when all
+// are zero, the double value is the determinant — the usual case for the exact zeros of coplanar,
+// touching or shared-vertex inputs on coarse coordinates (the role CGAL's interval filter plays);
+// (b) otherwise the expansion evaluation, exact always.
+
+/// a·b − c·d in double; clears `exact` if a rounding happened.
+inline double CheckedMinor(double a, double b, double c, double d, bool& exact) {
+  double p, p_err, q, q_err, m, m_err;
+  TwoProduct(a, b, p, p_err);
+  TwoProduct(c, d, q, q_err);
+  TwoDiff(p, q, m, m_err);
+  exact &= (p_err == 0) & (q_err == 0) & (m_err == 0);
+  return m;
+}
+
+/// b − a in double; clears `exact` if it rounded.
+inline double CheckedDiff(double b, double a, bool& exact) {
+  double x, err;
+  TwoDiff(b, a, x, err);
+  exact &= err == 0;
+  return x;
+}
+
+/// Sign of ((b − a) × (c − a)) · (d − a), exactly: > 0 when d lies on the side the right-handed normal
+/// of (a, b, c) points to.
+SPHERECHAIN_NOINLINE int Orient3dExact(const double* a, const double* b, const double* c, const double* d,
+                                       uint64_t* counter) {
+  if (counter) ++*counter;
+  // (a) error-free double evaluation.
+  bool exact = true;
+  double u[3], v[3], w[3];
+  for (int k = 0; k < 3; ++k) {
+    u[k] = CheckedDiff(b[k], a[k], exact);
+    v[k] = CheckedDiff(c[k], a[k], exact);
+    w[k] = CheckedDiff(d[k], a[k], exact);
+  }
+  if (exact) {
+    const double mx = CheckedMinor(u[1], v[2], u[2], v[1], exact);
+    const double my = CheckedMinor(u[2], v[0], u[0], v[2], exact);
+    const double mz = CheckedMinor(u[0], v[1], u[1], v[0], exact);
+    double tx, ty, tz, t_err[3], sum, sum_err, det, det_err;
+    TwoProduct(w[0], mx, tx, t_err[0]);
+    TwoProduct(w[1], my, ty, t_err[1]);
+    TwoProduct(w[2], mz, tz, t_err[2]);
+    TwoSum(tx, ty, sum, sum_err);
+    TwoSum(sum, tz, det, det_err);
+    if (exact & (t_err[0] == 0) & (t_err[1] == 0) & (t_err[2] == 0) & (sum_err == 0) & (det_err == 0))
+      return Sign(det);
+  }
+  // (b) expansions.
+  Expansion<2> eu[3], ev[3], ew[3];
+  for (int k = 0; k < 3; ++k) {
+    eu[k] = Diff(b[k], a[k]);
+    ev[k] = Diff(c[k], a[k]);
+    ew[k] = Diff(d[k], a[k]);
+  }
+  const Expansion<64> tx = Product(Minor(eu[1], eu[2], ev[1], ev[2]), ew[0]);
+  const Expansion<64> ty = Product(Minor(eu[2], eu[0], ev[2], ev[0]), ew[1]);
+  const Expansion<64> tz = Product(Minor(eu[0], eu[1], ev[0], ev[1]), ew[2]);
+  return Sign(Sum(Sum(tx, ty), tz));
+}
+
+/// Sign of (b_i − a_i)(c_j − a_j) − (b_j − a_j)(c_i − a_i), exactly: the orientation of (a, b, c)
+/// projected on the coordinate plane (i, j); for (i, j) = (k+1, k+2) mod 3 it is the sign of component
+/// k of (b − a) × (c − a).
+SPHERECHAIN_NOINLINE int Orient2dExact(const double* a, const double* b, const double* c, int i, int j,
+                                       uint64_t* counter) {
+  if (counter) ++*counter;
+  bool exact = true;
+  const double ui = CheckedDiff(b[i], a[i], exact), uj = CheckedDiff(b[j], a[j], exact);
+  const double vi = CheckedDiff(c[i], a[i], exact), vj = CheckedDiff(c[j], a[j], exact);
+  if (exact) {
+    const double det = CheckedMinor(ui, vj, uj, vi, exact);
+    if (exact) return Sign(det);
+  }
+  return Sign(Minor(Diff(b[i], a[i]), Diff(b[j], a[j]), Diff(c[i], a[i]), Diff(c[j], a[j])));
+}
+
+// ---------------------------------------------------------------------------------------------------
+// (3) Filtered predicates: the double evaluation, certified by Shewchuk's a-priori bound A (relative to
+// the permanent, the same expression with absolute values), else the exact evaluation above. The bounds
+// hold for the rounded differences computed here (they include the rounding of the differences).
+
+constexpr double kEpsilon = 0x1p-53;                                   // unit roundoff of double
+constexpr double kOrient2dBound = (3.0 + 16.0 * kEpsilon) * kEpsilon;  // Shewchuk's ccwerrboundA
+constexpr double kOrient3dBound = (7.0 + 56.0 * kEpsilon) * kEpsilon;  // Shewchuk's o3derrboundA
+
+/// A vertex: the float coordinates, converted (exactly) to double.
+struct Vec3 {
+  double c[3];
+};
+
+inline Vec3 Load(const float* f) {
+  return {{static_cast<double>(f[0]), static_cast<double>(f[1]), static_cast<double>(f[2])}};
+}
+
+/// The plane of triangle (a, b, c) prepared for many orient3d(a, b, c, ·): n = (b − a) × (c − a) in
+/// double and, per component, the permanent of its 2×2 minor (|u_i v_j| + |u_j v_i|).
+struct Plane {
+  double n[3];
+  double perm[3];
+};
+
+inline Plane MakePlane(const Vec3& a, const Vec3& b, const Vec3& c) {
+  const double ux = b.c[0] - a.c[0], uy = b.c[1] - a.c[1], uz = b.c[2] - a.c[2];
+  const double vx = c.c[0] - a.c[0], vy = c.c[1] - a.c[1], vz = c.c[2] - a.c[2];
+  const double xl = uy * vz, xr = uz * vy, yl = uz * vx, yr = ux * vz, zl = ux * vy, zr = uy * vx;
+  return {{xl - xr, yl - yr, zl - zr},
+          {std::fabs(xl) + std::fabs(xr), std::fabs(yl) + std::fabs(yr), std::fabs(zl) + std::fabs(zr)}};
+}
+
+/// Filtered orient3d(a, b, c, d) for the plane of (a, b, c): the double value and its error bound.
+struct Filtered {
+  double det, bound;
+};
+
+inline Filtered Side(const Plane& p, const Vec3& a, const Vec3& d) {
+  const double wx = d.c[0] - a.c[0], wy = d.c[1] - a.c[1], wz = d.c[2] - a.c[2];
+  return {wx * p.n[0] + wy * p.n[1] + wz * p.n[2],
+          kOrient3dBound * (std::fabs(wx) * p.perm[0] + std::fabs(wy) * p.perm[1] + std::fabs(wz) * p.perm[2])};
+}
+
+/// True when the three filtered values are certified strictly positive, or all strictly negative.
+inline bool CertifiedOneSide(const Filtered& f0, const Filtered& f1, const Filtered& f2) {
+  const bool above = (f0.det > f0.bound) & (f1.det > f1.bound) & (f2.det > f2.bound);
+  const bool below = (f0.det < -f0.bound) & (f1.det < -f1.bound) & (f2.det < -f2.bound);
+  return above | below;
+}
+
+/// Sign of orient3d(a, b, c, d) from its filtered value, exact when the bound does not certify it.
+/// Branch-free in the certified case (the sign itself is data, the fallback is rare).
+inline int Resolve(const Filtered& f, const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d, uint64_t* counter) {
+  const int sign = int(f.det > f.bound) - int(f.det < -f.bound);
+  if (sign != 0) [[likely]]
+    return sign;
+  return Orient3dExact(a.c, b.c, c.c, d.c, counter);
+}
+
+/// Sign of ((b − a) × (c − a)) · (d − a).
+inline int Orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d, uint64_t* counter) {
+  return Resolve(Side(MakePlane(a, b, c), a, d), a, b, c, d, counter);
+}
+
+/// Sign of component k of the plane's normal (b − a) × (c − a): the orient2d of the triangle (a, b, c)
+/// projected along axis k.
+inline int NormalSign(const Plane& p, int k, const Vec3& a, const Vec3& b, const Vec3& c, uint64_t* counter) {
+  const double bound = kOrient2dBound * p.perm[k];
+  if (p.n[k] > bound) return 1;
+  if (p.n[k] < -bound) return -1;
+  return Orient2dExact(a.c, b.c, c.c, (k + 1) % 3, (k + 2) % 3, counter);
+}
+
+/// True when the triangle (a, b, c) of plane p has exactly zero area (every normal component exactly 0).
+inline bool Degenerate(const Plane& p, const Vec3& a, const Vec3& b, const Vec3& c, uint64_t* counter) {
+  if ((std::fabs(p.n[0]) > kOrient2dBound * p.perm[0]) | (std::fabs(p.n[1]) > kOrient2dBound * p.perm[1]) |
+      (std::fabs(p.n[2]) > kOrient2dBound * p.perm[2]))
+    return false;  // a component certified non-zero: the usual exit
+  for (int k = 0; k < 3; ++k)
+    if (NormalSign(p, k, a, b, c, counter) != 0) return false;
+  return true;
+}
+
+/// Sign of (b_i − a_i)(c_j − a_j) − (b_j − a_j)(c_i − a_i).
+inline int Orient2d(const Vec3& a, const Vec3& b, const Vec3& c, int i, int j, uint64_t* counter) {
+  const double l = (b.c[i] - a.c[i]) * (c.c[j] - a.c[j]);
+  const double r = (b.c[j] - a.c[j]) * (c.c[i] - a.c[i]);
+  const double det = l - r;
+  const double bound = kOrient2dBound * (std::fabs(l) + std::fabs(r));
+  if (det > bound) return 1;
+  if (det < -bound) return -1;
+  return Orient2dExact(a.c, b.c, c.c, i, j, counter);
+}
+
+/// True when every coordinate is finite (|x| ≤ max is false for NaN and ±Inf).
+inline bool AllFinite(const Vec3* v, int count) {
+  bool finite = true;
+  for (int i = 0; i < count; ++i)
+    for (int k = 0; k < 3; ++k) finite &= std::fabs(v[i].c[k]) <= std::numeric_limits<double>::max();
+  return finite;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// (4) Coplanar triangles: project along an axis where the (common) plane's normal component is exactly
+// non-zero — an affine bijection of the plane onto the coordinate plane, so intersection is preserved —
+// and test the closed 2D triangles by separating edges: two closed convex polygons are disjoint iff the
+// supporting line of an edge of one has the other strictly on its outer side (the edges of their
+// Minkowski difference are edges of either). 2 + up to 18 exact-when-needed orient2d.
+
+/// True when some edge of `tri` (orientation `orientation`, ±1, in the projection (i, j)) has the three
+/// vertices of `other` strictly on its outer side.
+inline bool EdgeSeparates(const Vec3* const tri[3], int orientation, const Vec3* const other[3], int i, int j,
+                          uint64_t* counter) {
+  for (int e = 0; e < 3; ++e) {
+    const Vec3& a = *tri[e];
+    const Vec3& b = *tri[(e + 1) % 3];
+    bool separated = true;
+    for (int v = 0; v < 3 && separated; ++v) separated = orientation * Orient2d(a, b, *other[v], i, j, counter) < 0;
+    if (separated) return true;
+  }
+  return false;
+}
+
+SPHERECHAIN_NOINLINE bool CoplanarIntersect(const Plane& plane1, const Vec3* const t1[3], const Vec3* const t2[3],
+                                            uint64_t* counter) {
+  // Drop the axis of the largest |normal component| of triangle 1 (the best conditioned projection);
+  // exact non-zeroness decides, the magnitudes only order the tries.
+  const double m0 = std::fabs(plane1.n[0]), m1 = std::fabs(plane1.n[1]), m2 = std::fabs(plane1.n[2]);
+  int order[3] = {0, 1, 2};
+  if (m1 > m0 && m1 >= m2) {
+    order[0] = 1;
+    order[1] = 0;
+  } else if (m2 > m0 && m2 > m1) {
+    order[0] = 2;
+    order[2] = 0;
+  }
+  int axis = -1, orientation1 = 0;
+  for (int t = 0; t < 3 && orientation1 == 0; ++t) {
+    axis = order[t];
+    orientation1 = NormalSign(plane1, axis, *t1[0], *t1[1], *t1[2], counter);
+  }
+  if (orientation1 == 0) return false;  // unreachable: triangle 1 is not degenerate (checked before)
+  const int i = (axis + 1) % 3, j = (axis + 2) % 3;
+  const int orientation2 = Orient2d(*t2[0], *t2[1], *t2[2], i, j, counter);
+  if (orientation2 == 0) return false;  // unreachable: triangle 2 is not degenerate and lies in the plane
+  return !EdgeSeparates(t1, orientation1, t2, i, j, counter) && !EdgeSeparates(t2, orientation2, t1, i, j, counter);
+}
+
+// ---------------------------------------------------------------------------------------------------
+// (5) The 3D test (Guigue & Devillers 2003 §3).
+
+/// The canonical vertex of a triangle whose vertices have the orientations s0, s1, s2 w.r.t. the other
+/// plane (not all strictly on one side, not all zero): the apex k alone on its side, the other two on
+/// the opposite closed side, so that the plane cuts the triangle along a segment with ends on the edges
+/// leaving the apex. `flip` is −1 when the apex is on the negative side (or on the plane with both others
+/// positive): the other triangle is then reoriented so that the apex is on its non-negative side.
+struct Apex {
+  int8_t k, flip;
+};
+
+constexpr Apex FindApex(int s0, int s1, int s2) {
+  const int s[3] = {s0, s1, s2};
+  for (int k = 0; k < 3; ++k)
+    if (s[k] != 0 && s[(k + 1) % 3] != s[k] && s[(k + 2) % 3] != s[k]) return {int8_t(k), int8_t(s[k])};
+  // Two vertices strictly on one side, the third on the plane: the third is the apex.
+  const int k = s[0] == 0 ? 0 : (s[1] == 0 ? 1 : 2);
+  return {int8_t(k), int8_t(-s[(k + 1) % 3])};
+}
+
+/// FindApex for the 27 sign patterns, indexed by 9(s0 + 1) + 3(s1 + 1) + (s2 + 1): a load, not branches
+/// on data (the patterns that never reach it hold harmless values).
+struct ApexTable {
+  Apex entry[27];
+  constexpr ApexTable() : entry{} {
+    for (int i = 0; i < 27; ++i) entry[i] = FindApex(i / 9 - 1, i / 3 % 3 - 1, i % 3 - 1);
+  }
+};
+constexpr ApexTable kApex;
+
+/// Everything after the two filtered early exits: non-finite input, exact signs where the filter was
+/// unsure, the exact early exits, degenerate triangles, the coplanar case, the canonical form and the
+/// interval test. v: p1, q1, r1, p2, q2, r2. Recomputes the planes and filtered orientations (cheap)
+/// so that the hot path needs no stores.
+SPHERECHAIN_NOINLINE bool IntersectRest(const Vec3 v[6], uint64_t* counter) {
+  // Non-finite input: NaN/Inf never pass a certified comparison, so the exits before returned false
+  // already or we get here; either way no exact evaluation may see them.
+  if (!AllFinite(v, 6)) return false;
+  const Plane plane2 = MakePlane(v[3], v[4], v[5]);
+  const Plane plane1 = MakePlane(v[0], v[1], v[2]);
+  Filtered f1[3], f2[3];
+  for (int k = 0; k < 3; ++k) {
+    f1[k] = Side(plane2, v[3], v[k]);
+    f2[k] = Side(plane1, v[0], v[3 + k]);
+  }
+  const Vec3* t1[3] = {&v[0], &v[1], &v[2]};
+  const Vec3* t2[3] = {&v[3], &v[4], &v[5]};
+  int s1[3], s2[3];
+  for (int k = 0; k < 3; ++k) s1[k] = Resolve(f1[k], v[3], v[4], v[5], v[k], counter);
+  if ((s1[0] == s1[1]) & (s1[1] == s1[2]) & (s1[0] != 0)) return false;
+  for (int k = 0; k < 3; ++k) s2[k] = Resolve(f2[k], v[0], v[1], v[2], v[3 + k], counter);
+  if ((s2[0] == s2[1]) & (s2[1] == s2[2]) & (s2[0] != 0)) return false;
+  // The convention: a degenerate triangle (no plane: every orientation against it is exactly 0, so the
+  // exits above never fired for it) never intersects.
+  if (Degenerate(plane1, v[0], v[1], v[2], counter) || Degenerate(plane2, v[3], v[4], v[5], counter))
+    return false;
+
+  if ((s1[0] == 0) & (s1[1] == 0) & (s1[2] == 0)) return CoplanarIntersect(plane1, t1, t2, counter);
+
+  // Canonical form: triangle 1 rotated so its apex a1 is alone on the non-negative side of (oriented)
+  // plane 2, edges a1b1, a1c1 crossing it; likewise triangle 2 w.r.t. (oriented) plane 1. Rotations keep
+  // orientations; a swap of the two non-apex vertices reverses the triangle's plane.
+  const Apex apex1 = kApex.entry[9 * (s1[0] + 1) + 3 * (s1[1] + 1) + (s1[2] + 1)];
+  // Triangle 2 reversed (q2, r2 swapped) when apex1.flip < 0, so that a1 is on its non-negative side.
+  const int swap2 = apex1.flip < 0;
+  const int order2[3] = {0, 1 + swap2, 2 - swap2};
+  const Apex apex2 = kApex.entry[9 * (s2[order2[0]] + 1) + 3 * (s2[order2[1]] + 1) + (s2[order2[2]] + 1)];
+  // Triangle 1 reversed (b1, c1 swapped) when apex2.flip < 0, so that a2 is on its non-negative side.
+  const int swap1 = apex2.flip < 0;
+  const Vec3& a1 = *t1[apex1.k];
+  const Vec3& b1 = *t1[(apex1.k + 1 + swap1) % 3];
+  const Vec3& c1 = *t1[(apex1.k + 2 - swap1) % 3];
+  const Vec3& a2 = *t2[order2[apex2.k]];
+  const Vec3& b2 = *t2[order2[(apex2.k + 1) % 3]];
+  const Vec3& c2 = *t2[order2[(apex2.k + 2) % 3]];
+  // The segments T1 ∩ L and T2 ∩ L on the line L = plane1 ∩ plane2 overlap iff neither starts after the
+  // other ends: two orientations (Guigue & Devillers 2003, §3, the interval test).
+  const int first = Orient3d(a1, b1, a2, b2, counter), second = Orient3d(a1, c1, c2, a2, counter);
+  return (first <= 0) & (second <= 0);
+}
+
+/// The whole test. The hot part — two planes, six filtered orientations, the two early exits — is
+/// straight-line double arithmetic in registers; the rest is out of line.
+inline bool Intersect(const float* p1, const float* q1, const float* r1, const float* p2, const float* q2,
+                      const float* r2, uint64_t* counter) {
+  const Vec3 P1 = Load(p1), Q1 = Load(q1), R1 = Load(r1), P2 = Load(p2), Q2 = Load(q2), R2 = Load(r2);
+  // Triangle 1 against the plane of triangle 2, then 2 against 1: strictly on one side ⇒ disjoint.
+  const Plane plane2 = MakePlane(P2, Q2, R2);
+  const Filtered a = Side(plane2, P2, P1), b = Side(plane2, P2, Q1), c = Side(plane2, P2, R1);
+  if (CertifiedOneSide(a, b, c)) return false;
+  const Plane plane1 = MakePlane(P1, Q1, R1);
+  const Filtered d = Side(plane1, P1, P2), e = Side(plane1, P1, Q2), f = Side(plane1, P1, R2);
+  if (CertifiedOneSide(d, e, f)) return false;
+  const Vec3 v[6] = {P1, Q1, R1, P2, Q2, R2};
+  return IntersectRest(v, counter);
+}
+
+}  // namespace
+
+bool TrianglesIntersect(const float p1[3], const float q1[3], const float r1[3], const float p2[3],
+                        const float q2[3], const float r2[3]) {
+  return Intersect(p1, q1, r1, p2, q2, r2, nullptr);
+}
+
+bool TriangleIsDegenerate(const float p[3], const float q[3], const float r[3]) {
+  const Vec3 v[3] = {Load(p), Load(q), Load(r)};
+  if (!AllFinite(v, 3)) return false;
+  return Degenerate(MakePlane(v[0], v[1], v[2]), v[0], v[1], v[2], nullptr);
+}
+
+namespace detail {
+
+bool TrianglesIntersectCounted(const float p1[3], const float q1[3], const float r1[3], const float p2[3],
+                               const float q2[3], const float r2[3], uint64_t* exact_evaluations) {
+  return Intersect(p1, q1, r1, p2, q2, r2, exact_evaluations);
+}
+
+}  // namespace detail
+
+}  // namespace spherechain::runtime

@@ -1,0 +1,158 @@
+// The runtime narrow phase on real characters equals the exact ground truth, contact for contact:
+// MakeHuman (morph key frames) against CGAL box intersection + exact do_intersect (ExactSelfIntersections),
+// CesiumMan and BCN_Epileptic (clip frames) also against brute force over every triangle pair.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cstring>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "spherechain/baker/animation.h"
+#include "spherechain/baker/bake.h"
+#include "spherechain/baker/contacts.h"
+#include "spherechain/baker/morph.h"
+#include "spherechain/runtime/narrow_phase.h"
+#include "spherechain/runtime/triangle_intersect.h"
+#include "test_data.h"
+
+using namespace spherechain;
+
+namespace {
+
+struct Baked {
+  baker::BakeResult bake;
+  std::vector<uint64_t> storage;
+  runtime::AssetView view;
+  runtime::NarrowPhaseContext narrow;
+  std::vector<uint32_t> weld;
+};
+
+bool BakeAndLoad(const std::string& path, Baked* b) {
+  baker::Context ctx;
+  auto r = baker::Bake(path, baker::BakeConfig{}, &ctx);
+  REQUIRE_MESSAGE(r.ok(), (r.ok() ? "" : r.error().message));
+  b->bake = std::move(r).value();
+  b->storage.assign((b->bake.asset.size() + 7) / 8, 0);
+  std::memcpy(b->storage.data(), b->bake.asset.data(), b->bake.asset.size());
+  REQUIRE(runtime::LoadAsset(b->storage.data(), b->bake.asset.size(), &b->view) == runtime::Status::kOk);
+  REQUIRE(b->narrow.Init(b->view) == runtime::Status::kOk);
+  b->weld = baker::ComputeWeldIds(b->bake.mesh.positions);
+  for (uint32_t v = 0; v < b->view.vertex_count; ++v) REQUIRE(b->narrow.weld_id(v) == b->weld[v]);
+  return true;
+}
+
+using PairSet = std::set<baker::TrianglePair>;
+
+PairSet NarrowContacts(Baked* b, const std::vector<float>& pos, runtime::NarrowPhaseStats* stats) {
+  std::vector<runtime::TriangleContact> out(1u << 20);
+  uint32_t n = 0;
+  runtime::NarrowPhaseJob job;
+  job.context = &b->narrow;
+  job.positions = {pos.data(), b->view.vertex_count, 12};
+  job.output = out.data();
+  job.capacity = static_cast<uint32_t>(out.size());
+  job.count = &n;
+  job.stats = stats;
+  REQUIRE(job.Run() == runtime::Status::kOk);
+  PairSet s;
+  for (uint32_t i = 0; i < n; ++i) {
+    const auto& c = out[i];
+    CHECK(b->narrow.triangle_sphere(c.triangle_a) == c.sphere_a);
+    CHECK(b->narrow.triangle_sphere(c.triangle_b) == c.sphere_b);
+    s.insert({std::min(c.triangle_a, c.triangle_b), std::max(c.triangle_a, c.triangle_b)});
+  }
+  CHECK(s.size() == n);  // no contact reported twice
+  return s;
+}
+
+/// Contacts of the ground truth: owning spheres differ, assigned, not an excluded pair.
+PairSet CountedContacts(const Baked& b, const std::vector<baker::TrianglePair>& all) {
+  PairSet s;
+  for (const auto& p : all) {
+    const uint32_t sa = b.narrow.triangle_sphere(p.a), sb = b.narrow.triangle_sphere(p.b);
+    if (sa == 0xFFFF || sb == 0xFFFF || sa == sb || b.narrow.IsExcluded(sa, sb)) continue;
+    s.insert(p);
+  }
+  return s;
+}
+
+/// Every triangle pair, no boxes: non-adjacent by weld id, exact predicate.
+std::vector<baker::TrianglePair> BruteForce(const Baked& b, const std::vector<float>& pos) {
+  const auto& idx = b.bake.mesh.indices;
+  const uint32_t T = b.view.triangle_count;
+  std::vector<baker::TrianglePair> out;
+  auto v = [&](uint32_t t, int k) { return &pos[3 * size_t{idx[3 * t + k]}]; };
+  for (uint32_t s = 0; s < T; ++s) {
+    const uint32_t ws[3] = {b.weld[idx[3 * s]], b.weld[idx[3 * s + 1]], b.weld[idx[3 * s + 2]]};
+    for (uint32_t t = s + 1; t < T; ++t) {
+      const uint32_t w0 = b.weld[idx[3 * t]], w1 = b.weld[idx[3 * t + 1]], w2 = b.weld[idx[3 * t + 2]];
+      bool adjacent = false;
+      for (uint32_t w : ws) adjacent |= w == w0 || w == w1 || w == w2;
+      if (adjacent) continue;
+      if (runtime::TrianglesIntersect(v(s, 0), v(s, 1), v(s, 2), v(t, 0), v(t, 1), v(t, 2))) out.push_back({s, t});
+    }
+  }
+  return out;
+}
+
+void CheckFrame(Baked* b, const std::vector<float>& pos, bool brute_force, const std::string& what, size_t* total) {
+  runtime::NarrowPhaseStats stats;
+  const PairSet narrow = NarrowContacts(b, pos, &stats);
+  auto exact = baker::ExactSelfIntersections(pos.data(), b->view.vertex_count, b->bake.mesh.indices, b->weld);
+  REQUIRE(exact.ok());
+  const PairSet truth = CountedContacts(*b, exact.value());
+  CHECK_MESSAGE(narrow == truth, what << ": narrow " << narrow.size() << " vs exact " << truth.size());
+  if (brute_force) {
+    const PairSet brute = CountedContacts(*b, BruteForce(*b, pos));
+    CHECK_MESSAGE(narrow == brute, what << ": narrow " << narrow.size() << " vs brute force " << brute.size());
+  }
+  *total += truth.size();
+  const double all_pairs = 0.5 * double(b->view.triangle_count) * double(b->view.triangle_count - 1);
+  MESSAGE(what << ": " << truth.size() << " contacts, " << stats.candidate_pairs << " candidate sphere pairs, "
+               << stats.triangle_tests << " triangle tests (all pairs / tests = "
+               << (stats.triangle_tests ? all_pairs / stats.triangle_tests : 0.0) << ")");
+}
+
+}  // namespace
+
+TEST_CASE("heavy: narrow phase on real frames: MakeHuman morph key poses equal the exact ground truth") {
+  const std::string path = test::SharedData("makehuman/base.obj");
+  const std::string poses_dir = test::SourceFile("data/poses/makehuman");
+  if (!test::Require(path) || !test::Require(poses_dir)) return;
+  Baked b;
+  BakeAndLoad(path, &b);
+  auto poses = baker::LoadPoseFolder(poses_dir, *b.bake.mesh.skin);
+  REQUIRE(poses.ok());
+  const uint32_t frames = 40, keys = static_cast<uint32_t>(poses->size());
+  std::vector<float> pos(b.bake.mesh.positions.size());
+  baker::SkinningScratch scratch;
+  size_t total = 0;
+  CheckFrame(&b, b.bake.mesh.positions, false, "MakeHuman bind", &total);
+  for (uint32_t k = 0; k < keys; ++k) {
+    const uint32_t f = baker::MorphKeyFrame(k, frames, keys);
+    REQUIRE(baker::SkinMorphFrame(b.bake.mesh, poses.value(), f, frames, &scratch, pos.data(), pos.size()).ok());
+    CheckFrame(&b, pos, false, "MakeHuman frame " + std::to_string(f) + " (" + poses.value()[k].name + ")", &total);
+  }
+  CHECK(total > 0);  // the key poses do make contacts (arms crossed, knee to chest, ...)
+}
+
+TEST_CASE("heavy: narrow phase on real frames: CesiumMan walk and BCN_Epileptic clip equal brute force") {
+  for (const std::string& path :
+       {test::SharedData("gltf/CesiumMan.gltf"), test::AssimpModel("X/BCN_Epileptic.X")}) {
+    if (!test::Require(path)) continue;
+    Baked b;
+    BakeAndLoad(path, &b);
+    REQUIRE(!b.bake.mesh.clips.empty());
+    const baker::Clip& clip = b.bake.mesh.clips.front();
+    std::vector<float> pos(b.bake.mesh.positions.size());
+    baker::SkinningScratch scratch;
+    size_t total = 0;
+    for (uint32_t f = 0; f < 40; f += 8) {
+      const float t = clip.duration_s * float(f) / 40.0f;
+      REQUIRE(baker::SkinClip(b.bake.mesh, clip, t, &scratch, pos.data(), pos.size()).ok());
+      CheckFrame(&b, pos, true, path + " frame " + std::to_string(f), &total);
+    }
+  }
+}

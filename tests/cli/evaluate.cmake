@@ -1,0 +1,76 @@
+# `spherechain evaluate` on the MakeHuman morph (the asset of the cli_bake_makehuman fixture): the narrow
+# phase equals the exact ground truth (recall = precision = 1), the JSON has the documented keys, the
+# PNG is written, --min-recall gates the exit code; bad input (a --min-recall outside [0, 1], the wrong
+# mesh, an unknown clip) exits 1 with a message and writes nothing. Skips visibly when data is absent.
+foreach(f ${MESH} ${ASSET})
+  if(NOT EXISTS ${f})
+    message("SKIPPED: ${f} not found (../shared/data is absent)")
+    return()
+  endif()
+endforeach()
+file(REMOVE_RECURSE ${WORK})
+file(MAKE_DIRECTORY ${WORK})
+
+execute_process(COMMAND ${CLI} -q evaluate ${ASSET} --mesh ${MESH} --json ${WORK}/eval.json --png ${WORK}/eval.png
+                        --min-recall 0
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "evaluate failed (${rc}):\n${out}${err}")
+endif()
+message(STATUS "${out}")
+if(NOT err MATCHES "evaluate: frame 40/40")
+  message(FATAL_ERROR "no progress line on stderr:\n${err}")
+endif()
+if(NOT EXISTS ${WORK}/eval.png)
+  message(FATAL_ERROR "--png wrote nothing")
+endif()
+file(READ ${WORK}/eval.json json)
+foreach(key "summary;proxy;recall_m1" "summary;proxy;recall_m2" "summary;narrow;recall" "summary;narrow;precision"
+            "summary;coverage;phi1_adjusted" "summary;protrusion;phi1_adjusted")
+  string(JSON v GET "${json}" ${key})
+  message(STATUS "${key}: ${v}")
+endforeach()
+string(JSON n_recall GET "${json}" summary narrow recall)
+string(JSON n_precision GET "${json}" summary narrow precision)
+string(JSON contacts GET "${json}" summary contacts)
+if(NOT n_recall EQUAL 1 OR NOT n_precision EQUAL 1)
+  message(FATAL_ERROR "narrow phase vs exact ground truth: recall ${n_recall}, precision ${n_precision} (expected 1, 1)")
+endif()
+if(NOT contacts GREATER 0)
+  message(FATAL_ERROR "the MakeHuman morph should have contacts, got ${contacts}")
+endif()
+string(JSON ff TYPE "${json}" summary proxy false_alarm_frames)
+string(JSON fr LENGTH "${json}" frames)
+string(JSON e TYPE "${json}" frames 0 exact_region_pairs)
+string(JSON e2 TYPE "${json}" frames 0 proxy_region_pairs_m2)
+string(JSON e3 TYPE "${json}" frames 0 narrow_region_pairs)
+if(NOT ff STREQUAL "ARRAY" OR NOT fr EQUAL 40 OR NOT e STREQUAL "ARRAY" OR NOT e2 STREQUAL "ARRAY" OR NOT e3 STREQUAL "ARRAY")
+  message(FATAL_ERROR "JSON shape: false_alarm_frames ${ff}, ${fr} frames, region pair lists ${e} ${e2} ${e3}")
+endif()
+
+# --min-recall 1.0: exit 1 with the reason when the proxy misses anything on these 16 frames, else 0.
+execute_process(COMMAND ${CLI} -q evaluate ${ASSET} --mesh ${MESH} --frames 16 --no-coverage --min-recall 1.0
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT (rc EQUAL 1 AND err MATCHES "is below --min-recall 1.000") AND NOT (rc EQUAL 0 AND out MATCHES ">= --min-recall"))
+  message(FATAL_ERROR "--min-recall 1.0: unexpected exit ${rc}:\n${out}${err}")
+endif()
+message(STATUS "--min-recall 1.0 on 16 frames: exit ${rc}")
+
+# Bad input: exit 1, a message, nothing written.
+foreach(case "--min-recall;1.5;is outside \\[0, 1\\]" "--clip;nope;no clip named 'nope'")
+  list(GET case 0 flag)
+  list(GET case 1 value)
+  list(GET case 2 expect)
+  execute_process(COMMAND ${CLI} evaluate ${ASSET} --mesh ${MESH} ${flag} ${value} --json ${WORK}/bad.json
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 1 OR NOT "${out}${err}" MATCHES "${expect}" OR EXISTS ${WORK}/bad.json)
+    message(FATAL_ERROR "${flag} ${value}: expected exit 1 with '${expect}' and no output, got ${rc}:\n${out}${err}")
+  endif()
+endforeach()
+if(EXISTS ${WRONG})
+  execute_process(COMMAND ${CLI} evaluate ${ASSET} --mesh ${WRONG} --json ${WORK}/bad.json --png ${WORK}/bad.png
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 1 OR NOT "${out}${err}" MATCHES "does not match asset" OR EXISTS ${WORK}/bad.json OR EXISTS ${WORK}/bad.png)
+    message(FATAL_ERROR "wrong mesh: expected exit 1 with the fingerprint error and no output, got ${rc}:\n${out}${err}")
+  endif()
+endif()

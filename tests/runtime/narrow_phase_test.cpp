@@ -1,0 +1,320 @@
+// NarrowPhaseJob on shapes with known answers (crossing tubes, a tube folded on itself), against brute
+// force over every triangle pair, and its statuses on bad input.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <set>
+#include <tuple>
+#include <vector>
+
+#include "runtime/asset_builder.h"
+#include "spherechain/runtime/narrow_phase.h"
+#include "spherechain/runtime/triangle_intersect.h"
+
+namespace rt = spherechain::runtime;
+namespace st = spherechain::test;
+
+namespace {
+
+struct Loaded {
+  st::AlignedBytes bytes;
+  rt::AssetView view;
+};
+
+Loaded Load(const st::AssetData& d) {
+  Loaded l;
+  l.bytes = st::Serialize(d);
+  REQUIRE(rt::LoadAsset(l.bytes.data(), l.bytes.size, &l.view) == rt::Status::kOk);
+  return l;
+}
+
+using Contact = std::tuple<uint32_t, uint32_t, uint32_t, uint32_t>;  // sphere a, sphere b, tri a, tri b
+
+/// Every contact by brute force: all triangle pairs of different spheres (not excluded unless
+/// `all_pairs`), no shared corner by weld id, TrianglesIntersect. The reference for NarrowPhaseJob.
+std::set<Contact> BruteForce(const st::AssetData& d, const std::vector<float>& pos, bool all_pairs) {
+  std::set<Contact> out;
+  const uint32_t T = d.triangle_count;
+  auto excluded = [&](uint32_t a, uint32_t b) {
+    for (const auto& p : d.excluded)
+      if (p.a() == std::min(a, b) && p.b() == std::max(a, b)) return true;
+    return false;
+  };
+  auto vtx = [&](uint32_t t, int k) { return &pos[3 * size_t{d.triangles[3 * t + k]}]; };
+  for (uint32_t s = 0; s < T; ++s)
+    for (uint32_t t = s + 1; t < T; ++t) {
+      const uint32_t sa = d.triangle_spheres[s], sb = d.triangle_spheres[t];
+      if (sa == sb || (!all_pairs && excluded(sa, sb))) continue;
+      bool adjacent = false;
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+          adjacent |= d.weld_ids[d.triangles[3 * s + i]] == d.weld_ids[d.triangles[3 * t + j]];
+      if (adjacent) continue;
+      if (!rt::TrianglesIntersect(vtx(s, 0), vtx(s, 1), vtx(s, 2), vtx(t, 0), vtx(t, 1), vtx(t, 2))) continue;
+      if (sa < sb)
+        out.insert({sa, sb, s, t});
+      else
+        out.insert({sb, sa, t, s});
+    }
+  return out;
+}
+
+struct Run {
+  rt::Status status;
+  rt::NarrowPhaseStats stats;
+  std::vector<rt::TriangleContact> contacts;
+};
+
+Run RunJob(rt::NarrowPhaseContext* ctx, const std::vector<float>& pos, rt::Exclusions ex, uint32_t capacity = 100000,
+           const std::vector<rt::Collision>& only = {}) {
+  Run r;
+  r.contacts.resize(capacity);
+  uint32_t n = 0;
+  rt::NarrowPhaseJob job;
+  job.context = ctx;
+  job.positions = {pos.data(), static_cast<uint32_t>(pos.size() / 3), 12};
+  job.exclusions = ex;
+  job.output = r.contacts.data();
+  job.capacity = capacity;
+  job.count = &n;
+  job.stats = &r.stats;
+  if (!only.empty()) {
+    job.sphere_pairs = only.data();
+    job.sphere_pair_count = static_cast<uint32_t>(only.size());
+  }
+  r.status = job.Run();
+  r.contacts.resize(n);
+  return r;
+}
+
+std::set<Contact> AsSet(const std::vector<rt::TriangleContact>& v) {
+  std::set<Contact> s;
+  for (const auto& c : v) s.insert({c.sphere_a, c.sphere_b, c.triangle_a, c.triangle_b});
+  return s;
+}
+
+/// One tube of `rings` rings along x, folded at ring `bend` by `degrees` about the z axis through the
+/// ring's centre: rings after `bend` are rotated rigidly, so for a sharp fold the second half passes
+/// through the first half just after the bend.
+std::vector<float> Fold(const st::Mesh& mesh, const st::Tube& tube, uint32_t bend, float degrees) {
+  std::vector<float> out = mesh.positions;
+  const float a = degrees * 3.14159265f / 180.0f, c = std::cos(a), s = std::sin(a);
+  const float px = tube.origin[0] + tube.spacing * float(bend);
+  for (uint32_t v = (bend + 1) * tube.sides; v < mesh.vertex_count(); ++v) {
+    const float x = out[3 * v] - px, y = out[3 * v + 1];
+    out[3 * v] = px + c * x - s * y;
+    out[3 * v + 1] = c * y + s * x;
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("narrow phase: two crossing tubes touch where they cross, and equal brute force") {
+  st::Mesh mesh;
+  const st::AssetData d = st::TwoTubes(true, &mesh);
+  Loaded l = Load(d);
+  rt::NarrowPhaseContext ctx;
+  REQUIRE(ctx.Init(l.view) == rt::Status::kOk);
+  const Run r = RunJob(&ctx, mesh.positions, rt::Exclusions::kAsset);
+  REQUIRE(r.status == rt::Status::kOk);
+  CHECK(r.stats.contacts == r.contacts.size());
+  CHECK(r.contacts.size() > 0);
+  CHECK(AsSet(r.contacts) == BruteForce(d, mesh.positions, false));
+  // Tube A (x axis) spheres 0..7, tube B (y axis) 8..15; both cross the origin between rings 3 and 4
+  // (origin at −4.2, spacing 1.2: ring 3 at −0.6, ring 4 at 0.6). Cylinders of radius 1 meet for |x|, |y| ≤ 1.
+  for (const auto& c : r.contacts) {
+    CHECK(c.sphere_a < 8);
+    CHECK(c.sphere_b >= 8);
+    CHECK(c.sphere_a >= 2);
+    CHECK(c.sphere_a <= 4);
+    CHECK(c.sphere_b >= 10);
+    CHECK(c.sphere_b <= 12);
+  }
+  // Restricted to one sphere pair: the subset of the full answer.
+  const rt::Collision only{3, 11, 0.0f, 0u};
+  const Run sub = RunJob(&ctx, mesh.positions, rt::Exclusions::kAsset, 100000, {only});
+  std::set<Contact> expect;
+  for (const Contact& c : AsSet(r.contacts))
+    if (std::get<0>(c) == 3 && std::get<1>(c) == 11) expect.insert(c);
+  CHECK(AsSet(sub.contacts) == expect);
+  CHECK(sub.stats.candidate_pairs <= 1);
+}
+
+TEST_CASE("narrow phase: tubes apart have no candidate pair between them and no contact") {
+  st::Mesh mesh;
+  const st::AssetData d = st::TwoTubes(false, &mesh);
+  Loaded l = Load(d);
+  rt::NarrowPhaseContext ctx;
+  REQUIRE(ctx.Init(l.view) == rt::Status::kOk);
+  const Run r = RunJob(&ctx, mesh.positions, rt::Exclusions::kNone);
+  CHECK(r.status == rt::Status::kOk);
+  CHECK(r.contacts.empty());  // consecutive spheres touch along their shared ring: adjacency, no contact
+  CHECK(r.stats.adjacent_skipped > 0);
+  // With the asset's exclusions (consecutive spheres) no region box meets another: nothing to test.
+  const Run e = RunJob(&ctx, mesh.positions, rt::Exclusions::kAsset);
+  CHECK(e.contacts.empty());
+  CHECK(e.stats.candidate_pairs == 0);
+  CHECK(e.stats.triangle_tests == 0);
+}
+
+TEST_CASE("narrow phase: a tube folded on itself touches just after the fold, equal to brute force") {
+  st::Mesh mesh;
+  st::Tube tube;
+  tube.rings = 14;
+  tube.sides = 12;
+  tube.spacing = 0.6f;
+  const st::AssetData d = st::MakeTubes({tube}, {}, &mesh);
+  Loaded l = Load(d);
+  rt::NarrowPhaseContext ctx;
+  REQUIRE(ctx.Init(l.view) == rt::Status::kOk);
+  // Straight: nothing.
+  CHECK(RunJob(&ctx, mesh.positions, rt::Exclusions::kNone).contacts.empty());
+  // Folded by 100° at ring 7 (x = 4.2): the inner sides of the elbow pass through each other within
+  // about a radius (1) of the fold — segments 5–6 before it against 7–9 after it.
+  const std::vector<float> folded = Fold(mesh, tube, 7, 100.0f);
+  for (rt::Exclusions ex : {rt::Exclusions::kAsset, rt::Exclusions::kNone}) {
+    const Run r = RunJob(&ctx, folded, ex);
+    REQUIRE(r.status == rt::Status::kOk);
+    CHECK(AsSet(r.contacts) == BruteForce(d, folded, ex == rt::Exclusions::kNone));
+    REQUIRE(r.contacts.size() > 0);
+    for (const auto& c : r.contacts) {
+      CHECK(c.sphere_a < 7);   // one side of the fold ...
+      CHECK(c.sphere_b >= 7);  // ... against the other
+      CHECK(c.sphere_a >= 4);  // near the fold: the far ends stay apart
+      CHECK(c.sphere_b <= 10);
+    }
+  }
+  // The asset's exclusions (consecutive spheres) can only hide some of them.
+  CHECK(RunJob(&ctx, folded, rt::Exclusions::kAsset).contacts.size() <=
+        RunJob(&ctx, folded, rt::Exclusions::kNone).contacts.size());
+  // Folded the other way round: a contact set again (rings are staggered, so not the mirror image),
+  // equal to brute force.
+  const std::vector<float> other = Fold(mesh, tube, 7, -100.0f);
+  CHECK(AsSet(RunJob(&ctx, other, rt::Exclusions::kAsset).contacts) == BruteForce(d, other, false));
+}
+
+TEST_CASE("narrow phase: weld ids give a triangle soup its adjacency") {
+  // A tube as a soup: every triangle its own three vertices. Without weld ids, neighbouring triangles
+  // of consecutive spheres touch along their shared edges and would be contacts (with no exclusions).
+  st::Mesh mesh;
+  st::Tube tube;
+  st::AssetData d = st::MakeTubes({tube}, {}, &mesh);
+  std::vector<float> soup;
+  std::vector<uint32_t> tris;
+  for (uint32_t i = 0; i < mesh.triangles.size(); ++i) {
+    for (int k = 0; k < 3; ++k) soup.push_back(mesh.positions[3 * size_t{mesh.triangles[i]} + k]);
+    tris.push_back(i);
+  }
+  d.triangles = tris;
+  d.vertex_count = static_cast<uint32_t>(tris.size());
+  d.pivot_vertices.clear();
+  for (uint32_t t : d.pivot_triangles)
+    for (int k = 0; k < 3; ++k) d.pivot_vertices.push_back(3 * t + k);
+  // Welded: the lowest index of each position.
+  d.weld_ids.resize(d.vertex_count);
+  for (uint32_t v = 0; v < d.vertex_count; ++v) {
+    d.weld_ids[v] = v;
+    for (uint32_t w = 0; w < v; ++w)
+      if (soup[3 * w] == soup[3 * v] && soup[3 * w + 1] == soup[3 * v + 1] && soup[3 * w + 2] == soup[3 * v + 2]) {
+        d.weld_ids[v] = w;
+        break;
+      }
+  }
+  {
+    Loaded l = Load(d);
+    rt::NarrowPhaseContext ctx;
+    REQUIRE(ctx.Init(l.view) == rt::Status::kOk);
+    const Run r = RunJob(&ctx, soup, rt::Exclusions::kNone);
+    CHECK(r.contacts.empty());
+    CHECK(r.stats.adjacent_skipped > 0);
+  }
+  // Unwelded (identity ids): every ring's edges now make contacts between consecutive spheres.
+  for (uint32_t v = 0; v < d.vertex_count; ++v) d.weld_ids[v] = v;
+  Loaded l = Load(d);
+  rt::NarrowPhaseContext ctx;
+  REQUIRE(ctx.Init(l.view) == rt::Status::kOk);
+  const Run r = RunJob(&ctx, soup, rt::Exclusions::kNone);
+  CHECK(r.contacts.size() > 0);
+  for (const auto& c : r.contacts) CHECK(c.sphere_b == c.sphere_a + 1);
+  CHECK(RunJob(&ctx, soup, rt::Exclusions::kAsset).contacts.empty());  // consecutive spheres are excluded pairs
+}
+
+TEST_CASE("narrow phase: a short buffer gives kOkTruncated, the first records and complete stats") {
+  st::Mesh mesh;
+  const st::AssetData d = st::TwoTubes(true, &mesh);
+  Loaded l = Load(d);
+  rt::NarrowPhaseContext ctx;
+  REQUIRE(ctx.Init(l.view) == rt::Status::kOk);
+  const Run full = RunJob(&ctx, mesh.positions, rt::Exclusions::kAsset);
+  REQUIRE(full.contacts.size() > 2);
+  const Run part = RunJob(&ctx, mesh.positions, rt::Exclusions::kAsset, 2);
+  CHECK(part.status == rt::Status::kOkTruncated);
+  REQUIRE(part.contacts.size() == 2);
+  CHECK(part.stats.contacts == full.stats.contacts);
+  CHECK(part.stats.triangle_tests == full.stats.triangle_tests);
+  CHECK(part.contacts[0].triangle_a == full.contacts[0].triangle_a);
+  CHECK(part.contacts[1].triangle_b == full.contacts[1].triangle_b);
+  // Capacity 0, null output: counts only.
+  const Run none = RunJob(&ctx, mesh.positions, rt::Exclusions::kAsset, 0);
+  CHECK(none.status == rt::Status::kOkTruncated);
+  CHECK(none.stats.contacts == full.stats.contacts);
+}
+
+TEST_CASE("narrow phase: bad input gets its status and no output") {
+  st::Mesh mesh;
+  st::AssetData d = st::TwoTubes(true, &mesh);
+  Loaded l = Load(d);
+  rt::NarrowPhaseContext ctx;
+  rt::TriangleContact out[4];
+  uint32_t n = 77;
+  rt::NarrowPhaseJob job;
+  job.context = &ctx;
+  job.positions = {mesh.positions.data(), mesh.vertex_count(), 12};
+  job.output = out;
+  job.capacity = 4;
+  job.count = &n;
+  CHECK(job.Check() == rt::Status::kErrorInvalidJob);  // not initialised
+  REQUIRE(ctx.Init(l.view) == rt::Status::kOk);
+  CHECK(job.Validate());
+  job.positions.count = mesh.vertex_count() - 1;
+  CHECK(job.Run() == rt::Status::kErrorVertexCount);
+  job.positions.count = mesh.vertex_count();
+  job.positions.stride_bytes = 10;
+  CHECK(job.Run() == rt::Status::kErrorStride);
+  job.positions.stride_bytes = 12;
+  job.count = nullptr;
+  CHECK(job.Run() == rt::Status::kErrorNullArgument);
+  job.count = &n;
+  const rt::Collision bad{5, 5, 0.0f, 0u};
+  job.sphere_pairs = &bad;
+  job.sphere_pair_count = 1;
+  CHECK(job.Run() == rt::Status::kErrorIndexOutOfRange);
+  job.sphere_pairs = nullptr;
+  job.sphere_pair_count = 0;
+  CHECK(n == 77);  // untouched by argument errors
+  std::vector<float> nan = mesh.positions;
+  nan[3 * 20 + 1] = std::numeric_limits<float>::quiet_NaN();
+  job.positions.data = nan.data();
+  CHECK(job.Run() == rt::Status::kErrorNonFinitePositions);
+  CHECK(n == 0);
+  // An asset without the narrow-phase arrays (baked before them) is refused at Init.
+  d.triangles.clear();
+  Loaded old = Load(d);
+  rt::NarrowPhaseContext ctx_old;
+  CHECK(ctx_old.Init(old.view) == rt::Status::kErrorMissingField);
+  CHECK(!ctx_old.initialized());
+  // Corrupt narrow-phase arrays are refused by LoadAsset.
+  st::Mesh m2, m3;
+  st::AssetData bad_weld = st::TwoTubes(true, &m2);
+  bad_weld.weld_ids[3] = 5;  // points forward
+  st::AlignedBytes bytes = st::Serialize(bad_weld);
+  rt::AssetView view;
+  CHECK(rt::LoadAsset(bytes.data(), bytes.size, &view) == rt::Status::kErrorIndexOutOfRange);
+  st::AssetData bad_tris = st::TwoTubes(true, &m3);
+  bad_tris.triangles.pop_back();
+  bytes = st::Serialize(bad_tris);
+  CHECK(rt::LoadAsset(bytes.data(), bytes.size, &view) == rt::Status::kErrorCountMismatch);
+}
