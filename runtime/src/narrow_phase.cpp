@@ -23,6 +23,8 @@ inline bool BoxesOverlap(const float* a, const float* b) {
 }  // namespace
 
 struct NarrowPhaseContext::Internal {
+  using Key = NarrowPhaseContext::Key;
+
   /// Region boxes of every sphere; false when a position is not finite.
   static bool RegionBoxes(NarrowPhaseContext& c, const char* base, size_t stride) {
     bool finite = true;
@@ -67,62 +69,86 @@ struct NarrowPhaseContext::Internal {
     }
   }
 
-  /// Region-order slots of sphere s whose triangle box meets `clip`, degenerate ones dropped.
-  static uint32_t Cull(NarrowPhaseContext& c, uint32_t s, const float* clip, const char* base, size_t stride,
-                       uint32_t* out, NarrowPhaseStats* st) {
+  /// Region-order slots of sphere s whose triangle box meets `clip`, keyed by their box minimum on
+  /// `axis` and sorted by it (ties by slot: deterministic).
+  static uint32_t Cull(const NarrowPhaseContext& c, uint32_t s, const float* clip, int axis, Key* out) {
     uint32_t n = 0;
     for (uint32_t k = c.region_offsets_[s]; k < c.region_offsets_[s + 1]; ++k) {
-      if (!BoxesOverlap(&c.tri_box_[6 * size_t{k}], clip)) continue;
-      if (c.tri_state_[k] == 0) {
-        const float* p = Vertex(base, stride, c.region_v_[3 * size_t{k}]);
-        const float* q = Vertex(base, stride, c.region_v_[3 * size_t{k} + 1]);
-        const float* r = Vertex(base, stride, c.region_v_[3 * size_t{k} + 2]);
-        c.tri_state_[k] = TriangleIsDegenerate(p, q, r) ? 2 : 1;
-        if (c.tri_state_[k] == 2) ++st->degenerate_triangles;
-      }
-      if (c.tri_state_[k] == 2) continue;
-      out[n++] = k;
+      const float* box = &c.tri_box_[6 * size_t{k}];
+      if (BoxesOverlap(box, clip)) out[n++] = {box[axis], k};
     }
+    std::sort(out, out + n, [](const Key& x, const Key& y) { return x.min < y.min || (x.min == y.min && x.slot < y.slot); });
     return n;
   }
 
-  /// Every contact of candidate (a, b), a < b.
+  /// The exact test of two box-overlapping triangles of different spheres (adjacency, degeneracy, predicate).
+  static void Test(NarrowPhaseContext& c, uint32_t ka, uint32_t kb, uint32_t a, uint32_t b, const char* base,
+                   size_t stride, const NarrowPhaseJob& job, NarrowPhaseStats& st) {
+    const uint32_t* wa = &c.region_w_[3 * size_t{ka}];
+    const uint32_t* wb = &c.region_w_[3 * size_t{kb}];
+    if (wa[0] == wb[0] || wa[0] == wb[1] || wa[0] == wb[2] || wa[1] == wb[0] || wa[1] == wb[1] || wa[1] == wb[2] ||
+        wa[2] == wb[0] || wa[2] == wb[1] || wa[2] == wb[2]) {
+      ++st.adjacent_skipped;
+      return;
+    }
+    const uint32_t* va = &c.region_v_[3 * size_t{ka}];
+    const uint32_t* vb = &c.region_v_[3 * size_t{kb}];
+    const float* pa[3] = {Vertex(base, stride, va[0]), Vertex(base, stride, va[1]), Vertex(base, stride, va[2])};
+    const float* pb[3] = {Vertex(base, stride, vb[0]), Vertex(base, stride, vb[1]), Vertex(base, stride, vb[2])};
+    for (const auto& [k, p] : {std::pair(ka, pa), std::pair(kb, pb)}) {
+      if (c.tri_state_[k] == 0) {  // degeneracy decided once a frame, for triangles that reach a test
+        c.tri_state_[k] = TriangleIsDegenerate(p[0], p[1], p[2]) ? 2 : 1;
+        st.degenerate_triangles += c.tri_state_[k] == 2;
+      }
+      if (c.tri_state_[k] == 2) return;
+    }
+    ++st.triangle_tests;
+    if (!TrianglesIntersect(pa[0], pa[1], pa[2], pb[0], pb[1], pb[2])) return;
+    if (st.contacts < job.capacity)
+      job.output[st.contacts] = {c.region_tri_[ka], c.region_tri_[kb], static_cast<uint16_t>(a), static_cast<uint16_t>(b)};
+    ++st.contacts;
+  }
+
+  /// Every contact of candidate (a, b), a < b: both regions culled to the other's box, then a
+  /// sort-and-sweep of the two lists along the longest axis of the boxes' overlap.
   static void Pair(NarrowPhaseContext& c, uint32_t a, uint32_t b, const char* base, size_t stride,
-                   const NarrowPhaseJob& job, NarrowPhaseStats* st) {
+                   const NarrowPhaseJob& job, NarrowPhaseStats* out_stats) {
+    NarrowPhaseStats st = *out_stats;  // counters in registers, written back once
     TriangleBoxes(c, a, base, stride);
     TriangleBoxes(c, b, base, stride);
     const float* ba = &c.box_[6 * size_t{a}];
     const float* bb = &c.box_[6 * size_t{b}];
-    const uint32_t na = Cull(c, a, bb, base, stride, c.list_a_.data(), st);
-    if (na == 0) return;
-    const uint32_t nb = Cull(c, b, ba, base, stride, c.list_b_.data(), st);
-    st->culled_triangles += na + nb;
-    for (uint32_t i = 0; i < na; ++i) {
-      const uint32_t ka = c.list_a_[i];
-      const float* box_a = &c.tri_box_[6 * size_t{ka}];
-      const uint32_t* wa = &c.region_w_[3 * size_t{ka}];
-      const uint32_t* va = &c.region_v_[3 * size_t{ka}];
-      for (uint32_t j = 0; j < nb; ++j) {
-        const uint32_t kb = c.list_b_[j];
-        ++st->box_tests;
-        if (!BoxesOverlap(box_a, &c.tri_box_[6 * size_t{kb}])) continue;
-        const uint32_t* wb = &c.region_w_[3 * size_t{kb}];
-        if (wa[0] == wb[0] || wa[0] == wb[1] || wa[0] == wb[2] || wa[1] == wb[0] || wa[1] == wb[1] ||
-            wa[1] == wb[2] || wa[2] == wb[0] || wa[2] == wb[1] || wa[2] == wb[2]) {
-          ++st->adjacent_skipped;
-          continue;
-        }
-        const uint32_t* vb = &c.region_v_[3 * size_t{kb}];
-        ++st->triangle_tests;
-        if (!TrianglesIntersect(Vertex(base, stride, va[0]), Vertex(base, stride, va[1]), Vertex(base, stride, va[2]),
-                                Vertex(base, stride, vb[0]), Vertex(base, stride, vb[1]), Vertex(base, stride, vb[2])))
-          continue;
-        if (st->contacts < job.capacity)
-          job.output[st->contacts] = {c.region_tri_[ka], c.region_tri_[kb], static_cast<uint16_t>(a),
-                                      static_cast<uint16_t>(b)};
-        ++st->contacts;
-      }
+    int axis = 0;
+    float extent = -1.0f;
+    for (int k = 0; k < 3; ++k) {
+      const float e = std::min(ba[3 + k], bb[3 + k]) - std::max(ba[k], bb[k]);
+      if (e > extent) extent = e, axis = k;
     }
+    Key* la = c.list_a_.data();
+    Key* lb = c.list_b_.data();
+    const uint32_t na = Cull(c, a, bb, axis, la);
+    const uint32_t nb = na ? Cull(c, b, ba, axis, lb) : 0;
+    st.culled_triangles += na + nb;
+    // Sweep: take the list whose next box starts first; test it against the other list's boxes that
+    // start before it ends. Each overlapping pair is met exactly once.
+    uint32_t i = 0, j = 0;
+    while (i < na && j < nb) {
+      const bool from_a = la[i].min <= lb[j].min;
+      const Key& x = from_a ? la[i] : lb[j];
+      const Key* other = from_a ? lb : la;
+      const uint32_t n_other = from_a ? nb : na;
+      const float* bx = &c.tri_box_[6 * size_t{x.slot}];
+      for (uint32_t o = from_a ? j : i; o < n_other && other[o].min <= bx[3 + axis]; ++o) {
+        ++st.box_tests;
+        if (!BoxesOverlap(bx, &c.tri_box_[6 * size_t{other[o].slot}])) continue;
+        if (from_a)
+          Test(c, x.slot, other[o].slot, a, b, base, stride, job, st);
+        else
+          Test(c, other[o].slot, x.slot, a, b, base, stride, job, st);
+      }
+      from_a ? ++i : ++j;
+    }
+    *out_stats = st;
   }
 };
 
@@ -176,8 +202,8 @@ Status NarrowPhaseContext::Init(const AssetView& view) {
     tri_box_.assign(6 * region_tri_.size(), 0.0f);
     tri_state_.assign(region_tri_.size(), 0);
     tri_box_frame_.assign(S, 0);
-    list_a_.assign(largest, 0);
-    list_b_.assign(largest, 0);
+    list_a_.assign(largest, Key{});
+    list_b_.assign(largest, Key{});
     sphere_count_ = S;
     vertex_count_ = V;
     triangle_count_ = T;

@@ -209,8 +209,7 @@ SPHERECHAIN_NOINLINE int Orient3dExact(const double* a, const double* b, const d
     TwoProduct(w[2], mz, tz, t_err[2]);
     TwoSum(tx, ty, sum, sum_err);
     TwoSum(sum, tz, det, det_err);
-    if (exact & (t_err[0] == 0) & (t_err[1] == 0) & (t_err[2] == 0) & (sum_err == 0) & (det_err == 0))
-      return Sign(det);
+    if (exact & (t_err[0] == 0) & (t_err[1] == 0) & (t_err[2] == 0) & (sum_err == 0) & (det_err == 0)) return Sign(det);
   }
   // (b) expansions.
   Expansion<2> eu[3], ev[3], ew[3];
@@ -438,17 +437,20 @@ SPHERECHAIN_NOINLINE bool IntersectRest(const Vec3 v[6], uint64_t* counter) {
   }
   const Vec3* t1[3] = {&v[0], &v[1], &v[2]};
   const Vec3* t2[3] = {&v[3], &v[4], &v[5]};
+  // The convention: a degenerate triangle (no plane: every orientation against it is exactly 0, so the
+  // strict exits never fire for it) never intersects.
+  auto degenerate = [&] {
+    return Degenerate(plane1, v[0], v[1], v[2], counter) || Degenerate(plane2, v[3], v[4], v[5], counter);
+  };
   int s1[3], s2[3];
   for (int k = 0; k < 3; ++k) s1[k] = Resolve(f1[k], v[3], v[4], v[5], v[k], counter);
   if ((s1[0] == s1[1]) & (s1[1] == s1[2]) & (s1[0] != 0)) return false;
+  // Triangle 1 in plane 2: coplanar (then triangle 2 lies in plane 1 too, its orientations need not be
+  // resolved), unless a triangle is degenerate.
+  if ((s1[0] == 0) & (s1[1] == 0) & (s1[2] == 0)) return !degenerate() && CoplanarIntersect(plane1, t1, t2, counter);
   for (int k = 0; k < 3; ++k) s2[k] = Resolve(f2[k], v[0], v[1], v[2], v[3 + k], counter);
   if ((s2[0] == s2[1]) & (s2[1] == s2[2]) & (s2[0] != 0)) return false;
-  // The convention: a degenerate triangle (no plane: every orientation against it is exactly 0, so the
-  // exits above never fired for it) never intersects.
-  if (Degenerate(plane1, v[0], v[1], v[2], counter) || Degenerate(plane2, v[3], v[4], v[5], counter))
-    return false;
-
-  if ((s1[0] == 0) & (s1[1] == 0) & (s1[2] == 0)) return CoplanarIntersect(plane1, t1, t2, counter);
+  if (degenerate()) return false;
 
   // Canonical form: triangle 1 rotated so its apex a1 is alone on the non-negative side of (oriented)
   // plane 2, edges a1b1, a1c1 crossing it; likewise triangle 2 w.r.t. (oriented) plane 1. Rotations keep
@@ -490,8 +492,8 @@ inline bool Intersect(const float* p1, const float* q1, const float* r1, const f
 
 }  // namespace
 
-bool TrianglesIntersect(const float p1[3], const float q1[3], const float r1[3], const float p2[3],
-                        const float q2[3], const float r2[3]) {
+bool TrianglesIntersect(const float p1[3], const float q1[3], const float r1[3], const float p2[3], const float q2[3],
+                        const float r2[3]) {
   return Intersect(p1, q1, r1, p2, q2, r2, nullptr);
 }
 

@@ -111,11 +111,12 @@ void Compare(const Tri& a, const Tri& b, std::mt19937& rng, Tally* tally) {
 
 void Report(const char* name, const Tally& t) {
   const uint64_t tested = t.pairs - t.degenerate;
-  MESSAGE(std::string(name) << ": " << t.pairs << " pairs, " << t.intersecting << " intersecting, " << t.disjoint << " disjoint, "
-               << t.degenerate << " with a degenerate triangle (false, skipped vs CGAL); exact fallback in "
-               << t.needed_exact << " of " << tested << " tests ("
-               << (tested ? 100.0 * double(t.needed_exact) / double(tested) : 0.0) << "%), "
-               << t.exact_evaluations << " exact orientations");
+  MESSAGE(std::string(name) << ": " << t.pairs << " pairs, " << t.intersecting << " intersecting, " << t.disjoint
+                            << " disjoint, " << t.degenerate
+                            << " with a degenerate triangle (false, skipped vs CGAL); exact fallback in "
+                            << t.needed_exact << " of " << tested << " tests ("
+                            << (tested ? 100.0 * double(t.needed_exact) / double(tested) : 0.0) << "%), "
+                            << t.exact_evaluations << " exact orientations");
   CHECK_MESSAGE(t.disagreements == 0, std::string(name) << ": " << t.disagreements << " disagreements with CGAL");
 }
 
@@ -132,12 +133,18 @@ Tri Embed(const Tri& t, int plane, float c) {
 
 constexpr int kPairsPerCategory = 40000;
 
+/// Coordinates 1e-30..1e30 (and 1 + 1 ulp): differences of these are often inexact in double.
+constexpr float kWidePalette[] = {0.0f,       1e-30f, -1e-30f, 3e-8f, 1.0f,  -1.0f,
+                                  1.0000001f, 2.5f,   1e8f,    -1e8f, 1e30f, -1e30f};
+
 }  // namespace
 
 TEST_CASE("triangle_intersect: hand cases with known answers") {
   const Tri base = T({0, 0, 0}, {4, 0, 0}, {0, 4, 0});  // in z = 0
 
-  SUBCASE("crossing: a vertical triangle pierces the base") { Expect(base, T({1, 1, -1}, {1, 1, 1}, {2, 0.5f, 1}), true); }
+  SUBCASE("crossing: a vertical triangle pierces the base") {
+    Expect(base, T({1, 1, -1}, {1, 1, 1}, {2, 0.5f, 1}), true);
+  }
   SUBCASE("separated: above the base, not parallel") { Expect(base, T({1, 1, 1}, {2, 1, 3}, {1, 2, 2}), false); }
   SUBCASE("separated: the other's plane crosses the triangle but outside") {
     Expect(base, T({5, 5, -1}, {5, 5, 1}, {6, 5, 0}), false);
@@ -170,9 +177,9 @@ TEST_CASE("triangle_intersect: hand cases with known answers") {
   SUBCASE("identical triangles") { Expect(base, base, true); }
 
   SUBCASE("degenerate triangles: false, and TriangleIsDegenerate") {
-    const Tri segment = T({1, 1, -1}, {1, 1, 1}, {1, 1, 0});  // collinear, crosses the base
-    const Tri point = T({1, 1, 0}, {1, 1, 0}, {1, 1, 0});     // a point inside the base
-    const Tri repeated = T({1, 1, -1}, {1, 1, 1}, {1, 1, 1}); // two equal vertices
+    const Tri segment = T({1, 1, -1}, {1, 1, 1}, {1, 1, 0});   // collinear, crosses the base
+    const Tri point = T({1, 1, 0}, {1, 1, 0}, {1, 1, 0});      // a point inside the base
+    const Tri repeated = T({1, 1, -1}, {1, 1, 1}, {1, 1, 1});  // two equal vertices
     CHECK(rt::TriangleIsDegenerate(segment[0].data(), segment[1].data(), segment[2].data()));
     CHECK(rt::TriangleIsDegenerate(point[0].data(), point[1].data(), point[2].data()));
     CHECK(rt::TriangleIsDegenerate(repeated[0].data(), repeated[1].data(), repeated[2].data()));
@@ -254,7 +261,8 @@ TEST_CASE("triangle_intersect: agrees with CGAL exact do_intersect on random har
         b = {nudged(a[0]), nudged(a[1]), nudged(a[2])};
         break;
       case 1:  // sharing an edge (maybe nudged), third vertex near the plane or anywhere
-        b = {rng() % 2 ? a[0] : nudged(a[0]), a[1], rng() % 2 ? near_plane(a, coef(rng), coef(rng)) : random_tri(coord)[0]};
+        b = {rng() % 2 ? a[0] : nudged(a[0]), a[1],
+             rng() % 2 ? near_plane(a, coef(rng), coef(rng)) : random_tri(coord)[0]};
         break;
       case 2:  // sharing a vertex, the others near the plane
         b = {a[0], nudged(near_plane(a, coef(rng), coef(rng))), near_plane(a, coef(rng), coef(rng))};
@@ -283,6 +291,8 @@ TEST_CASE("triangle_intersect: agrees with CGAL exact do_intersect on random har
   };
 
   Tally uniform, snapped, near_degenerate, large, wide, coplanar, mixed;
+  std::uniform_int_distribution<int> palette(0, int(std::size(kWidePalette)) - 1);
+  auto wide_coord = [&] { return kWidePalette[palette(rng)]; };
   auto unit_coord = [&] { return unit(rng); };
   auto grid_coord = [&] { return float(grid(rng)); };
   for (int i = 0; i < kPairsPerCategory; ++i) {
@@ -308,20 +318,12 @@ TEST_CASE("triangle_intersect: agrees with CGAL exact do_intersect on random har
     // (e) wide exponent range: coordinates from a small palette spanning 1e-30..1e30 (so coincidences
     //     happen), where differences are not exact in double and the expansions carry two components
     {
-      static constexpr float kPalette[] = {0.0f, 1e-30f, -1e-30f, 3e-8f, 1.0f, -1.0f, 1.0000001f, 2.5f, 1e8f, -1e8f,
-                                           1e30f, -1e30f};
-      std::uniform_int_distribution<int> pal(0, int(std::size(kPalette)) - 1);
-      auto wide_coord = [&] { return kPalette[pal(rng)]; };
       const Tri a = random_tri(wide_coord);
       Compare(a, i % 2 ? hard_partner(a, wide_coord) : random_tri(wide_coord), rng, &wide);
     }
     // (f) exactly coplanar: unit, grid, wide-palette or mixed-scale coordinates, a hard partner (in the plane)
     //     or random
     {
-      static constexpr float kPalette[] = {0.0f, 1e-30f, -1e-30f, 3e-8f, 1.0f, -1.0f, 1.0000001f, 2.5f, 1e8f, -1e8f,
-                                           1e30f, -1e30f};
-      std::uniform_int_distribution<int> pal(0, int(std::size(kPalette)) - 1);
-      auto wide_coord = [&] { return kPalette[pal(rng)]; };
       const int kind = i % 4;
       auto coord = [&] {
         return kind == 0 ? unit(rng) : kind == 1 ? float(grid(rng)) : kind == 2 ? wide_coord() : mixed_coord();

@@ -8,9 +8,10 @@
 //      whatever the deformation: no baked bound, no slack to prove);
 //   2. candidate sphere pairs — boxes that overlap (closed intervals: touching counts), minus the
 //      excluded pairs (the asset's, or none): #S(#S−1)/2 box tests (4,560 for 96 spheres, ~3 µs);
-//   3. per candidate (a, b): the triangles of a whose box meets b's region box, and vice versa;
-//      triangle boxes tested; pairs sharing a corner (weld ids: Asset.weld_ids) skipped; the rest
-//      tested exactly by TrianglesIntersect (Guigue–Devillers 2003, exact orientation predicates).
+//   3. per candidate (a, b): the triangles of a whose box meets b's region box, and vice versa,
+//      swept against each other along the longest axis of the two region boxes' overlap (sort and
+//      sweep: only triangle boxes that overlap on that axis are compared); pairs sharing a corner
+//      (weld ids: Asset.weld_ids) skipped; the rest tested exactly by TrianglesIntersect (Guigue–Devillers 2003, exact orientation predicates).
 // A contact is two triangles that share no (welded) corner and intersect (closed triangles: touching
 // counts), owned by different spheres that are not an excluded pair (Asset.surrounding_*): exactly
 // what `spherechain evaluate` counts as ground truth, so the two agree triangle pair for triangle pair.
@@ -48,8 +49,8 @@ struct NarrowPhaseStats {
   uint32_t box_tests = 0;             ///< triangle-box vs triangle-box tests
   uint32_t adjacent_skipped = 0;      ///< box-overlapping triangle pairs skipped for sharing a welded corner
   uint32_t triangle_tests = 0;        ///< exact triangle–triangle tests (TrianglesIntersect calls)
-  uint32_t degenerate_triangles = 0;  ///< culled-in triangles dropped as degenerate (zero area, exact):
-                                      ///< degenerate triangles never make contacts
+  uint32_t degenerate_triangles = 0;  ///< triangles that reached an exact test and were found degenerate
+                                      ///< (zero area, exact; once a frame each): they never make contacts
   uint32_t contacts = 0;              ///< intersecting triangle pairs; > capacity ⇔ truncated
 };
 
@@ -58,6 +59,8 @@ struct NarrowPhaseStats {
 /// pairs; plus per-frame scratch (region boxes, triangle boxes, candidate pairs, culled lists).
 /// Ownership: owns its memory; after Init it no longer reads the asset bytes.
 /// Thread safety: one job at a time per context (Run writes the scratch); contexts are independent.
+struct NarrowPhaseJob;
+
 struct NarrowPhaseJob;
 
 class NarrowPhaseContext {
@@ -111,15 +114,20 @@ class NarrowPhaseContext {
   std::vector<uint8_t> tri_state_;             // per region-order triangle: 0 unchecked, 1 ok, 2 degenerate
   std::vector<uint32_t> tri_box_frame_;        // per sphere: frame stamp of its triangle boxes
   uint32_t frame_ = 0;
-  std::vector<uint32_t> list_a_, list_b_;      // culled region-order triangle slots
+  struct Key {
+    float min;      // the triangle box's minimum along the sweep axis
+    uint32_t slot;  // region-order triangle slot
+  };
+  std::vector<Key> list_a_, list_b_;           // culled triangles of a candidate pair, sorted for the sweep
 };
 
 /// ozz-style job: exact triangle contacts between the surrounding regions of different spheres
 /// (see the file comment for the three stages and the definition of a contact).
-/// Output order (deterministic): by sphere pair (a, b) ascending, then triangle_a in a's surrounding
-/// order, then triangle_b in b's surrounding order.
+/// Output order (deterministic, a pure function of the asset and the positions): by sphere pair (a, b)
+/// ascending (or in `sphere_pairs` order), then in the order the sweep meets the triangle pairs.
 /// Cost: O(#V) for the region boxes, #S(#S−1)/2 box tests for the candidates, then per candidate the
-/// two regions' triangles (boxes computed once per frame per sphere) and the culled pairs; the exact
+/// two regions' triangles (boxes computed once per frame per sphere), a sort of the culled ones and
+/// the sweep's box tests; the exact
 /// test is ~20–60 ns (filtered double orientation tests, exact expansions only near degeneracy).
 /// MakeHuman morph: see README "Exact self-contacts". No allocation, no exceptions; serial.
 struct NarrowPhaseJob {

@@ -5,9 +5,10 @@
 // constructed point. Each determinant is evaluated in double with a floating-point filter (the
 // a-priori error bounds of Shewchuk 1997, "Adaptive precision floating-point arithmetic and fast robust
 // geometric predicates", orient3d/orient2d bound A); when the filter cannot certify the sign it is
-// recomputed exactly with floating-point expansions (TwoDiff / TwoProduct via std::fma, expansion sum
-// and scale, sign of the most significant component). The answers are therefore exact, not "robust
-// up to epsilon".
+// recomputed exactly: first the plain double evaluation with the rounding error of every operation
+// computed (TwoDiff / TwoSum / TwoProduct via std::fma; all zero ⇒ the value is exact), else with
+// floating-point expansions (expansion sum and scale, sign of the most significant component). The
+// answers are therefore exact, not "robust up to epsilon".
 #pragma once
 
 #include <cstdint>
@@ -32,14 +33,18 @@ namespace spherechain::runtime {
 /// The limit is the input itself: floats are taken as given (rounding done by the caller, e.g. skinning,
 /// is not undone).
 ///
-/// Cost: ~10–20 ns when one triangle lies strictly on one side of the other's plane (the usual case:
-/// 6 filtered orientations), ~25–40 ns otherwise; the exact fallback (≤ a few hundred ns) runs only on
-/// (near-)degenerate configurations: touching, coplanar, shared vertices. No allocation, no exceptions,
+/// Cost (x86-64, -O2, one core of a 2-core cloud Xeon): ~15 ns when triangle 1 lies strictly on one side
+/// of triangle 2's plane (3 filtered orientations), ~60 ns on average over box-overlapping neighbours,
+/// ~95 ns for intersecting pairs (8 filtered orientations) — CGAL EPICK do_intersect: 25 / 120 / 145 ns
+/// on the same pairs. The exact fallback runs only where the filter cannot certify a sign (touching,
+/// coplanar, shared vertices, 1-ulp configurations): ~30 ns per orientation when plain double arithmetic
+/// happens to be error-free (coarse coordinates), ~300 ns when it needs expansions; a coplanar pair on
+/// integer coordinates ~270 ns. No allocation (≤ ~7 KB of stack in the expansion stage), no exceptions,
 /// no global state: thread-safe, reentrant.
 /// Source: Guigue & Devillers 2003 §3 (3D test), coplanar case by projection onto the axis plane of the
 /// largest normal component and a 2D separating-edge test with exact orient2d; Shewchuk 1997 §4.
-bool TrianglesIntersect(const float p1[3], const float q1[3], const float r1[3], const float p2[3],
-                        const float q2[3], const float r2[3]);
+bool TrianglesIntersect(const float p1[3], const float q1[3], const float r1[3], const float p2[3], const float q2[3],
+                        const float r2[3]);
 
 /// True when the triangle (p, q, r) has exactly zero area: its three vertices are collinear or two
 /// coincide (the three components of (q − p) × (r − p) are exactly zero). Same answer as CGAL's
@@ -49,15 +54,16 @@ bool TrianglesIntersect(const float p1[3], const float q1[3], const float r1[3],
 /// Non-finite coordinates (NaN, ±Inf) give false (not a zero-area triangle; TrianglesIntersect
 /// rejects them anyway).
 /// Exactness and sources as TrianglesIntersect (three exact orient2d, Shewchuk 1997 filter first).
-/// Cost: ~3–5 ns when the filter certifies a non-zero component (every non-sliver triangle); no
-/// allocation, thread-safe.
+/// Cost: a few ns when the filter certifies a non-zero component (every triangle that is not a sliver);
+/// no allocation, thread-safe.
 bool TriangleIsDegenerate(const float p[3], const float q[3], const float r[3]);
 
 namespace detail {
 
 /// Test and diagnostics hook: exactly TrianglesIntersect, and adds to `*exact_evaluations` (not
 /// nullable) the number of orientation determinants whose sign the floating-point filter could not
-/// certify and that were therefore evaluated exactly with expansions. Not for production paths.
+/// certify and that were therefore evaluated exactly (error-free double stage or expansions). Same cost
+/// as TrianglesIntersect plus a counter increment per exact evaluation; for tests and measurements.
 bool TrianglesIntersectCounted(const float p1[3], const float q1[3], const float r1[3], const float p2[3],
                                const float q2[3], const float r2[3], uint64_t* exact_evaluations);
 
