@@ -3,6 +3,8 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "commands.h"
+#include "spherechain/baker/import.h"
 #include "spherechain/baker/write.h"
 
 namespace spherechain::cli {
@@ -123,6 +125,19 @@ bool OpenAnimation(const baker::Mesh& mesh, const AnimationArgs& a, AnimationSou
     if (auto s = baker::ValidateClip(*mesh.skin, *out->clip); !s.ok()) return *error = s.error().message, false;
   }
   return true;
+}
+
+bool OpenAssetAndMesh(const std::string& asset_path, const std::string& mesh_path, const std::string& rig,
+                      LoadedAsset* asset, baker::Mesh* mesh, std::string* error) {
+  if (!LoadAssetFile(asset_path, asset, error)) return false;
+  baker::ImportOptions opts;
+  opts.rig_path = rig;
+  baker::Context log = MakeLoggingContext();
+  auto imported = baker::ImportMesh(mesh_path, opts, &log);
+  if (!imported.ok())
+    return *error = std::string(baker::ToString(imported.error().code)) + ": " + imported.error().message, false;
+  *mesh = std::move(imported).value();
+  return CheckFingerprint(asset->view, *mesh, asset_path, mesh_path, error);
 }
 
 bool CheckFingerprint(const runtime::AssetView& view, const baker::Mesh& mesh, const std::string& asset_path,

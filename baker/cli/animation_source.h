@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "asset_file.h"
 #include "spherechain/baker/animation.h"
 #include "spherechain/baker/morph.h"
 #include "spherechain/runtime/asset.h"
@@ -38,6 +39,11 @@ struct AnimationSource {
 /// Picks the animation (unknown clip, missing poses, too few frames: false with `*error` saying what).
 /// `mesh` must have a skin.
 bool OpenAnimation(const baker::Mesh& mesh, const AnimationArgs& args, AnimationSource* out, std::string* error);
+
+/// Loads the asset (verified) and imports the character it was baked from (`rig`: MakeHuman .mhskel,
+/// empty = default), then checks their fingerprints. False with `*error` ("<kind>: <file>: <why>").
+bool OpenAssetAndMesh(const std::string& asset_path, const std::string& mesh_path, const std::string& rig,
+                      LoadedAsset* asset, baker::Mesh* mesh, std::string* error);
 
 /// The mesh must be the one the asset was baked from (DESIGN.md: a mismatched pairing is an error):
 /// counts, then the hashes of positions and indices. False with `*error` naming both files.

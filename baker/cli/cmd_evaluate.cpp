@@ -107,16 +107,11 @@ int RunEvaluate(const EvaluateArgs& a) {
   if (!a.png.empty() && a.png == a.json) return Fail("--png and --json name the same file");
 
   LoadedAsset asset;
+  baker::Mesh mesh;
   std::string error;
-  if (!LoadAssetFile(a.asset, &asset, &error)) return Fail(error);
+  if (!OpenAssetAndMesh(a.asset, a.mesh, a.rig, &asset, &mesh, &error)) return Fail(error);
   const runtime::AssetView& view = asset.view;
-  baker::ImportOptions opts;
-  opts.rig_path = a.rig;
   baker::Context log = MakeLoggingContext();
-  auto imported = baker::ImportMesh(a.mesh, opts, &log);
-  if (!imported.ok()) return Fail(imported.error());
-  const baker::Mesh& mesh = imported.value();
-  if (!CheckFingerprint(view, mesh, a.asset, a.mesh, &error)) return Fail(error);
 
   AnimationArgs anim_args{a.mesh, a.clip, a.morph, a.poses_dir, a.frames};
   AnimationSource anim;

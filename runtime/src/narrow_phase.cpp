@@ -52,11 +52,23 @@ struct NarrowPhaseContext::Internal {
     return finite;
   }
 
-  /// Triangle boxes of sphere s's region (once per frame), degeneracy state reset.
-  static void TriangleBoxes(NarrowPhaseContext& c, uint32_t s, const char* base, size_t stride) {
-    if (c.tri_box_frame_[s] == c.frame_) return;
-    c.tri_box_frame_[s] = c.frame_;
+  /// Region-order slots of sphere s whose triangle box meets `clip`, their boxes written, keyed by the
+  /// box minimum on `axis` and sorted by it (ties by slot: deterministic). The cull is exact and reads
+  /// only the region's vertices once: each vertex gets an outcode (below / above `clip` on each axis,
+  /// Cohen–Sutherland), and a triangle's box misses `clip` exactly when its three corners share a bit.
+  static uint32_t Cull(NarrowPhaseContext& c, uint32_t s, const float* clip, int axis, const char* base,
+                       size_t stride, Key* out) {
+    const uint32_t vbegin = c.vert_offsets_[s], vend = c.vert_offsets_[s + 1];
+    uint8_t* code = c.outcode_.data();
+    for (uint32_t i = vbegin; i < vend; ++i) {
+      const float* p = Vertex(base, stride, c.vert_ids_[i]);
+      code[i - vbegin] = static_cast<uint8_t>((p[0] < clip[0]) | (p[0] > clip[3]) << 1 | (p[1] < clip[1]) << 2 |
+                                              (p[1] > clip[4]) << 3 | (p[2] < clip[2]) << 4 | (p[2] > clip[5]) << 5);
+    }
+    uint32_t n = 0;
     for (uint32_t k = c.region_offsets_[s]; k < c.region_offsets_[s + 1]; ++k) {
+      const uint32_t* l = &c.region_local_[3 * size_t{k}];
+      if (code[l[0]] & code[l[1]] & code[l[2]]) continue;
       const float* p = Vertex(base, stride, c.region_v_[3 * size_t{k}]);
       const float* q = Vertex(base, stride, c.region_v_[3 * size_t{k} + 1]);
       const float* r = Vertex(base, stride, c.region_v_[3 * size_t{k} + 2]);
@@ -65,17 +77,7 @@ struct NarrowPhaseContext::Internal {
         box[j] = std::min(std::min(p[j], q[j]), r[j]);
         box[3 + j] = std::max(std::max(p[j], q[j]), r[j]);
       }
-      c.tri_state_[k] = 0;
-    }
-  }
-
-  /// Region-order slots of sphere s whose triangle box meets `clip`, keyed by their box minimum on
-  /// `axis` and sorted by it (ties by slot: deterministic).
-  static uint32_t Cull(const NarrowPhaseContext& c, uint32_t s, const float* clip, int axis, Key* out) {
-    uint32_t n = 0;
-    for (uint32_t k = c.region_offsets_[s]; k < c.region_offsets_[s + 1]; ++k) {
-      const float* box = &c.tri_box_[6 * size_t{k}];
-      if (BoxesOverlap(box, clip)) out[n++] = {box[axis], k};
+      out[n++] = {box[axis], k};
     }
     std::sort(out, out + n, [](const Key& x, const Key& y) { return x.min < y.min || (x.min == y.min && x.slot < y.slot); });
     return n;
@@ -114,8 +116,6 @@ struct NarrowPhaseContext::Internal {
   static void Pair(NarrowPhaseContext& c, uint32_t a, uint32_t b, const char* base, size_t stride,
                    const NarrowPhaseJob& job, NarrowPhaseStats* out_stats) {
     NarrowPhaseStats st = *out_stats;  // counters in registers, written back once
-    TriangleBoxes(c, a, base, stride);
-    TriangleBoxes(c, b, base, stride);
     const float* ba = &c.box_[6 * size_t{a}];
     const float* bb = &c.box_[6 * size_t{b}];
     int axis = 0;
@@ -126,8 +126,8 @@ struct NarrowPhaseContext::Internal {
     }
     Key* la = c.list_a_.data();
     Key* lb = c.list_b_.data();
-    const uint32_t na = Cull(c, a, bb, axis, la);
-    const uint32_t nb = na ? Cull(c, b, ba, axis, lb) : 0;
+    const uint32_t na = Cull(c, a, bb, axis, base, stride, la);
+    const uint32_t nb = na ? Cull(c, b, ba, axis, base, stride, lb) : 0;
     st.culled_triangles += na + nb;
     // Sweep: take the list whose next box starts first; test it against the other list's boxes that
     // start before it ends. Each overlapping pair is met exactly once.
@@ -166,6 +166,7 @@ Status NarrowPhaseContext::Init(const AssetView& view) {
     region_offsets_.assign(1, 0);
     vert_offsets_.assign(1, 0);
     std::vector<uint32_t> verts;
+    uint32_t largest_verts = 0;
     for (uint32_t s = 0; s < S; ++s) {
       const TriangleSpan span = SurroundingTriangles(view, s);
       verts.clear();
@@ -185,6 +186,11 @@ Status NarrowPhaseContext::Init(const AssetView& view) {
       region_offsets_.push_back(static_cast<uint32_t>(region_tri_.size()));
       std::sort(verts.begin(), verts.end());
       verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
+      for (uint32_t k = region_offsets_[s]; k < region_tri_.size(); ++k)
+        for (int j = 0; j < 3; ++j)
+          region_local_.push_back(static_cast<uint32_t>(
+              std::lower_bound(verts.begin(), verts.end(), region_v_[3 * size_t{k} + j]) - verts.begin()));
+      largest_verts = std::max(largest_verts, static_cast<uint32_t>(verts.size()));
       vert_ids_.insert(vert_ids_.end(), verts.begin(), verts.end());
       vert_offsets_.push_back(static_cast<uint32_t>(vert_ids_.size()));
     }
@@ -201,7 +207,7 @@ Status NarrowPhaseContext::Init(const AssetView& view) {
     box_.assign(6 * size_t{S}, 0.0f);
     tri_box_.assign(6 * region_tri_.size(), 0.0f);
     tri_state_.assign(region_tri_.size(), 0);
-    tri_box_frame_.assign(S, 0);
+    outcode_.assign(largest_verts, 0);
     list_a_.assign(largest, Key{});
     list_b_.assign(largest, Key{});
     sphere_count_ = S;
@@ -246,10 +252,7 @@ Status NarrowPhaseJob::Run() const {
   const char* base = static_cast<const char*>(positions.data);
   const size_t stride = positions.stride_bytes;
   if (!NarrowPhaseContext::Internal::RegionBoxes(c, base, stride)) return Status::kErrorNonFinitePositions;
-  if (++c.frame_ == 0) {  // stamp wrapped: forget every stamp
-    std::fill(c.tri_box_frame_.begin(), c.tri_box_frame_.end(), 0u);
-    c.frame_ = 1;
-  }
+  std::fill(c.tri_state_.begin(), c.tri_state_.end(), uint8_t{0});  // degeneracy: unknown this frame
   const uint32_t S = c.sphere_count_;
   const bool skip_excluded = exclusions == Exclusions::kAsset;
   auto consider = [&](uint32_t a, uint32_t b) {

@@ -8,7 +8,8 @@
 //      whatever the deformation: no baked bound, no slack to prove);
 //   2. candidate sphere pairs — boxes that overlap (closed intervals: touching counts), minus the
 //      excluded pairs (the asset's, or none): #S(#S−1)/2 box tests (4,560 for 96 spheres, ~3 µs);
-//   3. per candidate (a, b): the triangles of a whose box meets b's region box, and vice versa,
+//   3. per candidate (a, b): the triangles of a whose box meets b's region box (decided exactly from
+//      their corners' Cohen–Sutherland outcodes), and vice versa,
 //      swept against each other along the longest axis of the two region boxes' overlap (sort and
 //      sweep: only triangle boxes that overlap on that axis are compared); pairs sharing a corner
 //      (weld ids: Asset.weld_ids) skipped; the rest tested exactly by TrianglesIntersect (Guigue–Devillers 2003, exact orientation predicates).
@@ -74,7 +75,7 @@ class NarrowPhaseContext {
   /// Sizes and fills the context for `view`. The only allocating call (catches std::bad_alloc).
   /// Returns kOk; kErrorNullArgument when `!view.valid()`; kErrorMissingField when the asset has no
   /// `triangles` or `weld_ids` (baked before the narrow phase existed: re-bake); kErrorOutOfMemory
-  /// (context left empty). Cost: O(#T + #V + #S) time; memory ~60 B per triangle + 8 B per
+  /// (context left empty). Cost: O(#T + #V + #S) time; memory ~70 B per triangle + 5 B per
   /// (sphere, region vertex) + 40 B per sphere + 8 B per triangle of the largest region.
   Status Init(const AssetView& view);
 
@@ -105,15 +106,15 @@ class NarrowPhaseContext {
   // Surrounding regions in sphere order (CSR, region_offsets_ #S+1): source triangle id, its three
   // vertex indices and three weld ids; index-degenerate triangles left out.
   std::vector<uint32_t> region_offsets_, region_tri_, region_v_, region_w_;
-  std::vector<uint32_t> vert_offsets_, vert_ids_;  // CSR #S+1: distinct vertices of each region
+  std::vector<uint32_t> vert_offsets_, vert_ids_;  // CSR #S+1: distinct vertices of each region, ascending
+  std::vector<uint32_t> region_local_;             // per slot: its corners' indices in the region's vertex list
   std::vector<uint32_t> excl_offsets_;             // CSR #S+1: excluded partners b > a of each a
   std::vector<uint16_t> excl_partners_;
   // Per-frame scratch.
   std::vector<float> box_;                     // #S×6 region boxes (min xyz, max xyz)
   std::vector<float> tri_box_;                 // per region-order triangle: 6 floats
   std::vector<uint8_t> tri_state_;             // per region-order triangle: 0 unchecked, 1 ok, 2 degenerate
-  std::vector<uint32_t> tri_box_frame_;        // per sphere: frame stamp of its triangle boxes
-  uint32_t frame_ = 0;
+  std::vector<uint8_t> outcode_;               // per vertex of the largest region: cull outcodes
   struct Key {
     float min;      // the triangle box's minimum along the sweep axis
     uint32_t slot;  // region-order triangle slot
@@ -126,8 +127,9 @@ class NarrowPhaseContext {
 /// Output order (deterministic, a pure function of the asset and the positions): by sphere pair (a, b)
 /// ascending (or in `sphere_pairs` order), then in the order the sweep meets the triangle pairs.
 /// Cost: O(#V) for the region boxes, #S(#S−1)/2 box tests for the candidates, then per candidate the
-/// two regions' triangles (boxes computed once per frame per sphere), a sort of the culled ones and
-/// the sweep's box tests; the exact
+/// two regions' vertices (an outcode each against the other region's box) and triangles (culled
+/// exactly by their corners' outcodes, boxes computed for those kept), a sort of the kept ones and the
+/// sweep's box tests; the exact
 /// test is ~20–60 ns (filtered double orientation tests, exact expansions only near degeneracy).
 /// MakeHuman morph: see README "Exact self-contacts". No allocation, no exceptions; serial.
 struct NarrowPhaseJob {
