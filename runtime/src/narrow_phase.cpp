@@ -72,12 +72,13 @@ struct NarrowPhaseContext::Internal {
       const float* p = Vertex(base, stride, c.region_v_[3 * size_t{k}]);
       const float* q = Vertex(base, stride, c.region_v_[3 * size_t{k} + 1]);
       const float* r = Vertex(base, stride, c.region_v_[3 * size_t{k} + 2]);
-      float* box = &c.tri_box_[6 * size_t{k}];
+      Key& key = out[n++];
       for (int j = 0; j < 3; ++j) {
-        box[j] = std::min(std::min(p[j], q[j]), r[j]);
-        box[3 + j] = std::max(std::max(p[j], q[j]), r[j]);
+        key.box[j] = std::min(std::min(p[j], q[j]), r[j]);
+        key.box[3 + j] = std::max(std::max(p[j], q[j]), r[j]);
       }
-      out[n++] = {box[axis], k};
+      key.min = key.box[axis];
+      key.slot = k;
     }
     std::sort(out, out + n, [](const Key& x, const Key& y) { return x.min < y.min || (x.min == y.min && x.slot < y.slot); });
     return n;
@@ -137,10 +138,14 @@ struct NarrowPhaseContext::Internal {
       const Key& x = from_a ? la[i] : lb[j];
       const Key* other = from_a ? lb : la;
       const uint32_t n_other = from_a ? nb : na;
-      const float* bx = &c.tri_box_[6 * size_t{x.slot}];
-      for (uint32_t o = from_a ? j : i; o < n_other && other[o].min <= bx[3 + axis]; ++o) {
+      const float* bx = x.box;
+      const float end = bx[3 + axis];
+      for (uint32_t o = from_a ? j : i; o < n_other && other[o].min <= end; ++o) {
         ++st.box_tests;
-        if (!BoxesOverlap(bx, &c.tri_box_[6 * size_t{other[o].slot}])) continue;
+        const float* by = other[o].box;  // on `axis` they overlap: the sweep says so
+        if (!((bx[0] <= by[3]) & (by[0] <= bx[3]) & (bx[1] <= by[4]) & (by[1] <= bx[4]) & (bx[2] <= by[5]) &
+              (by[2] <= bx[5])))
+          continue;
         if (from_a)
           Test(c, x.slot, other[o].slot, a, b, base, stride, job, st);
         else
@@ -205,7 +210,6 @@ Status NarrowPhaseContext::Init(const AssetView& view) {
     uint32_t largest = 0;
     for (uint32_t s = 0; s < S; ++s) largest = std::max(largest, region_offsets_[s + 1] - region_offsets_[s]);
     box_.assign(6 * size_t{S}, 0.0f);
-    tri_box_.assign(6 * region_tri_.size(), 0.0f);
     tri_state_.assign(region_tri_.size(), 0);
     outcode_.assign(largest_verts, 0);
     list_a_.assign(largest, Key{});

@@ -112,11 +112,11 @@ class NarrowPhaseContext {
   std::vector<uint16_t> excl_partners_;
   // Per-frame scratch.
   std::vector<float> box_;                     // #S×6 region boxes (min xyz, max xyz)
-  std::vector<float> tri_box_;                 // per region-order triangle: 6 floats
   std::vector<uint8_t> tri_state_;             // per region-order triangle: 0 unchecked, 1 ok, 2 degenerate
   std::vector<uint8_t> outcode_;               // per vertex of the largest region: cull outcodes
   struct Key {
-    float min;      // the triangle box's minimum along the sweep axis
+    float box[6];   // the triangle's box (min xyz, max xyz) this frame
+    float min;      // box minimum along the sweep axis
     uint32_t slot;  // region-order triangle slot
   };
   std::vector<Key> list_a_, list_b_;           // culled triangles of a candidate pair, sorted for the sweep
