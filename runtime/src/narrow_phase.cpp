@@ -1,6 +1,7 @@
 #include "spherechain/runtime/narrow_phase.h"
 
 #include <algorithm>
+#include <cstring>
 #include <new>
 
 #include "spherechain/runtime/triangle_intersect.h"
@@ -10,6 +11,14 @@ namespace spherechain::runtime {
 namespace {
 
 constexpr uint16_t kNoSphere = 0xFFFF;
+
+/// Float → uint32 with the same order (for finite values; −0 before +0, which both compare equal as
+/// floats: the sweep then only tests more pairs, never fewer).
+inline uint32_t OrderedBits(float f) {
+  uint32_t u;
+  std::memcpy(&u, &f, 4);
+  return (u & 0x80000000u) ? ~u : (u | 0x80000000u);
+}
 
 inline const float* Vertex(const char* base, size_t stride, uint32_t v) {
   return reinterpret_cast<const float*>(base + size_t{v} * stride);
@@ -23,7 +32,7 @@ inline bool BoxesOverlap(const float* a, const float* b) {
 }  // namespace
 
 struct NarrowPhaseContext::Internal {
-  using Key = NarrowPhaseContext::Key;
+  using Culled = NarrowPhaseContext::Culled;
 
   /// Region boxes of every sphere; false when a position is not finite.
   static bool RegionBoxes(NarrowPhaseContext& c, const char* base, size_t stride) {
@@ -57,7 +66,7 @@ struct NarrowPhaseContext::Internal {
   /// only the region's vertices once: each vertex gets an outcode (below / above `clip` on each axis,
   /// Cohen–Sutherland), and a triangle's box misses `clip` exactly when its three corners share a bit.
   static uint32_t Cull(NarrowPhaseContext& c, uint32_t s, const float* clip, int axis, const char* base,
-                       size_t stride, Key* out) {
+                       size_t stride, Culled* list) {
     const uint32_t vbegin = c.vert_offsets_[s], vend = c.vert_offsets_[s + 1];
     uint8_t* code = c.outcode_.data();
     for (uint32_t i = vbegin; i < vend; ++i) {
@@ -72,15 +81,16 @@ struct NarrowPhaseContext::Internal {
       const float* p = Vertex(base, stride, c.region_v_[3 * size_t{k}]);
       const float* q = Vertex(base, stride, c.region_v_[3 * size_t{k} + 1]);
       const float* r = Vertex(base, stride, c.region_v_[3 * size_t{k} + 2]);
-      Key& key = out[n++];
+      float* box = &list->box[6 * size_t{n}];
       for (int j = 0; j < 3; ++j) {
-        key.box[j] = std::min(std::min(p[j], q[j]), r[j]);
-        key.box[3 + j] = std::max(std::max(p[j], q[j]), r[j]);
+        box[j] = std::min(std::min(p[j], q[j]), r[j]);
+        box[3 + j] = std::max(std::max(p[j], q[j]), r[j]);
       }
-      key.min = key.box[axis];
-      key.slot = k;
+      list->slot[n] = k;
+      list->key[n] = uint64_t{OrderedBits(box[axis])} << 32 | n;  // ties: cull order (slot order)
+      ++n;
     }
-    std::sort(out, out + n, [](const Key& x, const Key& y) { return x.min < y.min || (x.min == y.min && x.slot < y.slot); });
+    std::sort(list->key.begin(), list->key.begin() + n);
     return n;
   }
 
@@ -125,31 +135,33 @@ struct NarrowPhaseContext::Internal {
       const float e = std::min(ba[3 + k], bb[3 + k]) - std::max(ba[k], bb[k]);
       if (e > extent) extent = e, axis = k;
     }
-    Key* la = c.list_a_.data();
-    Key* lb = c.list_b_.data();
-    const uint32_t na = Cull(c, a, bb, axis, base, stride, la);
-    const uint32_t nb = na ? Cull(c, b, ba, axis, base, stride, lb) : 0;
+    Culled& la = c.list_a_;
+    Culled& lb = c.list_b_;
+    const uint32_t na = Cull(c, a, bb, axis, base, stride, &la);
+    const uint32_t nb = na ? Cull(c, b, ba, axis, base, stride, &lb) : 0;
     st.culled_triangles += na + nb;
     // Sweep: take the list whose next box starts first; test it against the other list's boxes that
     // start before it ends. Each overlapping pair is met exactly once.
     uint32_t i = 0, j = 0;
     while (i < na && j < nb) {
-      const bool from_a = la[i].min <= lb[j].min;
-      const Key& x = from_a ? la[i] : lb[j];
-      const Key* other = from_a ? lb : la;
+      const bool from_a = la.key[i] <= lb.key[j];  // same order as the minima (ties: a first)
+      const Culled& xs = from_a ? la : lb;
+      const Culled& os = from_a ? lb : la;
+      const uint32_t xi = static_cast<uint32_t>((from_a ? la.key[i] : lb.key[j]) & 0xFFFFFFFFu);
       const uint32_t n_other = from_a ? nb : na;
-      const float* bx = x.box;
-      const float end = bx[3 + axis];
-      for (uint32_t o = from_a ? j : i; o < n_other && other[o].min <= end; ++o) {
+      const float* bx = &xs.box[6 * size_t{xi}];
+      const uint64_t end = uint64_t{OrderedBits(bx[3 + axis])} << 32 | 0xFFFFFFFFu;
+      for (uint32_t o = from_a ? j : i; o < n_other && os.key[o] <= end; ++o) {
         ++st.box_tests;
-        const float* by = other[o].box;  // on `axis` they overlap: the sweep says so
+        const uint32_t oi = static_cast<uint32_t>(os.key[o] & 0xFFFFFFFFu);
+        const float* by = &os.box[6 * size_t{oi}];  // on `axis` they overlap: the sweep says so
         if (!((bx[0] <= by[3]) & (by[0] <= bx[3]) & (bx[1] <= by[4]) & (by[1] <= bx[4]) & (bx[2] <= by[5]) &
               (by[2] <= bx[5])))
           continue;
         if (from_a)
-          Test(c, x.slot, other[o].slot, a, b, base, stride, job, st);
+          Test(c, xs.slot[xi], os.slot[oi], a, b, base, stride, job, st);
         else
-          Test(c, other[o].slot, x.slot, a, b, base, stride, job, st);
+          Test(c, os.slot[oi], xs.slot[xi], a, b, base, stride, job, st);
       }
       from_a ? ++i : ++j;
     }
@@ -212,8 +224,11 @@ Status NarrowPhaseContext::Init(const AssetView& view) {
     box_.assign(6 * size_t{S}, 0.0f);
     tri_state_.assign(region_tri_.size(), 0);
     outcode_.assign(largest_verts, 0);
-    list_a_.assign(largest, Key{});
-    list_b_.assign(largest, Key{});
+    for (Culled* l : {&list_a_, &list_b_}) {
+      l->key.assign(largest, 0);
+      l->slot.assign(largest, 0);
+      l->box.assign(6 * size_t{largest}, 0.0f);
+    }
     sphere_count_ = S;
     vertex_count_ = V;
     triangle_count_ = T;

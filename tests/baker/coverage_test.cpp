@@ -311,7 +311,7 @@ Measured MeasureBake(const std::string& path, const std::string& name) {
 
 }  // namespace
 
-TEST_CASE("coverage: MakeHuman φ1, φ1', φ2 — φ1' fills most of the body and barely protrudes, φ2 fills it all") {
+TEST_CASE("heavy: coverage: MakeHuman φ1, φ1', φ2 — φ1' fills most of the body and barely protrudes, φ2 fills it all") {
   const std::string path = test::SharedData("makehuman/base.obj");
   if (!test::Require(path)) return;
   const Measured m = MeasureBake(path, "MakeHuman");
@@ -327,7 +327,7 @@ TEST_CASE("coverage: MakeHuman φ1, φ1', φ2 — φ1' fills most of the body an
   CHECK(m.phi1_adjusted_holed.body_volume == doctest::Approx(m.phi1_adjusted.body_volume).epsilon(0.02));
 }
 
-TEST_CASE("coverage: CesiumMan φ1, φ1', φ2") {
+TEST_CASE("heavy: coverage: CesiumMan φ1, φ1', φ2") {
   const std::string path = test::SharedData("gltf/CesiumMan.gltf");
   if (!test::Require(path)) return;
   const Measured m = MeasureBake(path, "CesiumMan");

@@ -114,12 +114,12 @@ class NarrowPhaseContext {
   std::vector<float> box_;                     // #S×6 region boxes (min xyz, max xyz)
   std::vector<uint8_t> tri_state_;             // per region-order triangle: 0 unchecked, 1 ok, 2 degenerate
   std::vector<uint8_t> outcode_;               // per vertex of the largest region: cull outcodes
-  struct Key {
-    float box[6];   // the triangle's box (min xyz, max xyz) this frame
-    float min;      // box minimum along the sweep axis
-    uint32_t slot;  // region-order triangle slot
+  struct Culled {                // culled triangles of one side of a candidate pair
+    std::vector<uint64_t> key;   // sweep order: ordered bits of the box minimum on the axis << 32 | index
+    std::vector<uint32_t> slot;  // per index: region-order slot
+    std::vector<float> box;      // per index: 6 floats (min xyz, max xyz)
   };
-  std::vector<Key> list_a_, list_b_;           // culled triangles of a candidate pair, sorted for the sweep
+  Culled list_a_, list_b_;
 };
 
 /// ozz-style job: exact triangle contacts between the surrounding regions of different spheres
