@@ -148,7 +148,7 @@ TEST_CASE("coverage: a sphere inside a closed box covers sphere/box volume and d
   CHECK(s.outside_max_rel == 0.0);
 }
 
-TEST_CASE("coverage: a unit-sphere mesh in a concentric r = 1.2 sphere: full coverage, 1 − 1/1.2³ protrudes") {
+TEST_CASE("heavy: coverage: a unit-sphere mesh in a concentric r = 1.2 sphere: full coverage, 1 − 1/1.2³ protrudes") {
   const TestMesh body = UvSphere(1.0, 64, 128);
   const CoverageStats s = Measure(body, {MakeBall(0, 0, 0, 1.2)}, 1.0f / 80);  // h = 0.025
   CHECK(s.body_height == doctest::Approx(2.0).epsilon(1e-6));

@@ -218,7 +218,7 @@ TEST_CASE("triangle_intersect: hand cases with known answers") {
   }
 }
 
-TEST_CASE("triangle_intersect: agrees with CGAL exact do_intersect on random hard pairs") {
+TEST_CASE("heavy: triangle_intersect: agrees with CGAL exact do_intersect on random hard pairs") {
   std::mt19937 rng(20240611u);
   std::uniform_real_distribution<float> unit(0.0f, 1.0f);
   std::uniform_int_distribution<int> grid(0, 4), ulp(-2, 2), pick(0, 8);
@@ -356,7 +356,7 @@ TEST_CASE("triangle_intersect: agrees with CGAL exact do_intersect on random har
   CHECK(snapped.degenerate > 100);
 }
 
-TEST_CASE("triangle_intersect: agrees with CGAL where plain double orientations get the sign wrong") {
+TEST_CASE("heavy: triangle_intersect: agrees with CGAL where plain double orientations get the sign wrong") {
   // Mixed scales make coordinate differences inexact in double; then the naive orient2d can return 0 for
   // a non-zero determinant, a non-zero for zero, or even the opposite sign. These cases are selected so
   // that the answer hinges on exactly such a determinant.
