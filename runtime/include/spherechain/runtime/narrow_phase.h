@@ -8,8 +8,9 @@
 //      whatever the deformation: no baked bound, no slack to prove);
 //   2. candidate sphere pairs — boxes that overlap (closed intervals: touching counts), minus the
 //      excluded pairs (the asset's, or none): #S(#S−1)/2 box tests (4,560 for 96 spheres, ~3 µs);
-//   3. per candidate (a, b): the triangles of a whose box meets b's region box (decided exactly from
-//      their corners' Cohen–Sutherland outcodes), and vice versa,
+//   3. per candidate (a, b): the triangles of a whose box meets b's region box, and vice versa (exact:
+//      once a frame per sphere, its triangles culled by their corners' Cohen–Sutherland outcodes against
+//      the box of all its candidates' boxes, their boxes computed; then per candidate by those boxes),
 //      swept against each other along the longest axis of the two region boxes' overlap (sort and
 //      sweep: only triangle boxes that overlap on that axis are compared); pairs sharing a corner
 //      (weld ids: Asset.weld_ids) skipped; the rest tested exactly by TrianglesIntersect (Guigue–Devillers 2003, exact orientation predicates).
@@ -75,8 +76,9 @@ class NarrowPhaseContext {
   /// Sizes and fills the context for `view`. The only allocating call (catches std::bad_alloc).
   /// Returns kOk; kErrorNullArgument when `!view.valid()`; kErrorMissingField when the asset has no
   /// `triangles` or `weld_ids` (baked before the narrow phase existed: re-bake); kErrorOutOfMemory
-  /// (context left empty). Cost: O(#T + #V + #S) time; memory ~70 B per triangle + 5 B per
-  /// (sphere, region vertex) + 40 B per sphere + 8 B per triangle of the largest region.
+  /// (context left empty). Cost: O(#T + #V + #S) time; memory ~80 B per triangle + 5 B per
+  /// (sphere, region vertex) + ~100 B per sphere + ~100 B per triangle and 17 B per vertex of the
+  /// largest region.
   Status Init(const AssetView& view);
 
   bool initialized() const { return sphere_count_ != 0; }
@@ -110,14 +112,27 @@ class NarrowPhaseContext {
   std::vector<uint32_t> region_local_;             // per slot: its corners' indices in the region's vertex list
   std::vector<uint32_t> excl_offsets_;             // CSR #S+1: excluded partners b > a of each a
   std::vector<uint16_t> excl_partners_;
-  // Per-frame scratch.
-  std::vector<float> box_;                     // #S×6 region boxes (min xyz, max xyz)
+  // Per-frame scratch. Boxes are 8 floats: min xyz, 0, max xyz, 0 (four-wide loads).
+  std::vector<float> box_;                     // #S×8 region boxes
+  std::vector<float> box_soa_;                 // the same, 6 rows (min x, y, z, max x, y, z) of box_pitch_
+  size_t box_pitch_ = 0;                       // #S + 4: inverted boxes after the last
+  std::vector<float> clip_;                    // #S×8: box of the candidate partners' boxes ∩ its own (or inverted)
+  std::vector<uint32_t> kept_;                 // #S: triangles of the region kept by its clip, or kNotCulled
   std::vector<uint8_t> tri_state_;             // per region-order triangle: 0 unchecked, 1 ok, 2 degenerate
   std::vector<uint8_t> outcode_;               // per vertex of the largest region: cull outcodes
-  struct Culled {                // culled triangles of one side of a candidate pair
-    std::vector<uint64_t> key;   // sweep order: ordered bits of the box minimum on the axis << 32 | index
-    std::vector<uint32_t> slot;  // per index: region-order slot
-    std::vector<float> box;      // per index: 6 floats (min xyz, max xyz)
+  std::vector<float> corner_;                  // per vertex of the largest region: its position, 4 floats
+  // Per region-order position (CSR region_offsets_): the region's triangles kept by its clip, in slot
+  // order from the region's first position: their slot and box.
+  std::vector<uint32_t> kept_slot_;
+  std::vector<float> kept_box_;                // 8 floats each
+  std::vector<uint64_t> hits_;                 // sweep → exact tests: slot in a << 32 | slot in b
+  struct Culled {                     // culled triangles of one side of a candidate pair
+    std::vector<uint64_t> key;        // sweep order: ordered bits of the box minimum on the axis << 32 | n
+    std::vector<uint32_t> kept;       // per n (cull order): index into the region's kept triangles
+    std::vector<float> start;         // per n (cull order): box minimum on the axis
+    std::vector<uint32_t> bucket;     // counting-sort counters
+    std::vector<uint32_t> slot;       // sweep order: region-order slot; 4 more (read, unused)
+    std::vector<float> lo[3], hi[3];  // sweep order: box per axis; 4 sentinels (lo +inf, hi −inf) after
   };
   Culled list_a_, list_b_;
 };
@@ -126,10 +141,11 @@ class NarrowPhaseContext {
 /// (see the file comment for the three stages and the definition of a contact).
 /// Output order (deterministic, a pure function of the asset and the positions): by sphere pair (a, b)
 /// ascending (or in `sphere_pairs` order), then in the order the sweep meets the triangle pairs.
-/// Cost: O(#V) for the region boxes, #S(#S−1)/2 box tests for the candidates, then per candidate the
-/// two regions' vertices (an outcode each against the other region's box) and triangles (culled
-/// exactly by their corners' outcodes, boxes computed for those kept), a sort of the kept ones and the
-/// sweep's box tests; the exact
+/// Cost: O(#V) for the region boxes, #S(#S−1)/2 box tests for the candidates (twice, four at a time),
+/// then once per sphere with a candidate its region's vertices (an outcode each) and triangles (culled
+/// by their corners' outcodes, boxes computed for those kept), then per candidate a box test of each
+/// side's kept triangles against the other region's box, a sort of those left (counting sort into
+/// buckets, then insertion: ~linear) and the sweep's box tests (four at a time); the exact
 /// test is ~20–60 ns (filtered double orientation tests, exact expansions only near degeneracy).
 /// MakeHuman morph: see README "Exact self-contacts". No allocation, no exceptions; serial.
 struct NarrowPhaseJob {
