@@ -20,6 +20,8 @@ namespace {
 constexpr uint16_t kNoSphere = 0xFFFF;
 constexpr uint32_t kNotCulled = 0xFFFFFFFFu;  // NarrowPhaseContext::kept_: region not culled this frame
 constexpr float kInf = std::numeric_limits<float>::infinity();
+constexpr uint32_t kPrefetch = 32;  // RegionBoxes: vertices read ahead
+constexpr uint32_t kSentinels = 4;  // after each culled list: the sweep reads four boxes a step
 
 // Four floats (x, y, z, w) and lane masks: SSE2 on x86-64 (its baseline), scalar elsewhere. Every mask
 // is read through `& 7` or `& 15` as the caller needs: w lanes of vertex loads are never trusted.
@@ -85,6 +87,14 @@ inline uint32_t OrderedBits(float f) {
   return (u & 0x80000000u) ? ~u : (u | 0x80000000u);
 }
 
+inline void Prefetch(const void* p) {
+#if defined(__GNUC__)
+  __builtin_prefetch(p);
+#else
+  (void)p;
+#endif
+}
+
 inline const float* Vertex(const char* base, size_t stride, uint32_t v) {
   return reinterpret_cast<const float*>(base + size_t{v} * stride);
 }
@@ -127,6 +137,7 @@ struct NarrowPhaseContext::Internal {
       const uint32_t stop = end - (ids[end - 1] == last);  // ids ascending: only the last can be #V−1
       uint32_t i = begin;
       for (; i + 2 <= stop; i += 2) {
+        Prefetch(Vertex(base, stride, ids[i + kPrefetch]));  // ids padded; a hint, never a fault
         const F4 p = Load4(Vertex(base, stride, ids[i])), q = Load4(Vertex(base, stride, ids[i + 1]));
         lo0 = Min4(p, lo0), hi0 = Max4(p, hi0), lo1 = Min4(q, lo1), hi1 = Max4(q, hi1);
         nan = Or(nan, NanEither(p, q));
@@ -211,6 +222,7 @@ struct NarrowPhaseContext::Internal {
       code[i - vbegin] = static_cast<uint8_t>((Bits(Lt(p, clo)) & 7) | (Bits(Lt(chi, p)) & 7) << 3);
     }
     const uint32_t first = c.region_offsets_[s], end = c.region_offsets_[s + 1];
+    std::fill(&c.tri_state_[first], &c.tri_state_[first] + (end - first), uint8_t{0});  // degeneracy: unknown
     const uint32_t* local = c.region_local_.data();
     float* boxes = &c.kept_box_[8 * size_t{first}];
     uint32_t* slots = &c.kept_slot_[first];
@@ -230,43 +242,12 @@ struct NarrowPhaseContext::Internal {
     c.kept_[s] = n;
   }
 
-  /// key[0..n) = OrderedBits(start[k]) << 32 | k, ascending. A counting sort into n buckets over the
-  /// range of the starts (bucket = ⌊(start − lo)·scale⌋: monotone in the start, float rounding being
-  /// monotone), then an insertion sort that only moves keys within their bucket: linear for spread
-  /// starts, and the exact order whatever they are. `bucket`: n + 1 counters.
-  static void SortKeys(const float* start, uint32_t n, uint64_t* key, uint32_t* bucket) {
-    if (n == 0) return;
-    F4 lo4 = Set1(start[0]), hi4 = lo4;
-    uint32_t k4 = 0;
-    for (; k4 + 4 <= n; k4 += 4) lo4 = Min4(Load4(start + k4), lo4), hi4 = Max4(Load4(start + k4), hi4);
-    float lanes[8];
-    Store4(lanes, lo4);
-    Store4(lanes + 4, hi4);
-    float lo = std::min(std::min(lanes[0], lanes[1]), std::min(lanes[2], lanes[3]));
-    float hi = std::max(std::max(lanes[4], lanes[5]), std::max(lanes[6], lanes[7]));
-    for (; k4 < n; ++k4) lo = std::min(lo, start[k4]), hi = std::max(hi, start[k4]);
-    // (hi − lo)·scale < n in exact arithmetic; the clamp takes the rounding; a range too small for a
-    // finite scale gets one bucket (still sorted, by the insertion sort alone).
-    float scale = hi > lo ? static_cast<float>(n) / (hi - lo) * 0.999f : 0.0f;
-    if (!(scale < 1e30f)) scale = 0.0f;
-    const uint32_t top = n - 1;
-    std::fill(bucket, bucket + n + 1, 0u);
-    for (uint32_t k = 0; k < n; ++k)
-      ++bucket[std::min(top, static_cast<uint32_t>((start[k] - lo) * scale)) + 1];
-    for (uint32_t k = 1; k < n; ++k) bucket[k] += bucket[k - 1];
-    for (uint32_t k = 0; k < n; ++k)
-      key[bucket[std::min(top, static_cast<uint32_t>((start[k] - lo) * scale))]++] =
-          uint64_t{OrderedBits(start[k])} << 32 | k;
-    for (uint32_t k = 1; k < n; ++k) {
-      const uint64_t x = key[k];
-      uint32_t j = k;
-      for (; j > 0 && key[j - 1] > x; --j) key[j] = key[j - 1];
-      key[j] = x;
-    }
-  }
-
   /// Triangles of sphere s whose box meets `other` (the partner's region box), in sweep order: keyed by
-  /// the box minimum on `axis`, ties by cull (slot) order. Returns their number.
+  /// the box minimum on `axis`, ties by cull (slot) order; their slots and boxes beside. Returns their
+  /// number. The sort: a counting sort into n buckets over the range of the minima (bucket =
+  /// ⌊(start − lo)·scale⌋: monotone in the start, float rounding being monotone), each record written
+  /// at its bucket's place, then an insertion pass that only moves records within their bucket: linear
+  /// for spread minima, and the exact order whatever they are.
   static uint32_t Cull(NarrowPhaseContext& c, uint32_t s, const float* other, int axis, const char* base,
                        size_t stride, Culled* list) {
     if (c.kept_[s] == kNotCulled) CullRegion(c, s, base, stride);
@@ -282,16 +263,54 @@ struct NarrowPhaseContext::Internal {
       kept[n] = i;
       n += (Bits(And(Le(Load4(b), ohi), Le(olo, Load4(b + 4)))) & 7) == 7;
     }
-    SortKeys(start, n, list->key.data(), list->bucket.data());
-    const uint64_t* key = list->key.data();
-    for (uint32_t r = 0; r < n; ++r) {
-      const uint32_t i = kept[key[r] & 0xFFFFFFFFu];
+    uint64_t* key = list->key.data();
+    uint32_t* slot = list->slot.data();
+    float* lo[3] = {list->lo[0].data(), list->lo[1].data(), list->lo[2].data()};
+    float* hi[3] = {list->hi[0].data(), list->hi[1].data(), list->hi[2].data()};
+    for (uint32_t r = n; r < n + kSentinels; ++r)  // sentinels: start after every box, overlap nothing
+      for (int k = 0; k < 3; ++k) lo[k][r] = kInf, hi[k][r] = -kInf;
+    if (n == 0) return 0;
+    F4 lo4 = Set1(start[0]), hi4 = lo4;
+    uint32_t k4 = 0;
+    for (; k4 + 4 <= n; k4 += 4) lo4 = Min4(Load4(start + k4), lo4), hi4 = Max4(Load4(start + k4), hi4);
+    float lanes[8];
+    Store4(lanes, lo4);
+    Store4(lanes + 4, hi4);
+    float s_lo = std::min(std::min(lanes[0], lanes[1]), std::min(lanes[2], lanes[3]));
+    float s_hi = std::max(std::max(lanes[4], lanes[5]), std::max(lanes[6], lanes[7]));
+    for (; k4 < n; ++k4) s_lo = std::min(s_lo, start[k4]), s_hi = std::max(s_hi, start[k4]);
+    // (s_hi − s_lo)·scale < n in exact arithmetic; the clamp takes the rounding; a range too small for
+    // a finite scale gets one bucket (still sorted, by the insertion pass alone).
+    float scale = s_hi > s_lo ? static_cast<float>(n) / (s_hi - s_lo) * 0.999f : 0.0f;
+    if (!(scale < 1e30f)) scale = 0.0f;
+    const uint32_t top = n - 1;
+    uint32_t* bucket = list->bucket.data();
+    std::fill(bucket, bucket + n + 1, 0u);
+    for (uint32_t k = 0; k < n; ++k) ++bucket[std::min(top, static_cast<uint32_t>((start[k] - s_lo) * scale)) + 1];
+    for (uint32_t k = 1; k < n; ++k) bucket[k] += bucket[k - 1];
+    for (uint32_t k = 0; k < n; ++k) {
+      const uint32_t r = bucket[std::min(top, static_cast<uint32_t>((start[k] - s_lo) * scale))]++;
+      const uint32_t i = kept[k];
       const float* b = boxes + 8 * size_t{i};
-      list->slot[r] = c.kept_slot_[first + i];
-      for (int k = 0; k < 3; ++k) list->lo[k][r] = b[k], list->hi[k][r] = b[4 + k];
+      key[r] = uint64_t{OrderedBits(start[k])} << 32 | k;
+      slot[r] = c.kept_slot_[first + i];
+      for (int d = 0; d < 3; ++d) lo[d][r] = b[d], hi[d][r] = b[4 + d];
     }
-    for (uint32_t r = n; r < n + 4; ++r)  // sentinels: start after every box, overlap nothing
-      for (int k = 0; k < 3; ++k) list->lo[k][r] = kInf, list->hi[k][r] = -kInf;
+    for (uint32_t k = 1; k < n; ++k) {
+      if (!(key[k - 1] > key[k])) continue;  // rare: only within a bucket
+      const uint64_t x = key[k];
+      const uint32_t x_slot = slot[k];
+      const float x_lo[3] = {lo[0][k], lo[1][k], lo[2][k]}, x_hi[3] = {hi[0][k], hi[1][k], hi[2][k]};
+      uint32_t j = k;
+      for (; j > 0 && key[j - 1] > x; --j) {
+        key[j] = key[j - 1];
+        slot[j] = slot[j - 1];
+        for (int d = 0; d < 3; ++d) lo[d][j] = lo[d][j - 1], hi[d][j] = hi[d][j - 1];
+      }
+      key[j] = x;
+      slot[j] = x_slot;
+      for (int d = 0; d < 3; ++d) lo[d][j] = x_lo[d], hi[d][j] = x_hi[d];
+    }
     return n;
   }
 
@@ -300,8 +319,8 @@ struct NarrowPhaseContext::Internal {
                    size_t stride, const NarrowPhaseJob& job, NarrowPhaseStats& st) {
     const uint32_t* wa = &c.region_w_[3 * size_t{ka}];
     const uint32_t* wb = &c.region_w_[3 * size_t{kb}];
-    if (wa[0] == wb[0] || wa[0] == wb[1] || wa[0] == wb[2] || wa[1] == wb[0] || wa[1] == wb[1] || wa[1] == wb[2] ||
-        wa[2] == wb[0] || wa[2] == wb[1] || wa[2] == wb[2]) {
+    if ((wa[0] == wb[0]) | (wa[0] == wb[1]) | (wa[0] == wb[2]) | (wa[1] == wb[0]) | (wa[1] == wb[1]) |
+        (wa[1] == wb[2]) | (wa[2] == wb[0]) | (wa[2] == wb[1]) | (wa[2] == wb[2])) {  // one branch
       ++st.adjacent_skipped;
       return;
     }
@@ -368,17 +387,17 @@ struct NarrowPhaseContext::Internal {
     uint64_t* hits = c.hits_.data();
     const uint32_t flush_at = static_cast<uint32_t>(c.hits_.size()) - 4;
     uint32_t n_hits = 0;
-    uint32_t pos[2] = {0, 0};
-    while (pos[0] < na && pos[1] < nb) {
-      const uint32_t side = key_a[pos[0]] <= key_b[pos[1]] ? 0 : 1;  // same order as the minima (ties: cull order)
+    uint32_t i = 0, j = 0;  // next of a, of b
+    while (i < na && j < nb) {
+      const uint32_t side = key_a[i] <= key_b[j] ? 0 : 1;  // same order as the minima (ties: cull order)
       const View& x = view[side];
       const View& o = view[side ^ 1];
-      const uint32_t xi = pos[side];
+      const uint32_t xi = side ? j : i;
       const F4 x_end = Set1(x.end[xi]);
       const F4 xlo_u = Set1(x.lo_u[xi]), xhi_u = Set1(x.hi_u[xi]);
       const F4 xlo_v = Set1(x.lo_v[xi]), xhi_v = Set1(x.hi_v[xi]);
       const uint64_t x_slot = uint64_t{x.slot[xi]} << x.shift;
-      for (uint32_t k = pos[side ^ 1];; k += 4) {
+      for (uint32_t k = side ? i : j;; k += 4) {
         const uint32_t started = Bits(Le(Load4(o.start + k), x_end));  // a prefix: minima ascending
         const uint32_t hit = started & Bits(And(And(Le(Load4(o.lo_u + k), xhi_u), Le(xlo_u, Load4(o.hi_u + k))),
                                                 And(Le(Load4(o.lo_v + k), xhi_v), Le(xlo_v, Load4(o.hi_v + k)))));
@@ -394,7 +413,8 @@ struct NarrowPhaseContext::Internal {
         }
         if (started != 15) break;
       }
-      ++pos[side];
+      i += side ^ 1;
+      j += side;
     }
     Tests(c, hits, n_hits, a, b, base, stride, job, st);
     *out_stats = st;
@@ -443,6 +463,7 @@ Status NarrowPhaseContext::Init(const AssetView& view) {
       vert_ids_.insert(vert_ids_.end(), verts.begin(), verts.end());
       vert_offsets_.push_back(static_cast<uint32_t>(vert_ids_.size()));
     }
+    vert_ids_.resize(vert_ids_.size() + kPrefetch, 0);  // read ahead by RegionBoxes' prefetch
     unassigned_ = static_cast<uint32_t>(std::count(tri_sphere_.begin(), tri_sphere_.end(), kNoSphere));
     excl_offsets_.assign(S + 1, 0);
     if (const auto* ex = a.excluded_pairs()) {
@@ -466,13 +487,14 @@ Status NarrowPhaseContext::Init(const AssetView& view) {
     kept_slot_.assign(region_tri_.size(), 0);
     kept_box_.assign(8 * region_tri_.size(), 0.0f);
     hits_.assign(256, 0);
+    candidates_.assign(std::min(size_t{S} * (S - 1) / 2, 16 * size_t{S} + 64), 0);
     for (Culled* l : {&list_a_, &list_b_}) {
       l->key.assign(largest, 0);
       l->start.assign(largest, 0.0f);
       l->bucket.assign(largest + 1, 0);
       l->kept.assign(largest, 0);
-      l->slot.assign(largest + 4, 0);
-      for (int k = 0; k < 3; ++k) l->lo[k].assign(largest + 4, 0.0f), l->hi[k].assign(largest + 4, 0.0f);
+      l->slot.assign(largest + kSentinels, 0);
+      for (int k = 0; k < 3; ++k) l->lo[k].assign(largest + kSentinels, 0.0f), l->hi[k].assign(largest + kSentinels, 0.0f);
     }
     sphere_count_ = S;
     vertex_count_ = V;
@@ -516,19 +538,28 @@ Status NarrowPhaseJob::Run() const {
   const char* base = static_cast<const char*>(positions.data);
   const size_t stride = positions.stride_bytes;
   if (!NarrowPhaseContext::Internal::RegionBoxes(c, base, stride)) return Status::kErrorNonFinitePositions;
-  std::fill(c.tri_state_.begin(), c.tri_state_.end(), uint8_t{0});  // degeneracy: unknown this frame
   std::fill(c.kept_.begin(), c.kept_.end(), kNotCulled);               // regions: culled on first use
-  // Pass 1: each sphere's clip, the box of its candidate partners' boxes ∩ its own (inverted: none).
+  // Pass 1: each sphere's clip, the box of its candidate partners' boxes ∩ its own (inverted: none);
+  // the candidates kept for pass 2 while they fit (else enumerated again).
   for (size_t i = 0; i < c.clip_.size(); ++i) c.clip_[i] = i % 8 < 4 ? kInf : -kInf;
+  uint32_t n_cand = 0;
+  const uint32_t cand_capacity = static_cast<uint32_t>(c.candidates_.size());
   NarrowPhaseContext::Internal::ForEachCandidate(c, *this, [&](uint32_t a, uint32_t b) {
     NarrowPhaseContext::Internal::GrowClip(c, a, &c.box_[8 * size_t{b}]);
     NarrowPhaseContext::Internal::GrowClip(c, b, &c.box_[8 * size_t{a}]);
+    if (n_cand < cand_capacity) c.candidates_[n_cand] = a << 16 | b;
+    ++n_cand;
   });
   // Pass 2: the same candidates, in output order.
-  NarrowPhaseContext::Internal::ForEachCandidate(c, *this, [&](uint32_t a, uint32_t b) {
+  auto pair = [&](uint32_t a, uint32_t b) {
     ++st.candidate_pairs;
     NarrowPhaseContext::Internal::Pair(c, a, b, base, stride, *this, &st);
-  });
+  };
+  if (n_cand <= cand_capacity) {
+    for (uint32_t i = 0; i < n_cand; ++i) pair(c.candidates_[i] >> 16, c.candidates_[i] & 0xFFFFu);
+  } else {
+    NarrowPhaseContext::Internal::ForEachCandidate(c, *this, pair);
+  }
   *count = std::min(st.contacts, capacity);
   if (stats) *stats = st;
   return st.contacts > capacity ? Status::kOkTruncated : Status::kOk;

@@ -119,6 +119,7 @@ class NarrowPhaseContext {
   std::vector<float> clip_;                    // #S×8: box of the candidate partners' boxes ∩ its own (or inverted)
   std::vector<uint32_t> kept_;                 // #S: triangles of the region kept by its clip, or kNotCulled
   std::vector<uint8_t> tri_state_;             // per region-order triangle: 0 unchecked, 1 ok, 2 degenerate
+                                               // (reset with its region's cull: only those reach a test)
   std::vector<uint8_t> outcode_;               // per vertex of the largest region: cull outcodes
   std::vector<float> corner_;                  // per vertex of the largest region: its position, 4 floats
   // Per region-order position (CSR region_offsets_): the region's triangles kept by its clip, in slot
@@ -126,6 +127,7 @@ class NarrowPhaseContext {
   std::vector<uint32_t> kept_slot_;
   std::vector<float> kept_box_;                // 8 floats each
   std::vector<uint64_t> hits_;                 // sweep → exact tests: slot in a << 32 | slot in b
+  std::vector<uint32_t> candidates_;           // candidate pairs a << 16 | b, up to min(#S(#S−1)/2, 16·#S + 64)
   struct Culled {                     // culled triangles of one side of a candidate pair
     std::vector<uint64_t> key;        // sweep order: ordered bits of the box minimum on the axis << 32 | n
     std::vector<uint32_t> kept;       // per n (cull order): index into the region's kept triangles
