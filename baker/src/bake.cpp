@@ -52,7 +52,9 @@ Result<BakeConfig> ParseBakeConfig(const std::string& text, const std::string& w
   if (!j.is_object()) return MakeError(Error::Code::kConfig, where + ": the configuration must be a JSON object");
   static const std::set<std::string> known = {"segmentation", "region_map", "rig", "rays", "spheres_per_level",
                                               "disk_step", "disk_step_rel", "penetration_depth", "chains",
-                                              "compare_segmentations"};
+                                              "compare_segmentations", "fit", "max_spheres", "cover_voxel_rel",
+                                              "min_radius_rel", "min_gain", "region_balance", "refine_sweeps", "dilation_rel",
+                                              "contact_margin_rel", "near_rel"};
   for (auto it = j.begin(); it != j.end(); ++it)
     if (!known.count(it.key())) return MakeError(Error::Code::kConfig, where + ": unknown key '" + it.key() + "'");
 
@@ -79,7 +81,23 @@ Result<BakeConfig> ParseBakeConfig(const std::string& text, const std::string& w
       return MakeError(Error::Code::kConfig, where + ": 'compare_segmentations' must be true or false");
     c.compare_segmentations = j["compare_segmentations"];
   }
+  if (j.contains("fit")) {
+    if (!j["fit"].is_string()) return MakeError(Error::Code::kConfig, where + ": 'fit' must be a string");
+    const std::string m = j["fit"];
+    if (m == "cover") c.fit.method = FitMethod::kCover;
+    else if (m == "paper") c.fit.method = FitMethod::kPaper;
+    else return MakeError(Error::Code::kConfig, where + ": 'fit' must be cover or paper, not '" + m + "'");
+  }
   Status s = ReadNumber(j, "rays", 8, 4096, &c.fit.rays, where);
+  if (s.ok()) s = ReadNumber(j, "max_spheres", 5, 4096, &c.fit.max_spheres, where);
+  if (s.ok()) s = ReadNumber(j, "cover_voxel_rel", 1e-3, 0.1, &c.fit.cover_voxel_rel, where);
+  if (s.ok()) s = ReadNumber(j, "min_radius_rel", 0.0, 0.2, &c.fit.min_radius_rel, where);
+  if (s.ok()) s = ReadNumber(j, "min_gain", 0.0, 1.0, &c.fit.min_gain, where);
+  if (s.ok()) s = ReadNumber(j, "region_balance", 0.0, 1.0, &c.fit.region_balance, where);
+  if (s.ok()) s = ReadNumber(j, "refine_sweeps", 0, 64, &c.fit.refine_sweeps, where);
+  if (s.ok()) s = ReadNumber(j, "dilation_rel", 0.0, 0.05, &c.fit.dilation_rel, where);
+  if (s.ok()) s = ReadNumber(j, "contact_margin_rel", 0.0, 0.05, &c.contact_margin_rel, where);
+  if (s.ok()) s = ReadNumber(j, "near_rel", 0.0, 0.2, &c.near_rel, where);
   if (s.ok()) s = ReadNumber(j, "spheres_per_level", 2, 2, &c.fit.spheres_per_level, where);
   if (s.ok()) s = ReadNumber(j, "disk_step", 1e-9, 1e9, &c.fit.disk_step, where);
   if (s.ok()) s = ReadNumber(j, "disk_step_rel", 1e-4, 0.5, &c.fit.disk_step_rel, where);
@@ -116,6 +134,18 @@ Result<BakeConfig> LoadBakeConfig(const std::string& path) {
 std::string CanonicalConfig(const BakeConfig& c) {
   json j;  // nlohmann::json objects are key-sorted: stable
   j["segmentation"] = c.region_map.empty() ? MethodName(c.segmentation) : "map";
+  j["fit"] = FitMethodName(c.fit.method);
+  if (c.fit.method == FitMethod::kCover) {
+    j["max_spheres"] = c.fit.max_spheres;
+    j["cover_voxel_rel"] = c.fit.cover_voxel_rel;
+    j["min_radius_rel"] = c.fit.min_radius_rel;
+    j["min_gain"] = c.fit.min_gain;
+    j["refine_sweeps"] = c.fit.refine_sweeps;
+    j["region_balance"] = c.fit.region_balance;
+    j["dilation_rel"] = c.fit.dilation_rel;
+  }
+  j["contact_margin_rel"] = c.contact_margin_rel;
+  j["near_rel"] = c.near_rel;
   j["rays"] = c.fit.rays;
   j["spheres_per_level"] = c.fit.spheres_per_level;
   j["disk_step"] = c.fit.disk_step;
@@ -170,11 +200,18 @@ Result<BakeResult> Bake(const std::string& input_path, const BakeConfig& config,
     auto chains = BuildChains(spheres, config.chains);
     if (!chains.ok()) return chains.error();
     r.chains = std::move(chains).value();
-    r.excluded = ExcludedPairs(spheres, &r.cross_region_bind_overlaps);
+    if (config.fit.method == FitMethod::kPaper)
+      r.excluded = ExcludedPairs(spheres, &r.cross_region_bind_overlaps);
+    else
+      r.excluded = BindExcludedPairs(spheres, (config.near_rel + 2.0 * config.contact_margin_rel) * r.fit.body_height,
+                                     &r.exclusion_reasons,
+                                     &r.cross_region_bind_overlaps);
   }
   {
     Context::Timer t(ctx, "surrounding_regions");
-    auto surr = BuildSurroundingRegions(mesh, r.segmentation, spheres);
+    auto surr = BuildSurroundingRegions(mesh, r.segmentation, spheres,
+                                        config.fit.method == FitMethod::kPaper ? Ownership::kNearestCentre
+                                                                               : Ownership::kNearestSurface);
     if (!surr.ok()) return surr.error();
     r.surrounding = std::move(surr).value();
     r.unassigned_triangles = mesh.triangle_count() - r.surrounding.offsets.back();
@@ -212,6 +249,15 @@ Result<BakeResult> Bake(const std::string& input_path, const BakeConfig& config,
     r.accuracy = {all1.Stats(), all1a.Stats(), all2.Stats()};
   }
   {
+    // Bind-pose coverage and protrusion of the spheres the runtime refits (φ1'), for the report and
+    // the asset; a mesh too open to measure gets a warning, not an error.
+    std::vector<Ball> balls;
+    for (const FittedSphere& s : spheres) balls.push_back({s.center, s.radius});
+    auto cov = MeasureCoverage(mesh.positions, mesh.indices, balls, r.coverage_options, ctx);
+    if (cov.ok()) r.coverage = cov.value();
+    else if (ctx) ctx->Warn("coverage not measured: " + cov.error().message);
+  }
+  {
     Context::Timer t(ctx, "write");
     AssetInputs in;
     in.mesh = &mesh;
@@ -226,6 +272,9 @@ Result<BakeResult> Bake(const std::string& input_path, const BakeConfig& config,
     in.params = config.fit;
     const std::string canonical = CanonicalConfig(config);
     in.config_hash = Hash64(canonical.data(), canonical.size());
+    in.contact_margin = config.contact_margin_rel * r.fit.body_height;
+    if (r.coverage) in.coverage = &*r.coverage;
+    in.coverage_voxel_rel = r.coverage_options.voxel_rel;
     r.asset = BuildAsset(in);
   }
   return r;
@@ -299,7 +348,27 @@ json MakeBakeReport(const BakeResult& r, const BakeConfig& config, const Context
   }
   j["chains"] = chains;
   j["mean_spheres_per_chain"] = r.chains.empty() ? 0.0 : double(total) / double(r.chains.size());
+  j["fit"] = FitMethodName(config.fit.method);
+  j["contact_margin"] = config.contact_margin_rel * r.fit.body_height;
+  j["contact_margin_rel"] = config.contact_margin_rel;
+  if (r.coverage)
+    j["coverage"] = {{"coverage", r.coverage->coverage},
+                     {"protrusion", r.coverage->protrusion},
+                     {"outside_p95_rel", r.coverage->outside_p95_rel},
+                     {"outside_max_rel", r.coverage->outside_max_rel},
+                     {"voxel_rel", r.coverage_options.voxel_rel},
+                     {"undecided_voxels", r.coverage->voxels_undecided}};
   j["excluded_pairs"] = r.excluded.size();
+  if (config.fit.method == FitMethod::kPaper)
+    j["exclusions"] = {{"rule", "paper: sequence neighbours up to 2 apart, torso levels up to 2 apart, bind overlap, "
+                                "limb-torso junction within half the radii"}};
+  else
+    j["exclusions"] = {{"rule", "bind geometry: limb sequence neighbours, bind overlap, within near_rel + 2 contact_margin_rel of the "
+                                "height, limb-torso pairs within 1.25 (rA + rB) + that"},
+                       {"limb_neighbour", r.exclusion_reasons.limb_neighbour},
+                       {"bind_overlap", r.exclusion_reasons.bind_overlap},
+                       {"bind_near", r.exclusion_reasons.bind_near},
+                       {"junction", r.exclusion_reasons.junction}};
   if (!r.cross_region_bind_overlaps.empty()) {
     json w = json::array();
     for (const SpherePair& p : r.cross_region_bind_overlaps) w.push_back({p.first, p.second});

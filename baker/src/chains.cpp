@@ -103,4 +103,37 @@ std::vector<SpherePair> ExcludedPairs(const std::vector<FittedSphere>& spheres,
   return {pairs.begin(), pairs.end()};
 }
 
+std::vector<SpherePair> BindExcludedPairs(const std::vector<FittedSphere>& spheres, double near,
+                                          ExclusionReasons* reasons,
+                                          std::vector<SpherePair>* cross_region_bind_overlaps) {
+  std::vector<SpherePair> pairs;
+  ExclusionReasons why;
+  const size_t n = spheres.size();
+  for (size_t a = 0; a < n; ++a) {
+    for (size_t b = a + 1; b < n; ++b) {
+      const FittedSphere& A = spheres[a];
+      const FittedSphere& B = spheres[b];
+      const bool same_region = A.region == B.region;
+      const double d = (A.center - B.center).norm(), rr = A.radius + B.radius;
+      const SpherePair p{static_cast<uint16_t>(a), static_cast<uint16_t>(b)};
+      if (same_region && IsTubular(A.region) && std::abs(A.sequence - B.sequence) == 1) {
+        ++why.limb_neighbour;
+      } else if (d < rr) {
+        ++why.bind_overlap;
+        const bool limb_torso = (A.region == Region::kTorso) != (B.region == Region::kTorso);
+        if (!same_region && !limb_torso && cross_region_bind_overlaps) cross_region_bind_overlaps->push_back(p);
+      } else if (d < rr + near) {
+        ++why.bind_near;
+      } else if ((A.region == Region::kTorso) != (B.region == Region::kTorso) && d < 1.25 * rr + near) {
+        ++why.junction;  // a limb's root and the torso where the skin creases (hip, armpit)
+      } else {
+        continue;
+      }
+      pairs.push_back(p);  // (a, b) visited in ascending order: sorted and unique
+    }
+  }
+  if (reasons) *reasons = why;
+  return pairs;
+}
+
 }  // namespace spherechain::baker

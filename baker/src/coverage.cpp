@@ -179,8 +179,8 @@ void MarkSpheres(const Grid& g, const std::vector<Ball>& spheres, std::vector<ui
   }
 }
 
-Status Validate(const std::vector<float>& positions, const std::vector<uint32_t>& indices,
-                const std::vector<Ball>& spheres, const CoverageOptions& options) {
+Status ValidateMesh(const std::vector<float>& positions, const std::vector<uint32_t>& indices,
+                    const CoverageOptions& options) {
   if (positions.empty()) return Invalid("the mesh has no vertex");
   if (positions.size() % 3 != 0) return Invalid("positions hold " + std::to_string(positions.size()) + " floats, not #V×3");
   if (indices.empty()) return Invalid("the mesh has no triangle");
@@ -194,40 +194,41 @@ Status Validate(const std::vector<float>& positions, const std::vector<uint32_t>
     if (indices[i] >= nv)
       return Invalid("triangle " + std::to_string(i / 3) + " has vertex index " + std::to_string(indices[i]) +
                      " out of range (#V = " + std::to_string(nv) + ")");
-  if (spheres.empty()) return Invalid("no sphere to measure");
-  for (size_t s = 0; s < spheres.size(); ++s) {
-    if (!spheres[s].center.allFinite() || !std::isfinite(spheres[s].radius))
-      return Invalid("sphere " + std::to_string(s) + " has a non-finite centre or radius");
-    if (spheres[s].radius < 0.0) return Invalid("sphere " + std::to_string(s) + " has a negative radius");
-  }
   if (!(options.voxel_rel > 0.0f) || !std::isfinite(options.voxel_rel))
     return MakeError(Error::Code::kConfig, "coverage: voxel_rel must be > 0 and finite");
   if (options.max_voxels == 0) return MakeError(Error::Code::kConfig, "coverage: max_voxels must be >= 1");
   return Ok{};
 }
 
-Result<CoverageStats> Measure(const std::vector<float>& positions, const std::vector<uint32_t>& indices,
-                              const std::vector<Ball>& spheres, const CoverageOptions& options) {
-  // Bounding boxes: the mesh's (height), then with the spheres (grid).
-  std::array<double, 3> mlo, mhi;
-  mlo.fill(std::numeric_limits<double>::infinity());
-  mhi.fill(-std::numeric_limits<double>::infinity());
+Status Validate(const std::vector<float>& positions, const std::vector<uint32_t>& indices,
+                const std::vector<Ball>& spheres, const CoverageOptions& options) {
+  if (Status ok = ValidateMesh(positions, indices, options); !ok) return ok;
+  if (spheres.empty()) return Invalid("no sphere to measure");
+  for (size_t s = 0; s < spheres.size(); ++s) {
+    if (!spheres[s].center.allFinite() || !std::isfinite(spheres[s].radius))
+      return Invalid("sphere " + std::to_string(s) + " has a non-finite centre or radius");
+    if (spheres[s].radius < 0.0) return Invalid("sphere " + std::to_string(s) + " has a negative radius");
+  }
+  return Ok{};
+}
+
+// Bounding box of the vertices and the body height (longest extent).
+double MeshBox(const std::vector<float>& positions, std::array<double, 3>* lo, std::array<double, 3>* hi) {
+  lo->fill(std::numeric_limits<double>::infinity());
+  hi->fill(-std::numeric_limits<double>::infinity());
   for (size_t i = 0; i < positions.size(); i += 3)
     for (int a = 0; a < 3; ++a) {
-      mlo[a] = std::min(mlo[a], double(positions[i + a]));
-      mhi[a] = std::max(mhi[a], double(positions[i + a]));
+      (*lo)[a] = std::min((*lo)[a], double(positions[i + a]));
+      (*hi)[a] = std::max((*hi)[a], double(positions[i + a]));
     }
-  const double height = std::max({mhi[0] - mlo[0], mhi[1] - mlo[1], mhi[2] - mlo[2]});
-  if (!(height > 0.0)) return Invalid("the mesh has zero extent (all vertices coincide)");
-  std::array<double, 3> lo = mlo, hi = mhi;
-  for (const Ball& s : spheres)
-    for (int a = 0; a < 3; ++a) {
-      lo[a] = std::min(lo[a], s.center[a] - s.radius);
-      hi[a] = std::max(hi[a], s.center[a] + s.radius);
-    }
+  return std::max({(*hi)[0] - (*lo)[0], (*hi)[1] - (*lo)[1], (*hi)[2] - (*lo)[2]});
+}
 
-  // Cube voxels; n = ceil(extent / h) with a 1/1000-voxel slack so an extent of exactly N voxels (up to
-  // the float rounding of voxel_rel) is N voxels, not N + 1. Enlarged until the grid fits max_voxels.
+// Cube voxels over [lo, hi]; n = ceil(extent / h) with a 1/1000-voxel slack so an extent of exactly N
+// voxels (up to the float rounding of voxel_rel) is N voxels, not N + 1. Enlarged until the grid fits
+// max_voxels.
+Grid MakeGrid(const std::array<double, 3>& lo, const std::array<double, 3>& hi, double height,
+              const CoverageOptions& options) {
   Grid g;
   g.h = double(options.voxel_rel) * height;
   for (;;) {
@@ -243,7 +244,23 @@ Result<CoverageStats> Measure(const std::vector<float>& positions, const std::ve
   for (int a = 0; a < 3; ++a) g.origin[a] = 0.5 * (lo[a] + hi[a]) - (double(g.n[a]) * g.h) / 2.0;
   g.stride = {1, size_t{g.n[0]}, size_t{g.n[0]} * g.n[1]};
   g.total = size_t{g.n[0]} * g.n[1] * g.n[2];
+  return g;
+}
 
+Result<CoverageStats> Measure(const std::vector<float>& positions, const std::vector<uint32_t>& indices,
+                              const std::vector<Ball>& spheres, const CoverageOptions& options) {
+  // Bounding boxes: the mesh's (height), then with the spheres (grid).
+  std::array<double, 3> mlo, mhi;
+  const double height = MeshBox(positions, &mlo, &mhi);
+  if (!(height > 0.0)) return Invalid("the mesh has zero extent (all vertices coincide)");
+  std::array<double, 3> lo = mlo, hi = mhi;
+  for (const Ball& s : spheres)
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::min(lo[a], s.center[a] - s.radius);
+      hi[a] = std::max(hi[a], s.center[a] + s.radius);
+    }
+
+  const Grid g = MakeGrid(lo, hi, height, options);
   std::vector<uint8_t> state(g.total, 0);
   for (int axis = 0; axis < 3; ++axis) CastAxis(axis, g, positions, indices, state);
   MarkSpheres(g, spheres, state);
@@ -312,6 +329,33 @@ Result<CoverageStats> MeasureCoverage(const std::vector<float>& positions, const
   if (Status ok = Validate(positions, indices, spheres, options); !ok) return ok.error();
   try {
     return Measure(positions, indices, spheres, options);
+  } catch (const std::exception& e) {
+    return MakeError(Error::Code::kInternal, std::string("coverage: CGAL: ") + e.what());
+  }
+}
+
+Result<InteriorVoxels> VoxelizeInterior(const std::vector<float>& positions, const std::vector<uint32_t>& indices,
+                                        const CoverageOptions& options, Context* ctx) {
+  Context::Timer timer(ctx, "voxelize");
+  if (Status ok = ValidateMesh(positions, indices, options); !ok) return ok.error();
+  try {
+    std::array<double, 3> lo, hi;
+    const double height = MeshBox(positions, &lo, &hi);
+    if (!(height > 0.0)) return Invalid("the mesh has zero extent (all vertices coincide)");
+    const Grid g = MakeGrid(lo, hi, height, options);
+    std::vector<uint8_t> state(g.total, 0);
+    for (int axis = 0; axis < 3; ++axis) CastAxis(axis, g, positions, indices, state);
+    InteriorVoxels out;
+    out.origin = Eigen::Vector3d(g.origin[0], g.origin[1], g.origin[2]);
+    out.voxel_size = g.h;
+    for (int a = 0; a < 3; ++a) out.dims[a] = g.n[a];
+    out.body_height = height;
+    for (size_t i = 0; i < g.total; ++i) {
+      const int in = state[i] & 3, known = (state[i] >> 2) & 3;
+      if (2 * in > known) out.inside.push_back(static_cast<uint32_t>(i));
+      if (2 * in == known) ++out.undecided;
+    }
+    return out;
   } catch (const std::exception& e) {
     return MakeError(Error::Code::kInternal, std::string("coverage: CGAL: ") + e.what());
   }

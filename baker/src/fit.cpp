@@ -9,6 +9,8 @@
 
 namespace spherechain::baker {
 
+const char* FitMethodName(FitMethod m) { return m == FitMethod::kPaper ? "paper" : "cover"; }
+
 Result<FitResult> FitSpheres(const Mesh& mesh, const Segmentation& seg, const FitParams& params, Context* ctx) {
   Context::Timer timer(ctx, "fit");
   if (seg.triangle_regions.size() != mesh.triangle_count())
@@ -41,6 +43,13 @@ Result<FitResult> FitSpheres(const Mesh& mesh, const Segmentation& seg, const Fi
     FitResult result;
     result.body_height = fit_detail::BodyHeight(mesh, fit_detail::UpVector(mesh.up_axis));
     result.disk_step = fit_detail::DiskStep(mesh, params);
+    if (params.method == FitMethod::kCover) {
+      auto cover = FitCover(*fit_mesh, seg, params, ctx);
+      if (!cover.ok()) return cover.error();
+      result.spheres = std::move(cover).value();
+      if (ctx) ctx->Info("fit: " + std::to_string(result.spheres.size()) + " spheres (cover)");
+      return result;
+    }
     for (int r = 0; r < kRegionCount - 1; ++r) {
       const Region region = static_cast<Region>(r);
       auto limb = FitTubular(*fit_mesh, tris[r], region, params, ctx);

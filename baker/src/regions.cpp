@@ -81,7 +81,7 @@ std::vector<uint32_t> SurroundingRegions::Vertices(const Mesh& mesh, size_t sphe
 }
 
 Result<SurroundingRegions> BuildSurroundingRegions(const Mesh& mesh, const Segmentation& seg,
-                                                   const std::vector<FittedSphere>& spheres) {
+                                                   const std::vector<FittedSphere>& spheres, Ownership ownership) {
   if (spheres.empty()) return MakeError(Error::Code::kFit, "no sphere to assign triangles to");
   const uint32_t T = mesh.triangle_count();
   std::array<std::vector<uint32_t>, kRegionCount> by_region;
@@ -98,7 +98,8 @@ Result<SurroundingRegions> BuildSurroundingRegions(const Mesh& mesh, const Segme
     double best = std::numeric_limits<double>::infinity();
     uint32_t best_s = candidates.front();
     for (uint32_t s : candidates) {
-      const double d = (spheres[s].center - c).squaredNorm();
+      const double d = ownership == Ownership::kNearestCentre ? (spheres[s].center - c).squaredNorm()
+                                                              : (spheres[s].center - c).norm() - spheres[s].radius;
       if (d < best) { best = d; best_s = s; }  // ties keep the lower index: deterministic
     }
     out.triangle_spheres[t] = static_cast<uint16_t>(best_s);
@@ -176,8 +177,16 @@ Result<Pivots> ChoosePivots(const Mesh& mesh, const std::vector<FittedSphere>& s
       // level constraint each time, until a well-spread choice appears.
       for (double reach : {2.5, 4.0, 8.0}) {
         std::vector<uint32_t> wide;
-        for (uint32_t t = 0; t < T; ++t)
-          if (areas[t] > 0.0 && (Centroid(mesh, t) - S.center).norm() < reach * S.radius) wide.push_back(t);
+        // Triangles of the sphere's own region first (an interior sphere must not follow another
+        // region's skin); any region when its own has too few.
+        for (bool own : {true, false}) {
+          wide.clear();
+          for (uint32_t t = 0; t < T; ++t)
+            if (areas[t] > 0.0 && (!own || spheres[surrounding.triangle_spheres[t]].region == S.region) &&
+                (Centroid(mesh, t) - S.center).norm() < reach * S.radius)
+              wide.push_back(t);
+          if (wide.size() >= 4) break;
+        }
         for (double w : {0.5, 0.2, 0.0}) {
           pick = {};
           if (wide.size() >= 4 && choose(wide, w, &pick) && well_conditioned(pick)) { ok = true; break; }

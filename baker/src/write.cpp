@@ -12,6 +12,8 @@
 #include <flatbuffers/flatbuffers.h>
 #include <xxhash.h>
 
+#include "spherechain/runtime/asset.h"
+
 #include "spherechain/runtime/schema/spherechain_generated.h"
 
 namespace spherechain::baker {
@@ -129,12 +131,21 @@ std::vector<uint8_t> BuildAsset(const AssetInputs& in) {
 
   auto accuracy = fb::CreateAccuracy(b, ToStats(b, in.accuracy.phi1), ToStats(b, in.accuracy.phi1_adjusted),
                                      ToStats(b, in.accuracy.phi2));
-  auto generator = b.CreateString("spherechain-baker 0.1.0");
+  auto generator = b.CreateString("spherechain-baker 0.2.0");
+  auto fit_method = b.CreateString(FitMethodName(in.params.method));
+  flatbuffers::Offset<fb::Coverage> coverage = 0;
+  if (in.coverage)
+    coverage = fb::CreateCoverage(b, float(in.coverage->coverage), float(in.coverage->protrusion),
+                                  float(in.coverage->outside_p95_rel), float(in.coverage->outside_max_rel),
+                                  in.coverage_voxel_rel);
   auto units = b.CreateString(mesh.units);
 
   fb::AssetBuilder ab(b);
-  ab.add_schema_version(1);
+  ab.add_schema_version(spherechain::runtime::kSchemaVersion);
   ab.add_generator(generator);
+  ab.add_contact_margin(float(in.contact_margin));
+  ab.add_fit_method(fit_method);
+  if (in.coverage) ab.add_coverage(coverage);
   ab.add_fingerprint(fingerprint);
   ab.add_parts(parts_v);
   ab.add_units(units);

@@ -151,7 +151,7 @@ Status LoadAsset(const void* bytes, size_t size, AssetView* out) {
 
   uint32_t version = 0;
   if (Status s = ReadVersion(buf, size, &version); s != Status::kOk) return s;
-  if (version < kSchemaVersion) return Status::kErrorVersionTooOld;
+  if (version < kMinSchemaVersion) return Status::kErrorVersionTooOld;
   if (version > kSchemaVersion) return Status::kErrorVersionTooNew;
 
   fb::Verifier verifier(buf, size, /*max_depth=*/8, /*max_tables=*/16 + 1024 + 65536, /*check_alignment=*/true);

@@ -19,6 +19,8 @@ Status Context::Init(const AssetView& view) {
     constexpr uint32_t kPad = 8;  // SoA rows are read in chunks of 8; padding spheres never overlap
     for (auto* v : {&x_, &y_, &z_}) v->assign(S + kPad, 1e18f);
     r_.assign(S + kPad, 0.0f);
+    mr_.assign(S + kPad, 0.0f);
+    contact_margin_ = a.contact_margin();
     for (auto* v : {&bind_x_, &bind_y_, &bind_z_, &bind_r_}) v->resize(S);
     for (auto* v : {&local_x_, &local_y_, &local_z_, &offset_x_, &offset_y_, &offset_z_, &radius_scale_})
       v->assign(S + kPad, 0.0f);  // refit reads whole SIMD groups

@@ -36,9 +36,10 @@ void Context::Internal::DetectSpan(const Context& c, uint32_t span) {
 Status Context::Internal::DetectM1(const DetectJob& job) {
   const Context& c = *job.context;
   const uint32_t G = static_cast<uint32_t>(c.m1_order_.size());
+  const float m = job.margin < 0.0f ? c.contact_margin_ : job.margin;
   for (uint32_t g = 0; g < G; ++g) {  // (padding lanes gather sphere 0; the skip stream masks them)
     const uint32_t s = c.m1_order_[g];
-    c.gx_[g] = c.x_[s], c.gy_[g] = c.y_[s], c.gz_[g] = c.z_[s], c.gr_[g] = c.r_[s];
+    c.gx_[g] = c.x_[s], c.gy_[g] = c.y_[s], c.gz_[g] = c.z_[s], c.gr_[g] = c.r_[s] + m;
   }
   const uint32_t P = static_cast<uint32_t>(c.span_hits_.size());
   if (job.parallel_for.run) {
@@ -84,10 +85,18 @@ Status Context::Internal::DetectM1(const DetectJob& job) {
 Status Context::Internal::DetectM2(const DetectJob& job) {
   const Context& c = *job.context;
   const uint32_t S = c.sphere_count_;
-  const kernels::AllPairsArgs args{c.x_.data(), c.y_.data(), c.z_.data(), c.r_.data(), S, c.m2_excl_.data(),
+  const float m = job.margin < 0.0f ? c.contact_margin_ : job.margin;
+  const float* r = c.r_.data();
+  if (m != 0.0f) {  // grown radii (padding stays 0: its spheres are far away)
+    for (uint32_t s = 0; s < S; ++s) c.mr_[s] = c.r_[s] + m;
+    r = c.mr_.data();
+  }
+  const kernels::AllPairsArgs args{c.x_.data(), c.y_.data(), c.z_.data(), r, S, c.m2_excl_.data(),
                                    c.chain_mask_.data(), job.output, job.capacity};
   const uint32_t distinct = c.use_avx_ ? kernels::AllPairsAvx(args) : kernels::AllPairsSse(args);
   const uint32_t written = distinct < job.capacity ? distinct : job.capacity;
+  if (m != 0.0f)
+    for (uint32_t k = 0; k < written; ++k) job.output[k].depth -= 2.0f * m;  // depth of the spheres themselves
   *job.count = written;
   if (job.stats) *job.stats = {static_cast<uint32_t>(uint64_t{S} * (S - 1) / 2), distinct, distinct};
   return distinct > written ? Status::kOkTruncated : Status::kOk;
@@ -109,7 +118,8 @@ uint32_t DetectBound(const AssetView& view, DetectMethod method) {
 
 Status DetectJob::Check() const {
   if (!context || !count || (!output && capacity > 0)) return Status::kErrorNullArgument;
-  if (!context->initialized() || (method != DetectMethod::kM1 && method != DetectMethod::kM2))
+  if (!context->initialized() || (method != DetectMethod::kM1 && method != DetectMethod::kM2) ||
+      !std::isfinite(margin))
     return Status::kErrorInvalidJob;
   return Status::kOk;
 }

@@ -16,7 +16,7 @@ const char* ToString(Status s) {
     case Status::kErrorAssetTooSmall: return "kErrorAssetTooSmall: asset truncated (smaller than a FlatBuffer header)";
     case Status::kErrorAssetTooLarge: return "kErrorAssetTooLarge: asset larger than kMaxAssetBytes";
     case Status::kErrorIdentifier: return "kErrorIdentifier: not a .sphc asset (file_identifier is not SPHC)";
-    case Status::kErrorVersionTooOld: return "kErrorVersionTooOld: asset schema_version is older than this SDK (re-bake)";
+    case Status::kErrorVersionTooOld: return "kErrorVersionTooOld: asset schema_version is older than this SDK reads (re-bake)";
     case Status::kErrorVersionTooNew: return "kErrorVersionTooNew: asset schema_version is newer than this SDK";
     case Status::kErrorCorrupt: return "kErrorCorrupt: FlatBuffers verification failed (truncated or corrupted)";
     case Status::kErrorMissingField: return "kErrorMissingField: a required asset field is absent";

@@ -50,11 +50,17 @@ void CheckRoundTrip(const BakeResult& r) {
 
 }  // namespace
 
+BakeConfig PaperConfig() {
+  BakeConfig c;
+  c.fit.method = FitMethod::kPaper;
+  return c;
+}
+
 TEST_CASE("bake: MakeHuman base.obj — five regions, ~80 spheres, six chains, every triangle assigned") {
   const std::string path = test::SharedData("makehuman/base.obj");
   if (!test::Require(path)) return;
   Context ctx;
-  auto r = Bake(path, BakeConfig{}, &ctx);
+  auto r = Bake(path, PaperConfig(), &ctx);
   REQUIRE_MESSAGE(r.ok(), (r.ok() ? "" : r.error().message));
   CHECK(r->mesh.vertex_count() == 13380);
   CHECK(r->mesh.triangle_count() == 26756);
@@ -79,7 +85,7 @@ TEST_CASE("bake: MakeHuman base.obj — five regions, ~80 spheres, six chains, e
                         << 100 * r->agreement->triangle_fraction << "% of triangles");
   CHECK(r->agreement->triangle_fraction > 0.85);
   CheckRoundTrip(r.value());
-  const auto report = MakeBakeReport(r.value(), BakeConfig{}, ctx);
+  const auto report = MakeBakeReport(r.value(), PaperConfig(), ctx);
   for (const char* key : {"vertices", "triangles", "spheres", "regions", "chains", "unassigned_triangles", "accuracy",
                           "timings_ms", "mesh_issues"})
     CHECK(report.contains(key));

@@ -298,7 +298,9 @@ TEST_CASE("fit: MakeHuman body gives sphere counts per region") {
   const sb::Segmentation seg = StandInSegmentation(m, mhw);
   sb::Context ctx;
   const auto t0 = std::chrono::steady_clock::now();
-  auto res = sb::FitSpheres(m, seg, sb::FitParams{}, &ctx);
+  sb::FitParams paper;
+  paper.method = sb::FitMethod::kPaper;
+  auto res = sb::FitSpheres(m, seg, paper, &ctx);
   const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   REQUIRE(res.ok());
   const auto& fr = res.value();

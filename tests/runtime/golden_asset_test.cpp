@@ -58,11 +58,11 @@ TEST_CASE("golden v1 asset (CesiumMan, baked by spherechain 0.1.0) loads with it
       spherechain::schema::Asset::VT_SCHEMA_VERSION);
   REQUIRE(field != nullptr);
   const size_t offset = static_cast<size_t>(field - base);
-  uint32_t v = 2;
+  uint32_t v = kSchemaVersion + 1;
   std::memcpy(reinterpret_cast<uint8_t*>(other.data()) + offset, &v, 4);
   AssetView newer;
   CHECK(LoadAsset(other.data(), size, &newer) == Status::kErrorVersionTooNew);
-  v = 0;
+  v = kMinSchemaVersion - 1;
   std::memcpy(reinterpret_cast<uint8_t*>(other.data()) + offset, &v, 4);
   CHECK(LoadAsset(other.data(), size, &newer) == Status::kErrorVersionTooOld);
 }

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "spherechain/baker/chains.h"
+#include "spherechain/baker/coverage.h"
 #include "spherechain/baker/fit.h"
 #include "spherechain/baker/import.h"
 #include "spherechain/baker/regions.h"
@@ -18,7 +19,11 @@
 namespace spherechain::baker {
 
 /// Bake configuration. JSON form (every key optional):
-/// { "segmentation": "auto"|"rig"|"geometry"|"map", "region_map": "map.json", "rig": "x.mhskel",
+/// { "fit": "cover"|"paper", "max_spheres": 128, "cover_voxel_rel": 0.005, "min_radius_rel": 0.003,
+///   "min_gain": 0.0002, "region_balance": 0.5, "refine_sweeps": 4, "dilation_rel": 0.003,
+///   "contact_margin_rel": 0.004,
+///   "near_rel": 0.005,
+///   "segmentation": "auto"|"rig"|"geometry"|"map", "region_map": "map.json", "rig": "x.mhskel",
 ///   "rays": 80, "spheres_per_level": 2, "disk_step": 0.25, "disk_step_rel": 0.015,
 ///   "penetration_depth": 0.3, "chains": [{"name": "zeta0", "members": ["R0", "R4L", "R2"]}, ...] }
 struct BakeConfig {
@@ -28,6 +33,13 @@ struct BakeConfig {
   FitParams fit;
   std::vector<ChainDef> chains = DefaultChainDefs();
   bool compare_segmentations = true;  ///< rigged mesh: also segment by geometry and report agreement
+  /// Contact margin stored in the asset (schema Asset.contact_margin), relative to the body height:
+  /// detection tests spheres with radii grown by it (physics engines' contact offset / skin width).
+  double contact_margin_rel = 0.004;
+  /// Exclusions (cover fit): pairs whose spheres come within (near_rel + 2·contact_margin_rel) × body
+  /// height of each other at bind pose are adjacent (chains.h BindExcludedPairs) — so nothing the
+  /// margin reaches at bind pose is ever reported.
+  double near_rel = 0.005;
 };
 
 /// Parses a JSON configuration file. Errors: kIo, kConfig (unknown key, wrong type, value out of range —
@@ -55,6 +67,9 @@ struct BakeResult {
   std::vector<Chain> chains;
   std::vector<SpherePair> excluded;
   std::vector<SpherePair> cross_region_bind_overlaps;
+  ExclusionReasons exclusion_reasons;                  ///< cover fit: why pairs were excluded
+  std::optional<CoverageStats> coverage;               ///< bind-pose coverage of φ1' (absent: not measurable)
+  CoverageOptions coverage_options;                    ///< what it was measured with
   SurroundingRegions surrounding;
   Pivots pivots;
   std::vector<SphereAccuracy> sphere_accuracy;         ///< #S

@@ -45,4 +45,25 @@ using SpherePair = std::pair<uint16_t, uint16_t>;
 std::vector<SpherePair> ExcludedPairs(const std::vector<FittedSphere>& spheres,
                                       std::vector<SpherePair>* cross_region_bind_overlaps = nullptr);
 
+/// Why BindExcludedPairs excluded its pairs (each pair counted once, under the first reason that holds).
+struct ExclusionReasons {
+  size_t limb_neighbour = 0;  ///< consecutive spheres of a limb's sequence
+  size_t bind_overlap = 0;    ///< ‖cA − cB‖ < rA + rB at bind pose
+  size_t bind_near = 0;       ///< ‖cA − cB‖ < rA + rB + near at bind pose (they nearly touch)
+  size_t junction = 0;        ///< a limb sphere and a torso sphere with ‖cA − cB‖ < 1.25 (rA + rB) + near:
+                              ///< the crease of the hip or armpit, where flexing folds skin on skin
+};
+
+/// Adjacent pairs from bind-pose geometry and the limb sequences (the "cover" fit's rule): consecutive
+/// spheres of a tubular region's sequence, and every pair whose spheres overlap or come within `near`
+/// (source units, ≥ 0) of each other at the bind pose — at those places the skin folds onto itself
+/// when the joint bends, without anything meeting. No fixed ±k window: spheres of one region that are
+/// apart at bind pose are tested (a bending spine, an elbow folding the forearm onto the upper arm).
+/// Sorted by (a, b), unique. `reasons` [opt, out] counts them by reason; `cross_region_bind_overlaps`
+/// [opt, out] as ExcludedPairs (bind-overlapping pairs of two different regions other than a limb and
+/// the torso). Cost: O(#S²).
+std::vector<SpherePair> BindExcludedPairs(const std::vector<FittedSphere>& spheres, double near,
+                                          ExclusionReasons* reasons = nullptr,
+                                          std::vector<SpherePair>* cross_region_bind_overlaps = nullptr);
+
 }  // namespace spherechain::baker

@@ -6,6 +6,8 @@
 #include <cstdint>
 #include <vector>
 
+#include <Eigen/Core>
+
 #include "spherechain/baker/fit.h"  // Ball: the sphere type (φ1, φ1', φ2 all convert to it)
 #include "spherechain/baker/types.h"
 
@@ -95,5 +97,29 @@ struct CoverageStats {
 Result<CoverageStats> MeasureCoverage(const std::vector<float>& positions, const std::vector<uint32_t>& indices,
                                       const std::vector<Ball>& spheres, const CoverageOptions& options = {},
                                       Context* ctx = nullptr);
+
+/// The interior of a body mesh as voxel centres (bind pose, model space, source units): the grid and
+/// inside test of MeasureCoverage (steps 1–2: cube voxels of edge voxel_rel × body height over the
+/// mesh's bounding box, axis-voted ray parity with the symbolically perturbed fill rule).
+struct InteriorVoxels {
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();  ///< corner of voxel (0, 0, 0) [Units: source]
+  double voxel_size = 0.0;                           ///< voxel edge [Units: source]
+  uint32_t dims[3] = {0, 0, 0};                      ///< voxels along x, y, z
+  double body_height = 0.0;                          ///< longest extent of the mesh's bounding box
+  /// Linear indices (i + nx·(j + ny·k)) of the voxels whose centre is inside, ascending.
+  std::vector<uint32_t> inside;
+  uint32_t undecided = 0;  ///< voxels whose vote tied (counted outside), as CoverageStats
+  /// Centre of voxel `index` [Units: source].
+  Eigen::Vector3d Centre(uint32_t index) const {
+    const uint32_t i = index % dims[0], j = (index / dims[0]) % dims[1], k = index / (dims[0] * dims[1]);
+    return origin + voxel_size * Eigen::Vector3d(i + 0.5, j + 0.5, k + 0.5);
+  }
+};
+
+/// Voxelises the interior of `positions`/`indices` (as MeasureCoverage: #V×3 floats, #T×3 indices).
+/// Errors: those of MeasureCoverage that concern the mesh and the options. Cost: O(#T + #voxels),
+/// ~1 byte a voxel while it runs. Adds a "voxelize" timing to `ctx` [opt].
+Result<InteriorVoxels> VoxelizeInterior(const std::vector<float>& positions, const std::vector<uint32_t>& indices,
+                                        const CoverageOptions& options = {}, Context* ctx = nullptr);
 
 }  // namespace spherechain::baker

@@ -15,7 +15,24 @@ namespace spherechain::baker {
 /// Torso labels (Figure 6), a bitmask: a sphere may be both L and T.
 enum TorsoLabel : uint8_t { kLabelL = 1, kLabelR = 2, kLabelT = 4, kLabelD = 8 };
 
+/// How the regions are filled: "cover" (FitCover, the default) or "paper" (FitTubular + FitTorso, §3).
+enum class FitMethod : uint8_t { kCover = 0, kPaper = 1 };
+const char* FitMethodName(FitMethod m);
+
 struct FitParams {
+  FitMethod method = FitMethod::kCover;
+  // --- cover fit (FitCover) ---
+  int max_spheres = 128;              ///< sphere budget [Limit: 5..4096]
+  double cover_voxel_rel = 1.0 / 200; ///< interior voxel edge / body height [Limit: 0.001..0.1]
+  double min_radius_rel = 0.003;      ///< smallest sphere radius / body height (fingers, toes: none)
+  double min_gain = 0.0002;           ///< stop when the best sphere adds less than this (weighted share
+                                      ///< of the body's volume, see region_balance) [Limit: 0..1]
+  /// Gain of a voxel of region k: (V_k / V)^−balance / V, V_k its region's interior volume: 0 ranks
+  /// spheres by the body volume they add, 1 by the share of their own region's. [Limit: 0..1]
+  double region_balance = 0.5;
+  int refine_sweeps = 4;              ///< optimisation sweeps (0: greedy only) [Limit: 0..64]
+  double dilation_rel = 0.003;        ///< radii grown past the surface / body height [Limit: 0..0.05]
+  // --- paper fit (FitTubular, FitTorso) ---
   int rays = 80;                    ///< N_r, rays of the torso disk [Limit: >= 8]
   int spheres_per_level = 2;        ///< N_s [Limit: 2]
   double disk_step = 0.0;           ///< δ [Units: source] ; 0 = disk_step_rel × height
@@ -96,7 +113,34 @@ Result<std::vector<FittedSphere>> FitTorso(const Mesh& mesh, const std::vector<u
                                            const Segmentation& seg, const FitParams& params,
                                            Context* ctx = nullptr);
 
-/// All five regions: FitTubular for R0..R3, then FitTorso; δ = params.disk_step, or disk_step_rel ×
+/// The "cover" fit: spheres that fill each region, at most params.max_spheres in all.
+/// Method (after Coverage Axis, Dou et al. 2022, and the coverage objective of variational sphere
+/// sets, Wang et al. 2006):
+/// 1. the body's interior as voxel centres of edge cover_voxel_rel × height (VoxelizeInterior: the
+///    ray-parity test of MeasureCoverage, which tolerates open real meshes);
+/// 2. for each interior voxel, the exact distance to the nearest triangle (CGAL AABB_tree) — the
+///    radius of the largest ball centred there inside the surface — and the region of that triangle;
+/// 3. candidates: voxels whose inscribed ball has radius ≥ min_radius_rel × height;
+/// 4. lazy greedy set cover (Minoux 1978): repeatedly the candidate whose ball adds the largest share
+///    of its own region's still-uncovered interior (so arms and legs are served like the torso), until
+///    max_spheres or the best adds < min_gain; every region gets at least one sphere;
+/// 5. optimisation: refine_sweeps passes of coordinate ascent — each sphere moves to the neighbouring
+///    candidate voxel (26-neighbourhood, same region) whose ball adds most, while coverage grows.
+/// Radii = distance to the surface + dilation_rel × height: the spheres touch the skin from inside, so
+/// protrusion is only the dilation and the voxel sampling of the mesh. Order and labels: limbs from
+/// the torso outwards (distance from the centroid of the vertices the limb shares with the torso);
+/// torso bottom-up, then left to right, labelled L and/or R by the side of the torso's mid-plane
+/// (within half a radius of it: both), T when the sphere spans a height of the arm–torso junction, D
+/// when its bottom is below the top of the leg–torso junction (each label given to at least one
+/// sphere); level = −1, column by side. center = center_phi1 = center_phi2.
+/// `mesh`: bind pose, model space; `seg` must match it (#T). Errors: kFit (parameters out of range,
+/// segmentation size mismatch, a mesh that encloses almost no volume, a region with triangles but no
+/// interior voxel or no sphere, a voxelisation error). A region without triangles gets no sphere. Cost: O(#T log #T + #voxels + Σ candidate ball voxels
+/// × lazy re-evaluations); allocates ~8 bytes a voxel of the bounding box. Adds "fit.cover.*" timings.
+Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation& seg, const FitParams& params,
+                                           Context* ctx = nullptr);
+
+/// All five regions: with FitMethod::kCover, FitCover; with kPaper, FitTubular for R0..R3, then FitTorso; δ = params.disk_step, or disk_step_rel ×
 /// the body height along Mesh::up_axis. Adds a "fit" timing to `ctx`. Errors: kFit (segmentation size
 /// mismatch, a region's failure naming the region, an exception from CGAL turned into a message).
 Result<FitResult> FitSpheres(const Mesh& mesh, const Segmentation& seg, const FitParams& params,

@@ -12,8 +12,10 @@ namespace spherechain::baker {
 
 /// The surrounding region of each sphere: the triangles assigned to it (§5.1: Δ_i ∈ ⊙_j iff ⊙_j's
 /// centre is the nearest to Δ_i). Here the nearest is taken among the spheres of the triangle's own
-/// region (so an arm triangle never belongs to a torso sphere), measuring from the centre to the
-/// triangle's centroid; a region without spheres falls back to all spheres.
+/// region (so an arm triangle never belongs to a torso sphere), measuring from the centre (or the
+/// surface, Ownership) to the triangle's centroid; a region without spheres falls back to all spheres.
+/// A sphere may own no triangle (deep inside, another sphere always nearer): its pivots then come from
+/// its neighbourhood (ChoosePivots).
 struct SurroundingRegions {
   std::vector<uint16_t> triangle_spheres;  ///< #T, owning sphere per triangle
   std::vector<uint32_t> offsets;           ///< #S+1 into `triangles`
@@ -22,10 +24,16 @@ struct SurroundingRegions {
   std::vector<uint32_t> Vertices(const Mesh& mesh, size_t sphere) const;
 };
 
+/// Which sphere of its region a triangle belongs to: the nearest centre (the paper, §5.1) or the
+/// nearest sphere surface, ‖c − p‖ − r (the cover fit, whose spheres of very different sizes all
+/// reach the skin: the sphere that reaches the triangle owns it).
+enum class Ownership : uint8_t { kNearestCentre, kNearestSurface };
+
 /// Assigns every triangle to a sphere. Cost: O(#T · spheres per region). Errors: kFit when there is no
 /// sphere at all.
 Result<SurroundingRegions> BuildSurroundingRegions(const Mesh& mesh, const Segmentation& seg,
-                                                   const std::vector<FittedSphere>& spheres);
+                                                   const std::vector<FittedSphere>& spheres,
+                                                   Ownership ownership = Ownership::kNearestCentre);
 
 /// Four pivot polygons per sphere (§5.1, Figure 9 right) and their bind-pose frame data.
 struct Pivots {

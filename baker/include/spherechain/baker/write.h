@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "spherechain/baker/chains.h"
+#include "spherechain/baker/coverage.h"
 #include "spherechain/baker/fit.h"
 #include "spherechain/baker/regions.h"
 #include "spherechain/baker/segment.h"
@@ -50,6 +51,9 @@ struct AssetInputs {
   AccuracySummary accuracy;
   FitParams params;
   uint64_t config_hash = 0;
+  double contact_margin = 0.0;                      ///< Asset.contact_margin [Units: source]
+  const CoverageStats* coverage = nullptr;          ///< [opt] Asset.coverage
+  float coverage_voxel_rel = 0.0f;                  ///< the voxel edge it was measured with / height
 };
 
 /// Serialises the asset. Deterministic: the same inputs give the same bytes (no timestamps, no

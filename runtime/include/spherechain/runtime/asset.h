@@ -9,9 +9,13 @@
 
 namespace spherechain::runtime {
 
-/// The schema version this SDK reads (schemas/spherechain.fbs, Asset.schema_version). Bump on any
-/// change old readers cannot read; keep a golden asset per version in tests/data/.
-inline constexpr uint32_t kSchemaVersion = 1;
+/// The schema version this SDK writes and reads (schemas/spherechain.fbs, Asset.schema_version). Bump
+/// on any change old readers cannot read or would misread; keep a golden asset per version in
+/// tests/data/golden/. v2 added Asset.contact_margin, fit_method and coverage.
+inline constexpr uint32_t kSchemaVersion = 2;
+/// The oldest schema version this SDK still reads: v1 assets load, with what v2 added absent
+/// (contact margin 0 — their spheres were tested unmargined —, fit "paper", no coverage).
+inline constexpr uint32_t kMinSchemaVersion = 1;
 /// FlatBuffers file_identifier of a .sphc asset.
 inline constexpr char kFileIdentifier[5] = "SPHC";
 /// Largest asset LoadAsset accepts [bytes] (FlatBuffers' own limit is 2 GiB).
@@ -53,7 +57,8 @@ struct AssetView {
 /// Checks, in order (each failure its own status):
 ///  1. envelope: kErrorNullArgument, kErrorAlignment, kErrorAssetTooSmall, kErrorAssetTooLarge,
 ///     kErrorIdentifier ("SPHC"), kErrorCorrupt (root offset out of bounds),
-///     kErrorVersionTooOld / kErrorVersionTooNew (schema_version vs kSchemaVersion — read before the
+///     kErrorVersionTooOld / kErrorVersionTooNew (schema_version below kMinSchemaVersion / above
+///     kSchemaVersion — read before the
 ///     full verification so an asset from another SDK version gets the clear message);
 ///  2. flatbuffers::Verifier (alignment checked, max depth 8 — the schema nests 3 deep — and max
 ///     tables 16 + 1024 chains + 65536 mesh parts): kErrorCorrupt;

@@ -69,6 +69,9 @@ class Context {
   uint32_t sphere_count() const { return sphere_count_; }  ///< #S
   uint32_t vertex_count() const { return vertex_count_; }  ///< #V the positions must have.
   uint32_t chain_count() const { return chain_count_; }    ///< number of chains (≤ kMaxChains).
+  /// The asset's contact margin (Asset.contact_margin, schema v2; 0 for v1 assets) [Units: source]:
+  /// what DetectJob grows every radius by unless the job overrides it.
+  float contact_margin() const { return contact_margin_; }
 
   /// Current spheres (see SphereArrays for lifetime).
   SphereArrays spheres() const { return {x_.data(), y_.data(), z_.data(), r_.data(), sphere_count_}; }
@@ -98,6 +101,8 @@ class Context {
  private:
   uint32_t sphere_count_ = 0, vertex_count_ = 0, chain_count_ = 0;
   uint32_t m1_candidates_ = 0, m2_candidates_ = 0;
+  float contact_margin_ = 0.0f;
+  mutable std::vector<float> mr_;                     // #S + kPad: radii grown by the margin (M2 scratch)
   std::vector<float> x_, y_, z_, r_;                  // current spheres, #S + kPad each (far-away padding)
   std::vector<float> bind_x_, bind_y_, bind_z_, bind_r_;  // Asset.spheres, #S each
   std::vector<uint32_t> pivot_vertices_;              // #S×12, Asset.pivot_vertices

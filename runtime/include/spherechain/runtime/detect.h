@@ -23,7 +23,8 @@ enum class DetectMethod : uint8_t {
 struct Collision {
   uint16_t a;      ///< sphere index, a < b
   uint16_t b;      ///< sphere index
-  float depth;     ///< penetration depth rA + rB − ‖cA − cB‖ [Units: source units] (> 0)
+  float depth;     ///< penetration depth rA + rB − ‖cA − cB‖ of the spheres themselves [Units: source
+                   ///< units]: > 0 overlapping; in (−2·margin, 0] apart but within the contact margin
   uint32_t chains; ///< bit c set ⇔ Asset.chains[c] contains both a and b (M1: never 0; M2: may be 0)
 };
 static_assert(sizeof(Collision) == 12);
@@ -44,7 +45,8 @@ struct DetectStats {
 uint32_t DetectBound(const AssetView& view, DetectMethod method);
 
 /// ozz-style job: reports overlapping non-excluded sphere pairs of the context's current spheres
-/// (after RefitJob::Run, or bind pose). Overlap: ‖cA − cB‖² < (rA + rB)² (11 operations).
+/// (after RefitJob::Run, or bind pose). Overlap: ‖cA − cB‖² < (rA + rB + 2m)² (11 operations), m the
+/// contact margin (DetectJob::margin).
 /// Output order (deterministic, identical with or without parallel_for): M1 — by chain, each pair
 /// under the first chain containing both a and b, rows i < j of that chain's ascending list;
 /// M2 — lexicographic (a, b).
@@ -60,11 +62,16 @@ struct DetectJob {
   uint32_t* count = nullptr;    ///< out: records written (== min(distinct_pairs, capacity))
   DetectStats* stats = nullptr; ///< [opt] out: counters
   ParallelFor parallel_for;     ///< [opt]
+  /// Contact margin [Units: source units]: spheres are tested with every radius grown by it (a pair is
+  /// reported when ‖cA − cB‖ < rA + rB + 2·margin, as physics engines' contact offset / skin width).
+  /// < 0 (default): the asset's, Context::contact_margin() (Asset.contact_margin); NaN or +inf:
+  /// kErrorInvalidJob. [Limit: finite]
+  float margin = -1.0f;
 
   /// True when Run() would not fail on arguments.
   bool Validate() const { return Check() == Status::kOk; }
   /// kErrorNullArgument (context or count null, or output null with capacity > 0),
-  /// kErrorInvalidJob (context not initialised, unknown method), else kOk.
+  /// kErrorInvalidJob (context not initialised, unknown method, margin NaN or infinite), else kOk.
   Status Check() const;
   /// Returns Check()'s error (outputs untouched), kOk, or kOkTruncated when more pairs overlapped
   /// than `capacity`: output holds the first `capacity` in the documented order, *count == capacity.

@@ -32,7 +32,7 @@ enum class [[nodiscard]] Status : uint32_t {
   kErrorAssetTooSmall = 0x8000'0101u,   ///< Fewer bytes than a FlatBuffer header (8) — truncated file.
   kErrorAssetTooLarge = 0x8000'0102u,   ///< More than kMaxAssetBytes.
   kErrorIdentifier = 0x8000'0103u,      ///< file_identifier is not "SPHC" (not a .sphc asset).
-  kErrorVersionTooOld = 0x8000'0104u,   ///< schema_version < kSchemaVersion (re-bake with this SDK).
+  kErrorVersionTooOld = 0x8000'0104u,   ///< schema_version < kMinSchemaVersion (re-bake with this SDK).
   kErrorVersionTooNew = 0x8000'0105u,   ///< schema_version > kSchemaVersion (asset from a newer SDK).
   kErrorCorrupt = 0x8000'0106u,         ///< FlatBuffers Verifier rejected the buffer (offsets out of
                                         ///< bounds, truncated, too deep, too many tables, misaligned).

@@ -45,6 +45,9 @@ struct AccuracyBuilder;
 struct Asset;
 struct AssetBuilder;
 
+struct Coverage;
+struct CoverageBuilder;
+
 enum class UpAxis : int8_t {
   Y = 0,
   Z = 1,
@@ -713,7 +716,10 @@ struct Asset FLATBUFFERS_FINAL_CLASS : private flatbuffers::Table {
     VT_PIVOT_FRAMES = 46,
     VT_ACCURACY = 48,
     VT_TRIANGLES = 50,
-    VT_WELD_IDS = 52
+    VT_WELD_IDS = 52,
+    VT_CONTACT_MARGIN = 54,
+    VT_FIT_METHOD = 56,
+    VT_COVERAGE = 58
   };
   uint32_t schema_version() const {
     return GetField<uint32_t>(VT_SCHEMA_VERSION, 0);
@@ -790,6 +796,15 @@ struct Asset FLATBUFFERS_FINAL_CLASS : private flatbuffers::Table {
   const flatbuffers::Vector<uint32_t> *weld_ids() const {
     return GetPointer<const flatbuffers::Vector<uint32_t> *>(VT_WELD_IDS);
   }
+  float contact_margin() const {
+    return GetField<float>(VT_CONTACT_MARGIN, 0.0f);
+  }
+  const flatbuffers::String *fit_method() const {
+    return GetPointer<const flatbuffers::String *>(VT_FIT_METHOD);
+  }
+  const spherechain::schema::Coverage *coverage() const {
+    return GetPointer<const spherechain::schema::Coverage *>(VT_COVERAGE);
+  }
   bool Verify(flatbuffers::Verifier &verifier) const {
     return VerifyTableStart(verifier) &&
            VerifyField<uint32_t>(verifier, VT_SCHEMA_VERSION, 4) &&
@@ -841,6 +856,11 @@ struct Asset FLATBUFFERS_FINAL_CLASS : private flatbuffers::Table {
            verifier.VerifyVector(triangles()) &&
            VerifyOffset(verifier, VT_WELD_IDS) &&
            verifier.VerifyVector(weld_ids()) &&
+           VerifyField<float>(verifier, VT_CONTACT_MARGIN, 4) &&
+           VerifyOffset(verifier, VT_FIT_METHOD) &&
+           verifier.VerifyString(fit_method()) &&
+           VerifyOffset(verifier, VT_COVERAGE) &&
+           verifier.VerifyTable(coverage()) &&
            verifier.EndTable();
   }
 };
@@ -924,6 +944,15 @@ struct AssetBuilder {
   void add_weld_ids(flatbuffers::Offset<flatbuffers::Vector<uint32_t>> weld_ids) {
     fbb_.AddOffset(Asset::VT_WELD_IDS, weld_ids);
   }
+  void add_contact_margin(float contact_margin) {
+    fbb_.AddElement<float>(Asset::VT_CONTACT_MARGIN, contact_margin, 0.0f);
+  }
+  void add_fit_method(flatbuffers::Offset<flatbuffers::String> fit_method) {
+    fbb_.AddOffset(Asset::VT_FIT_METHOD, fit_method);
+  }
+  void add_coverage(flatbuffers::Offset<spherechain::schema::Coverage> coverage) {
+    fbb_.AddOffset(Asset::VT_COVERAGE, coverage);
+  }
   explicit AssetBuilder(flatbuffers::FlatBufferBuilder &_fbb)
         : fbb_(_fbb) {
     start_ = fbb_.StartTable();
@@ -961,8 +990,14 @@ inline flatbuffers::Offset<Asset> CreateAsset(
     flatbuffers::Offset<flatbuffers::Vector<const spherechain::schema::PivotFrame *>> pivot_frames = 0,
     flatbuffers::Offset<spherechain::schema::Accuracy> accuracy = 0,
     flatbuffers::Offset<flatbuffers::Vector<uint32_t>> triangles = 0,
-    flatbuffers::Offset<flatbuffers::Vector<uint32_t>> weld_ids = 0) {
+    flatbuffers::Offset<flatbuffers::Vector<uint32_t>> weld_ids = 0,
+    float contact_margin = 0.0f,
+    flatbuffers::Offset<flatbuffers::String> fit_method = 0,
+    flatbuffers::Offset<spherechain::schema::Coverage> coverage = 0) {
   AssetBuilder builder_(_fbb);
+  builder_.add_coverage(coverage);
+  builder_.add_fit_method(fit_method);
+  builder_.add_contact_margin(contact_margin);
   builder_.add_weld_ids(weld_ids);
   builder_.add_triangles(triangles);
   builder_.add_accuracy(accuracy);
@@ -1017,7 +1052,10 @@ inline flatbuffers::Offset<Asset> CreateAssetDirect(
     const std::vector<spherechain::schema::PivotFrame> *pivot_frames = nullptr,
     flatbuffers::Offset<spherechain::schema::Accuracy> accuracy = 0,
     const std::vector<uint32_t> *triangles = nullptr,
-    const std::vector<uint32_t> *weld_ids = nullptr) {
+    const std::vector<uint32_t> *weld_ids = nullptr,
+    float contact_margin = 0.0f,
+    const char *fit_method = nullptr,
+    flatbuffers::Offset<spherechain::schema::Coverage> coverage = 0) {
   auto generator__ = generator ? _fbb.CreateString(generator) : 0;
   auto parts__ = parts ? _fbb.CreateVector<flatbuffers::Offset<spherechain::schema::MeshPart>>(*parts) : 0;
   auto units__ = units ? _fbb.CreateString(units) : 0;
@@ -1037,6 +1075,7 @@ inline flatbuffers::Offset<Asset> CreateAssetDirect(
   auto pivot_frames__ = pivot_frames ? _fbb.CreateVectorOfStructs<spherechain::schema::PivotFrame>(*pivot_frames) : 0;
   auto triangles__ = triangles ? _fbb.CreateVector<uint32_t>(*triangles) : 0;
   auto weld_ids__ = weld_ids ? _fbb.CreateVector<uint32_t>(*weld_ids) : 0;
+  auto fit_method__ = fit_method ? _fbb.CreateString(fit_method) : 0;
   return spherechain::schema::CreateAsset(
       _fbb,
       schema_version,
@@ -1063,7 +1102,92 @@ inline flatbuffers::Offset<Asset> CreateAssetDirect(
       pivot_frames__,
       accuracy,
       triangles__,
-      weld_ids__);
+      weld_ids__,
+      contact_margin,
+      fit_method__,
+      coverage);
+}
+
+/// Bind-pose coverage of the body by the spheres (baker coverage.h MeasureCoverage).
+struct Coverage FLATBUFFERS_FINAL_CLASS : private flatbuffers::Table {
+  typedef CoverageBuilder Builder;
+  enum FlatBuffersVTableOffset FLATBUFFERS_VTABLE_UNDERLYING_TYPE {
+    VT_COVERAGE = 4,
+    VT_PROTRUSION = 6,
+    VT_OUTSIDE_P95_REL = 8,
+    VT_OUTSIDE_MAX_REL = 10,
+    VT_VOXEL_REL = 12
+  };
+  float coverage() const {
+    return GetField<float>(VT_COVERAGE, 0.0f);
+  }
+  float protrusion() const {
+    return GetField<float>(VT_PROTRUSION, 0.0f);
+  }
+  float outside_p95_rel() const {
+    return GetField<float>(VT_OUTSIDE_P95_REL, 0.0f);
+  }
+  float outside_max_rel() const {
+    return GetField<float>(VT_OUTSIDE_MAX_REL, 0.0f);
+  }
+  float voxel_rel() const {
+    return GetField<float>(VT_VOXEL_REL, 0.0f);
+  }
+  bool Verify(flatbuffers::Verifier &verifier) const {
+    return VerifyTableStart(verifier) &&
+           VerifyField<float>(verifier, VT_COVERAGE, 4) &&
+           VerifyField<float>(verifier, VT_PROTRUSION, 4) &&
+           VerifyField<float>(verifier, VT_OUTSIDE_P95_REL, 4) &&
+           VerifyField<float>(verifier, VT_OUTSIDE_MAX_REL, 4) &&
+           VerifyField<float>(verifier, VT_VOXEL_REL, 4) &&
+           verifier.EndTable();
+  }
+};
+
+struct CoverageBuilder {
+  typedef Coverage Table;
+  flatbuffers::FlatBufferBuilder &fbb_;
+  flatbuffers::uoffset_t start_;
+  void add_coverage(float coverage) {
+    fbb_.AddElement<float>(Coverage::VT_COVERAGE, coverage, 0.0f);
+  }
+  void add_protrusion(float protrusion) {
+    fbb_.AddElement<float>(Coverage::VT_PROTRUSION, protrusion, 0.0f);
+  }
+  void add_outside_p95_rel(float outside_p95_rel) {
+    fbb_.AddElement<float>(Coverage::VT_OUTSIDE_P95_REL, outside_p95_rel, 0.0f);
+  }
+  void add_outside_max_rel(float outside_max_rel) {
+    fbb_.AddElement<float>(Coverage::VT_OUTSIDE_MAX_REL, outside_max_rel, 0.0f);
+  }
+  void add_voxel_rel(float voxel_rel) {
+    fbb_.AddElement<float>(Coverage::VT_VOXEL_REL, voxel_rel, 0.0f);
+  }
+  explicit CoverageBuilder(flatbuffers::FlatBufferBuilder &_fbb)
+        : fbb_(_fbb) {
+    start_ = fbb_.StartTable();
+  }
+  flatbuffers::Offset<Coverage> Finish() {
+    const auto end = fbb_.EndTable(start_);
+    auto o = flatbuffers::Offset<Coverage>(end);
+    return o;
+  }
+};
+
+inline flatbuffers::Offset<Coverage> CreateCoverage(
+    flatbuffers::FlatBufferBuilder &_fbb,
+    float coverage = 0.0f,
+    float protrusion = 0.0f,
+    float outside_p95_rel = 0.0f,
+    float outside_max_rel = 0.0f,
+    float voxel_rel = 0.0f) {
+  CoverageBuilder builder_(_fbb);
+  builder_.add_voxel_rel(voxel_rel);
+  builder_.add_outside_max_rel(outside_max_rel);
+  builder_.add_outside_p95_rel(outside_p95_rel);
+  builder_.add_protrusion(protrusion);
+  builder_.add_coverage(coverage);
+  return builder_.Finish();
 }
 
 inline const spherechain::schema::Asset *GetAsset(const void *buf) {

@@ -1,0 +1,419 @@
+// spherechain baker — the "cover" fit (fit.h FitCover): spheres that fill the body. Inner balls centred on
+// the voxels of the body's interior, radius the exact distance to the surface, chosen by lazy greedy
+// set cover of the interior (Coverage Axis, Dou et al. 2022; lazy evaluation, Minoux 1978) and then
+// moved voxel by voxel while the covered volume grows (coordinate ascent on the coverage objective of
+// variational sphere sets, Wang et al. 2006).
+#include <algorithm>
+#include <cmath>
+#include <exception>
+#include <limits>
+#include <numeric>
+#include <queue>
+#include <string>
+
+#include <CGAL/AABB_traits.h>
+#include <CGAL/AABB_tree.h>
+#include <CGAL/AABB_triangle_primitive.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+
+#include "geometry.h"
+#include "spherechain/baker/coverage.h"
+#include "spherechain/baker/fit.h"
+
+namespace spherechain::baker {
+namespace {
+
+using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Point3 = K::Point_3;
+using Triangle3 = K::Triangle_3;
+using TriangleList = std::vector<Triangle3>;
+using Primitive = CGAL::AABB_triangle_primitive<K, TriangleList::const_iterator>;
+using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>>;
+using Eigen::Vector3d;
+
+constexpr uint8_t kOutside = 0xFF;
+
+// The interior as a dense grid: region label (kOutside outside), distance to the surface, and how many
+// chosen spheres of the voxel's own region cover it.
+struct Field {
+  uint32_t n[3] = {0, 0, 0};
+  size_t stride[3] = {1, 0, 0};
+  double h = 0.0;
+  Vector3d origin = Vector3d::Zero();
+  std::vector<uint8_t> label;
+  std::vector<float> dist;  // [Units: voxels]
+  std::vector<uint16_t> count;
+  float grow = 0.0f;  // dilation added to every ball [Units: voxels]
+  std::array<double, kRegionCount> volume{};  // voxels of each region
+  std::array<double, kRegionCount> weight{};  // gain per voxel of each region: volume^-balance
+
+  void Coords(size_t v, int64_t* i, int64_t* j, int64_t* k) const {
+    *i = int64_t(v % n[0]);
+    *j = int64_t((v / n[0]) % n[1]);
+    *k = int64_t(v / stride[2]);
+  }
+  Vector3d Centre(size_t v) const {
+    int64_t i, j, k;
+    Coords(v, &i, &j, &k);
+    return origin + h * Vector3d(double(i) + 0.5, double(j) + 0.5, double(k) + 0.5);
+  }
+
+  // Calls fn(voxel) for every interior voxel whose centre lies within dist[c] + grow (voxel units) of
+  // voxel c's centre.
+  template <class Fn>
+  void ForBall(size_t c, Fn&& fn) const {
+    int64_t ci, cj, ck;
+    Coords(c, &ci, &cj, &ck);
+    const double r = double(dist[c]) + grow, r2 = r * r;
+    const int64_t R = int64_t(std::floor(r));
+    for (int64_t dk = -R; dk <= R; ++dk) {
+      const int64_t k = ck + dk;
+      if (k < 0 || k >= int64_t(n[2])) continue;
+      for (int64_t dj = -R; dj <= R; ++dj) {
+        const int64_t j = cj + dj;
+        if (j < 0 || j >= int64_t(n[1])) continue;
+        const double rest = r2 - double(dj * dj + dk * dk);
+        if (rest < 0.0) continue;
+        const int64_t half = int64_t(std::floor(std::sqrt(rest)));
+        const int64_t i0 = std::max<int64_t>(0, ci - half), i1 = std::min<int64_t>(int64_t(n[0]) - 1, ci + half);
+        const size_t row = size_t(j) * stride[1] + size_t(k) * stride[2];
+        for (int64_t i = i0; i <= i1; ++i)
+          if (label[row + size_t(i)] != kOutside) fn(row + size_t(i));
+      }
+    }
+  }
+  // What a sphere at c would add: the interior voxels it covers that no sphere covers yet, each
+  // weighted by its region's weight.
+  double Gain(size_t c) const {
+    std::array<uint32_t, kRegionCount> g{};
+    ForBall(c, [&](size_t v) { g[label[v]] += count[v] == 0; });
+    double sum = 0.0;
+    for (int r = 0; r < kRegionCount; ++r) sum += g[r] * weight[r];
+    return sum;
+  }
+  void Apply(size_t c, int delta) {
+    ForBall(c, [&](size_t v) { count[v] = static_cast<uint16_t>(count[v] + delta); });
+  }
+};
+
+Vector3d VertexOf(const Mesh& mesh, uint32_t v) { return fit_detail::Vertex(mesh, v); }
+
+// Mean of the vertices shared by region `reg`'s triangles and the torso's (its root), or the region's
+// vertex nearest the torso's centroid when the two do not touch.
+Vector3d LimbRoot(const Mesh& mesh, const Segmentation& seg, Region reg, const Vector3d& torso_centroid) {
+  const uint32_t V = mesh.vertex_count();
+  std::vector<uint8_t> mask(V, 0);  // bit 0: in the limb, bit 1: in the torso
+  for (uint32_t t = 0; t < mesh.triangle_count(); ++t) {
+    const uint8_t r = seg.triangle_regions[t];
+    const uint8_t bit = r == uint8_t(reg) ? 1 : r == uint8_t(Region::kTorso) ? 2 : 0;
+    if (bit)
+      for (int k = 0; k < 3; ++k) mask[mesh.indices[3 * t + k]] |= bit;
+  }
+  Vector3d sum = Vector3d::Zero();
+  size_t n = 0;
+  double best = std::numeric_limits<double>::infinity();
+  Vector3d nearest = torso_centroid;
+  for (uint32_t v = 0; v < V; ++v) {
+    if (mask[v] == 3) sum += VertexOf(mesh, v), ++n;
+    if (mask[v] & 1) {
+      const double d = (VertexOf(mesh, v) - torso_centroid).squaredNorm();
+      if (d < best) best = d, nearest = VertexOf(mesh, v);
+    }
+  }
+  return n ? Vector3d(sum / double(n)) : nearest;
+}
+
+// Heights (along up) of the vertices shared by the torso and any of `limbs`: [lo, hi]; empty → lo > hi.
+std::pair<double, double> JunctionBand(const Mesh& mesh, const Segmentation& seg, const Vector3d& up,
+                                       std::initializer_list<Region> limbs) {
+  const uint32_t V = mesh.vertex_count();
+  std::vector<uint8_t> mask(V, 0);
+  for (uint32_t t = 0; t < mesh.triangle_count(); ++t) {
+    const uint8_t r = seg.triangle_regions[t];
+    uint8_t bit = r == uint8_t(Region::kTorso) ? 2 : 0;
+    for (Region l : limbs)
+      if (r == uint8_t(l)) bit = 1;
+    if (bit)
+      for (int k = 0; k < 3; ++k) mask[mesh.indices[3 * t + k]] |= bit;
+  }
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (uint32_t v = 0; v < V; ++v)
+    if (mask[v] == 3) {
+      const double y = VertexOf(mesh, v).dot(up);
+      lo = std::min(lo, y), hi = std::max(hi, y);
+    }
+  return {lo, hi};
+}
+
+}  // namespace
+
+Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation& seg, const FitParams& params,
+                                           Context* ctx) {
+  Context::Timer timer(ctx, "fit.cover");
+  const uint32_t T = mesh.triangle_count();
+  if (seg.triangle_regions.size() != T)
+    return MakeError(Error::Code::kFit, "fit cover: segmentation does not match the mesh's triangle count");
+  if (params.max_spheres < kRegionCount || params.max_spheres > 4096)
+    return MakeError(Error::Code::kFit, "fit cover: max_spheres must be in [5, 4096]");
+  if (!(params.cover_voxel_rel >= 1e-3 && params.cover_voxel_rel <= 0.1))
+    return MakeError(Error::Code::kFit, "fit cover: cover_voxel_rel must be in [0.001, 0.1]");
+
+  // 1. The interior.
+  CoverageOptions vopt;
+  vopt.voxel_rel = float(params.cover_voxel_rel);
+  vopt.max_voxels = 16'000'000;
+  auto vox = VoxelizeInterior(mesh.positions, mesh.indices, vopt, ctx);
+  if (!vox.ok()) return MakeError(Error::Code::kFit, "fit cover: " + vox.error().message);
+  const InteriorVoxels& iv = vox.value();
+  const double height = iv.body_height;
+  if (iv.inside.size() < 64)
+    return MakeError(Error::Code::kFit, "fit cover: the mesh encloses almost no volume (" +
+                                            std::to_string(iv.inside.size()) +
+                                            " interior voxels): is it a closed surface?");
+
+  Field F;
+  for (int a = 0; a < 3; ++a) F.n[a] = iv.dims[a];
+  F.stride[1] = F.n[0];
+  F.stride[2] = size_t(F.n[0]) * F.n[1];
+  F.h = iv.voxel_size;
+  F.origin = iv.origin;
+  const size_t total = F.stride[2] * F.n[2];
+  F.label.assign(total, kOutside);
+  F.dist.assign(total, 0.0f);
+  F.count.assign(total, 0);
+
+  // 2. Distance to the surface and region (of the nearest triangle) of every interior voxel.
+  TriangleList tris;
+  std::vector<uint32_t> tri_ids;
+  tris.reserve(T);
+  for (uint32_t t = 0; t < T; ++t) {
+    std::array<Point3, 3> p;
+    for (int k = 0; k < 3; ++k) {
+      const float* x = &mesh.positions[3 * size_t(mesh.indices[3 * t + k])];
+      p[k] = Point3(x[0], x[1], x[2]);
+    }
+    if (CGAL::collinear(p[0], p[1], p[2])) continue;
+    tris.emplace_back(p[0], p[1], p[2]);
+    tri_ids.push_back(t);
+  }
+  if (tris.empty()) return MakeError(Error::Code::kFit, "fit cover: every triangle is degenerate");
+  Tree tree(tris.begin(), tris.end());
+  {
+    Context::Timer t(ctx, "fit.cover.distance");
+    tree.accelerate_distance_queries();
+    Point3 hint;
+    size_t prev = SIZE_MAX;
+    for (uint32_t v : iv.inside) {
+      const Vector3d c = iv.Centre(v);
+      const Point3 q(c.x(), c.y(), c.z());
+      const auto hit = prev + 1 == v ? tree.closest_point_and_primitive(q, std::make_pair(hint, tris.cbegin()))
+                                     : tree.closest_point_and_primitive(q);
+      hint = hit.first;
+      prev = v;
+      const uint32_t tri = tri_ids[size_t(hit.second - tris.cbegin())];
+      const uint8_t reg = seg.triangle_regions[tri];
+      if (reg >= kRegionCount) continue;
+      F.label[v] = reg;
+      F.dist[v] = float(std::sqrt(CGAL::squared_distance(q, hit.first)) / F.h);
+      F.volume[reg] += 1.0;
+    }
+  }
+  std::array<bool, kRegionCount> has_triangles{};
+  for (uint8_t r : seg.triangle_regions)
+    if (r < kRegionCount) has_triangles[r] = true;
+  for (int r = 0; r < kRegionCount; ++r)
+    if (has_triangles[r] && F.volume[r] < 1.0)
+      return MakeError(Error::Code::kFit, std::string("fit cover: region ") + RegionSymbol(Region(r)) +
+                                              " has no interior voxel (too thin for cover_voxel_rel " +
+                                              std::to_string(params.cover_voxel_rel) + ")");
+
+  double total_volume = 0.0;
+  for (int r = 0; r < kRegionCount; ++r) total_volume += F.volume[r];
+  for (int r = 0; r < kRegionCount; ++r)
+    F.weight[r] = F.volume[r] > 0.0 ? std::pow(F.volume[r] / total_volume, -params.region_balance) / total_volume : 0.0;
+
+  F.grow = float(params.dilation_rel * height / F.h);
+
+  // 3. Candidates: interior voxels whose inscribed ball is at least min_radius (fingers and toes,
+  //    thinner, are left to their neighbours' spheres) and at least one voxel.
+  const float rmin = float(std::max(1.0, params.min_radius_rel * height / F.h));
+  //    The greedy starts from every other voxel along each axis (an eighth of them: the set-cover
+  //    gains are smooth at that scale) and the optimisation moves spheres over all of them.
+  std::vector<uint32_t> cand, start;
+  for (uint32_t v : iv.inside) {
+    if (F.label[v] == kOutside || F.dist[v] < rmin) continue;
+    cand.push_back(v);
+    int64_t i, j, k;
+    F.Coords(v, &i, &j, &k);
+    if (((i | j | k) & 1) == 0 || F.dist[v] < 2.0f) start.push_back(v);  // thin parts: every voxel
+  }
+  if (cand.empty()) return MakeError(Error::Code::kFit, "fit cover: no interior point is min_radius_rel from the surface");
+
+  // 4. Lazy greedy set cover: the sphere that adds the largest share of its region's volume, until
+  //    max_spheres or the best adds less than min_gain. Every region gets its first sphere before any
+  //    region its second (a thin limb is never left without one).
+  std::vector<uint32_t> chosen;
+  {
+    Context::Timer t(ctx, "fit.cover.greedy");
+    using Entry = std::pair<double, uint32_t>;  // gain, candidate voxel (ties: the larger index — fixed)
+    std::priority_queue<Entry> queue;
+    for (uint32_t c : start) queue.emplace(F.Gain(c), c);
+    std::array<int, kRegionCount> per_region{};
+    while (!queue.empty() && int(chosen.size()) < params.max_spheres) {
+      auto [gain, c] = queue.top();
+      queue.pop();
+      const double now = F.Gain(c);
+      if (!queue.empty() && now < queue.top().first) {
+        queue.emplace(now, c);  // stale: re-queue with its current gain
+        continue;
+      }
+      const bool first_of_region = per_region[F.label[c]] == 0;
+      if (now < params.min_gain && !first_of_region) {
+        // Below the threshold: only regions still without a sphere may take one.
+        bool all_served = true;
+        for (int r = 0; r < kRegionCount; ++r) all_served = all_served && (per_region[r] > 0 || F.volume[r] == 0.0);
+        if (all_served) break;
+        continue;
+      }
+      F.Apply(c, +1);
+      chosen.push_back(c);
+      ++per_region[F.label[c]];
+    }
+    for (int r = 0; r < kRegionCount; ++r)
+      if (per_region[r] == 0 && has_triangles[r])
+        return MakeError(Error::Code::kFit, std::string("fit cover: no sphere fits region ") + RegionSymbol(Region(r)) +
+                                                " (thinner than min_radius_rel, or max_spheres too small)");
+  }
+
+  // 5. Optimisation: move each sphere to the neighbouring voxel (26-neighbourhood, same region, a
+  //    candidate) whose ball adds the most, while the covered volume grows.
+  {
+    Context::Timer t(ctx, "fit.cover.refine");
+    std::vector<uint8_t> is_cand(total, 0);
+    for (uint32_t c : cand) is_cand[c] = 1;
+    for (int sweep = 0; sweep < params.refine_sweeps; ++sweep) {
+      size_t moved = 0;
+      for (uint32_t& c : chosen) {
+        F.Apply(c, -1);
+        const uint8_t reg = F.label[c];
+        double best = F.Gain(c);
+        uint32_t best_c = c;
+        int64_t ci, cj, ck;
+        F.Coords(c, &ci, &cj, &ck);
+        for (int dk = -1; dk <= 1; ++dk)
+          for (int dj = -1; dj <= 1; ++dj)
+            for (int di = -1; di <= 1; ++di) {
+              const int64_t i = ci + di, j = cj + dj, k = ck + dk;
+              if ((di | dj | dk) == 0 || i < 0 || j < 0 || k < 0 || i >= F.n[0] || j >= F.n[1] || k >= F.n[2]) continue;
+              const size_t v = size_t(i) + size_t(j) * F.stride[1] + size_t(k) * F.stride[2];
+              if (!is_cand[v] || F.label[v] != reg) continue;
+              const double g = F.Gain(v);
+              if (g > best + 1e-12) best = g, best_c = uint32_t(v);
+            }
+        moved += best_c != c;
+        c = best_c;
+        F.Apply(c, +1);
+      }
+      if (moved == 0) break;
+    }
+  }
+
+  // 6. Off the grid: each centre pushed away from its nearest surface point, half a voxel at a time
+  //    while its inscribed radius grows (towards the medial axis: a voxel centre is up to half a voxel
+  //    diagonal off it, which costs a thin limb a few % of its radius).
+  std::vector<std::pair<Vector3d, double>> balls;
+  for (uint32_t c : chosen) {
+    Vector3d x = iv.Centre(c);
+    Point3 q(x.x(), x.y(), x.z());
+    Point3 near = tree.closest_point(q);
+    double r = std::sqrt(CGAL::squared_distance(q, near));
+    for (int it = 0; it < 8; ++it) {
+      const Vector3d away = x - Vector3d(near.x(), near.y(), near.z());
+      if (away.norm() <= 0.0) break;
+      const Vector3d y = x + 0.5 * F.h * away.normalized();
+      const Point3 qy(y.x(), y.y(), y.z());
+      const Point3 ny = tree.closest_point(qy);
+      const double ry = std::sqrt(CGAL::squared_distance(qy, ny));
+      if (!(ry > r)) break;
+      x = y, near = ny, r = ry;
+    }
+    balls.emplace_back(x, r);
+  }
+
+  // 7. Spheres, their order and labels.
+  const Vector3d up = fit_detail::UpVector(mesh.up_axis);
+  std::array<Vector3d, kRegionCount> centroid;
+  std::array<double, kRegionCount> nvox{};
+  for (auto& c : centroid) c.setZero();
+  for (uint32_t v : iv.inside)
+    if (F.label[v] != kOutside) centroid[F.label[v]] += iv.Centre(v), nvox[F.label[v]] += 1;
+  for (int r = 0; r < kRegionCount; ++r) centroid[r] /= std::max(1.0, nvox[r]);
+  Vector3d left = Vector3d::Zero();
+  for (auto [l, r] : {std::pair{0, 1}, std::pair{2, 3}}) {
+    left = centroid[l] - centroid[r];
+    left -= left.dot(up) * up;
+    if (left.norm() > 1e-9 * height) break;
+  }
+  if (left.norm() <= 1e-9 * height) left = up.unitOrthogonal();
+  left.normalize();
+  const int torso = int(Region::kTorso);
+  const auto [arm_lo, arm_hi] = JunctionBand(mesh, seg, up, {Region::kLeftArm, Region::kRightArm});
+  const auto [leg_lo, leg_hi] = JunctionBand(mesh, seg, up, {Region::kLeftLeg, Region::kRightLeg});
+  (void)leg_lo;
+
+  const double dilation = params.dilation_rel * height;
+  std::vector<FittedSphere> out;
+  for (int r = 0; r < kRegionCount; ++r) {
+    std::vector<FittedSphere> group;
+    const Vector3d root = r == torso ? Vector3d::Zero() : LimbRoot(mesh, seg, Region(r), centroid[torso]);
+    for (size_t k = 0; k < chosen.size(); ++k) {
+      if (F.label[chosen[k]] != r) continue;
+      FittedSphere s;
+      s.center = s.center_phi1 = s.center_phi2 = balls[k].first;
+      s.radius = s.radius_phi1 = s.radius_phi2 = balls[k].second + dilation;
+      s.region = Region(r);
+      group.push_back(std::move(s));
+    }
+    if (r != torso) {
+      // Limbs: from the torso outwards, by distance from the limb's root.
+      std::stable_sort(group.begin(), group.end(), [&](const FittedSphere& a, const FittedSphere& b) {
+        return (a.center - root).squaredNorm() < (b.center - root).squaredNorm();
+      });
+    } else {
+      // Torso: bottom-up, then from the character's left to its right; labels of Figure 6.
+      std::stable_sort(group.begin(), group.end(), [&](const FittedSphere& a, const FittedSphere& b) {
+        const double ha = a.center.dot(up), hb = b.center.dot(up);
+        if (ha != hb) return ha < hb;
+        return a.center.dot(left) > b.center.dot(left);
+      });
+      const double mid = centroid[torso].dot(left);
+      for (FittedSphere& s : group) {
+        const double side = s.center.dot(left) - mid, y = s.center.dot(up);
+        // Within half a radius of the mid-plane: both sides (the belly, the head, the spine).
+        if (side > -0.5 * s.radius) s.labels |= kLabelL;
+        if (side < 0.5 * s.radius) s.labels |= kLabelR;
+        s.column = side >= 0.0 ? 0 : 1;
+        if (arm_lo <= arm_hi && y + s.radius >= arm_lo && y - s.radius <= arm_hi) s.labels |= kLabelT;
+        if (leg_lo <= leg_hi && y - s.radius <= leg_hi) s.labels |= kLabelD;
+      }
+      // A chain member set must not be empty: the nearest sphere takes a label nobody has.
+      auto ensure = [&](uint8_t label, auto distance) {
+        if (std::any_of(group.begin(), group.end(), [&](const FittedSphere& s) { return s.labels & label; })) return;
+        auto it = std::min_element(group.begin(), group.end(), [&](const FittedSphere& a, const FittedSphere& b) {
+          return distance(a) < distance(b);
+        });
+        if (it != group.end()) it->labels |= label;
+      };
+      ensure(kLabelT, [&](const FittedSphere& s) { return std::abs(s.center.dot(up) - 0.5 * (arm_lo + arm_hi)); });
+      ensure(kLabelD, [&](const FittedSphere& s) { return s.center.dot(up) - s.radius; });
+    }
+    for (size_t k = 0; k < group.size(); ++k) group[k].sequence = int(k);
+    for (FittedSphere& s : group) out.push_back(std::move(s));
+  }
+  if (ctx)
+    ctx->Info("fit cover: " + std::to_string(out.size()) + " spheres from " + std::to_string(cand.size()) +
+              " candidates over " + std::to_string(iv.inside.size()) + " interior voxels");
+  return out;
+}
+
+}  // namespace spherechain::baker

@@ -1,0 +1,232 @@
+// The cover fit (FitCover) on shapes with known answers, the bind-geometry exclusions, and the
+// MakeHuman bake with its schema v2 asset through the runtime (contact margin).
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <vector>
+
+#include "spherechain/baker/bake.h"
+#include "spherechain/baker/chains.h"
+#include "spherechain/baker/coverage.h"
+#include "spherechain/baker/fit.h"
+#include "spherechain/runtime/runtime.h"
+#include "test_data.h"
+
+namespace sb = spherechain::baker;
+namespace rt = spherechain::runtime;
+using Eigen::Vector3d;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+/// Closed tube along +Y (end caps fanned from their centres), cross-section (a cos θ, b sin θ) in XZ.
+sb::Mesh ClosedTube(double a, double b, double length, int n_around, int n_along) {
+  sb::Mesh m;
+  for (int j = 0; j <= n_along; ++j)
+    for (int i = 0; i < n_around; ++i) {
+      const double th = 2.0 * kPi * i / n_around;
+      m.positions.insert(m.positions.end(), {float(a * std::cos(th)), float(length * j / n_along), float(b * std::sin(th))});
+    }
+  for (int j = 0; j < n_along; ++j)
+    for (int i = 0; i < n_around; ++i) {
+      const uint32_t v0 = j * n_around + i, v1 = j * n_around + (i + 1) % n_around;
+      const uint32_t v2 = v1 + n_around, v3 = v0 + n_around;
+      for (uint32_t v : {v0, v2, v1, v0, v3, v2}) m.indices.push_back(v);
+    }
+  const uint32_t bottom = m.vertex_count(), top = bottom + 1;
+  m.positions.insert(m.positions.end(), {0.f, 0.f, 0.f, 0.f, float(length), 0.f});
+  const uint32_t last = uint32_t(n_along) * n_around;
+  for (int i = 0; i < n_around; ++i) {
+    const uint32_t i1 = (i + 1) % n_around;
+    for (uint32_t v : {bottom, uint32_t(i), i1}) m.indices.push_back(v);
+    for (uint32_t v : {top, last + i1, last + uint32_t(i)}) m.indices.push_back(v);
+  }
+  m.up_axis = sb::UpAxis::kY;
+  return m;
+}
+
+sb::Segmentation AllTorso(const sb::Mesh& m) {
+  sb::Segmentation seg;
+  seg.triangle_regions.assign(m.triangle_count(), uint8_t(sb::Region::kTorso));
+  return seg;
+}
+
+double Coverage(const sb::Mesh& m, const std::vector<sb::FittedSphere>& spheres, double* protrusion = nullptr) {
+  std::vector<sb::Ball> balls;
+  for (const auto& s : spheres) balls.push_back({s.center, s.radius});
+  auto c = sb::MeasureCoverage(m.positions, m.indices, balls);
+  REQUIRE(c.ok());
+  if (protrusion) *protrusion = c->protrusion;
+  return c->coverage;
+}
+
+}  // namespace
+
+TEST_CASE("heavy: fit cover: a cylinder is filled to >= 95 % with no sphere outside it") {
+  // Long enough that the flat caps' rims (which no inscribed ball reaches) weigh little.
+  const double R = 1.0, L = 24.0;
+  const sb::Mesh m = ClosedTube(R, R, L, 96, 96);
+  sb::FitParams p;
+  p.dilation_rel = 0.0;
+  p.max_spheres = 64;
+  auto fit = sb::FitCover(m, AllTorso(m), p);
+  REQUIRE_MESSAGE(fit.ok(), (fit.ok() ? "" : fit.error().message));
+  const auto& sp = fit.value();
+  REQUIRE(sp.size() >= 6);
+  // Inscribed: every sphere inside the (polygonal) cylinder — the distance to the axis plus the radius
+  // within R, the caps not crossed (the 96-gon's inradius is R cos(π/96)).
+  const double inradius = R * std::cos(kPi / 96);
+  for (const auto& s : sp) {
+    double worst = -1.0;  // max over the prism's side faces of (c · n_k + r − inradius)
+    for (int k = 0; k < 96; ++k) {
+      const double th = 2.0 * kPi * (k + 0.5) / 96;
+      worst = std::max(worst, s.center.x() * std::cos(th) + s.center.z() * std::sin(th) + s.radius - inradius);
+    }
+    CHECK(worst <= 1e-5);
+    CHECK(s.center.y() - s.radius >= -1e-6);
+    CHECK(s.center.y() + s.radius <= L + 1e-6);
+    CHECK(s.region == sb::Region::kTorso);
+  }
+  double protrusion = 1.0;
+  const double cov = Coverage(m, sp, &protrusion);
+  MESSAGE("cylinder R=1 L=24: " << sp.size() << " spheres, coverage " << cov << ", protrusion " << protrusion);
+  CHECK(cov >= 0.95);
+  CHECK(protrusion <= 0.01);  // voxel sampling of the surface only
+}
+
+TEST_CASE("heavy: fit cover: a flat (elliptic) torso — two spheres a level miss the coverage target, the cover fit meets it") {
+  const double a = 2.0, b = 1.0, H = 16.0;
+  const sb::Mesh m = ClosedTube(a, b, H, 96, 96);
+  const sb::Segmentation seg = AllTorso(m);
+  std::vector<uint32_t> all(m.triangle_count());
+  for (uint32_t t = 0; t < all.size(); ++t) all[t] = t;
+  sb::FitParams paper;
+  paper.disk_step = 0.25;
+  auto disk = sb::FitTorso(m, all, seg, paper);
+  REQUIRE(disk.ok());
+  sb::FitParams cover;
+  cover.dilation_rel = 0.0;
+  cover.max_spheres = 128;
+  auto filled = sb::FitCover(m, seg, cover);
+  REQUIRE(filled.ok());
+  const double c_paper = Coverage(m, disk.value()), c_cover = Coverage(m, filled.value());
+  MESSAGE("elliptic torso a=2 b=1 H=16: paper " << disk->size() << " spheres " << c_paper << ", cover "
+                                                 << filled->size() << " spheres " << c_cover);
+  CHECK(c_paper < 0.90);
+  CHECK(c_cover >= 0.90);
+  for (const auto& s : filled.value()) {  // no sphere sticks out of the flat sides
+    const double x = s.center.x(), z = s.center.z();
+    CHECK(x * x / (a * a) + z * z / (b * b) < 1.0);
+    CHECK(std::abs(z) + s.radius <= b + 1e-3);
+  }
+}
+
+TEST_CASE("fit cover: bad parameters and a mesh without volume are clear errors") {
+  const sb::Mesh m = ClosedTube(1, 1, 4, 32, 16);
+  sb::FitParams p;
+  p.max_spheres = 2;
+  auto r = sb::FitCover(m, AllTorso(m), p);
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().message.find("max_spheres") != std::string::npos);
+  sb::Segmentation short_seg;
+  short_seg.triangle_regions.assign(3, 4);
+  CHECK_FALSE(sb::FitCover(m, short_seg, sb::FitParams{}).ok());
+  // A flat square (two triangles) encloses nothing.
+  sb::Mesh flat;
+  flat.positions = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
+  flat.indices = {0, 1, 2, 0, 2, 3};
+  auto f = sb::FitCover(flat, AllTorso(flat), sb::FitParams{});
+  REQUIRE_FALSE(f.ok());
+  CHECK(f.error().code == sb::Error::Code::kFit);
+}
+
+TEST_CASE("exclusions from bind geometry on a bent limb: neighbours and near pairs, not a fixed window") {
+  // An L-shaped arm of 8 spheres (r = 0.5, 0.8 apart: consecutive ones overlap, i and i+2 do not),
+  // bent 90° at sphere 4, and a torso sphere by its root.
+  std::vector<sb::FittedSphere> sp;
+  for (int i = 0; i < 8; ++i) {
+    sb::FittedSphere s;
+    s.region = sb::Region::kLeftArm;
+    s.sequence = i;
+    s.radius = 0.5;
+    s.center = i <= 4 ? Vector3d(1.2 + 1.1 * i, 0, 0) : Vector3d(1.2 + 1.1 * 4, -1.1 * (i - 4), 0);
+    sp.push_back(s);
+  }
+  sb::FittedSphere torso;
+  torso.region = sb::Region::kTorso;
+  torso.radius = 0.6;
+  torso.center = Vector3d(0, 0, 0);
+  sp.push_back(torso);
+  sb::ExclusionReasons why;
+  const auto ex = sb::BindExcludedPairs(sp, 0.05, &why);
+  auto has = [&](uint16_t a, uint16_t b) { return std::find(ex.begin(), ex.end(), sb::SpherePair{a, b}) != ex.end(); };
+  for (uint16_t i = 0; i + 1 < 8; ++i) CHECK(has(i, i + 1));  // limb neighbours
+  CHECK(why.limb_neighbour == 7);
+  CHECK_FALSE(has(0, 2));  // 2.2 apart, radii sum 1: tested (a fixed ±2 window would hide it)
+  CHECK_FALSE(has(2, 6));  // across the bend: 2.2·√2 apart
+  CHECK(has(0, 8));        // the root and the torso: 1.2 apart < 1.1 (sum) + near? no: junction rule
+  CHECK(why.bind_overlap + why.bind_near + why.junction == 1);
+  // Near: two arm spheres 1.02 apart but not consecutive in sequence are excluded with near 0.05.
+  sp[7].center = sp[5].center + Vector3d(1.02, 0, 0);
+  sb::ExclusionReasons why2;
+  const auto ex2 = sb::BindExcludedPairs(sp, 0.05, &why2);
+  CHECK(std::find(ex2.begin(), ex2.end(), sb::SpherePair{5, 7}) != ex2.end());
+  CHECK(why2.bind_near >= 1);
+}
+
+TEST_CASE("heavy: bake MakeHuman with the cover fit — coverage, protrusion, schema v2 asset and its contact margin") {
+  const std::string path = spherechain::test::SharedData("makehuman/base.obj");
+  if (!spherechain::test::Require(path)) return;
+  sb::Context ctx;
+  auto r = sb::Bake(path, sb::BakeConfig{}, &ctx);
+  REQUIRE_MESSAGE(r.ok(), (r.ok() ? "" : r.error().message));
+  CHECK(r->fit.spheres.size() <= 128);
+  REQUIRE(r->coverage.has_value());
+  MESSAGE("MakeHuman cover fit: " << r->fit.spheres.size() << " spheres, coverage " << r->coverage->coverage
+                                  << ", protrusion " << r->coverage->protrusion << ", p95 outside "
+                                  << r->coverage->outside_p95_rel);
+  CHECK(r->coverage->coverage >= 0.90);
+  CHECK(r->coverage->protrusion <= 0.05);
+  CHECK(r->coverage->outside_p95_rel <= 0.005);
+  for (int k = 0; k < sb::kRegionCount; ++k) {
+    size_t n = 0;
+    for (const auto& s : r->fit.spheres) n += int(s.region) == k;
+    CHECK_MESSAGE(n >= 2, "region " << k << " has " << n << " spheres");
+  }
+
+  // The asset: v2, the margin stored, bind pose quiet with it, pairs within a larger override.
+  std::vector<uint64_t> storage((r->asset.size() + 7) / 8);
+  std::memcpy(storage.data(), r->asset.data(), r->asset.size());
+  rt::AssetView view;
+  REQUIRE(rt::LoadAsset(storage.data(), r->asset.size(), &view) == rt::Status::kOk);
+  CHECK(view.asset->schema_version() == rt::kSchemaVersion);
+  REQUIRE(view.asset->coverage() != nullptr);
+  CHECK(view.asset->coverage()->coverage() == doctest::Approx(r->coverage->coverage).epsilon(1e-6));
+  CHECK(std::string(view.asset->fit_method()->c_str()) == "cover");
+  rt::Context c;
+  REQUIRE(c.Init(view) == rt::Status::kOk);
+  const float margin = float(0.004 * r->fit.body_height);
+  CHECK(c.contact_margin() == doctest::Approx(margin).epsilon(1e-5));
+  std::vector<rt::Collision> out(rt::DetectBound(view, rt::DetectMethod::kM2));
+  uint32_t n = 0;
+  rt::DetectJob job;
+  job.context = &c;
+  job.method = rt::DetectMethod::kM2;
+  job.output = out.data();
+  job.capacity = uint32_t(out.size());
+  job.count = &n;
+  REQUIRE(job.Run() == rt::Status::kOk);
+  CHECK(n == 0);  // exclusions cover everything the margin reaches at bind pose
+  job.margin = 0.05f * float(r->fit.body_height);
+  REQUIRE(job.Run() == rt::Status::kOk);
+  CHECK(n > 0);
+  for (uint32_t i = 0; i < n; ++i) {
+    CHECK(out[i].depth > -2.0f * job.margin * 1.0001f);
+    CHECK(!c.IsExcluded(out[i].a, out[i].b));
+  }
+  job.margin = std::nanf("");
+  CHECK(job.Run() == rt::Status::kErrorInvalidJob);
+}
