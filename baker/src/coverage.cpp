@@ -11,10 +11,9 @@
 #include <string>
 #include <utility>
 
-#include <CGAL/AABB_traits.h>
-#include <CGAL/AABB_tree.h>
-#include <CGAL/AABB_triangle_primitive.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+
+#include "surface_tree.h"
 
 namespace spherechain::baker {
 namespace {
@@ -22,10 +21,7 @@ namespace {
 using K = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Point2 = K::Point_2;
 using Point3 = K::Point_3;
-using Triangle3 = K::Triangle_3;
-using TriangleList = std::vector<Triangle3>;
-using Primitive = CGAL::AABB_triangle_primitive<K, TriangleList::const_iterator>;
-using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>>;
+using surface_detail::Tree;
 
 // Per-voxel state byte: bits 0-1 inside votes (0..3), bits 2-3 known axes (0..3), bit 4 in a sphere.
 constexpr uint8_t kInsideVote = 1;
@@ -289,16 +285,7 @@ Result<CoverageStats> Measure(const std::vector<float>& positions, const std::ve
       st.voxels_in_spheres ? double(st.voxels_in_spheres - st.voxels_both) / st.voxels_in_spheres : 0.0;
 
   if (!outside.empty()) {
-    TriangleList tris;
-    tris.reserve(indices.size() / 3);
-    for (size_t f = 0; f < indices.size(); f += 3) {
-      std::array<Point3, 3> p;
-      for (int k = 0; k < 3; ++k) {
-        const float* x = &positions[3 * size_t{indices[f + k]}];
-        p[k] = Point3(x[0], x[1], x[2]);
-      }
-      if (!CGAL::collinear(p[0], p[1], p[2])) tris.emplace_back(p[0], p[1], p[2]);
-    }
+    const surface_detail::TriangleList tris = surface_detail::NonDegenerateTriangles(positions, indices).triangles;
     if (tris.empty()) return Invalid("every triangle is degenerate (zero area)");
     Tree tree(tris.begin(), tris.end());
     tree.accelerate_distance_queries();

@@ -11,24 +11,16 @@
 #include <queue>
 #include <string>
 
-#include <CGAL/AABB_traits.h>
-#include <CGAL/AABB_tree.h>
-#include <CGAL/AABB_triangle_primitive.h>
-#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
-
 #include "geometry.h"
+#include "surface_tree.h"
 #include "spherechain/baker/coverage.h"
 #include "spherechain/baker/fit.h"
 
 namespace spherechain::baker {
 namespace {
 
-using K = CGAL::Exact_predicates_inexact_constructions_kernel;
-using Point3 = K::Point_3;
-using Triangle3 = K::Triangle_3;
-using TriangleList = std::vector<Triangle3>;
-using Primitive = CGAL::AABB_triangle_primitive<K, TriangleList::const_iterator>;
-using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>>;
+using surface_detail::Point3;
+using surface_detail::Tree;
 using Eigen::Vector3d;
 
 constexpr uint8_t kOutside = 0xFF;
@@ -96,28 +88,35 @@ struct Field {
   }
 };
 
-Vector3d VertexOf(const Mesh& mesh, uint32_t v) { return fit_detail::Vertex(mesh, v); }
+// Per vertex: bit 0 when a triangle of one of `limbs` uses it, bit 1 when a torso triangle does
+// (3: on the junction).
+std::vector<uint8_t> JunctionMask(const Mesh& mesh, const Segmentation& seg, std::initializer_list<Region> limbs) {
+  std::vector<uint8_t> mask(mesh.vertex_count(), 0);
+  for (uint32_t t = 0; t < mesh.triangle_count(); ++t) {
+    const uint8_t r = seg.triangle_regions[t];
+    uint8_t bit = r == uint8_t(Region::kTorso) ? 2 : 0;
+    for (Region l : limbs)
+      if (r == uint8_t(l)) bit = 1;
+    if (bit)
+      for (int k = 0; k < 3; ++k) mask[mesh.indices[3 * t + k]] |= bit;
+  }
+  return mask;
+}
 
 // Mean of the vertices shared by region `reg`'s triangles and the torso's (its root), or the region's
 // vertex nearest the torso's centroid when the two do not touch.
 Vector3d LimbRoot(const Mesh& mesh, const Segmentation& seg, Region reg, const Vector3d& torso_centroid) {
   const uint32_t V = mesh.vertex_count();
-  std::vector<uint8_t> mask(V, 0);  // bit 0: in the limb, bit 1: in the torso
-  for (uint32_t t = 0; t < mesh.triangle_count(); ++t) {
-    const uint8_t r = seg.triangle_regions[t];
-    const uint8_t bit = r == uint8_t(reg) ? 1 : r == uint8_t(Region::kTorso) ? 2 : 0;
-    if (bit)
-      for (int k = 0; k < 3; ++k) mask[mesh.indices[3 * t + k]] |= bit;
-  }
+  const std::vector<uint8_t> mask = JunctionMask(mesh, seg, {reg});
   Vector3d sum = Vector3d::Zero();
   size_t n = 0;
   double best = std::numeric_limits<double>::infinity();
   Vector3d nearest = torso_centroid;
   for (uint32_t v = 0; v < V; ++v) {
-    if (mask[v] == 3) sum += VertexOf(mesh, v), ++n;
+    if (mask[v] == 3) sum += fit_detail::Vertex(mesh, v), ++n;
     if (mask[v] & 1) {
-      const double d = (VertexOf(mesh, v) - torso_centroid).squaredNorm();
-      if (d < best) best = d, nearest = VertexOf(mesh, v);
+      const double d = (fit_detail::Vertex(mesh, v) - torso_centroid).squaredNorm();
+      if (d < best) best = d, nearest = fit_detail::Vertex(mesh, v);
     }
   }
   return n ? Vector3d(sum / double(n)) : nearest;
@@ -127,19 +126,11 @@ Vector3d LimbRoot(const Mesh& mesh, const Segmentation& seg, Region reg, const V
 std::pair<double, double> JunctionBand(const Mesh& mesh, const Segmentation& seg, const Vector3d& up,
                                        std::initializer_list<Region> limbs) {
   const uint32_t V = mesh.vertex_count();
-  std::vector<uint8_t> mask(V, 0);
-  for (uint32_t t = 0; t < mesh.triangle_count(); ++t) {
-    const uint8_t r = seg.triangle_regions[t];
-    uint8_t bit = r == uint8_t(Region::kTorso) ? 2 : 0;
-    for (Region l : limbs)
-      if (r == uint8_t(l)) bit = 1;
-    if (bit)
-      for (int k = 0; k < 3; ++k) mask[mesh.indices[3 * t + k]] |= bit;
-  }
+  const std::vector<uint8_t> mask = JunctionMask(mesh, seg, limbs);
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   for (uint32_t v = 0; v < V; ++v)
     if (mask[v] == 3) {
-      const double y = VertexOf(mesh, v).dot(up);
+      const double y = fit_detail::Vertex(mesh, v).dot(up);
       lo = std::min(lo, y), hi = std::max(hi, y);
     }
   return {lo, hi};
@@ -183,19 +174,9 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
   F.count.assign(total, 0);
 
   // 2. Distance to the surface and region (of the nearest triangle) of every interior voxel.
-  TriangleList tris;
-  std::vector<uint32_t> tri_ids;
-  tris.reserve(T);
-  for (uint32_t t = 0; t < T; ++t) {
-    std::array<Point3, 3> p;
-    for (int k = 0; k < 3; ++k) {
-      const float* x = &mesh.positions[3 * size_t(mesh.indices[3 * t + k])];
-      p[k] = Point3(x[0], x[1], x[2]);
-    }
-    if (CGAL::collinear(p[0], p[1], p[2])) continue;
-    tris.emplace_back(p[0], p[1], p[2]);
-    tri_ids.push_back(t);
-  }
+  const surface_detail::SurfaceTriangles surface = surface_detail::NonDegenerateTriangles(mesh.positions, mesh.indices);
+  const surface_detail::TriangleList& tris = surface.triangles;
+  const std::vector<uint32_t>& tri_ids = surface.ids;
   if (tris.empty()) return MakeError(Error::Code::kFit, "fit cover: every triangle is degenerate");
   Tree tree(tris.begin(), tris.end());
   {
@@ -343,11 +324,10 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
   // 7. Spheres, their order and labels.
   const Vector3d up = fit_detail::UpVector(mesh.up_axis);
   std::array<Vector3d, kRegionCount> centroid;
-  std::array<double, kRegionCount> nvox{};
   for (auto& c : centroid) c.setZero();
   for (uint32_t v : iv.inside)
-    if (F.label[v] != kOutside) centroid[F.label[v]] += iv.Centre(v), nvox[F.label[v]] += 1;
-  for (int r = 0; r < kRegionCount; ++r) centroid[r] /= std::max(1.0, nvox[r]);
+    if (F.label[v] != kOutside) centroid[F.label[v]] += iv.Centre(v);
+  for (int r = 0; r < kRegionCount; ++r) centroid[r] /= std::max(1.0, F.volume[r]);  // volume: voxel counts
   Vector3d left = Vector3d::Zero();
   for (auto [l, r] : {std::pair{0, 1}, std::pair{2, 3}}) {
     left = centroid[l] - centroid[r];
@@ -359,7 +339,6 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
   const int torso = int(Region::kTorso);
   const auto [arm_lo, arm_hi] = JunctionBand(mesh, seg, up, {Region::kLeftArm, Region::kRightArm});
   const auto [leg_lo, leg_hi] = JunctionBand(mesh, seg, up, {Region::kLeftLeg, Region::kRightLeg});
-  (void)leg_lo;
 
   const double dilation = params.dilation_rel * height;
   std::vector<FittedSphere> out;

@@ -9,6 +9,9 @@
 namespace spherechain::runtime {
 namespace {
 
+// The margin a job tests with: its own when >= 0, else the asset's.
+float JobMargin(const DetectJob& job) { return job.margin < 0.0f ? job.context->contact_margin() : job.margin; }
+
 struct DetectTaskData {
   const Context* ctx;
 };
@@ -36,7 +39,7 @@ void Context::Internal::DetectSpan(const Context& c, uint32_t span) {
 Status Context::Internal::DetectM1(const DetectJob& job) {
   const Context& c = *job.context;
   const uint32_t G = static_cast<uint32_t>(c.m1_order_.size());
-  const float m = job.margin < 0.0f ? c.contact_margin_ : job.margin;
+  const float m = JobMargin(job);
   for (uint32_t g = 0; g < G; ++g) {  // (padding lanes gather sphere 0; the skip stream masks them)
     const uint32_t s = c.m1_order_[g];
     c.gx_[g] = c.x_[s], c.gy_[g] = c.y_[s], c.gz_[g] = c.z_[s], c.gr_[g] = c.r_[s] + m;
@@ -85,7 +88,7 @@ Status Context::Internal::DetectM1(const DetectJob& job) {
 Status Context::Internal::DetectM2(const DetectJob& job) {
   const Context& c = *job.context;
   const uint32_t S = c.sphere_count_;
-  const float m = job.margin < 0.0f ? c.contact_margin_ : job.margin;
+  const float m = JobMargin(job);
   const float* r = c.r_.data();
   if (m != 0.0f) {  // grown radii (padding stays 0: its spheres are far away)
     for (uint32_t s = 0; s < S; ++s) c.mr_[s] = c.r_[s] + m;
