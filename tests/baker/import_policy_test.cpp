@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include <unistd.h>
+
 #include "spherechain/baker/import.h"
 #include "test_data.h"
 
@@ -21,7 +23,8 @@ namespace fs = std::filesystem;
 struct PolicyDir {
   fs::path dir;
   PolicyDir() {
-    dir = fs::temp_directory_path() / "spherechain_import_policy_test";
+    // One folder per process: ctest runs each test case of this file as its own process, in parallel.
+    dir = fs::temp_directory_path() / ("spherechain_import_policy_test." + std::to_string(::getpid()));
     fs::remove_all(dir);
     fs::create_directories(dir / "sub");
     fs::create_directories(dir / "secret");
