@@ -1,5 +1,6 @@
 // spherechain evaluate ASSET --mesh INPUT [--clip NAME | --morph POSES...] [--frames N] [--margin REL]
 //                      [--refit paper|frame] [--json OUT] [--png OUT] [--min-recall R] [--no-coverage]
+//                      [--sweep-margin[=M1,M2,...]]
 //
 // Measures the proxy against the truth. Every frame of the animation `play` would run: the deformed
 // mesh's exact self-intersections (ground truth: every intersecting pair of triangles that share no
@@ -10,12 +11,16 @@
 // apart. Summary: the proxy's recall (region pairs and sphere pairs), its false alarms (a region pair
 // reported where no triangles of the two regions come within --margin), the narrow phase's recall and
 // precision (triangle pairs), and bind-pose coverage / protrusion of φ1, φ1', φ2.
+// --sweep-margin re-runs M1 and M2 on the same refit spheres with other contact margins (DetectJob::margin)
+// and prints recall and false alarms against the margin: the trade a user picks the bake's
+// contact_margin_rel from.
 #include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <map>
 #include <set>
@@ -48,6 +53,43 @@ struct EvaluateArgs {
   double margin = 0.01;
   double min_recall = std::numeric_limits<double>::quiet_NaN();
   bool coverage = true;
+  std::string sweep;  // "" (no sweep), "auto" (the default margins) or a comma-separated list of fractions of height
+};
+
+/// The contact margins --sweep-margin tries by default, as fractions of the body height.
+constexpr double kDefaultSweep[] = {0.0, 0.001, 0.002, 0.003, 0.004, 0.005, 0.006, 0.008, 0.01, 0.015};
+
+/// Parses --sweep-margin's value: "auto" → kDefaultSweep; else comma-separated fractions in [0, 0.1].
+bool ParseSweep(const std::string& text, std::vector<double>* out, std::string* error) {
+  out->clear();
+  if (text.empty()) return true;
+  if (text == "auto") {
+    out->assign(std::begin(kDefaultSweep), std::end(kDefaultSweep));
+    return true;
+  }
+  size_t start = 0;
+  while (start <= text.size()) {
+    const size_t comma = std::min(text.find(',', start), text.size());
+    const std::string item = text.substr(start, comma - start);
+    char* end = nullptr;
+    const double v = std::strtod(item.c_str(), &end);
+    if (item.empty() || end != item.c_str() + item.size() || !(v >= 0.0 && v <= 0.1)) {
+      *error = "--sweep-margin: '" + item + "' is not a margin in [0, 0.1] (a fraction of the body height)";
+      return false;
+    }
+    out->push_back(v);
+    start = comma + 1;
+  }
+  std::sort(out->begin(), out->end());
+  out->erase(std::unique(out->begin(), out->end()), out->end());
+  return true;
+}
+
+/// One contact margin of --sweep-margin, summed over the frames.
+struct SweepPoint {
+  double margin_rel = 0;
+  size_t found_m1 = 0, found_m2 = 0, sfound_m1 = 0, sfound_m2 = 0, false_m1 = 0, false_m2 = 0, false_frames = 0;
+  size_t pairs_m2 = 0;  // sphere pairs M2 reported (the narrow phase's work)
 };
 
 std::string RegionName(const RegionPair& p) { return "R" + std::to_string(p.first) + "-R" + std::to_string(p.second); }
@@ -91,7 +133,18 @@ struct FrameEval {
   std::set<RegionPair> false_m1, false_m2;
   uint32_t missed_contacts = 0;  // contacts in region pairs M2 did not report
   uint32_t missed_sphere_contacts = 0;  // contacts whose sphere pair M2 did not report
+  // Per sphere pair, for an artist (and a tuner) to see which spheres miss or cry wolf: the refit spheres'
+  // gap ‖cA − cB‖ − rA − rB − 2·margin [Units: source] (> 0: apart even with the margin).
+  std::map<SpherePairKey, float> missed_sphere_gaps;  // exact contact, M2 did not report the pair
+  std::map<SpherePairKey, float> false_sphere_gaps;   // M2 reported, inside a false-alarm region pair
 };
+
+/// [{"a", "b", "gap_rel"}]: sphere pairs with their refit gap as a fraction of the body height.
+nlohmann::json SphereGapList(const std::map<SpherePairKey, float>& gaps, double height) {
+  nlohmann::json list = nlohmann::json::array();
+  for (const auto& [k, g] : gaps) list.push_back({{"a", k.first}, {"b", k.second}, {"gap_rel", g / height}});
+  return list;
+}
 
 /// The exact-predicate coverage measure of one sphere set (bind pose).
 nlohmann::json CoverageJson(const baker::CoverageStats& c) {
@@ -105,6 +158,13 @@ int RunEvaluate(const EvaluateArgs& a) {
     return Fail("--min-recall " + std::to_string(a.min_recall) + " is outside [0, 1]");
   if (!(a.margin >= 0.0 && a.margin < 1.0)) return Fail("--margin must be in [0, 1) (a fraction of the body height)");
   if (!a.png.empty() && a.png == a.json) return Fail("--png and --json name the same file");
+  std::vector<SweepPoint> sweep;
+  {
+    std::vector<double> margins;
+    std::string error;
+    if (!ParseSweep(a.sweep, &margins, &error)) return Fail(error);
+    for (double m : margins) sweep.push_back({m});
+  }
 
   LoadedAsset asset;
   baker::Mesh mesh;
@@ -225,20 +285,77 @@ int RunEvaluate(const EvaluateArgs& a) {
       }
     }
     // False alarms: region pairs the proxy reports with no contact, where nothing comes within the margin.
-    std::set<RegionPair> reported = row.m1_regions;
-    reported.insert(row.m2_regions.begin(), row.m2_regions.end());
-    for (const RegionPair& rp : reported) {
-      if (row.exact_regions.count(rp)) continue;
+    std::map<RegionPair, bool> near_cache;  // per frame: does anything of the pair come within the margin
+    auto is_false = [&](const RegionPair& rp) -> baker::Result<bool> {
+      if (row.exact_regions.count(rp)) return false;
+      if (auto it = near_cache.find(rp); it != near_cache.end()) return !it->second;
       auto near = baker::AnyTrianglesWithin(
           positions.data(), V, mesh.indices, weld, region_triangles[rp.first], region_triangles[rp.second], margin,
           [&](uint32_t s, uint32_t t) {
             const uint32_t sa = narrow.triangle_sphere(s), sb = narrow.triangle_sphere(t);
             return sa != sb && !narrow.IsExcluded(sa, sb);
           });
-      if (!near.ok()) return Fail(near.error());
-      if (near.value()) continue;
+      if (!near.ok()) return near.error();
+      near_cache[rp] = near.value();
+      return !near.value();
+    };
+    std::set<RegionPair> reported = row.m1_regions;
+    reported.insert(row.m2_regions.begin(), row.m2_regions.end());
+    for (const RegionPair& rp : reported) {
+      auto f = is_false(rp);
+      if (!f.ok()) return Fail(f.error());
+      if (!f.value()) continue;
       if (row.m1_regions.count(rp)) row.false_m1.insert(rp);
       if (row.m2_regions.count(rp)) row.false_m2.insert(rp);
+    }
+    // The same refit spheres under other contact margins.
+    for (SweepPoint& pt : sweep) {
+      std::set<RegionPair> regions[2];
+      std::set<SpherePairKey> pairs[2];
+      for (int m = 0; m < 2; ++m) {
+        auto& out = m == 0 ? out_m1 : out_m2;
+        uint32_t n = 0;
+        runtime::DetectJob det;
+        det.context = &ctx;
+        det.method = m == 0 ? runtime::DetectMethod::kM1 : runtime::DetectMethod::kM2;
+        det.margin = static_cast<float>(pt.margin_rel * height);
+        det.output = out.data();
+        det.capacity = static_cast<uint32_t>(out.size());
+        det.count = &n;
+        if (runtime::Status st = det.Run(); runtime::Failed(st))
+          return Fail(std::string("detect (sweep): ") + runtime::ToString(st));
+        for (uint32_t i = 0; i < n; ++i) {
+          regions[m].insert(region_pair(out[i].a, out[i].b));
+          pairs[m].insert({out[i].a, out[i].b});
+        }
+      }
+      pt.found_m1 += CountIn(row.exact_regions, regions[0]);
+      pt.found_m2 += CountIn(row.exact_regions, regions[1]);
+      pt.sfound_m1 += CountIn(row.exact_spheres, pairs[0]);
+      pt.sfound_m2 += CountIn(row.exact_spheres, pairs[1]);
+      pt.pairs_m2 += pairs[1].size();
+      bool any_false = false;
+      for (int m = 0; m < 2; ++m)
+        for (const RegionPair& rp : regions[m]) {
+          auto f = is_false(rp);
+          if (!f.ok()) return Fail(f.error());
+          (m == 0 ? pt.false_m1 : pt.false_m2) += f.value();
+          any_false |= f.value();
+        }
+      pt.false_frames += any_false;
+    }
+    {
+      const runtime::SphereArrays sp = ctx.spheres();
+      const float m = ctx.contact_margin();
+      auto gap = [&](SpherePairKey k) {
+        const float dx = sp.x[k.first] - sp.x[k.second], dy = sp.y[k.first] - sp.y[k.second],
+                    dz = sp.z[k.first] - sp.z[k.second];
+        return std::sqrt(dx * dx + dy * dy + dz * dz) - sp.r[k.first] - sp.r[k.second] - 2 * m;
+      };
+      for (const SpherePairKey& k : row.exact_spheres)
+        if (!row.m2_spheres.count(k)) row.missed_sphere_gaps[k] = gap(k);
+      for (const SpherePairKey& k : row.m2_spheres)
+        if (row.false_m2.count(region_pair(k.first, k.second))) row.false_sphere_gaps[k] = gap(k);
     }
     const double elapsed = std::chrono::duration<double>(Clock::now() - t_start).count();
     if (tty) {
@@ -344,6 +461,19 @@ int RunEvaluate(const EvaluateArgs& a) {
                     100 * coverage_detail[name]["outside_p95_rel"].get<double>(),
                     100 * coverage_detail[name]["outside_max_rel"].get<double>());
 
+  if (!sweep.empty()) {
+    std::printf("\ncontact margin sweep (same refit spheres; the asset's margin is %.4g = %.2f %% of height):\n",
+                double(ctx.contact_margin()), 100.0 * ctx.contact_margin() / height);
+    std::printf("%10s %8s  %18s  %18s  %18s  %11s  %14s  %14s\n", "margin %h", "margin", "region recall M1", "region recall M2",
+                "sphere recall M2", "false M1/M2", "false frames", "pairs/frame M2");
+    for (const SweepPoint& pt : sweep)
+      std::printf("%10.2f %8.4g  %9.1f %% (%3zu)  %9.1f %% (%3zu)  %15.1f %%  %5zu/%-5zu  %6zu of %-4u  %14.1f\n",
+                  100 * pt.margin_rel, pt.margin_rel * height, 100 * Ratio(double(pt.found_m1), double(exact_regions)),
+                  pt.found_m1, 100 * Ratio(double(pt.found_m2), double(exact_regions)), pt.found_m2,
+                  100 * Ratio(double(pt.sfound_m2), double(exact_spheres)), pt.false_m1, pt.false_m2, pt.false_frames,
+                  anim.frames, anim.frames ? double(pt.pairs_m2) / anim.frames : 0.0);
+  }
+
   // ---- outputs (nothing is written before every frame succeeded) ----------------------------------------
   if (!a.png.empty()) {
     const uint32_t f = worst;
@@ -404,12 +534,29 @@ int RunEvaluate(const EvaluateArgs& a) {
                     {"false_alarms_m2", RegionList(r.false_m2)},
                     {"exact_sphere_pairs", r.exact_spheres.size()},
                     {"missed_contacts_m2", r.missed_contacts},
+                    {"missed_sphere_pairs_m2", SphereGapList(r.missed_sphere_gaps, height)},
+                    {"false_alarm_sphere_pairs_m2", SphereGapList(r.false_sphere_gaps, height)},
                     {"narrow", {{"contacts", r.narrow.contacts}, {"true_contacts", r.narrow_true},
                                 {"candidate_pairs", r.narrow.candidate_pairs}, {"triangle_tests", r.narrow.triangle_tests},
                                 {"us", r.narrow_us}}},
                     {"exact_ms", r.exact_ms}});
     }
     j["frames"] = fr;
+    if (!sweep.empty()) {
+      nlohmann::json sw = nlohmann::json::array();
+      for (const SweepPoint& pt : sweep)
+        sw.push_back({{"margin_rel", pt.margin_rel},
+                      {"margin", pt.margin_rel * height},
+                      {"recall_m1", Ratio(double(pt.found_m1), double(exact_regions))},
+                      {"recall_m2", Ratio(double(pt.found_m2), double(exact_regions))},
+                      {"sphere_recall_m1", Ratio(double(pt.sfound_m1), double(exact_spheres))},
+                      {"sphere_recall_m2", Ratio(double(pt.sfound_m2), double(exact_spheres))},
+                      {"false_alarms_m1", pt.false_m1},
+                      {"false_alarms_m2", pt.false_m2},
+                      {"false_alarm_frames", pt.false_frames},
+                      {"sphere_pairs_per_frame_m2", anim.frames ? double(pt.pairs_m2) / anim.frames : 0.0}});
+      j["margin_sweep"] = sw;
+    }
     j["summary"] = {
         {"frames", anim.frames},
         {"contacts", gt},
@@ -469,6 +616,11 @@ void RegisterEvaluate(CLI::App& app, Commands* commands) {
                   "Exit 1 when the proxy's region-pair recall (the lower of M1 and M2) is below this, in [0, 1] "
                   "(for a game's CI)");
   sub->add_flag("!--no-coverage", args->coverage, "Skip the bind-pose coverage / protrusion measurement");
+  sub->add_option("--sweep-margin", args->sweep,
+                  "Also run M1 and M2 with other contact margins (fractions of the body height, comma-separated; "
+                  "alone: 0,0.001,...,0.015) and print recall and false alarms against the margin; JSON: margin_sweep")
+      ->expected(0, 1)
+      ->default_str("auto");
   commands->handlers.emplace_back(sub, [args] { return RunEvaluate(*args); });
 }
 

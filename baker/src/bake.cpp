@@ -366,6 +366,7 @@ json MakeBakeReport(const BakeResult& r, const BakeConfig& config, const Context
     j["exclusions"] = {{"rule", "bind geometry: limb sequence neighbours, bind overlap, within near_rel + 2 contact_margin_rel of the "
                                 "height, limb-torso pairs within 1.25 (rA + rB) + that"},
                        {"limb_neighbour", r.exclusion_reasons.limb_neighbour},
+                       {"limb_side_by_side", r.exclusion_reasons.limb_side_by_side},
                        {"bind_overlap", r.exclusion_reasons.bind_overlap},
                        {"bind_near", r.exclusion_reasons.bind_near},
                        {"junction", r.exclusion_reasons.junction}};

@@ -118,6 +118,8 @@ std::vector<SpherePair> BindExcludedPairs(const std::vector<FittedSphere>& spher
       const SpherePair p{static_cast<uint16_t>(a), static_cast<uint16_t>(b)};
       if (same_region && IsTubular(A.region) && std::abs(A.sequence - B.sequence) == 1) {
         ++why.limb_neighbour;
+      } else if (same_region && IsTubular(A.region) && std::abs(A.root_distance - B.root_distance) < rr) {
+        ++why.limb_side_by_side;  // one cross-section of the tube: no fold brings their skins together
       } else if (d < rr) {
         ++why.bind_overlap;
         const bool limb_torso = (A.region == Region::kTorso) != (B.region == Region::kTorso);

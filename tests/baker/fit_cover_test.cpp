@@ -153,6 +153,7 @@ TEST_CASE("exclusions from bind geometry on a bent limb: neighbours and near pai
     s.sequence = i;
     s.radius = 0.5;
     s.center = i <= 4 ? Vector3d(1.2 + 1.1 * i, 0, 0) : Vector3d(1.2 + 1.1 * 4, -1.1 * (i - 4), 0);
+    s.root_distance = 1.2 + 1.1 * i;  // along the limb from its root at the origin
     sp.push_back(s);
   }
   sb::FittedSphere torso;
@@ -175,6 +176,23 @@ TEST_CASE("exclusions from bind geometry on a bent limb: neighbours and near pai
   const auto ex2 = sb::BindExcludedPairs(sp, 0.05, &why2);
   CHECK(std::find(ex2.begin(), ex2.end(), sb::SpherePair{5, 7}) != ex2.end());
   CHECK(why2.bind_near >= 1);
+  CHECK(why2.limb_side_by_side == 0);
+  // Side by side: a sphere beside sphere 2 in the same stretch of the limb (root distance 0.3 further,
+  // 1.33 apart: neither overlapping nor near) is excluded as side by side; moved 2.5 further along the
+  // limb (beyond rA + rB = 1) it is tested.
+  sb::FittedSphere beside = sp[2];
+  beside.sequence = 20;
+  beside.center = sp[2].center + Vector3d(0.3, 0, 1.3);
+  beside.root_distance = sp[2].root_distance + 0.3;
+  sp.push_back(beside);
+  const uint16_t k = static_cast<uint16_t>(sp.size() - 1);
+  sb::ExclusionReasons why3;
+  const auto ex3 = sb::BindExcludedPairs(sp, 0.05, &why3);
+  CHECK(std::find(ex3.begin(), ex3.end(), sb::SpherePair{2, k}) != ex3.end());
+  CHECK(why3.limb_side_by_side >= 1);
+  sp[k].root_distance = sp[2].root_distance + 2.5;
+  const auto ex4 = sb::BindExcludedPairs(sp, 0.05);
+  CHECK(std::find(ex4.begin(), ex4.end(), sb::SpherePair{2, k}) == ex4.end());
 }
 
 TEST_CASE("heavy: bake MakeHuman with the cover fit — coverage, protrusion, schema v2 asset and its contact margin") {

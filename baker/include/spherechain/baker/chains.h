@@ -48,6 +48,9 @@ std::vector<SpherePair> ExcludedPairs(const std::vector<FittedSphere>& spheres,
 /// Why BindExcludedPairs excluded its pairs (each pair counted once, under the first reason that holds).
 struct ExclusionReasons {
   size_t limb_neighbour = 0;  ///< consecutive spheres of a limb's sequence
+  size_t limb_side_by_side = 0;  ///< same limb, |root_distance_A − root_distance_B| < rA + rB: two spheres of
+                                 ///< one stretch of the tube (their skins face away from each other; a
+                                 ///< flexing joint moves them together without any fold of skin on skin)
   size_t bind_overlap = 0;    ///< ‖cA − cB‖ < rA + rB at bind pose
   size_t bind_near = 0;       ///< ‖cA − cB‖ < rA + rB + near at bind pose (they nearly touch)
   size_t junction = 0;        ///< a limb sphere and a torso sphere with ‖cA − cB‖ < 1.25 (rA + rB) + near:
@@ -55,7 +58,8 @@ struct ExclusionReasons {
 };
 
 /// Adjacent pairs from bind-pose geometry and the limb sequences (the "cover" fit's rule): consecutive
-/// spheres of a tubular region's sequence, and every pair whose spheres overlap or come within `near`
+/// spheres of a tubular region's sequence, limb spheres side by side along the limb
+/// (FittedSphere::root_distance within rA + rB), and every pair whose spheres overlap or come within `near`
 /// (source units, ≥ 0) of each other at the bind pose — at those places the skin folds onto itself
 /// when the joint bends, without anything meeting. No fixed ±k window: spheres of one region that are
 /// apart at bind pose are tested (a bending spine, an elbow folding the forearm onto the upper arm).

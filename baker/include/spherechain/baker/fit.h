@@ -55,6 +55,9 @@ struct FittedSphere {
   int sequence = 0;        ///< position along its region's sequence: limbs from the torso outwards,
                            ///< torso bottom-up by level (paper Figure 12)
   int level = -1;          ///< torso: ordinal of the chosen disk level, 0 = bottom; limbs: -1
+  /// Cover fit, limbs: distance from the limb's root (where it joins the torso) to the centre, bind pose,
+  /// source units — the key of `sequence`; 0 otherwise.
+  double root_distance = 0.0;
   int column = -1;         ///< torso: 0 = character's left, 1 = right; limbs: -1
   /// Torso only: the disk's rays assigned to this sphere: ray index k (0..N_r-1), the disk centre and
   /// the surface hit distance along the ray (the paper's per-ray comparison, §6).
