@@ -66,6 +66,15 @@ nlohmann::json Describe(const runtime::AssetView& v) {
   if (const auto* acc = a.accuracy())
     j["accuracy"] = {{"phi1", stats(acc->phi1())}, {"phi1_adjusted", stats(acc->phi1_adjusted())},
                      {"phi2", stats(acc->phi2())}};
+  // Schema v2: the fit, the contact margin and the bake's bind-pose coverage measure.
+  j["fit"] = a.fit_method() ? a.fit_method()->str() : "paper";
+  j["contact_margin"] = a.contact_margin();
+  if (const auto* c = a.coverage())
+    j["coverage"] = {{"coverage", c->coverage()},
+                     {"protrusion", c->protrusion()},
+                     {"outside_p95_rel", c->outside_p95_rel()},
+                     {"outside_max_rel", c->outside_max_rel()},
+                     {"voxel_rel", c->voxel_rel()}};
   return j;
 }
 
@@ -99,6 +108,18 @@ int RunInspect(const InspectArgs& args) {
       if (!j["accuracy"][m].is_null())
         std::printf("accuracy %-14s mean|F| %.4f  RMS %.4f\n", m, j["accuracy"][m]["mean_abs_F"].get<double>(),
                     j["accuracy"][m]["rms_F"].get<double>());
+  std::printf("fit: %s, contact margin %.4g (source units)\n", j["fit"].get<std::string>().c_str(),
+              j["contact_margin"].get<double>());
+  if (j.contains("coverage")) {
+    const auto& c = j["coverage"];
+    std::printf("bind pose: coverage %.1f %% of the body volume, protrusion %.1f %% of the spheres' volume outside; "
+                "outside distance p95 %.2f %%, max %.2f %% of height (voxels %.2f %% of height)\n",
+                100 * c["coverage"].get<double>(), 100 * c["protrusion"].get<double>(),
+                100 * c["outside_p95_rel"].get<double>(), 100 * c["outside_max_rel"].get<double>(),
+                100 * c["voxel_rel"].get<double>());
+  } else {
+    std::printf("bind pose coverage: not recorded (schema v1 asset or paper fit; `spherechain evaluate` measures it)\n");
+  }
   return 0;
 }
 

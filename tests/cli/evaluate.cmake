@@ -12,7 +12,7 @@ file(REMOVE_RECURSE ${WORK})
 file(MAKE_DIRECTORY ${WORK})
 
 execute_process(COMMAND ${CLI} -q evaluate ${ASSET} --mesh ${MESH} --json ${WORK}/eval.json --png ${WORK}/eval.png
-                        --min-recall 0
+                        --min-recall 0 --sweep-margin=0,0.004,0.02
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "evaluate failed (${rc}):\n${out}${err}")
@@ -48,6 +48,35 @@ if(NOT ff STREQUAL "ARRAY" OR NOT fr EQUAL 40 OR NOT e STREQUAL "ARRAY" OR NOT e
   message(FATAL_ERROR "JSON shape: false_alarm_frames ${ff}, ${fr} frames, region pair lists ${e} ${e2} ${e3}")
 endif()
 
+# --sweep-margin: one row per margin; the row at the asset's own margin (0.4 % of the height, the bake's
+# default) is the main result; a larger margin reports a superset of pairs, so recall and false alarms
+# never drop and the pairs per frame grow (they would stay flat if the margin were ignored).
+string(JSON n_sweep LENGTH "${json}" margin_sweep)
+if(NOT n_sweep EQUAL 3)
+  message(FATAL_ERROR "margin_sweep: ${n_sweep} rows, expected 3")
+endif()
+string(JSON main_recall GET "${json}" summary proxy recall_m2)
+string(JSON main_false GET "${json}" summary proxy false_alarms_m2)
+set(prev_recall -1)
+set(prev_pairs -1)
+set(prev_false -1)
+foreach(i 0 1 2)
+  string(JSON m GET "${json}" margin_sweep ${i} margin_rel)
+  string(JSON r GET "${json}" margin_sweep ${i} recall_m2)
+  string(JSON fa GET "${json}" margin_sweep ${i} false_alarms_m2)
+  string(JSON p GET "${json}" margin_sweep ${i} sphere_pairs_per_frame_m2)
+  message(STATUS "sweep margin ${m}: recall M2 ${r}, false alarms ${fa}, ${p} sphere pairs a frame")
+  if(r LESS prev_recall OR fa LESS prev_false OR NOT p GREATER prev_pairs)
+    message(FATAL_ERROR "margin sweep not monotonic at margin ${m}: recall ${r}, false ${fa}, pairs ${p}")
+  endif()
+  set(prev_recall ${r})
+  set(prev_pairs ${p})
+  set(prev_false ${fa})
+  if(i EQUAL 1 AND (NOT r EQUAL main_recall OR NOT fa EQUAL main_false))
+    message(FATAL_ERROR "sweep at the asset's margin: recall ${r}, false ${fa}; main result: ${main_recall}, ${main_false}")
+  endif()
+endforeach()
+
 # --min-recall 1.0: exit 1 with the reason when the proxy misses anything on these 16 frames, else 0.
 execute_process(COMMAND ${CLI} -q evaluate ${ASSET} --mesh ${MESH} --frames 16 --no-coverage --min-recall 1.0
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
@@ -57,7 +86,8 @@ endif()
 message(STATUS "--min-recall 1.0 on 16 frames: exit ${rc}")
 
 # Bad input: exit 1, a message, nothing written.
-foreach(case "--min-recall;1.5;is outside \\[0, 1\\]" "--clip;nope;no clip named 'nope'")
+foreach(case "--min-recall;1.5;is outside \\[0, 1\\]" "--clip;nope;no clip named 'nope'"
+             "--sweep-margin;0.01,x;'x' is not a margin")
   list(GET case 0 flag)
   list(GET case 1 value)
   list(GET case 2 expect)

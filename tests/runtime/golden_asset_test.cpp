@@ -22,6 +22,21 @@ std::vector<uint64_t> ReadAligned(const std::string& path, size_t* size) {
   return bytes;
 }
 
+/// Pairs M2 reports on the context's current spheres with the given margin (−1: the asset's).
+uint32_t CountM2(const AssetView& view, const Context& ctx, float margin = -1.0f) {
+  std::vector<Collision> out(DetectBound(view, DetectMethod::kM2));
+  uint32_t count = 99;
+  DetectJob job;
+  job.context = &ctx;
+  job.method = DetectMethod::kM2;
+  job.margin = margin;
+  job.output = out.data();
+  job.capacity = static_cast<uint32_t>(out.size());
+  job.count = &count;
+  REQUIRE(job.Run() == Status::kOk);
+  return count;
+}
+
 }  // namespace
 
 TEST_CASE("golden v1 asset (CesiumMan, baked by spherechain 0.1.0) loads with its counts and runs") {
@@ -38,17 +53,9 @@ TEST_CASE("golden v1 asset (CesiumMan, baked by spherechain 0.1.0) loads with it
   CHECK(view.chain_count == 6);
   Context ctx;
   REQUIRE(ctx.Init(view) == Status::kOk);
-  // At the bind pose (spheres as baked) nothing collides.
-  std::vector<Collision> out(DetectBound(view, DetectMethod::kM2));
-  uint32_t count = 99;
-  DetectJob job;
-  job.context = &ctx;
-  job.method = DetectMethod::kM2;
-  job.output = out.data();
-  job.capacity = static_cast<uint32_t>(out.size());
-  job.count = &count;
-  REQUIRE(job.Run() == Status::kOk);
-  CHECK(count == 0);
+  // v1 has no contact margin: read as 0. At the bind pose (spheres as baked) nothing collides.
+  CHECK(ctx.contact_margin() == 0.0f);
+  CHECK(CountM2(view, ctx) == 0);
 
   // The same bytes stamped with another schema version are refused with the version status.
   std::vector<uint64_t> other = bytes;
@@ -65,4 +72,32 @@ TEST_CASE("golden v1 asset (CesiumMan, baked by spherechain 0.1.0) loads with it
   v = kMinSchemaVersion - 1;
   std::memcpy(reinterpret_cast<uint8_t*>(other.data()) + offset, &v, 4);
   CHECK(LoadAsset(other.data(), size, &newer) == Status::kErrorVersionTooOld);
+}
+
+TEST_CASE("golden v2 asset (CesiumMan, cover fit, baked by spherechain 0.2.0) loads with its margin and coverage") {
+  const std::string path = spherechain::test::SourceFile("tests/data/golden/v2/cesium_man.sphc");
+  REQUIRE_MESSAGE(spherechain::test::Require(path), "the golden asset is part of the repository");
+  size_t size = 0;
+  std::vector<uint64_t> bytes = ReadAligned(path, &size);
+  AssetView view;
+  REQUIRE(LoadAsset(bytes.data(), size, &view) == Status::kOk);
+  CHECK(view.asset->schema_version() == 2);
+  CHECK(view.vertex_count == 3273);
+  CHECK(view.triangle_count == 4672);
+  CHECK(view.sphere_count == 128);
+  CHECK(view.chain_count == 6);
+  // The v2 fields: the fit, the contact margin (0.4 % of CesiumMan's 1.507 m), the bind coverage.
+  REQUIRE(view.asset->fit_method() != nullptr);
+  CHECK(view.asset->fit_method()->str() == "cover");
+  CHECK(view.asset->contact_margin() == doctest::Approx(0.004 * 1.507).epsilon(0.01));
+  REQUIRE(view.asset->coverage() != nullptr);
+  CHECK(view.asset->coverage()->coverage() > 0.85f);
+  CHECK(view.asset->coverage()->protrusion() < 0.05f);
+  Context ctx;
+  REQUIRE(ctx.Init(view) == Status::kOk);
+  CHECK(ctx.contact_margin() == view.asset->contact_margin());
+  // Bind pose, grown by the asset's margin: quiet (pairs within two margins are excluded at bake).
+  CHECK(CountM2(view, ctx) == 0);
+  // A margin of 5 % of the height makes non-excluded bind neighbours touch: the override is honoured.
+  CHECK(CountM2(view, ctx, 0.05f * 1.507f) > 0);
 }
