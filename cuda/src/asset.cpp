@@ -124,6 +124,7 @@ Status DeviceAsset::Upload(const runtime::AssetView& view) {
   desc_.chain_count = C;
   desc_.max_chain_length = max_chain;
   desc_.excluded_count = a.excluded_pairs() ? a.excluded_pairs()->size() : 0;
+  desc_.contact_margin = a.contact_margin();  // as Context::Init (field absent in v1 assets: 0)
   return Status::kOk;
 }
 

@@ -5,12 +5,15 @@
 //  - GroupKernel<kWarp=true>:  a warp per instance, 4 per block (kWarpPerInstance);
 //  - ChainKernel: a block per (instance, chain), a thread per chain sphere (kBlockPerChain, M1).
 // Each refits the spheres it needs into shared memory (DevRefitSphere, the CPU formulas), syncs, runs
-// the overlap tests, and appends hits to one device array with warp-aggregated atomicAdd
+// the overlap tests on the radii grown by the instance's contact margin (FrameParams::margin, else its
+// asset's: DetectJob's JobMargin; the stored spheres keep their own radii), and appends hits (with the
+// spheres' own depth) to one device array with warp-aggregated atomicAdd
 // (cooperative_groups::coalesced_threads), counting per instance. When the spheres do not fit in
 // 48 KiB of shared memory the kernels keep them in the batch's global sphere buffer instead.
 #include <cooperative_groups.h>
 
 #include <algorithm>
+#include <cmath>
 #include <new>
 #include <utility>
 
@@ -42,12 +45,19 @@ struct KernelParams {
   uint32_t shared_spheres;  // spheres per group slice of shared memory
   uint32_t chains_per_instance;
   uint32_t flags;
+  float margin;  // FrameParams::margin: >= 0 for every instance, < 0 each instance's asset's
 };
 
-// Appends one pair: one atomicAdd per coalesced group of hitting threads.
+// The contact margin instance spheres of asset `A` are tested with (as DetectJob's JobMargin).
+__device__ __forceinline__ float InstanceMargin(const KernelParams& p, const DeviceAssetDesc& A) {
+  return p.margin < 0.0f ? A.contact_margin : p.margin;
+}
+
+// Appends one pair: one atomicAdd per coalesced group of hitting threads. `grow`: see DevDepth (0 for
+// M1, the margin for M2).
 __device__ __forceinline__ void Emit(const KernelParams& p, uint32_t inst, uint32_t a, uint32_t b, const float4& A,
-                                     const float4& B, uint32_t chains) {
-  const float depth = detail::DevDepth(A, B);
+                                     const float4& B, uint32_t chains, float grow) {
+  const float depth = detail::DevDepth(A, B, grow);
   cg::coalesced_group g = cg::coalesced_threads();
   uint32_t base = 0;
   if (g.thread_rank() == 0) base = atomicAdd(p.counters, g.size());
@@ -78,6 +88,7 @@ __global__ void GroupKernel(KernelParams p) {
   const DeviceAssetDesc& A = p.assets[I.asset];
   const uint32_t S = A.sphere_count;
   const bool frame_mode = p.flags & kFlagFrameMode, write = p.flags & kFlagWriteSpheres, m1 = p.flags & kFlagM1;
+  const float m = InstanceMargin(p, A), grow = m1 ? 0.0f : m;  // depth rounding as DetectM1 / DetectM2
   float4* sph = kShared ? smem + size_t{group} * p.shared_spheres : p.spheres + I.sphere_offset;
 
   for (uint32_t s = lane; s < S; s += G) {
@@ -99,9 +110,9 @@ __global__ void GroupKernel(KernelParams p) {
         const uint32_t common = ma & __ldg(mask + b);
         if (m1 && !common) continue;
         const float4 SB = sph[b];
-        if (detail::DevOverlap(SA, SB) && !detail::DevIsExcluded(A, a, b)) {
+        if (detail::DevOverlap(SA, SB, m) && !detail::DevIsExcluded(A, a, b)) {
           ++hits;
-          Emit(p, inst, a, b, SA, SB, common);
+          Emit(p, inst, a, b, SA, SB, common, grow);
         }
       }
     }
@@ -115,9 +126,9 @@ __global__ void GroupKernel(KernelParams p) {
         const uint32_t common = ma & __ldg(mask + b);
         if (m1 && !common) continue;
         const float4 SB = sph[b];
-        if (detail::DevOverlap(SA, SB) && !detail::DevIsExcluded(A, a, b)) {
+        if (detail::DevOverlap(SA, SB, m) && !detail::DevIsExcluded(A, a, b)) {
           ++hits;
-          Emit(p, inst, a, b, SA, SB, common);
+          Emit(p, inst, a, b, SA, SB, common, grow);
         }
       }
     }
@@ -135,6 +146,7 @@ __global__ void ChainKernel(KernelParams p) {
   const DeviceAssetDesc& A = p.assets[I.asset];
   if (chain >= A.chain_count && chain != 0) return;  // whole block
   const bool frame_mode = p.flags & kFlagFrameMode, write = p.flags & kFlagWriteSpheres;
+  const float m = InstanceMargin(p, A);
   const uint32_t* mask = A.chain_mask;
   uint32_t off = 0, n = 0;
   if (chain < A.chain_count) {
@@ -170,12 +182,12 @@ __global__ void ChainKernel(KernelParams p) {
     for (uint32_t j = i + 1; j < n; ++j) {
       const uint32_t b = ids[j];
       const float4 SB = kShared ? smem[j] : global[b];
-      if (!detail::DevOverlap(SA, SB)) continue;
+      if (!detail::DevOverlap(SA, SB, m)) continue;
       const uint32_t common = ma & __ldg(mask + b);
       // Reported once: by the first chain containing both (as the CPU DetectM1).
       if (uint32_t(__ffs(common) - 1) != chain || detail::DevIsExcluded(A, a, b)) continue;
       ++hits;
-      Emit(p, inst, a, b, SA, SB, common);
+      Emit(p, inst, a, b, SA, SB, common, 0.0f);  // M1: depth from the own radii
     }
   }
   AddInstanceCount(p, inst, hits);
@@ -355,6 +367,7 @@ Status Batch::Run(const FrameParams& params, cudaStream_t stream) const {
     return Status::kErrorInvalidJob;
   const bool m1 = params.method == runtime::DetectMethod::kM1;
   if (!m1 && params.method != runtime::DetectMethod::kM2) return Status::kErrorInvalidJob;
+  if (!std::isfinite(params.margin)) return Status::kErrorInvalidJob;  // as DetectJob::Check
   Strategy strategy = params.strategy;
   const bool few = instance_count_ < 4 * sm_count_;
   if (strategy == Strategy::kAuto)
@@ -374,6 +387,7 @@ Status Batch::Run(const FrameParams& params, cudaStream_t stream) const {
   p.capacity = capacity_;
   p.shared_spheres = max_spheres_;
   p.chains_per_instance = std::max(max_chains_, 1u);
+  p.margin = params.margin;
   p.flags = (params.mode == runtime::RefitMode::kPivotFrame ? kFlagFrameMode : 0u) |
             (params.write_spheres ? kFlagWriteSpheres : 0u) | (m1 ? kFlagM1 : 0u);
 

@@ -1,12 +1,13 @@
 // Device mirror of runtime/refit.h (BuildPivotFrame, PivotFrameToModel, PivotMeanDistance,
-// TriangleCentroid) and of Context::Internal::Refit / the DetectJob overlap test.
+// TriangleCentroid) and of Context::Internal::Refit / the DetectJob overlap test (with its margin).
 //
 // refit.h's inline helpers are host-only (not __host__ __device__) and this backend may not edit
 // them, so the formulas are transcribed here operation for operation, in the same order. The CUDA
 // target is compiled with --fmad=false (no FMA contraction, IEEE division and square root by
 // default), like the host build (-std=c++20 → -ffp-contract=off, no FMA on baseline x86-64), so the
 // GPU spheres are expected to match the CPU ones bit for bit; the tests allow 1e-5 relative.
-// KEEP IN SYNC with runtime/include/spherechain/runtime/refit.h and runtime/src/kernels.inl (the CPU
+// KEEP IN SYNC with runtime/include/spherechain/runtime/refit.h, runtime/src/detect.cpp (the margin:
+// JobMargin, the grown radii of DetectM1 / DetectM2, their depths) and runtime/src/kernels.inl (the CPU
 // refit/detect kernels: the same formulas evaluated several spheres per instruction, bit-identical to
 // refit.h's scalar helpers; its sqrt(max d²) for the frame scale equals max sqrt(d²) used here).
 #pragma once
@@ -111,18 +112,25 @@ __device__ __forceinline__ float4 DevRefitSphere(const DeviceAssetDesc& a, const
   return make_float4(c[0], c[1], c[2], local.w * DevPivotMeanDistance(p, c));
 }
 
-/// The DetectJob overlap test for a < b: ‖c_b − c_a‖² < (r_b + r_a)² (11 operations, §5.2), same
-/// operand order as Overlap8 in runtime/src/kernels.cpp.
-__device__ __forceinline__ bool DevOverlap(const float4& A, const float4& B) {
+/// The DetectJob overlap test for a < b with the contact margin m (DetectJob::margin resolved):
+/// ‖c_b − c_a‖² < ((r_b + m) + (r_a + m))² (§5.2), the same operations in the same order as Overlap8 in
+/// runtime/src/kernels.cpp on the radii DetectM1 / DetectM2 grow by m beforehand (r + m, one float add
+/// each; with m == 0 that is r itself, as DetectM2's ungrown radii), so the pair set is the CPU's.
+__device__ __forceinline__ bool DevOverlap(const float4& A, const float4& B, float m) {
   const float dx = B.x - A.x, dy = B.y - A.y, dz = B.z - A.z;
-  const float rr = B.w + A.w;
+  const float rr = (B.w + m) + (A.w + m);
   return (dx * dx + dy * dy + dz * dz) < rr * rr;
 }
 
-/// Penetration depth as MakeCollision: r_a + r_b − ‖c_b − c_a‖.
-__device__ __forceinline__ float DevDepth(const float4& A, const float4& B) {
+/// Penetration depth of the spheres themselves, r_a + r_b − ‖c_b − c_a‖ (may be negative inside the
+/// margin), rounded as the CPU method that reports it: `grow` = 0 as DetectM1 (own radii, the
+/// expression MakeCollision uses); `grow` = m for DetectM2 with m ≠ 0, which subtracts the margins
+/// again from the grown radii' depth: ((r_a + m) + (r_b + m) − ‖·‖) − 2m.
+__device__ __forceinline__ float DevDepth(const float4& A, const float4& B, float grow) {
   const float dx = B.x - A.x, dy = B.y - A.y, dz = B.z - A.z;
-  return A.w + B.w - sqrtf(dx * dx + dy * dy + dz * dz);
+  const float d = sqrtf(dx * dx + dy * dy + dz * dz);
+  if (grow != 0.0f) return (A.w + grow) + (B.w + grow) - d - 2.0f * grow;
+  return A.w + B.w - d;
 }
 
 /// True when (a, b), a < b, is an excluded (adjacent) pair: scan of a's sorted partner list.

@@ -89,14 +89,16 @@ inline std::vector<float> RandomMotion(const std::vector<float>& rest, std::mt19
   return out;
 }
 
-/// CPU reference for one instance: refit + detect with the runtime (all pairs, never truncated).
+/// CPU reference for one instance: refit + detect with the runtime (all pairs, never truncated),
+/// detect with DetectJob::margin = `margin` (< 0: the asset's).
 struct CpuFrame {
   std::vector<runtime::Collision> pairs;
   std::vector<float> x, y, z, r;
 };
 
 inline CpuFrame CpuReference(runtime::Context& ctx, const runtime::AssetView& view, const float* positions,
-                             uint32_t stride_bytes, runtime::RefitMode mode, runtime::DetectMethod method) {
+                             uint32_t stride_bytes, runtime::RefitMode mode, runtime::DetectMethod method,
+                             float margin = -1.0f) {
   CpuFrame f;
   runtime::RefitJob refit;
   refit.context = &ctx;
@@ -113,6 +115,7 @@ inline CpuFrame CpuReference(runtime::Context& ctx, const runtime::AssetView& vi
   runtime::DetectJob det;
   det.context = &ctx;
   det.method = method;
+  det.margin = margin;
   det.output = f.pairs.data();
   det.capacity = static_cast<uint32_t>(f.pairs.size());
   det.count = &n;

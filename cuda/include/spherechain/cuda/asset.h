@@ -8,9 +8,9 @@
 
 namespace spherechain::cuda {
 
-/// Device pointers and counts of one uploaded asset. POD, shared by host and device code; every
-/// pointer is DEVICE memory owned by the DeviceAsset it came from (lifetime: until Release / the
-/// DeviceAsset's destruction). Layout mirrors runtime::Context's SoA (same values, same arithmetic):
+/// Device pointers, counts and contact margin of one uploaded asset. POD, shared by host and device
+/// code; every pointer is DEVICE memory owned by the DeviceAsset it came from (lifetime: until Release /
+/// the DeviceAsset's destruction). Layout mirrors runtime::Context's SoA (same values, same arithmetic):
 struct DeviceAssetDesc {
   const uint32_t* pivot_vertices = nullptr;  ///< #S×12: vertex indices (< #V) of the 4 pivot triangles
                                              ///< (Asset.pivot_vertices)
@@ -28,6 +28,11 @@ struct DeviceAssetDesc {
   uint32_t chain_count = 0;                  ///< #C (0..32)
   uint32_t max_chain_length = 0;             ///< longest chain (spheres)
   uint32_t excluded_count = 0;               ///< #excluded (len(Asset.excluded_pairs))
+  float contact_margin = 0.0f;               ///< the asset's contact margin [Units: source units]
+                                             ///< (Asset.contact_margin, schema v2; 0 for v1 assets), as
+                                             ///< runtime::Context::contact_margin(): the margin
+                                             ///< Batch::Run tests this asset's instances with when
+                                             ///< FrameParams::margin < 0
 };
 
 /// Owning device copy of what refit and detect need from one asset (runtime::AssetView), uploaded
@@ -43,7 +48,8 @@ class DeviceAsset {
   ~DeviceAsset();
 
   /// Copies `view`'s refit/detect data to the current device (one cudaMalloc, one synchronous
-  /// cudaMemcpy). The asset bytes are no longer needed afterwards.
+  /// cudaMemcpy) and keeps the asset's contact margin (Asset.contact_margin; 0 for v1 assets). The
+  /// asset bytes are no longer needed afterwards.
   /// Returns kOk; kErrorNullArgument (`!view.valid()`); kErrorOutOfMemory (host/device allocation);
   /// kErrorCuda (LastCudaError()). On failure the object is left empty.
   /// Cost: O(#S + Σ|chain| + #excluded) host work, ~100 B per sphere of device memory, synchronous.
@@ -59,6 +65,8 @@ class DeviceAsset {
   uint32_t sphere_count() const { return desc_.sphere_count; }  ///< #S
   uint32_t vertex_count() const { return desc_.vertex_count; }  ///< #V
   uint32_t chain_count() const { return desc_.chain_count; }    ///< #C
+  /// The asset's contact margin (DeviceAssetDesc::contact_margin) [Units: source units]; 0 when empty.
+  float contact_margin() const { return desc_.contact_margin; }
   /// Device bytes held.
   size_t device_bytes() const { return bytes_; }
 

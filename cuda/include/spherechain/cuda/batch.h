@@ -12,7 +12,8 @@
 namespace spherechain::cuda {
 
 /// How the fused refit+detect kernel maps work to threads (paper §6 compares M1/M2 on the GPU).
-/// All strategies report the same pair set for a given DetectMethod (the CPU DetectJob's set).
+/// All strategies report the same pair set for a given DetectMethod and margin (the CPU DetectJob's
+/// set with the same DetectJob::margin).
 enum class Strategy : uint8_t {
   /// kBlockPerChain for M1 when there are few instances (< 4 per SM), else kWarpPerInstance.
   /// M2: kThreadPerSphere for few instances, else kWarpPerInstance.
@@ -49,7 +50,8 @@ struct Instance {
 /// DetectJob) tagged with its instance. POD, 16 bytes, device output record.
 struct BatchCollision {
   uint32_t instance;         ///< index into the instance table
-  runtime::Collision pair;   ///< a < b, depth [source units], chains mask
+  runtime::Collision pair;   ///< a < b, chains mask, depth of the spheres themselves rA + rB − ‖cA − cB‖
+                             ///< [source units] (in (−2·margin, 0] for pairs apart but within the margin)
 };
 static_assert(sizeof(BatchCollision) == 16);
 
@@ -58,7 +60,15 @@ struct FrameParams {
   runtime::RefitMode mode = runtime::RefitMode::kPivotFrame;  ///< as RefitJob::mode (§5.1)
   runtime::DetectMethod method = runtime::DetectMethod::kM1;  ///< as DetectJob::method (§5.2)
   Strategy strategy = Strategy::kAuto;                        ///< kernel mapping (see Strategy)
-  bool write_spheres = false;  ///< also store the refitted spheres in spheres() (costs 16 B/sphere)
+  bool write_spheres = false;  ///< also store the refitted spheres in spheres() (costs 16 B/sphere;
+                               ///< their own radii, never grown by the margin)
+  /// Contact margin [Units: source units], as DetectJob::margin: spheres are tested with every radius
+  /// grown by it (a pair is reported when ‖cA − cB‖ < rA + rB + 2·margin, as physics engines' contact
+  /// offset / skin width); BatchCollision depths stay the spheres' own.
+  /// < 0 (default): each instance uses its own asset's, DeviceAsset::contact_margin()
+  /// (Asset.contact_margin; 0 for v1 assets); >= 0: this margin for every instance of the batch;
+  /// NaN or ±inf: Run returns kErrorInvalidJob. [Limit: finite]
+  float margin = -1.0f;
 };
 
 /// Host copy of one frame's results (Batch::Download). Allocates; for tests and tools, not the
@@ -113,12 +123,18 @@ class Batch {
   Status SetInstances(const Instance* instances, uint32_t instance_count);
 
   /// Enqueues one frame on `stream` (0 = legacy default stream): zero the counters, then refit every
-  /// instance's spheres from its positions and report overlapping non-excluded pairs. Asynchronous,
-  /// no allocation, no synchronisation: capturable (cudaStreamBeginCapture … EndCapture).
+  /// instance's spheres from its positions and report overlapping non-excluded pairs. Overlap, as
+  /// the CPU DetectJob (same float operations, so the same pair set): ‖cB − cA‖² < ((rB + m) + (rA + m))²,
+  /// m the instance's margin (FrameParams::margin, or its asset's when < 0); the reported depth is
+  /// rounded as DetectJob's for the method (M1: rA + rB − ‖·‖; M2 with m ≠ 0: ((rA + m) + (rB + m) − ‖·‖)
+  /// − 2m). Asynchronous, no allocation, no synchronisation: capturable (cudaStreamBeginCapture …
+  /// EndCapture).
   /// Returns kOk (enqueued; read the overflow flag for truncation); kErrorInvalidJob (not initialised,
-  /// unknown mode/method/strategy, kBlockPerChain with M2); kErrorCuda (launch failed:
-  /// LastCudaError()). Non-finite positions give non-finite spheres, which never overlap.
-  /// Cost: one kernel; per sphere 12 vertex reads (144 B) + ~120 flops; per tested pair 11 flops.
+  /// unknown mode/method/strategy, kBlockPerChain with M2, margin NaN or infinite; nothing enqueued,
+  /// outputs untouched); kErrorCuda (launch failed: LastCudaError()). Non-finite positions give
+  /// non-finite spheres, which never overlap.
+  /// Cost: one kernel; per sphere 12 vertex reads (144 B) + ~120 flops; per tested pair 12 flops (the
+  /// CPU's 11, whose radii are grown beforehand, plus the column sphere's margin add).
   Status Run(const FrameParams& params, cudaStream_t stream) const;
 
   /// Copies the last frame's outputs to `out` after synchronising `stream` (allocates host vectors).

@@ -1,0 +1,286 @@
+// doctest fixtures of the spherechain::cuda suites: the device check (visible SKIP), assets on host and
+// device, device instance buffers, recorded animation frames, and the CPU == GPU comparison of one frame.
+#pragma once
+
+#include <doctest/doctest.h>
+
+#include <cuda_runtime_api.h>
+
+#include <algorithm>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <map>
+
+#include "cuda/cuda_test_util.h"
+#include "test_data.h"
+
+#define CUDA_REQUIRE(expr) REQUIRE_MESSAGE((expr) == cudaSuccess, #expr)
+
+namespace spherechain::test {
+
+namespace sc = spherechain::cuda;
+
+/// True when a CUDA device is usable; otherwise a visible SKIPPED message (the test returns early).
+inline bool RequireDevice() {
+  if (sc::DeviceAvailable() == sc::Status::kOk) return true;
+  MESSAGE("SKIPPED: no CUDA device (cudaGetDeviceCount: " << std::string(sc::LastCudaErrorString())
+          << ") — spherechain::cuda tests need a GPU");
+  return false;
+}
+
+/// One asset on host (bytes, view, CPU context, rest positions) and device.
+struct AssetSet {
+  Mesh mesh;
+  AlignedBytes bytes;
+  runtime::AssetView view;
+  runtime::Context ctx;
+  sc::DeviceAsset device;
+};
+
+/// Loads `set->bytes` into the view, the CPU context and the device copy.
+inline void LoadBytes(AssetSet* s) {
+  REQUIRE(runtime::LoadAsset(s->bytes.data(), s->bytes.size, &s->view) == runtime::Status::kOk);
+  REQUIRE(s->ctx.Init(s->view) == runtime::Status::kOk);
+  REQUIRE(s->device.Upload(s->view) == sc::Status::kOk);
+  CHECK(s->device.contact_margin() == s->ctx.contact_margin());
+}
+
+inline void LoadSet(AssetSet* s, AssetData d) {
+  s->bytes = Serialize(d);
+  LoadBytes(s);
+}
+
+/// Serialize (tests/runtime/asset_builder.h, which writes no Asset.contact_margin) with
+/// Asset.contact_margin = `margin` [source units]: the same fields, plus the margin.
+inline AlignedBytes SerializeWithMargin(const AssetData& d, float margin) {
+  flatbuffers::FlatBufferBuilder b(1024);
+  auto fp = schema::CreateFingerprint(b, d.vertex_count, d.triangle_count, 0, 0);
+  auto params = schema::CreateBakeParams(b, 80, 2, 0.25f, 0.3f, 4, b.CreateString("geometry"), 0);
+  auto spheres = b.CreateVectorOfStructs(d.spheres);
+  std::vector<flatbuffers::Offset<schema::Chain>> chains;
+  for (size_t i = 0; i < d.chains.size(); ++i)
+    chains.push_back(schema::CreateChain(b, b.CreateString("chain" + std::to_string(i)), b.CreateVector(d.chains[i])));
+  auto chains_v = b.CreateVector(chains);
+  auto excl = b.CreateVectorOfStructs(d.excluded);
+  auto ts = b.CreateVector(d.triangle_spheres);
+  auto so = b.CreateVector(d.surrounding_offsets);
+  auto st = b.CreateVector(d.surrounding_triangles);
+  auto pt = b.CreateVector(d.pivot_triangles);
+  auto pv = b.CreateVector(d.pivot_vertices);
+  auto pf = b.CreateVectorOfStructs(d.frames);
+  auto gen = b.CreateString("batch_fixture.h");
+  auto units = b.CreateString("unknown");
+  schema::AssetBuilder ab(b);
+  ab.add_schema_version(d.schema_version);
+  ab.add_generator(gen);
+  ab.add_fingerprint(fp);
+  ab.add_units(units);
+  ab.add_params(params);
+  ab.add_spheres(spheres);
+  ab.add_chains(chains_v);
+  ab.add_excluded_pairs(excl);
+  ab.add_triangle_spheres(ts);
+  ab.add_surrounding_offsets(so);
+  ab.add_surrounding_triangles(st);
+  ab.add_pivot_triangles(pt);
+  ab.add_pivot_vertices(pv);
+  ab.add_pivot_frames(pf);
+  ab.add_contact_margin(margin);
+  b.Finish(ab.Finish(), d.identifier.c_str());
+  AlignedBytes out;
+  out.assign(b.GetBufferPointer(), b.GetSize());
+  return out;
+}
+
+/// A baked .sphc file (e.g. /tmp/mh.sphc).
+inline void LoadFile(AssetSet* s, const std::string& path) {
+  REQUIRE_MESSAGE(ReadAligned(path, &s->bytes), path);
+  LoadBytes(s);
+}
+
+/// A "star" of tubes crossing near the origin (many crossing pairs), chains mixing tubes; its
+/// Asset.contact_margin is `contact_margin` (0: the field absent, as asset_builder.h writes it).
+inline void MakeStar(AssetSet* s, uint32_t tubes, uint32_t rings, float contact_margin = 0.0f) {
+  std::vector<Tube> ts;
+  for (uint32_t i = 0; i < tubes; ++i) {
+    Tube t;
+    const float ang = 3.14159265f * float(i) / float(tubes);
+    t.direction[0] = std::cos(ang);
+    t.direction[1] = std::sin(ang);
+    t.direction[2] = 0.1f * float(i % 3);
+    const float l = std::sqrt(1.0f + t.direction[2] * t.direction[2]);
+    for (float& v : t.direction) v /= l;
+    for (int k = 0; k < 3; ++k) t.origin[k] = -0.5f * t.spacing * float(rings - 1) * t.direction[k];
+    t.origin[2] += 0.3f * float(i);
+    t.rings = rings;
+    t.sphere_scale = 1.0f + 0.05f * float(i);
+    ts.push_back(t);
+  }
+  std::vector<std::vector<uint32_t>> chains;
+  for (uint32_t i = 0; i < tubes; ++i) chains.push_back({i, (i + 1) % tubes});
+  chains.push_back({0});
+  const AssetData d = MakeTubes(ts, chains, &s->mesh);
+  s->bytes = contact_margin != 0.0f ? SerializeWithMargin(d, contact_margin) : Serialize(d);
+  LoadBytes(s);
+}
+
+/// Instances on the device: one allocation, instance i at its own offset with its own stride.
+struct DeviceInstances {
+  std::vector<std::vector<float>> host;  // packed xyz per instance (CPU input)
+  std::vector<sc::Instance> table;
+  std::vector<uint32_t> strides;
+  void* buffer = nullptr;
+  std::vector<size_t> offsets;
+  ~DeviceInstances() {
+    if (buffer) (void)cudaFree(buffer);
+  }
+  void Build(const std::vector<AssetSet*>& assets, uint32_t n, uint32_t seed, bool rest = false) {
+    std::mt19937 rng(seed);
+    size_t total = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+      AssetSet& a = *assets[i % assets.size()];
+      host.push_back(rest ? a.mesh.positions : RandomMotion(a.mesh.positions, rng, 20.0f, 0.05f));
+      strides.push_back(i % 3 == 2 ? 16u : 12u);
+      offsets.push_back(total);
+      total += size_t{a.view.vertex_count} * strides.back();
+      total = (total + 15) & ~size_t{15};
+    }
+    CUDA_REQUIRE(cudaMalloc(&buffer, total));
+    Upload();
+    for (uint32_t i = 0; i < n; ++i)
+      table.push_back({static_cast<char*>(buffer) + offsets[i], assets[i % assets.size()]->view.vertex_count, strides[i],
+                       static_cast<uint32_t>(i % assets.size())});
+  }
+  // Writes host[i] into the device buffer with instance i's stride (padding lanes = NaN).
+  void Upload() {
+    for (size_t i = 0; i < host.size(); ++i) {
+      const uint32_t fl = strides[i] / 4, nv = static_cast<uint32_t>(host[i].size() / 3);
+      std::vector<float> s(size_t{nv} * fl, std::nanf(""));
+      for (uint32_t v = 0; v < nv; ++v) std::memcpy(&s[size_t{v} * fl], &host[i][3 * size_t{v}], 12);
+      CUDA_REQUIRE(cudaMemcpy(static_cast<char*>(buffer) + offsets[i], s.data(), s.size() * 4, cudaMemcpyHostToDevice));
+    }
+  }
+};
+
+inline bool NearRel(float a, float b, float tol = 1e-5f) {
+  return std::fabs(a - b) <= tol * std::max(1.0f, std::max(std::fabs(a), std::fabs(b)));
+}
+
+/// The margin instance spheres of `a` are tested with under `fp` (as DetectJob's: < 0 the asset's).
+inline float FrameMargin(const AssetSet& a, const sc::FrameParams& fp) {
+  return fp.margin < 0.0f ? a.ctx.contact_margin() : fp.margin;
+}
+
+/// Checks the GPU frame against the CPU runtime (DetectJob with fp.margin) for every instance. Pairs
+/// must be the same set with the same chains mask and depth (1e-4 rel); a pair may differ only when it
+/// is borderline on the CPU spheres (|d² − (ra+rb+2m)²| ≤ 1e-5 (ra+rb+2m)², m the instance's margin).
+/// Spheres (when written) equal within 1e-5 relative.
+inline void CompareWithCpu(const std::vector<AssetSet*>& assets, const DeviceInstances& inst, const sc::HostResults& gpu,
+                           const sc::Batch& batch, const sc::FrameParams& fp) {
+  std::vector<std::map<std::pair<int, int>, runtime::Collision>> by_inst(inst.host.size());
+  for (const sc::BatchCollision& c : gpu.pairs) {
+    REQUIRE(c.instance < inst.host.size());
+    CHECK(by_inst[c.instance].emplace(std::make_pair(int(c.pair.a), int(c.pair.b)), c.pair).second);  // no duplicates
+  }
+  size_t borderline = 0, cpu_total = 0;
+  for (size_t i = 0; i < inst.host.size(); ++i) {
+    AssetSet& a = *assets[inst.table[i].asset];
+    const float m = FrameMargin(a, fp);
+    const CpuFrame cpu = CpuReference(a.ctx, a.view, inst.host[i].data(), 12, fp.mode, fp.method, fp.margin);
+    cpu_total += cpu.pairs.size();
+    if (fp.write_spheres) {
+      const uint32_t off = batch.sphere_offset(static_cast<uint32_t>(i));
+      for (uint32_t s = 0; s < a.view.sphere_count; ++s) {
+        const float4 g = gpu.spheres[off + s];
+        const bool ok = NearRel(g.x, cpu.x[s]) && NearRel(g.y, cpu.y[s]) && NearRel(g.z, cpu.z[s]) && NearRel(g.w, cpu.r[s]);
+        if (!ok) {
+          FAIL_CHECK("instance " << i << " sphere " << s << ": gpu (" << g.x << ", " << g.y << ", " << g.z << ", " << g.w
+                                 << ") cpu (" << cpu.x[s] << ", " << cpu.y[s] << ", " << cpu.z[s] << ", " << cpu.r[s] << ")");
+          break;
+        }
+      }
+    }
+    CHECK(gpu.instance_counts[i] == by_inst[i].size());
+    auto borderline_pair = [&](int pa, int pb) {
+      const float dx = cpu.x[pb] - cpu.x[pa], dy = cpu.y[pb] - cpu.y[pa], dz = cpu.z[pb] - cpu.z[pa];
+      const float rr = (cpu.r[pa] + m) + (cpu.r[pb] + m);
+      return std::fabs(dx * dx + dy * dy + dz * dz - rr * rr) <= 1e-5f * rr * rr;
+    };
+    std::set<std::pair<int, int>> cpu_set;
+    for (const runtime::Collision& c : cpu.pairs) {
+      cpu_set.insert({c.a, c.b});
+      auto it = by_inst[i].find({c.a, c.b});
+      if (it == by_inst[i].end()) {
+        if (borderline_pair(c.a, c.b)) { ++borderline; continue; }
+        FAIL_CHECK("instance " << i << ": CPU pair (" << c.a << ", " << c.b << ") missing on the GPU");
+        continue;
+      }
+      CHECK(it->second.chains == c.chains);
+      CHECK(NearRel(it->second.depth, c.depth, 1e-4f));
+    }
+    for (const auto& [key, c] : by_inst[i])
+      if (!cpu_set.count(key)) {
+        if (borderline_pair(key.first, key.second)) { ++borderline; continue; }
+        FAIL_CHECK("instance " << i << ": GPU pair (" << key.first << ", " << key.second << ") not on the CPU");
+      }
+  }
+  CHECK(gpu.total == gpu.pairs.size());
+  CHECK_FALSE(gpu.overflow);
+  MESSAGE("compared " << inst.host.size() << " instances, " << cpu_total << " CPU pairs, " << borderline
+                      << " borderline differences (margin " << fp.margin << ")");
+}
+
+/// Recorded animation frames (`spherechain play ... --dump-frames DIR`: frame_NNNN.f32, #V×3 float32)
+/// named by SPHERECHAIN_GPU_FRAMES="a.sphc=framesdir;b.sphc=framesdir2" (scripts/gpu-carry.sh prepares
+/// the MakeHuman morph and the CesiumMan walk): calls `fn(set, frames)` per readable item, the asset
+/// loaded and set.mesh.positions = frames[0]. Returns the number of items; 0 after a visible SKIPPED
+/// message when the variable is unset.
+inline size_t ForEachRecordedClip(const std::function<void(AssetSet&, const std::vector<std::vector<float>>&)>& fn) {
+  const char* env = std::getenv("SPHERECHAIN_GPU_FRAMES");
+  if (!env || !*env) {
+    MESSAGE("SKIPPED: set SPHERECHAIN_GPU_FRAMES=asset.sphc=frames_dir[;...] (see scripts/gpu-carry.sh)");
+    return 0;
+  }
+  const std::string spec = env;
+  size_t start = 0, clips = 0;
+  while (start < spec.size()) {
+    const size_t end = std::min(spec.find(';', start), spec.size());
+    const std::string item = spec.substr(start, end - start);
+    start = end + 1;
+    const size_t eq = item.find('=');
+    REQUIRE(eq != std::string::npos);
+    const std::string asset_path = item.substr(0, eq), dir = item.substr(eq + 1);
+    if (!Require(asset_path) || !Require(dir)) continue;
+    AssetSet set;
+    LoadFile(&set, asset_path);
+    std::vector<std::string> files;
+    for (const auto& e : std::filesystem::directory_iterator(dir))
+      if (e.path().extension() == ".f32") files.push_back(e.path().string());
+    std::sort(files.begin(), files.end());
+    REQUIRE(!files.empty());
+    std::vector<std::vector<float>> frames;
+    for (const std::string& f : files) {
+      std::ifstream in(f, std::ios::binary);
+      std::vector<float> p(size_t{set.view.vertex_count} * 3);
+      in.read(reinterpret_cast<char*>(p.data()), std::streamsize(p.size() * sizeof(float)));
+      REQUIRE_MESSAGE(in.gcount() == std::streamsize(p.size() * sizeof(float)), f << " is not #V×3 float32");
+      frames.push_back(std::move(p));
+    }
+    set.mesh.positions = frames[0];
+    fn(set, frames);
+    MESSAGE(asset_path << ": " << frames.size() << " recorded frames, CPU == GPU");
+    ++clips;
+  }
+  return clips;
+}
+
+/// Device instances holding `frames`, one instance per frame (all of asset slot 0).
+inline void BuildFrameInstances(AssetSet& set, const std::vector<std::vector<float>>& frames, DeviceInstances* inst) {
+  inst->Build({&set}, static_cast<uint32_t>(frames.size()), 1u, /*rest=*/true);
+  for (size_t i = 0; i < frames.size(); ++i) inst->host[i] = frames[i];
+  inst->Upload();
+}
+
+}  // namespace spherechain::test
