@@ -600,9 +600,9 @@ int main(int argc, char** argv) {
   const uint32_t S = view.sphere_count;
   uint32_t chain_total = 0;
   for (const auto* c : *view.asset->chains()) chain_total += c->spheres()->size();
-  std::printf("asset: %u spheres, %u chains (avg %.1f spheres), %u vertices, %zu frames, %d reps\n", S,
-              view.chain_count, view.chain_count ? double(chain_total) / view.chain_count : 0.0, view.vertex_count,
-              w.frames.size(), reps);
+  std::printf("asset: %u spheres, %u chains (avg %.1f spheres), %u vertices, %zu frames, %d reps, contact margin %g\n",
+              S, view.chain_count, view.chain_count ? double(chain_total) / view.chain_count : 0.0, view.vertex_count,
+              w.frames.size(), reps, double(ctx.contact_margin()));
 
   std::vector<sc::Collision> out(std::max(sc::DetectBound(view, sc::DetectMethod::kM1),
                                           sc::DetectBound(view, sc::DetectMethod::kM2)));
@@ -644,6 +644,13 @@ int main(int argc, char** argv) {
     if (m1.Run() != sc::Status::kOk) return 1;
     m1_count[f] = count;
   }
+  // The peers test the radii DetectJob tests: grown by the asset's contact margin (schema v2; 0 for v1).
+  const float margin = ctx.contact_margin();
+  std::vector<std::vector<float>> gr(w.frames.size());
+  for (size_t f = 0; f < w.frames.size(); ++f) {
+    gr[f] = sr[f];
+    for (float& r : gr[f]) r += margin;
+  }
   std::vector<uint8_t> excluded(size_t{S} * S, 0);
   for (uint32_t a = 0; a < S; ++a)
     for (uint32_t b = 0; b < S; ++b) excluded[size_t{a} * S + b] = ctx.IsExcluded(a, b);
@@ -659,7 +666,7 @@ int main(int argc, char** argv) {
     uint32_t n = 0;
     for (uint32_t a = 0; a < S; ++a)
       for (uint32_t b = a + 1; b < S; ++b) {
-        const float dx = sx[f][b] - sx[f][a], dy = sy[f][b] - sy[f][a], dz = sz[f][b] - sz[f][a], rr = sr[f][b] + sr[f][a];
+        const float dx = sx[f][b] - sx[f][a], dy = sy[f][b] - sy[f][a], dz = sz[f][b] - sz[f][a], rr = gr[f][b] + gr[f][a];
         n += (ctx.chain_mask(a) & ctx.chain_mask(b)) && dx * dx + dy * dy + dz * dz < rr * rr && !excluded[size_t{a} * S + b];
       }
     if (n != m1_count[f]) mismatch = true;
@@ -672,7 +679,7 @@ int main(int argc, char** argv) {
     std::copy(sr[f].begin(), sr[f].end(), ctx.mutable_r());
   };
   auto overlap = [&](size_t f, uint32_t a, uint32_t b) {
-    const float dx = sx[f][a] - sx[f][b], dy = sy[f][a] - sy[f][b], dz = sz[f][a] - sz[f][b], rr = sr[f][a] + sr[f][b];
+    const float dx = sx[f][a] - sx[f][b], dy = sy[f][a] - sy[f][b], dz = sz[f][a] - sz[f][b], rr = gr[f][a] + gr[f][b];
     return dx * dx + dy * dy + dz * dz < rr * rr && !excluded[size_t{a} * S + b];
   };
   const size_t F = w.frames.size();
@@ -726,7 +733,7 @@ int main(int argc, char** argv) {
   };
   std::vector<Peer> peers;
   peers.push_back({"naive M2", measure("naive M2", [&](size_t f) {
-                     for (uint32_t i = 0; i < S; ++i) aos[i] = {sx[f][i], sy[f][i], sz[f][i], sr[f][i]};
+                     for (uint32_t i = 0; i < S; ++i) aos[i] = {sx[f][i], sy[f][i], sz[f][i], gr[f][i]};
                      uint32_t n = 0;
                      for (uint32_t a = 0; a < S; ++a)
                        for (uint32_t b = a + 1; b < S; ++b) {
@@ -760,7 +767,7 @@ int main(int argc, char** argv) {
     std::function<bool(size_t, uint32_t, uint32_t)> test_fn = overlap;
     auto frame = [&](size_t f) {
       for (uint32_t i = 0; i < S; ++i) {
-        shapes[i]->radius = sr[f][i];
+        shapes[i]->radius = gr[f][i];
         shapes[i]->computeLocalAABB();
         objects[i]->setTranslation(fcl::Vector3<float>(sx[f][i], sy[f][i], sz[f][i]));
         objects[i]->computeAABB();
@@ -794,7 +801,7 @@ int main(int argc, char** argv) {
     }
     auto frame = [&](size_t f) {
       for (uint32_t i = 0; i < S; ++i) {
-        const btVector3 c(sx[f][i], sy[f][i], sz[f][i]), e(sr[f][i], sr[f][i], sr[f][i]);
+        const btVector3 c(sx[f][i], sy[f][i], sz[f][i]), e(gr[f][i], gr[f][i], gr[f][i]);
         broadphase.setAabb(proxies[i], c - e, c + e, nullptr);
       }
       broadphase.calculateOverlappingPairs(nullptr);

@@ -30,7 +30,7 @@ Mesh Cylinder(double R, double H, int seg, int rings) {
 
 }  // namespace
 
-TEST_CASE("regions: every triangle goes to the nearest sphere of its region; pivots surround each sphere") {
+TEST_CASE("regions: every triangle goes to the nearest sphere of its region and pivots surround each sphere") {
   const double R = 1.0, H = 9.0;
   Mesh mesh = Cylinder(R, H, 32, 36);
   Segmentation seg;

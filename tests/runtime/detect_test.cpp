@@ -117,7 +117,7 @@ TEST_CASE("Excluded (adjacent) pairs are never reported even though they overlap
   CHECK(open.Detect(DetectMethod::kM2).size() == 14);
 }
 
-TEST_CASE("M1 distinct pairs are a subset of M2 pairs; raw M1 counts duplicates across chains") {
+TEST_CASE("M1 distinct pairs are a subset of M2 pairs, and raw M1 counts duplicates across chains") {
   test::Mesh mesh;
   test::Tube a, b, c;
   a.origin[0] = -4.2f;

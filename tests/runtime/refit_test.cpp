@@ -115,7 +115,7 @@ TEST_CASE("kPivotFrame: a rigid motion of the mesh moves every sphere rigidly an
   }
 }
 
-TEST_CASE("kPaper: a translation moves every sphere by the same vector; a rotation does not (documented)") {
+TEST_CASE("kPaper: a translation moves every sphere by the same vector, a rotation does not (documented)") {
   Fixture fx;
   float I[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
   const float t[3] = {-1.5f, 7.0f, 0.25f};
