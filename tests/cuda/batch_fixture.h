@@ -52,48 +52,6 @@ inline void LoadSet(AssetSet* s, AssetData d) {
   LoadBytes(s);
 }
 
-/// Serialize (tests/runtime/asset_builder.h, which writes no Asset.contact_margin) with
-/// Asset.contact_margin = `margin` [source units]: the same fields, plus the margin.
-inline AlignedBytes SerializeWithMargin(const AssetData& d, float margin) {
-  flatbuffers::FlatBufferBuilder b(1024);
-  auto fp = schema::CreateFingerprint(b, d.vertex_count, d.triangle_count, 0, 0);
-  auto params = schema::CreateBakeParams(b, 80, 2, 0.25f, 0.3f, 4, b.CreateString("geometry"), 0);
-  auto spheres = b.CreateVectorOfStructs(d.spheres);
-  std::vector<flatbuffers::Offset<schema::Chain>> chains;
-  for (size_t i = 0; i < d.chains.size(); ++i)
-    chains.push_back(schema::CreateChain(b, b.CreateString("chain" + std::to_string(i)), b.CreateVector(d.chains[i])));
-  auto chains_v = b.CreateVector(chains);
-  auto excl = b.CreateVectorOfStructs(d.excluded);
-  auto ts = b.CreateVector(d.triangle_spheres);
-  auto so = b.CreateVector(d.surrounding_offsets);
-  auto st = b.CreateVector(d.surrounding_triangles);
-  auto pt = b.CreateVector(d.pivot_triangles);
-  auto pv = b.CreateVector(d.pivot_vertices);
-  auto pf = b.CreateVectorOfStructs(d.frames);
-  auto gen = b.CreateString("batch_fixture.h");
-  auto units = b.CreateString("unknown");
-  schema::AssetBuilder ab(b);
-  ab.add_schema_version(d.schema_version);
-  ab.add_generator(gen);
-  ab.add_fingerprint(fp);
-  ab.add_units(units);
-  ab.add_params(params);
-  ab.add_spheres(spheres);
-  ab.add_chains(chains_v);
-  ab.add_excluded_pairs(excl);
-  ab.add_triangle_spheres(ts);
-  ab.add_surrounding_offsets(so);
-  ab.add_surrounding_triangles(st);
-  ab.add_pivot_triangles(pt);
-  ab.add_pivot_vertices(pv);
-  ab.add_pivot_frames(pf);
-  ab.add_contact_margin(margin);
-  b.Finish(ab.Finish(), d.identifier.c_str());
-  AlignedBytes out;
-  out.assign(b.GetBufferPointer(), b.GetSize());
-  return out;
-}
-
 /// A baked .sphc file (e.g. /tmp/mh.sphc).
 inline void LoadFile(AssetSet* s, const std::string& path) {
   REQUIRE_MESSAGE(ReadAligned(path, &s->bytes), path);
@@ -121,8 +79,9 @@ inline void MakeStar(AssetSet* s, uint32_t tubes, uint32_t rings, float contact_
   std::vector<std::vector<uint32_t>> chains;
   for (uint32_t i = 0; i < tubes; ++i) chains.push_back({i, (i + 1) % tubes});
   chains.push_back({0});
-  const AssetData d = MakeTubes(ts, chains, &s->mesh);
-  s->bytes = contact_margin != 0.0f ? SerializeWithMargin(d, contact_margin) : Serialize(d);
+  AssetData d = MakeTubes(ts, chains, &s->mesh);
+  d.contact_margin = contact_margin;
+  s->bytes = Serialize(d);
   LoadBytes(s);
 }
 

@@ -53,6 +53,7 @@ struct Mesh {
 struct AssetData {
   uint32_t schema_version = runtime::kSchemaVersion;
   std::string identifier = "SPHC";
+  float contact_margin = 0.0f;  ///< Asset.contact_margin (schema v2) [source units]; 0 = not written
   uint32_t vertex_count = 0, triangle_count = 0;
   std::vector<schema::Sphere> spheres;
   std::vector<std::vector<uint16_t>> chains;
@@ -204,6 +205,7 @@ inline AlignedBytes Serialize(const AssetData& d) {
   ab.add_pivot_frames(pf);
   if (!d.triangles.empty()) ab.add_triangles(tris);
   if (!d.weld_ids.empty()) ab.add_weld_ids(weld);
+  if (d.contact_margin != 0.0f) ab.add_contact_margin(d.contact_margin);
   b.Finish(ab.Finish(), d.identifier.c_str());
   AlignedBytes out;
   out.assign(b.GetBufferPointer(), b.GetSize());
