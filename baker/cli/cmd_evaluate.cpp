@@ -212,6 +212,26 @@ int RunEvaluate(const EvaluateArgs& a) {
   baker::SkinningScratch scratch;
   std::vector<FrameEval> rows(anim.frames);
   const bool tty = isatty(2);
+  // M1 (m = 0) or M2 (m = 1) on the context's current spheres with contact margin `margin` (−1: the
+  // asset's); the reported region pairs and sphere pairs are added to the sets.
+  auto detect = [&](int m, float margin, std::set<RegionPair>* regions, std::set<SpherePairKey>* pairs) {
+    auto& out = m == 0 ? out_m1 : out_m2;
+    uint32_t n = 0;
+    runtime::DetectJob det;
+    det.context = &ctx;
+    det.method = m == 0 ? runtime::DetectMethod::kM1 : runtime::DetectMethod::kM2;
+    det.margin = margin;
+    det.output = out.data();
+    det.capacity = static_cast<uint32_t>(out.size());
+    det.count = &n;
+    const runtime::Status s = det.Run();
+    if (runtime::Failed(s)) return s;
+    for (uint32_t i = 0; i < n; ++i) {
+      regions->insert(region_pair(out[i].a, out[i].b));
+      pairs->insert({out[i].a, out[i].b});
+    }
+    return s;
+  };
   const auto t_start = Clock::now();
 
   for (uint32_t f = 0; f < anim.frames; ++f) {
@@ -223,21 +243,10 @@ int RunEvaluate(const EvaluateArgs& a) {
     refit.mode = mode;
     refit.positions = {positions.data(), V, 12};
     if (runtime::Status s = refit.Run(); runtime::Failed(s)) return Fail(std::string("refit: ") + runtime::ToString(s));
-    for (int m = 0; m < 2; ++m) {
-      auto& out = m == 0 ? out_m1 : out_m2;
-      uint32_t n = 0;
-      runtime::DetectJob det;
-      det.context = &ctx;
-      det.method = m == 0 ? runtime::DetectMethod::kM1 : runtime::DetectMethod::kM2;
-      det.output = out.data();
-      det.capacity = static_cast<uint32_t>(out.size());
-      det.count = &n;
-      if (runtime::Status s = det.Run(); runtime::Failed(s)) return Fail(std::string("detect: ") + runtime::ToString(s));
-      for (uint32_t i = 0; i < n; ++i) {
-        (m == 0 ? row.m1_regions : row.m2_regions).insert(region_pair(out[i].a, out[i].b));
-        (m == 0 ? row.m1_spheres : row.m2_spheres).insert({out[i].a, out[i].b});
-      }
-    }
+    if (runtime::Status s = detect(0, -1.0f, &row.m1_regions, &row.m1_spheres); runtime::Failed(s))
+      return Fail(std::string("detect: ") + runtime::ToString(s));
+    if (runtime::Status s = detect(1, -1.0f, &row.m2_regions, &row.m2_spheres); runtime::Failed(s))
+      return Fail(std::string("detect: ") + runtime::ToString(s));
     // Narrow phase.
     uint32_t n_contacts = 0;
     runtime::NarrowPhaseJob job;
@@ -312,23 +321,10 @@ int RunEvaluate(const EvaluateArgs& a) {
     for (SweepPoint& pt : sweep) {
       std::set<RegionPair> regions[2];
       std::set<SpherePairKey> pairs[2];
-      for (int m = 0; m < 2; ++m) {
-        auto& out = m == 0 ? out_m1 : out_m2;
-        uint32_t n = 0;
-        runtime::DetectJob det;
-        det.context = &ctx;
-        det.method = m == 0 ? runtime::DetectMethod::kM1 : runtime::DetectMethod::kM2;
-        det.margin = static_cast<float>(pt.margin_rel * height);
-        det.output = out.data();
-        det.capacity = static_cast<uint32_t>(out.size());
-        det.count = &n;
-        if (runtime::Status st = det.Run(); runtime::Failed(st))
+      for (int m = 0; m < 2; ++m)
+        if (runtime::Status st = detect(m, static_cast<float>(pt.margin_rel * height), &regions[m], &pairs[m]);
+            runtime::Failed(st))
           return Fail(std::string("detect (sweep): ") + runtime::ToString(st));
-        for (uint32_t i = 0; i < n; ++i) {
-          regions[m].insert(region_pair(out[i].a, out[i].b));
-          pairs[m].insert({out[i].a, out[i].b});
-        }
-      }
       pt.found_m1 += CountIn(row.exact_regions, regions[0]);
       pt.found_m2 += CountIn(row.exact_regions, regions[1]);
       pt.sfound_m1 += CountIn(row.exact_spheres, pairs[0]);

@@ -356,9 +356,8 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
     if (r != torso) {
       // Limbs: from the torso outwards, by distance from the limb's root.
       for (FittedSphere& s : group) s.root_distance = (s.center - root).norm();
-      std::stable_sort(group.begin(), group.end(), [&](const FittedSphere& a, const FittedSphere& b) {
-        return (a.center - root).squaredNorm() < (b.center - root).squaredNorm();
-      });
+      std::stable_sort(group.begin(), group.end(),
+                       [](const FittedSphere& a, const FittedSphere& b) { return a.root_distance < b.root_distance; });
     } else {
       // Torso: bottom-up, then from the character's left to its right; labels of Figure 6.
       std::stable_sort(group.begin(), group.end(), [&](const FittedSphere& a, const FittedSphere& b) {
