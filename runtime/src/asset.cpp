@@ -74,6 +74,8 @@ Status Semantics(const Asset& a, AssetView* view) {
       return Status::kErrorNonFinite;
     if (!(f->mean_distance() > 0.0f)) return Status::kErrorPivotFrame;
   }
+  if (!Finite(a.contact_margin())) return Status::kErrorNonFinite;  // NaN would silently detect nothing
+  if (a.contact_margin() < 0.0f) return Status::kErrorContactMargin;
 
   // Chains: present, sorted, unique, in range, and with a bounded number of candidate pairs (the M1
   // workspace and DetectBound grow with Σ|ζ|(|ζ|−1)/2: a small hostile asset must not ask for gigabytes).

@@ -30,6 +30,7 @@ const char* ToString(Status s) {
     case Status::kErrorRadius: return "kErrorRadius: a sphere radius is <= 0";
     case Status::kErrorPivotFrame: return "kErrorPivotFrame: PivotFrame.mean_distance is <= 0";
     case Status::kErrorChainOrder: return "kErrorChainOrder: chain spheres not strictly ascending";
+    case Status::kErrorContactMargin: return "kErrorContactMargin: Asset.contact_margin is negative";
     case Status::kErrorExcludedPairs: return "kErrorExcludedPairs: excluded pairs not a < b or not strictly ascending";
   }
   return "unknown status";

@@ -70,7 +70,8 @@ struct AssetView {
 ///     surrounding / pivot triangles < #T, pivot vertices < #V, optional `triangles` indices < #V —
 ///     3·#T of them, else kErrorCountMismatch —, optional `weld_ids`: #V entries, weld_ids[v] <= v and
 ///     weld_ids[weld_ids[v]] == weld_ids[v], else kErrorIndexOutOfRange), kErrorOffsets, kErrorNonFinite,
-///     kErrorRadius, kErrorPivotFrame, kErrorChainOrder, kErrorExcludedPairs.
+///     kErrorRadius, kErrorPivotFrame, kErrorChainOrder, kErrorExcludedPairs, kErrorContactMargin
+///     (contact_margin < 0; NaN or inf: kErrorNonFinite).
 /// Returns kOk with `*out` filled.
 /// Cost: O(size) reads, no allocation, no exceptions; thread-safe (pure function of its inputs).
 /// Untrusted input: every truncated prefix and bit flip returns an error, never crashes (tested).

@@ -49,12 +49,14 @@ enum class [[nodiscard]] Status : uint32_t {
                                          ///< index >= #V.
   kErrorOffsets = 0x8000'0207u,          ///< surrounding_offsets not starting at 0, not monotone, or
                                          ///< not ending at len(surrounding_triangles).
-  kErrorNonFinite = 0x8000'0208u,        ///< A NaN or infinite float (centre, radius, pivot frame).
+  kErrorNonFinite = 0x8000'0208u,        ///< A NaN or infinite float (centre, radius, pivot frame,
+                                         ///< contact_margin).
   kErrorRadius = 0x8000'0209u,           ///< A sphere radius <= 0.
   kErrorPivotFrame = 0x8000'020Au,       ///< PivotFrame.mean_distance <= 0.
   kErrorChainOrder = 0x8000'020Bu,       ///< A chain's sphere list is not strictly ascending (sorted, unique).
   kErrorExcludedPairs = 0x8000'020Cu,    ///< An excluded pair with a >= b, or the list not strictly
                                          ///< ascending by (a, b).
+  kErrorContactMargin = 0x8000'020Du,    ///< Asset.contact_margin < 0 (schema v2).
 };
 
 /// True for kOk and every success-with-detail (kOkTruncated). Cost: one compare.
