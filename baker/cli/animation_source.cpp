@@ -13,22 +13,25 @@ namespace {
 
 namespace fs = std::filesystem;
 
-/// Folder of the character's default key poses: --poses-dir, else data/poses/<character> found by
-/// walking up from the current directory and from the executable's folder (build/<dir>/baker/).
+/// Folder of the character's default key poses, the first that exists of: --poses-dir; the installed
+/// data, <executable's folder>/SPHERECHAIN_BIN_TO_DATA/poses/<character> (bin/ → share/spherechain/);
+/// the source tree's data/poses/<character> (a build tree, compiled-in path); data/poses/<character>
+/// walking up from the current directory. Empty when none exists.
 std::string FindPosesDir(const std::string& character, const std::string& explicit_dir) {
   if (!explicit_dir.empty()) return explicit_dir;
-  const fs::path rel = fs::path("data") / "poses" / character;
-  std::vector<fs::path> starts;
+  std::vector<fs::path> candidates;
   std::error_code ec;
-  starts.push_back(fs::current_path(ec));
   const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  if (!ec) starts.push_back(exe.parent_path());
-  for (fs::path p : starts) {
-    for (int up = 0; up < 6 && !p.empty(); ++up, p = p.parent_path()) {
-      if (fs::is_directory(p / rel, ec)) return (p / rel).string();
-      if (p == p.parent_path()) break;
-    }
+  if (!ec) candidates.push_back(exe.parent_path() / SPHERECHAIN_BIN_TO_DATA / "poses" / character);
+  candidates.push_back(fs::path(SPHERECHAIN_SOURCE_DATA_DIR) / "poses" / character);
+  const fs::path rel = fs::path("data") / "poses" / character;
+  fs::path p = fs::current_path(ec);
+  for (int up = 0; up < 6 && !ec && !p.empty(); ++up, p = p.parent_path()) {
+    candidates.push_back(p / rel);
+    if (p == p.parent_path()) break;
   }
+  for (const fs::path& c : candidates)
+    if (fs::is_directory(c, ec)) return c.lexically_normal().string();
   return {};
 }
 
@@ -89,7 +92,8 @@ bool OpenAnimation(const baker::Mesh& mesh, const AnimationArgs& a, AnimationSou
     if (a.morph.empty()) {
       if (dir.empty())
         return *error = "'" + a.mesh + "' has no clips and no default key poses (data/poses/" + character +
-                        " not found from the current directory or the executable); pass --morph POSE.json... or "
+                        " not found in the installed share/spherechain/, the source tree or upward from the current "
+                        "directory); pass --morph POSE.json... or "
                         "--poses-dir DIR",
                false;
       auto loaded = baker::LoadPoseFolder(dir, *mesh.skin);

@@ -597,7 +597,7 @@ void RegisterEvaluate(CLI::App& app, Commands* commands) {
       ->check(CLI::ExistingFile);
   sub->add_option("--clip", args->clip, "Clip to play (default: the first clip; none: the morph)");
   sub->add_option("--morph", args->morph, "Key pose files (.json), pose names in the poses folder, or folders");
-  sub->add_option("--poses-dir", args->poses_dir, "Folder of default key poses (default: data/poses/<character>)");
+  sub->add_option("--poses-dir", args->poses_dir, "Folder of default key poses (default: as for play)");
   sub->add_option("--frames", args->frames, "Frames: the morph's length, or uniform samples of the clip (default 40)");
   sub->add_option("--margin", args->margin,
                   "A reported region pair is a false alarm when no triangles of the two regions come within this "

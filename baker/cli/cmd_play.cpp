@@ -432,8 +432,8 @@ void RegisterPlay(CLI::App& app, Commands* commands) {
   sub->add_option("--morph", args->morph,
                   "Key pose files (.json), pose names in the poses folder, or folders; morph through them");
   sub->add_option("--poses-dir", args->poses_dir,
-                  "Folder of default key poses (default: data/poses/<character> found upward from the current "
-                  "directory or the executable)");
+                  "Folder of default key poses (default: poses/<character> in the installed share/spherechain/, "
+                  "else the source tree's data/, else data/poses/<character> upward from the current directory)");
   sub->add_option("--frames", args->frames, "Frames: the morph's length, or uniform samples of the clip (default 40)");
   sub->add_option("--method", args->method, "Broad phase: m1 (chains), m2 (all spheres), both")
       ->check(CLI::IsMember({"m1", "m2", "both"}));
