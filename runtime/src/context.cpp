@@ -1,6 +1,7 @@
 // Context::Init — the runtime's only allocation: copies what refit/detect need out of the asset, SoA.
 #include "spherechain/runtime/context.h"
 
+#include "alloc_guard.h"
 #include "internal.h"
 
 #include <algorithm>
@@ -15,7 +16,7 @@ Status Context::Init(const AssetView& view) {
   const schema::Asset& a = *view.asset;
   const uint32_t S = view.sphere_count;
   const uint32_t C = view.chain_count;
-  try {
+  SPHERECHAIN_TRY {
     constexpr uint32_t kPad = 8;  // SoA rows are read in chunks of 8; padding spheres never overlap
     for (auto* v : {&x_, &y_, &z_}) v->assign(S + kPad, 1e18f);
     r_.assign(S + kPad, 0.0f);
@@ -134,7 +135,7 @@ Status Context::Init(const AssetView& view) {
     m1_keys_.resize(keys);
     span_hits_.assign(K, 0u);
     use_avx_ = kernels::HasAvx();
-  } catch (const std::bad_alloc&) {
+  } SPHERECHAIN_CATCH_BAD_ALLOC {
     *this = Context{};
     return Status::kErrorOutOfMemory;
   }

@@ -59,7 +59,8 @@ class Context {
 
   /// Sizes and fills the workspace for `view` and sets the spheres to the bind pose
   /// (Asset.spheres). The only allocating call of the runtime (catches std::bad_alloc).
-  /// Returns kOk; kErrorNullArgument when `!view.valid()`; kErrorOutOfMemory (context left empty).
+  /// Returns kOk; kErrorNullArgument when `!view.valid()`; kErrorOutOfMemory (context left empty; a
+  /// runtime built with -fno-exceptions terminates on allocation failure instead).
   /// Cost: O(#S + Σ|chain|²·degree) time; memory ~100 B per sphere + 8 B per distinct M1 candidate
   /// pair (Σ|chain|²/2 at most) + 8 B per excluded pair + 18 B per (sphere, class sharing a chain).
   Status Init(const AssetView& view);

@@ -1,0 +1,24 @@
+# The runtime as a package, as a game gets it: configure the source tree with the `runtime-noexcept`
+# preset (runtime only, -fno-exceptions -fno-rtti) into WORK, build, install into WORK/prefix, then build
+# tests/package/consumer against it with find_package(spherechain) (also without exceptions or RTTI)
+# and run it on the golden v2 asset.
+file(REMOVE_RECURSE ${WORK})
+function(run what)
+  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "${what} failed (${rc}):\n${out}${err}")
+  endif()
+  set(out "${out}" PARENT_SCOPE)
+endfunction()
+run("configure (preset runtime-noexcept)" ${CMAKE_COMMAND} -S ${SRC} --preset runtime-noexcept -B ${WORK}/build
+    -DCMAKE_INSTALL_PREFIX=${WORK}/prefix)
+run("build" ${CMAKE_COMMAND} --build ${WORK}/build -j 2)
+run("install" ${CMAKE_COMMAND} --install ${WORK}/build)
+run("configure the consumer" ${CMAKE_COMMAND} -S ${SRC}/tests/package/consumer -B ${WORK}/consumer
+    -DCMAKE_PREFIX_PATH=${WORK}/prefix -DCMAKE_BUILD_TYPE=Release "-DCMAKE_CXX_FLAGS=-fno-exceptions -fno-rtti")
+run("build the consumer" ${CMAKE_COMMAND} --build ${WORK}/consumer)
+run("run the consumer" ${WORK}/consumer/consumer ${ASSET})
+if(NOT out MATCHES "spheres 128 chains 6 ")
+  message(FATAL_ERROR "the consumer read the golden asset wrongly: ${out}")
+endif()
+message("consumer built against ${WORK}/prefix (no exceptions, no RTTI): ${out}")
