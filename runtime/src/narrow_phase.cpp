@@ -6,6 +6,7 @@
 #include <limits>
 #include <new>
 
+#include "alloc_guard.h"
 #include "spherechain/runtime/triangle_intersect.h"
 
 #if defined(__GNUC__) && defined(__x86_64__)
@@ -428,7 +429,7 @@ Status NarrowPhaseContext::Init(const AssetView& view) {
   const auto* tris = a.triangles();
   const auto* weld = a.weld_ids();
   if (!tris || !weld) return Status::kErrorMissingField;  // LoadAsset checked their sizes and ranges
-  try {
+  SPHERECHAIN_TRY {
     const uint32_t S = view.sphere_count, T = view.triangle_count, V = view.vertex_count;
     weld_.assign(weld->begin(), weld->end());
     tri_sphere_.assign(T, kNoSphere);
@@ -499,7 +500,7 @@ Status NarrowPhaseContext::Init(const AssetView& view) {
     sphere_count_ = S;
     vertex_count_ = V;
     triangle_count_ = T;
-  } catch (const std::bad_alloc&) {
+  } SPHERECHAIN_CATCH_BAD_ALLOC {
     *this = NarrowPhaseContext{};
     return Status::kErrorOutOfMemory;
   }
