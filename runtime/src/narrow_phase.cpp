@@ -20,9 +20,12 @@ namespace {
 
 constexpr uint16_t kNoSphere = 0xFFFF;
 constexpr uint32_t kNotCulled = 0xFFFFFFFFu;  // NarrowPhaseContext::kept_: region not culled this frame
+constexpr uint32_t kUnprepared = 0xFFFFFFFFu;  // NarrowPhaseContext::prepared_at_: not yet met by a test this frame
+constexpr uint32_t kDegenerate = 0xFFFFFFFEu;  // NarrowPhaseContext::prepared_at_: met, zero area
 constexpr float kInf = std::numeric_limits<float>::infinity();
 constexpr uint32_t kPrefetch = 32;  // RegionBoxes: vertices read ahead
 constexpr uint32_t kSentinels = 4;  // after each culled list: the sweep reads four boxes a step
+constexpr uint32_t kChunk = 8;      // kept triangles per chunk box (CullRegion, Cull)
 
 // Four floats (x, y, z, w) and lane masks: SSE2 on x86-64 (its baseline), scalar elsewhere. Every mask
 // is read through `& 7` or `& 15` as the caller needs: w lanes of vertex loads are never trusted.
@@ -41,6 +44,7 @@ inline M4 And(M4 a, M4 b) { return _mm_and_ps(a, b); }
 inline M4 Or(M4 a, M4 b) { return _mm_or_ps(a, b); }
 inline M4 NoLanes() { return _mm_setzero_ps(); }
 inline uint32_t Bits(M4 m) { return static_cast<uint32_t>(_mm_movemask_ps(m)); }
+inline void Transpose4(F4& a, F4& b, F4& c, F4& d) { _MM_TRANSPOSE4_PS(a, b, c, d); }
 #else
 struct F4 {
   float v[4];
@@ -72,6 +76,11 @@ inline M4 And(M4 a, M4 b) { return a & b; }
 inline M4 Or(M4 a, M4 b) { return a | b; }
 inline M4 NoLanes() { return 0; }
 inline uint32_t Bits(M4 m) { return m; }
+inline void Transpose4(F4& a, F4& b, F4& c, F4& d) {
+  F4* r[4] = {&a, &b, &c, &d};
+  for (int i = 0; i < 4; ++i)
+    for (int j = i + 1; j < 4; ++j) std::swap(r[i]->v[j], r[j]->v[i]);
+}
 #endif
 
 // Per 4-bit mask: its set lanes in order, then lane 0 again (padding); and how many are set.
@@ -212,6 +221,9 @@ struct NarrowPhaseContext::Internal {
   /// gets an outcode (below / above the clip on each axis, Cohen–Sutherland), and a triangle's box misses
   /// the clip exactly when its three corners share a bit. A triangle box meeting a partner's region box
   /// meets the clip (the triangle lies in its own region box), so the per-pair cull loses nothing.
+  /// Written from the region's pool offset: slots and boxes (8 floats), inverted boxes padding the last
+  /// chunk of kChunk; each chunk's box (the box of its boxes) as six rows from the region's chunk offset,
+  /// inverted chunks padding to a multiple of four.
   static void CullRegion(NarrowPhaseContext& c, uint32_t s, const char* base, size_t stride) {
     const F4 clo = Load4(&c.clip_[8 * size_t{s}]), chi = Load4(&c.clip_[8 * size_t{s} + 4]);
     const uint32_t vbegin = c.vert_offsets_[s], vend = c.vert_offsets_[s + 1], last = c.vertex_count_ - 1;
@@ -223,101 +235,201 @@ struct NarrowPhaseContext::Internal {
       code[i - vbegin] = static_cast<uint8_t>((Bits(Lt(p, clo)) & 7) | (Bits(Lt(chi, p)) & 7) << 3);
     }
     const uint32_t first = c.region_offsets_[s], end = c.region_offsets_[s + 1];
-    std::fill(&c.tri_state_[first], &c.tri_state_[first] + (end - first), uint8_t{0});  // degeneracy: unknown
+    std::fill(&c.prepared_at_[first], &c.prepared_at_[first] + (end - first), kUnprepared);  // degeneracy: unknown
     const uint32_t* local = c.region_local_.data();
-    float* boxes = &c.kept_box_[8 * size_t{first}];
-    uint32_t* slots = &c.kept_slot_[first];
+    const uint32_t pool = c.pool_offsets_[s];
+    uint32_t* slots = &c.kept_slot_[pool];
+    float* boxes = &c.kept_box_[8 * size_t{pool}];
     uint32_t n = 0;
     for (uint32_t k = first; k < end; ++k) {  // branch-free: written always, counted when kept
       const uint32_t* l = local + 3 * size_t{k};
       slots[n] = k;
       n += (code[l[0]] & code[l[1]] & code[l[2]]) == 0;
     }
-    for (uint32_t i = 0; i < n; ++i) {
-      const uint32_t* l = local + 3 * size_t{slots[i]};
-      const F4 p = Load4(corner + 4 * size_t{l[0]}), q = Load4(corner + 4 * size_t{l[1]});
-      const F4 r = Load4(corner + 4 * size_t{l[2]});
-      Store4(boxes + 8 * size_t{i}, Min4(r, Min4(q, p)));
-      Store4(boxes + 8 * size_t{i} + 4, Max4(r, Max4(q, p)));
+    float* chunk_row[6];
+    for (int d = 0; d < 6; ++d) chunk_row[d] = &c.chunk_box_[d * c.chunk_pitch_ + c.chunk_offsets_[s]];
+    const uint32_t chunks = (n + kChunk - 1) / kChunk;
+    for (uint32_t q = 0; q < chunks; ++q) {
+      F4 chunk_lo = Set1(kInf), chunk_hi = Set1(-kInf);
+      for (uint32_t i = q * kChunk; i < (q + 1) * kChunk; ++i) {
+        F4 lo = Set1(kInf), hi = Set1(-kInf);  // padding: an inverted box
+        if (i < n) {
+          const uint32_t* l = local + 3 * size_t{slots[i]};
+          const F4 p = Load4(corner + 4 * size_t{l[0]}), q4 = Load4(corner + 4 * size_t{l[1]});
+          const F4 r = Load4(corner + 4 * size_t{l[2]});
+          lo = Min4(r, Min4(q4, p)), hi = Max4(r, Max4(q4, p));
+        }
+        Store4(boxes + 8 * size_t{i}, lo);
+        Store4(boxes + 8 * size_t{i} + 4, hi);
+        chunk_lo = Min4(lo, chunk_lo), chunk_hi = Max4(hi, chunk_hi);
+      }
+      float box[8];
+      Store4(box, chunk_lo);
+      Store4(box + 4, chunk_hi);
+      for (int d = 0; d < 3; ++d) chunk_row[d][q] = box[d], chunk_row[3 + d][q] = box[4 + d];
     }
+    for (uint32_t q = chunks; q < (chunks + 3) / 4 * 4; ++q)
+      for (int d = 0; d < 3; ++d) chunk_row[d][q] = kInf, chunk_row[3 + d][q] = -kInf;
     c.kept_[s] = n;
   }
 
-  /// Triangles of sphere s whose box meets `other` (the partner's region box), in sweep order: keyed by
-  /// the box minimum on `axis`, ties by cull (slot) order; their slots and boxes beside. Returns their
-  /// number. The sort: a counting sort into n buckets over the range of the minima (bucket =
-  /// ⌊(start − lo)·scale⌋: monotone in the start, float rounding being monotone), each record written
-  /// at its bucket's place, then an insertion pass that only moves records within their bucket: linear
-  /// for spread minima, and the exact order whatever they are.
-  static uint32_t Cull(NarrowPhaseContext& c, uint32_t s, const float* other, int axis, const char* base,
-                       size_t stride, Culled* list) {
-    if (c.kept_[s] == kNotCulled) CullRegion(c, s, base, stride);
-    const uint32_t first = c.region_offsets_[s], m = c.kept_[s];
-    const float* boxes = &c.kept_box_[8 * size_t{first}];
-    const F4 olo = Load4(other), ohi = Load4(other + 4);
-    float* start = list->start.data();
+  /// Lanes (bits 0..3) of the four chunk boxes at `at` of six rows (min x, y, z, max x, y, z) that meet
+  /// the box (lo, hi) (each F4 one coordinate broadcast), closed intervals.
+  static uint32_t Overlap4(float* const row[6], size_t at, const F4 lo[3], const F4 hi[3]) {
+    return Bits(And(And(And(Le(Load4(row[0] + at), hi[0]), Le(lo[0], Load4(row[3] + at))),
+                        And(Le(Load4(row[1] + at), hi[1]), Le(lo[1], Load4(row[4] + at)))),
+                    And(Le(Load4(row[2] + at), hi[2]), Le(lo[2], Load4(row[5] + at)))));
+  }
+
+  /// True when the 8-float box at b meets the box (lo, hi): closed intervals on x, y, z.
+  static bool Meets(const float* b, F4 lo, F4 hi) {
+    return (Bits(And(Le(Load4(b), hi), Le(lo, Load4(b + 4)))) & 7) == 7;
+  }
+
+  /// The kept triangles of sphere s (CullRegion run) whose box meets `box` (8 floats), in slot order:
+  /// list->kept gets their index among the kept triangles, list->rank their rank in this order. With
+  /// kInner only those also meeting `inner` (8 floats) are listed, each with its rank among those
+  /// meeting `box`. Chunks whose box misses `box` are skipped four at a time. Returns the number meeting
+  /// `box`; *listed: the number listed.
+  template <bool kInner>
+  static uint32_t Filter(NarrowPhaseContext& c, uint32_t s, const float* box, const float* inner, Culled* list,
+                         uint32_t* listed) {
+    const uint32_t pool = c.pool_offsets_[s], m = c.kept_[s];
+    const float* boxes = &c.kept_box_[8 * size_t{pool}];
+    float* chunk_row[6];
+    for (int d = 0; d < 6; ++d) chunk_row[d] = &c.chunk_box_[d * c.chunk_pitch_ + c.chunk_offsets_[s]];
+    const F4 lo[3] = {Set1(box[0]), Set1(box[1]), Set1(box[2])};
+    const F4 hi[3] = {Set1(box[4]), Set1(box[5]), Set1(box[6])};
+    const F4 olo = Load4(box), ohi = Load4(box + 4);
+    const F4 ilo = Load4(kInner ? inner : box), ihi = Load4(kInner ? inner + 4 : box + 4);
     uint32_t* kept = list->kept.data();
-    uint32_t n = 0;
-    for (uint32_t i = 0; i < m; ++i) {  // branch-free: written always, counted when kept
-      const float* b = boxes + 8 * size_t{i};
-      start[n] = b[axis];
-      kept[n] = i;
-      n += (Bits(And(Le(Load4(b), ohi), Le(olo, Load4(b + 4)))) & 7) == 7;
+    uint32_t* rank = list->rank.data();
+    uint32_t n = 0, n_inner = 0;
+    const uint32_t chunks = (m + kChunk - 1) / kChunk;
+    for (uint32_t q0 = 0; q0 < chunks; q0 += 4) {
+      for (uint32_t hit = Overlap4(chunk_row, q0, lo, hi); hit; hit &= hit - 1) {
+        const uint32_t first = (q0 + static_cast<uint32_t>(std::countr_zero(hit))) * kChunk;
+        for (uint32_t i = first; i < first + kChunk; ++i) {  // branch-free: written always, counted when kept
+          const float* b = boxes + 8 * size_t{i};
+          const bool meets = Meets(b, olo, ohi);
+          kept[n_inner] = i;
+          rank[n_inner] = n;
+          n_inner += kInner ? meets & Meets(b, ilo, ihi) : meets;
+          n += meets;
+        }
+      }
     }
+    *listed = n_inner;
+    return n;
+  }
+
+  /// The box (8 floats) of the boxes of the n listed triangles of sphere s; inverted when n is 0.
+  static void ListBox(const NarrowPhaseContext& c, uint32_t s, const Culled& list, uint32_t n, float* out) {
+    const float* boxes = &c.kept_box_[8 * size_t{c.pool_offsets_[s]}];
+    F4 lo = Set1(kInf), hi = Set1(-kInf);
+    for (uint32_t k = 0; k < n; ++k) {
+      const float* b = boxes + 8 * size_t{list.kept[k]};
+      lo = Min4(Load4(b), lo), hi = Max4(Load4(b + 4), hi);
+    }
+    Store4(out, lo);
+    Store4(out + 4, hi);
+  }
+
+  /// Drops from the n listed triangles of sphere s those whose box misses `box`; ranks kept. Returns
+  /// the number left.
+  static uint32_t Tighten(const NarrowPhaseContext& c, uint32_t s, const float* box, Culled* list, uint32_t n) {
+    const float* boxes = &c.kept_box_[8 * size_t{c.pool_offsets_[s]}];
+    const F4 lo = Load4(box), hi = Load4(box + 4);
+    uint32_t* kept = list->kept.data();
+    uint32_t* rank = list->rank.data();
+    uint32_t left = 0;
+    for (uint32_t k = 0; k < n; ++k) {  // branch-free: written always, counted when kept
+      const uint32_t i = kept[k], r = rank[k];
+      kept[left] = i;
+      rank[left] = r;
+      left += Meets(boxes + 8 * size_t{i}, lo, hi);
+    }
+    return left;
+  }
+
+  /// The n listed triangles of sphere s in sweep order: keyed by the box minimum on `axis`, ties by rank
+  /// (slot order); their slots and boxes beside, by coordinate; sentinels after. The sort: a counting
+  /// sort into n buckets over the range of the minima (bucket = ⌊(start − lo)·scale⌋: monotone in the
+  /// start, float rounding being monotone), each key written at its bucket's place, then an insertion
+  /// pass that only moves keys within their bucket (linear for spread minima, the exact order whatever
+  /// they are), then the records gathered in key order.
+  static void Sort(const NarrowPhaseContext& c, uint32_t s, int axis, Culled* list, uint32_t n) {
+    const uint32_t pool = c.pool_offsets_[s];
+    const float* boxes = &c.kept_box_[8 * size_t{pool}];
+    const uint32_t* kept = list->kept.data();
+    const uint32_t* rank = list->rank.data();
+    float* start = list->start.data();
     uint64_t* key = list->key.data();
     uint32_t* slot = list->slot.data();
     float* lo[3] = {list->lo[0].data(), list->lo[1].data(), list->lo[2].data()};
     float* hi[3] = {list->hi[0].data(), list->hi[1].data(), list->hi[2].data()};
     for (uint32_t r = n; r < n + kSentinels; ++r)  // sentinels: start after every box, overlap nothing
       for (int k = 0; k < 3; ++k) lo[k][r] = kInf, hi[k][r] = -kInf;
-    if (n == 0) return 0;
-    F4 lo4 = Set1(start[0]), hi4 = lo4;
-    uint32_t k4 = 0;
-    for (; k4 + 4 <= n; k4 += 4) lo4 = Min4(Load4(start + k4), lo4), hi4 = Max4(Load4(start + k4), hi4);
-    float lanes[8];
-    Store4(lanes, lo4);
-    Store4(lanes + 4, hi4);
-    float s_lo = std::min(std::min(lanes[0], lanes[1]), std::min(lanes[2], lanes[3]));
-    float s_hi = std::max(std::max(lanes[4], lanes[5]), std::max(lanes[6], lanes[7]));
-    for (; k4 < n; ++k4) s_lo = std::min(s_lo, start[k4]), s_hi = std::max(s_hi, start[k4]);
+    if (n == 0) return;
+    float s_lo = kInf, s_hi = -kInf;
+    for (uint32_t k = 0; k < n; ++k) {
+      start[k] = boxes[8 * size_t{kept[k]} + axis];
+      s_lo = std::min(s_lo, start[k]), s_hi = std::max(s_hi, start[k]);
+    }
     // (s_hi − s_lo)·scale < n in exact arithmetic; the clamp takes the rounding; a range too small for
     // a finite scale gets one bucket (still sorted, by the insertion pass alone).
-    float scale = s_hi > s_lo ? static_cast<float>(n) / (s_hi - s_lo) * 0.999f : 0.0f;
+    const uint32_t buckets = 2 * n;
+    float scale = s_hi > s_lo ? static_cast<float>(buckets) / (s_hi - s_lo) * 0.999f : 0.0f;
     if (!(scale < 1e30f)) scale = 0.0f;
-    const uint32_t top = n - 1;
+    const uint32_t top = buckets - 1;
     uint32_t* bucket = list->bucket.data();
-    std::fill(bucket, bucket + n + 1, 0u);
-    for (uint32_t k = 0; k < n; ++k) ++bucket[std::min(top, static_cast<uint32_t>((start[k] - s_lo) * scale)) + 1];
-    for (uint32_t k = 1; k < n; ++k) bucket[k] += bucket[k - 1];
+    uint32_t* bucket_of = list->bucket_of.data();
+    std::fill(bucket, bucket + buckets + 1, 0u);
     for (uint32_t k = 0; k < n; ++k) {
-      const uint32_t r = bucket[std::min(top, static_cast<uint32_t>((start[k] - s_lo) * scale))]++;
-      const uint32_t i = kept[k];
-      const float* b = boxes + 8 * size_t{i};
-      key[r] = uint64_t{OrderedBits(start[k])} << 32 | k;
-      slot[r] = c.kept_slot_[first + i];
-      for (int d = 0; d < 3; ++d) lo[d][r] = b[d], hi[d][r] = b[4 + d];
+      bucket_of[k] = std::min(top, static_cast<uint32_t>((start[k] - s_lo) * scale));
+      ++bucket[bucket_of[k] + 1];
     }
+    for (uint32_t k = 1; k < buckets; ++k) bucket[k] += bucket[k - 1];
+    // Sorted by (start, k): the same order as (start, rank), ranks ascending in k.
+    for (uint32_t k = 0; k < n; ++k) key[bucket[bucket_of[k]]++] = uint64_t{OrderedBits(start[k])} << 32 | k;
     for (uint32_t k = 1; k < n; ++k) {
       if (!(key[k - 1] > key[k])) continue;  // rare: only within a bucket
       const uint64_t x = key[k];
-      const uint32_t x_slot = slot[k];
-      const float x_lo[3] = {lo[0][k], lo[1][k], lo[2][k]}, x_hi[3] = {hi[0][k], hi[1][k], hi[2][k]};
       uint32_t j = k;
-      for (; j > 0 && key[j - 1] > x; --j) {
-        key[j] = key[j - 1];
-        slot[j] = slot[j - 1];
-        for (int d = 0; d < 3; ++d) lo[d][j] = lo[d][j - 1], hi[d][j] = hi[d][j - 1];
-      }
+      for (; j > 0 && key[j - 1] > x; --j) key[j] = key[j - 1];
       key[j] = x;
-      slot[j] = x_slot;
-      for (int d = 0; d < 3; ++d) lo[d][j] = x_lo[d], hi[d][j] = x_hi[d];
     }
-    return n;
+    // The records in key order; the boxes four at a time, transposed into the coordinate rows.
+    uint32_t r = 0;
+    for (; r + 4 <= n; r += 4) {
+      const float* b[4];
+      for (uint32_t t = 0; t < 4; ++t) {
+        const uint32_t k = static_cast<uint32_t>(key[r + t]), i = kept[k];
+        b[t] = boxes + 8 * size_t{i};
+        key[r + t] = (key[r + t] & 0xFFFFFFFF00000000u) | rank[k];  // the sweep's order: (start, rank)
+        slot[r + t] = c.kept_slot_[pool + i];
+      }
+      F4 l0 = Load4(b[0]), l1 = Load4(b[1]), l2 = Load4(b[2]), l3 = Load4(b[3]);
+      F4 h0 = Load4(b[0] + 4), h1 = Load4(b[1] + 4), h2 = Load4(b[2] + 4), h3 = Load4(b[3] + 4);
+      Transpose4(l0, l1, l2, l3);
+      Transpose4(h0, h1, h2, h3);
+      Store4(lo[0] + r, l0), Store4(lo[1] + r, l1), Store4(lo[2] + r, l2);
+      Store4(hi[0] + r, h0), Store4(hi[1] + r, h1), Store4(hi[2] + r, h2);
+    }
+    for (; r < n; ++r) {
+      const uint32_t k = static_cast<uint32_t>(key[r]), i = kept[k];
+      const float* b = boxes + 8 * size_t{i};
+      key[r] = (key[r] & 0xFFFFFFFF00000000u) | rank[k];
+      slot[r] = c.kept_slot_[pool + i];
+      for (int d = 0; d < 3; ++d) lo[d][r] = b[d], hi[d][r] = b[4 + d];
+    }
   }
 
-  /// The exact test of two box-overlapping triangles of different spheres (adjacency, degeneracy, predicate).
-  static void Test(NarrowPhaseContext& c, uint32_t ka, uint32_t kb, uint32_t a, uint32_t b, const char* base,
+  /// The exact test of two box-overlapping triangles of different spheres (adjacency, degeneracy,
+  /// predicate): position ia of a's sorted list, ib of b's.
+  static void Test(NarrowPhaseContext& c, uint32_t ia, uint32_t ib, uint32_t a, uint32_t b, const char* base,
                    size_t stride, const NarrowPhaseJob& job, NarrowPhaseStats& st) {
+    const uint32_t ka = c.list_a_.slot[ia], kb = c.list_b_.slot[ib];
     const uint32_t* wa = &c.region_w_[3 * size_t{ka}];
     const uint32_t* wb = &c.region_w_[3 * size_t{kb}];
     if ((wa[0] == wb[0]) | (wa[0] == wb[1]) | (wa[0] == wb[2]) | (wa[1] == wb[0]) | (wa[1] == wb[1]) |
@@ -325,29 +437,40 @@ struct NarrowPhaseContext::Internal {
       ++st.adjacent_skipped;
       return;
     }
-    const uint32_t* va = &c.region_v_[3 * size_t{ka}];
-    const uint32_t* vb = &c.region_v_[3 * size_t{kb}];
-    const float* pa[3] = {Vertex(base, stride, va[0]), Vertex(base, stride, va[1]), Vertex(base, stride, va[2])};
-    const float* pb[3] = {Vertex(base, stride, vb[0]), Vertex(base, stride, vb[1]), Vertex(base, stride, vb[2])};
-    for (const auto& [k, p] : {std::pair(ka, pa), std::pair(kb, pb)}) {
-      if (c.tri_state_[k] == 0) {  // degeneracy decided once a frame, for triangles that reach a test
-        c.tri_state_[k] = TriangleIsDegenerate(p[0], p[1], p[2]) ? 2 : 1;
-        st.degenerate_triangles += c.tri_state_[k] == 2;
+    uint32_t at[2] = {c.prepared_at_[ka], c.prepared_at_[kb]};
+    if ((at[0] | at[1]) >= kDegenerate) {  // not both prepared already (the usual case once a pair is under way)
+      for (int side = 0; side < 2; ++side) {
+        const uint32_t k = side ? kb : ka;
+        if (at[side] == kUnprepared) {  // prepared (degeneracy decided) once a frame, for triangles that reach a test
+          const uint32_t* v = &c.region_v_[3 * size_t{k}];
+          const bool usable = PrepareTriangle(Vertex(base, stride, v[0]), Vertex(base, stride, v[1]),
+                                              Vertex(base, stride, v[2]), &c.prepared_[c.prepared_count_]);
+          // Positions are finite (RegionBoxes): not usable ⇔ degenerate.
+          c.prepared_at_[k] = at[side] = usable ? c.prepared_count_++ : kDegenerate;
+          st.degenerate_triangles += !usable;
+        }
+        if (at[side] == kDegenerate) return;
       }
-      if (c.tri_state_[k] == 2) return;
     }
     ++st.triangle_tests;
-    if (!TrianglesIntersect(pa[0], pa[1], pa[2], pb[0], pb[1], pb[2])) return;
+    if (!TrianglesIntersect(c.prepared_[at[0]], c.prepared_[at[1]])) return;
     if (st.contacts < job.capacity)
       job.output[st.contacts] = {c.region_tri_[ka], c.region_tri_[kb], static_cast<uint16_t>(a), static_cast<uint16_t>(b)};
     ++st.contacts;
   }
 
-  /// Test() on the buffered hits, in order.
+  /// Test() on the buffered hits, in order; the triangle data of the hits a few ahead fetched early.
   static void Tests(NarrowPhaseContext& c, const uint64_t* hits, uint32_t n, uint32_t a, uint32_t b,
                     const char* base, size_t stride, const NarrowPhaseJob& job, NarrowPhaseStats& st) {
-    for (uint32_t h = 0; h < n; ++h)
+    constexpr uint32_t kAhead = 4;  // a hint, never a fault
+    for (uint32_t h = 0; h < n; ++h) {
+      if (h + kAhead < n) {
+        // Unprepared (or degenerate) triangles have no data yet: the hint then lands past the pool's end.
+        Prefetch(&c.prepared_[std::min(c.prepared_at_[c.list_a_.slot[static_cast<uint32_t>(hits[h + kAhead] >> 32)]], c.prepared_count_)]);
+        Prefetch(&c.prepared_[std::min(c.prepared_at_[c.list_b_.slot[static_cast<uint32_t>(hits[h + kAhead])]], c.prepared_count_)]);
+      }
       Test(c, static_cast<uint32_t>(hits[h] >> 32), static_cast<uint32_t>(hits[h]), a, b, base, stride, job, st);
+    }
   }
 
   /// Every contact of candidate (a, b), a < b: both regions culled to the other's box, then a
@@ -365,59 +488,84 @@ struct NarrowPhaseContext::Internal {
     }
     Culled& la = c.list_a_;
     Culled& lb = c.list_b_;
-    const uint32_t na = Cull(c, a, bb, axis, base, stride, &la);
-    const uint32_t nb = na ? Cull(c, b, ba, axis, base, stride, &lb) : 0;
-    st.culled_triangles += na + nb;
+    // The triangles of a whose box meets b's region box, and those of b meeting a's (counted: the
+    // culled triangles); of those of b only the ones meeting a's listed boxes' box are listed, then of
+    // a's only those meeting b's listed boxes' box. The dropped ones meet no box of the other list, so
+    // the sweep below meets the same triangle pairs in the same order as on the full lists: ranks (the
+    // order in the full lists) break ties of the minima.
+    if (c.kept_[a] == kNotCulled) CullRegion(c, a, base, stride);
+    uint32_t listed_a = 0, listed_b = 0, nb = 0;
+    uint32_t na = Filter<false>(c, a, bb, nullptr, &la, &listed_a);
+    if (na) {
+      if (c.kept_[b] == kNotCulled) CullRegion(c, b, base, stride);
+      float box_a[8], box_b[8];
+      ListBox(c, a, la, na, box_a);
+      nb = Filter<true>(c, b, ba, box_a, &lb, &listed_b);
+      ListBox(c, b, lb, listed_b, box_b);
+      st.culled_triangles += na + nb;
+      na = Tighten(c, a, box_b, &la, na);
+      nb = listed_b;
+    }
+    Sort(c, a, axis, &la, na);
+    Sort(c, b, axis, &lb, nb);
     // Sweep: take the list whose next box starts first; test it against the other list's boxes that
     // start before it ends (on `axis` those overlap: the order says so), on the two other axes, four at
     // a time. Each overlapping pair is met exactly once. The sentinels end the inner loop. No branch on
-    // the data but the loop ends: the hits (slot in a << 32 | slot in b) go to a buffer, tested in order.
+    // the data but the loop ends: each step writes a record (its element, side, first box and hit
+    // lanes), kept when it has a hit; the records become hits (position in a's list << 32 | in b's),
+    // tested in order.
     struct View {
-      const uint32_t* slot;
       const float *start, *end, *lo_u, *hi_u, *lo_v, *hi_v;
-      uint32_t shift;  // of its slot in a hit: 32 for a, 0 for b
     };
     const int u = (axis + 1) % 3, v = (axis + 2) % 3;
     const View view[2] = {
-        {la.slot.data(), la.lo[axis].data(), la.hi[axis].data(), la.lo[u].data(), la.hi[u].data(), la.lo[v].data(),
-         la.hi[v].data(), 32},
-        {lb.slot.data(), lb.lo[axis].data(), lb.hi[axis].data(), lb.lo[u].data(), lb.hi[u].data(), lb.lo[v].data(),
-         lb.hi[v].data(), 0}};
+        {la.lo[axis].data(), la.hi[axis].data(), la.lo[u].data(), la.hi[u].data(), la.lo[v].data(), la.hi[v].data()},
+        {lb.lo[axis].data(), lb.hi[axis].data(), lb.lo[u].data(), lb.hi[u].data(), lb.lo[v].data(), lb.hi[v].data()}};
     const uint64_t* key_a = la.key.data();
     const uint64_t* key_b = lb.key.data();
-    uint64_t* hits = c.hits_.data();
-    const uint32_t flush_at = static_cast<uint32_t>(c.hits_.size()) - 4;
-    uint32_t n_hits = 0;
+    uint64_t* records = c.records_.data();
+    const uint32_t records_full = static_cast<uint32_t>(c.records_.size()) - 1;
+    uint32_t n_records = 0;
+    auto flush = [&] {  // records → hits → tests
+      uint64_t* hits = c.hits_.data();
+      uint32_t n_hits = 0;
+      for (uint32_t r = 0; r < n_records; ++r) {
+        const uint64_t rec = records[r];
+        const uint64_t x = rec >> 32, side = rec >> 31 & 1;
+        const uint32_t k = static_cast<uint32_t>(rec >> 4) & 0x7FFFFFFu, hit = static_cast<uint32_t>(rec) & 15;
+        for (uint32_t t = 0; t < 4; ++t) {  // the hit lanes packed to the front; all four written
+          const uint64_t o = k + kHitLane[hit][t];
+          hits[n_hits + t] = side ? (o << 32 | x) : (x << 32 | o);
+        }
+        n_hits += kHitCount[hit];
+      }
+      Tests(c, hits, n_hits, a, b, base, stride, job, st);
+      n_records = 0;
+    };
     uint32_t i = 0, j = 0;  // next of a, of b
     while (i < na && j < nb) {
-      const uint32_t side = key_a[i] <= key_b[j] ? 0 : 1;  // same order as the minima (ties: cull order)
+      const uint32_t side = key_a[i] <= key_b[j] ? 0 : 1;  // same order as the minima (ties: rank, then a)
       const View& x = view[side];
       const View& o = view[side ^ 1];
       const uint32_t xi = side ? j : i;
       const F4 x_end = Set1(x.end[xi]);
       const F4 xlo_u = Set1(x.lo_u[xi]), xhi_u = Set1(x.hi_u[xi]);
       const F4 xlo_v = Set1(x.lo_v[xi]), xhi_v = Set1(x.hi_v[xi]);
-      const uint64_t x_slot = uint64_t{x.slot[xi]} << x.shift;
+      const uint64_t x_record = uint64_t{xi} << 32 | uint64_t{side} << 31;
       for (uint32_t k = side ? i : j;; k += 4) {
         const uint32_t started = Bits(Le(Load4(o.start + k), x_end));  // a prefix: minima ascending
         const uint32_t hit = started & Bits(And(And(Le(Load4(o.lo_u + k), xhi_u), Le(xlo_u, Load4(o.hi_u + k))),
                                                 And(Le(Load4(o.lo_v + k), xhi_v), Le(xlo_v, Load4(o.hi_v + k)))));
         st.box_tests += static_cast<uint32_t>(std::countr_one(started));
-        if (n_hits > flush_at) {
-          Tests(c, hits, n_hits, a, b, base, stride, job, st);
-          n_hits = 0;
-        }
-        if (hit) {  // rare: most boxes that start in time miss on another axis
-          for (uint32_t t = 0; t < 4; ++t)  // the hit lanes packed to the front; all four written
-            hits[n_hits + t] = x_slot | uint64_t{o.slot[k + kHitLane[hit][t]]} << o.shift;
-          n_hits += kHitCount[hit];
-        }
+        records[n_records] = x_record | uint64_t{k} << 4 | hit;
+        n_records += hit != 0;
+        if (n_records == records_full) flush();
         if (started != 15) break;
       }
       i += side ^ 1;
       j += side;
     }
-    Tests(c, hits, n_hits, a, b, base, stride, job, st);
+    flush();
     *out_stats = st;
   }
 };
@@ -482,18 +630,32 @@ Status NarrowPhaseContext::Init(const AssetView& view) {
       for (int k = 0; k < 6; ++k) box_soa_[k * box_pitch_ + s] = k < 3 ? kInf : -kInf;
     clip_.assign(8 * size_t{S}, 0.0f);
     kept_.assign(S, kNotCulled);
-    tri_state_.assign(region_tri_.size(), 0);
+    prepared_at_.assign(region_tri_.size(), kUnprepared);
+    prepared_.assign(region_tri_.size() + 1, PreparedTriangle{});  // + 1: a prefetch target past the used ones
     outcode_.assign(largest_verts, 0);
     corner_.assign(4 * size_t{largest_verts}, 0.0f);
-    kept_slot_.assign(region_tri_.size(), 0);
-    kept_box_.assign(8 * region_tri_.size(), 0.0f);
-    hits_.assign(256, 0);
+    pool_offsets_.assign(1, 0);
+    chunk_offsets_.assign(1, 0);
+    for (uint32_t s = 0; s < S; ++s) {
+      const uint32_t chunks = (region_offsets_[s + 1] - region_offsets_[s] + kChunk - 1) / kChunk;
+      pool_offsets_.push_back(pool_offsets_[s] + chunks * kChunk);
+      chunk_offsets_.push_back(chunk_offsets_[s] + (chunks + 3) / 4 * 4);
+    }
+    pool_pitch_ = pool_offsets_[S];
+    chunk_pitch_ = chunk_offsets_[S];
+    kept_slot_.assign(pool_pitch_, 0);
+    kept_box_.assign(8 * pool_pitch_, 0.0f);
+    chunk_box_.assign(6 * chunk_pitch_, 0.0f);
+    records_.assign(64, 0);
+    hits_.assign(4 * records_.size(), 0);
     candidates_.assign(std::min(size_t{S} * (S - 1) / 2, 16 * size_t{S} + 64), 0);
     for (Culled* l : {&list_a_, &list_b_}) {
       l->key.assign(largest, 0);
       l->start.assign(largest, 0.0f);
-      l->bucket.assign(largest + 1, 0);
-      l->kept.assign(largest, 0);
+      l->bucket.assign(2 * size_t{largest} + 1, 0);
+      l->bucket_of.assign(largest, 0);
+      l->kept.assign(largest + kChunk, 0);  // Filter writes one past the listed ones (padding included)
+      l->rank.assign(largest + kChunk, 0);
       l->slot.assign(largest + kSentinels, 0);
       for (int k = 0; k < 3; ++k) l->lo[k].assign(largest + kSentinels, 0.0f), l->hi[k].assign(largest + kSentinels, 0.0f);
     }
@@ -540,6 +702,7 @@ Status NarrowPhaseJob::Run() const {
   const size_t stride = positions.stride_bytes;
   if (!NarrowPhaseContext::Internal::RegionBoxes(c, base, stride)) return Status::kErrorNonFinitePositions;
   std::fill(c.kept_.begin(), c.kept_.end(), kNotCulled);               // regions: culled on first use
+  c.prepared_count_ = 0;
   // Pass 1: each sphere's clip, the box of its candidate partners' boxes ∩ its own (inverted: none);
   // the candidates kept for pass 2 while they fit (else enumerated again).
   for (size_t i = 0; i < c.clip_.size(); ++i) c.clip_[i] = i % 8 < 4 ? kInf : -kInf;

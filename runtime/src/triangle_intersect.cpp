@@ -2,23 +2,33 @@
 // (Shewchuk 1997). See triangle_intersect.h for the contract.
 //
 // Layout: (1) floating-point expansions, the exact arithmetic; (2) exact orient3d / orient2d on them,
-// out of line (rare); (3) the filtered predicates, inline; (4) the 2D (coplanar) test; (5) the 3D test.
+// out of line (rare); (3) the filtered predicates, inline; (4) the 2D (coplanar) test; (5) the 3D test;
+// (6) prepared triangles: a semi-static float filter (its error bound derived there) in front of (5).
 //
 // Why float inputs never break the arithmetic: coordinates converted to double are multiples of 2^-149
 // with |x| < 2^128, so every difference is a multiple of 2^-149, every product of three differences a
 // multiple of 2^-447 below 2^387: no overflow, no underflow (doubles are normal down to 2^-1022), hence
 // the error bounds hold and TwoSum / TwoProduct are exact throughout.
 //
-// Floating-point environment: IEEE double with round-to-nearest and no extended precision (SSE2 and
-// later, ARM, CUDA). Contraction into FMA (-ffp-contract=fast) only removes roundings from the filtered
+// Floating-point environment: IEEE float and double with round-to-nearest and no extended precision
+// (SSE2 and later, ARM, CUDA). Results flushed to zero (FTZ) do no harm: no double result comes near
+// 2^-1022, and section 6's bound covers float underflow, gradual or flushed. Subnormal inputs read as
+// zero (DAZ) are not supported. Contraction into FMA (-ffp-contract=fast) only removes roundings from the filtered
 // expressions, so the bounds still hold; the error-free transformations keep their product out of reach
 // (every product feeds std::fma). -ffast-math (reassociation) would break them: refused below.
 #include "spherechain/runtime/triangle_intersect.h"
 
+#include <algorithm>
 #include <cfloat>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
+
+#if defined(__SSE2__) || defined(_M_X64) || (defined(_M_IX86_FP) && _M_IX86_FP >= 2)
+#define SPHERECHAIN_TRIANGLE_SSE2 1
+#include <emmintrin.h>
+#endif
 
 #if defined(__FAST_MATH__)
 #error "triangle_intersect.cpp must not be compiled with -ffast-math: its exact arithmetic relies on IEEE rounding"
@@ -420,21 +430,51 @@ struct ApexTable {
 };
 constexpr ApexTable kApex;
 
-/// Everything after the two filtered early exits: non-finite input, exact signs where the filter was
-/// unsure, the exact early exits, degenerate triangles, the coplanar case, the canonical form and the
-/// interval test. v: p1, q1, r1, p2, q2, r2. Recomputes the planes and filtered orientations (cheap)
-/// so that the hot path needs no stores.
-SPHERECHAIN_NOINLINE bool IntersectRest(const Vec3 v[6], uint64_t* counter) {
-  // Non-finite input: NaN/Inf never pass a certified comparison, so the exits before returned false
-  // already or we get here; either way no exact evaluation may see them.
-  if (!AllFinite(v, 6)) return false;
-  const Plane plane2 = MakePlane(v[3], v[4], v[5]);
-  const Plane plane1 = MakePlane(v[0], v[1], v[2]);
-  Filtered f1[3], f2[3];
-  for (int k = 0; k < 3; ++k) {
-    f1[k] = Side(plane2, v[3], v[k]);
-    f2[k] = Side(plane1, v[0], v[3 + k]);
+/// The canonical form (Guigue & Devillers 2003, §3) for exact orientations s1 of triangle 1's vertices
+/// (0, 1, 2) against plane 2 and s2 of triangle 2's (3, 4, 5) against plane 1, neither all equal nor all
+/// zero, both triangles non-degenerate: the vertices a1, b1, c1, a2, b2, c2 (indices) of the interval
+/// test, which is: Orient3d(a1, b1, a2, b2) ≤ 0 and Orient3d(a1, c1, c2, a2) ≤ 0 (the segments T1 ∩ L and
+/// T2 ∩ L on the line L = plane1 ∩ plane2 overlap iff neither starts after the other ends).
+struct Canonical {
+  int a1, b1, c1, a2, b2, c2;
+};
+
+constexpr Canonical CanonicalForm(const int s1[3], const int s2[3]) {
+  // Triangle 1 rotated so its apex a1 is alone on the non-negative side of (oriented) plane 2, edges
+  // a1b1, a1c1 crossing it; likewise triangle 2 w.r.t. (oriented) plane 1. Rotations keep
+  // orientations; a swap of the two non-apex vertices reverses the triangle's plane.
+  const Apex apex1 = kApex.entry[9 * (s1[0] + 1) + 3 * (s1[1] + 1) + (s1[2] + 1)];
+  // Triangle 2 reversed (q2, r2 swapped) when apex1.flip < 0, so that a1 is on its non-negative side.
+  const int swap2 = apex1.flip < 0;
+  const int order2[3] = {0, 1 + swap2, 2 - swap2};
+  const Apex apex2 = kApex.entry[9 * (s2[order2[0]] + 1) + 3 * (s2[order2[1]] + 1) + (s2[order2[2]] + 1)];
+  // Triangle 1 reversed (b1, c1 swapped) when apex2.flip < 0, so that a2 is on its non-negative side.
+  const int swap1 = apex2.flip < 0;
+  return {apex1.k, (apex1.k + 1 + swap1) % 3, (apex1.k + 2 - swap1) % 3,
+          3 + order2[apex2.k], 3 + order2[(apex2.k + 1) % 3], 3 + order2[(apex2.k + 2) % 3]};
+}
+
+/// CanonicalForm for the 64 patterns of non-zero signs, indexed by the positive ones as bits: triangle
+/// 1's vertices in bits 0..2, triangle 2's in 3..5 (a load instead of a chain of dependent lookups; the
+/// all-equal patterns, which never reach it, hold harmless values).
+struct CanonicalTable {
+  Canonical entry[64];
+  constexpr CanonicalTable() : entry{} {
+    for (int m = 0; m < 64; ++m) {
+      const int s1[3] = {m & 1 ? 1 : -1, m & 2 ? 1 : -1, m & 4 ? 1 : -1};
+      const int s2[3] = {m & 8 ? 1 : -1, m & 16 ? 1 : -1, m & 32 ? 1 : -1};
+      entry[m] = CanonicalForm(s1, s2);
+    }
   }
+};
+constexpr CanonicalTable kCanonical;
+
+/// Everything after the two filtered early exits, for finite input: exact signs where the filter was
+/// unsure, the exact early exits, degenerate triangles, the coplanar case, the canonical form and the
+/// interval test. v: p1, q1, r1, p2, q2, r2; plane1, plane2: MakePlane of each; f1, f2: the filtered
+/// orientations of triangle 1's vertices against plane 2 (Side(plane2, p2, ·)) and of 2's against 1.
+SPHERECHAIN_NOINLINE bool IntersectRest(const Vec3 v[6], const Plane& plane1, const Plane& plane2,
+                                        const Filtered f1[3], const Filtered f2[3], uint64_t* counter) {
   const Vec3* t1[3] = {&v[0], &v[1], &v[2]};
   const Vec3* t2[3] = {&v[3], &v[4], &v[5]};
   // The convention: a degenerate triangle (no plane: every orientation against it is exactly 0, so the
@@ -452,26 +492,19 @@ SPHERECHAIN_NOINLINE bool IntersectRest(const Vec3 v[6], uint64_t* counter) {
   if ((s2[0] == s2[1]) & (s2[1] == s2[2]) & (s2[0] != 0)) return false;
   if (degenerate()) return false;
 
-  // Canonical form: triangle 1 rotated so its apex a1 is alone on the non-negative side of (oriented)
-  // plane 2, edges a1b1, a1c1 crossing it; likewise triangle 2 w.r.t. (oriented) plane 1. Rotations keep
-  // orientations; a swap of the two non-apex vertices reverses the triangle's plane.
-  const Apex apex1 = kApex.entry[9 * (s1[0] + 1) + 3 * (s1[1] + 1) + (s1[2] + 1)];
-  // Triangle 2 reversed (q2, r2 swapped) when apex1.flip < 0, so that a1 is on its non-negative side.
-  const int swap2 = apex1.flip < 0;
-  const int order2[3] = {0, 1 + swap2, 2 - swap2};
-  const Apex apex2 = kApex.entry[9 * (s2[order2[0]] + 1) + 3 * (s2[order2[1]] + 1) + (s2[order2[2]] + 1)];
-  // Triangle 1 reversed (b1, c1 swapped) when apex2.flip < 0, so that a2 is on its non-negative side.
-  const int swap1 = apex2.flip < 0;
-  const Vec3& a1 = *t1[apex1.k];
-  const Vec3& b1 = *t1[(apex1.k + 1 + swap1) % 3];
-  const Vec3& c1 = *t1[(apex1.k + 2 - swap1) % 3];
-  const Vec3& a2 = *t2[order2[apex2.k]];
-  const Vec3& b2 = *t2[order2[(apex2.k + 1) % 3]];
-  const Vec3& c2 = *t2[order2[(apex2.k + 2) % 3]];
-  // The segments T1 ∩ L and T2 ∩ L on the line L = plane1 ∩ plane2 overlap iff neither starts after the
-  // other ends: two orientations (Guigue & Devillers 2003, §3, the interval test).
-  const int first = Orient3d(a1, b1, a2, b2, counter), second = Orient3d(a1, c1, c2, a2, counter);
-  return (first <= 0) & (second <= 0);
+  const Canonical k = CanonicalForm(s1, s2);
+  if (Orient3d(v[k.a1], v[k.b1], v[k.a2], v[k.b2], counter) > 0) return false;
+  return Orient3d(v[k.a1], v[k.c1], v[k.c2], v[k.a2], counter) <= 0;
+}
+
+/// IntersectRest for float input: non-finite coordinates (NaN/Inf never pass a certified comparison, so
+/// the exits before returned false already or we get here) answer false before any exact evaluation.
+SPHERECHAIN_NOINLINE bool IntersectRestChecked(const Vec3 v[6], uint64_t* counter) {
+  if (!AllFinite(v, 6)) return false;
+  const Plane plane1 = MakePlane(v[0], v[1], v[2]), plane2 = MakePlane(v[3], v[4], v[5]);
+  const Filtered f1[3] = {Side(plane2, v[3], v[0]), Side(plane2, v[3], v[1]), Side(plane2, v[3], v[2])};
+  const Filtered f2[3] = {Side(plane1, v[0], v[3]), Side(plane1, v[0], v[4]), Side(plane1, v[0], v[5])};
+  return IntersectRest(v, plane1, plane2, f1, f2, counter);
 }
 
 /// The whole test. The hot part — two planes, six filtered orientations, the two early exits — is
@@ -487,7 +520,144 @@ inline bool Intersect(const float* p1, const float* q1, const float* r1, const f
   const Filtered d = Side(plane1, P1, P2), e = Side(plane1, P1, Q2), f = Side(plane1, P1, R2);
   if (CertifiedOneSide(d, e, f)) return false;
   const Vec3 v[6] = {P1, Q1, R1, P2, Q2, R2};
-  return IntersectRest(v, counter);
+  return IntersectRestChecked(v, counter);
+}
+
+// ---------------------------------------------------------------------------------------------------
+// (6) Prepared triangles and their semi-static float filter.
+//
+// The value to certify is D(x) = N · (x − p), N = (q − p) × (r − p) exactly (x, p, q, r floats: exact
+// reals). PrepareTriangle computes in float u = q − p, v = r − p, per component i (j, k the next two)
+// a_i = u_j v_k, b_i = u_k v_j, n_i = a_i − b_i, P_i = |a_i| + |b_i|, S = Σ P_i, and δ = n · p
+// ((n_x p_x + n_y p_y) + n_z p_z). The filter computes in float e(x) = ((n_x x_x + n_y x_y) + n_z x_z) − δ.
+// With u = 2^-24, γ_k = ku/(1 − ku), M_x = max_i |x_i|, M_p = max_i |p_i|, and "tiny" the absolute
+// errors of underflow, gradual or flushed to zero (≤ 2^-126 per operation):
+//   |n_i − N_i| ≤ η_i = 4.01u P_i + 3·2^-126          (rounded differences, products and difference),
+//   |n_i| ≤ 1.0001 P_i,   e(x) − D(x) = [e(x) − (n · x − δ)] + (n − N) · (x − p) + (n · p − δ),
+//   |e(x) − (n · x − δ)| ≤ γ4 (Σ|n_i||x_i| + |δ|) + 7·2^-126,   |n · p − δ| ≤ γ3 Σ|n_i||p_i| + 3·2^-126,
+//   |δ| ≤ 1.0003 S M_p + 3·2^-126,   |(n − N) · (x − p)| ≤ Σ η_i (M_x + M_p),
+// so |e(x) − D(x)| ≤ 8.02u S M_x + 11.02u S M_p + 9·2^-126 (M_x + M_p) + 13·2^-126 ≤ G M_x + A with
+// G = 8.25u S + 2^-122 and A = (11.25u S + 2^-122) M_p + 2^-120, rounded up to floats with a 2^-20
+// relative margin, which also covers the two roundings of the bound's own evaluation fl(fl(G M_x) + A).
+// Then e > bound certifies D > 0 and e < −bound certifies D < 0; NaN compares false (uncertain). A fused
+// multiply-add (contraction) only removes roundings. No overflow: the filter is live only for
+// |coordinates| ≤ 2^40 (then P_i ≤ 2^83, every term of e stays below 2^126); otherwise G, A and M are +∞
+// and nothing is certified. The same η_i certifies a non-zero area: |n_i| > η_i for some i ⇒ N ≠ 0.
+
+constexpr double kFloatUnit = 0x1p-24;
+constexpr float kFilterMaxCoordinate = 0x1p40f;
+constexpr float kInfinity = std::numeric_limits<float>::infinity();
+
+/// A float ≥ v ≥ 0 (v finite, below 2^124): v with a 2^-20 margin, rounded to float.
+inline float RoundUp(double v) { return static_cast<float>(v * (1.0 + 0x1p-20)); }
+
+/// The float filter (see above) on the three vertices of t against the plane of p: bits 0..2 the
+/// vertices certified strictly above, bits 4..6 those certified strictly below. Four lanes, the fourth
+/// (the error terms) ignored.
+inline uint32_t FloatSides(const PreparedTriangle& t, const PreparedTriangle& p) {
+  const float bound = p.x[3] * t.z[3] + p.y[3];
+#if SPHERECHAIN_TRIANGLE_SSE2
+  __m128 e = _mm_mul_ps(_mm_set1_ps(p.plane[0]), _mm_load_ps(t.x));
+  e = _mm_add_ps(e, _mm_mul_ps(_mm_set1_ps(p.plane[1]), _mm_load_ps(t.y)));
+  e = _mm_add_ps(e, _mm_mul_ps(_mm_set1_ps(p.plane[2]), _mm_load_ps(t.z)));
+  e = _mm_sub_ps(e, _mm_set1_ps(p.plane[3]));
+  const __m128 b = _mm_set1_ps(bound);
+  const uint32_t above = static_cast<uint32_t>(_mm_movemask_ps(_mm_cmpgt_ps(e, b))) & 7;
+  const uint32_t below = static_cast<uint32_t>(_mm_movemask_ps(_mm_cmplt_ps(e, _mm_sub_ps(_mm_setzero_ps(), b)))) & 7;
+  return above | below << 4;
+#else
+  uint32_t sides = 0;
+  for (int k = 0; k < 3; ++k) {
+    float e = p.plane[0] * t.x[k];
+    e += p.plane[1] * t.y[k];
+    e += p.plane[2] * t.z[k];
+    e -= p.plane[3];
+    sides |= uint32_t{e > bound} << k | uint32_t{e < -bound} << (4 + k);
+  }
+  return sides;
+#endif
+}
+
+/// +1 / −1 when FloatSides certifies all three vertices above / below, else 0.
+inline int OneSide(uint32_t sides) { return int((sides & 7) == 7) - int((sides >> 4) == 7); }
+
+/// Orient3d(a, b, c, d) of float points whose |coordinates| are at most 2^40, evaluated in float as
+/// MakePlane and Side do in double, certified by Shewchuk's orient3d bound A for float ((7 + 56u)u
+/// relative to the permanent, u = 2^-24; 8u here) plus 2^-70 for underflow (gradual or flushed: at
+/// most ~2^-81 at that range): +1 / −1 when certified, 0 when not (then the caller evaluates exactly).
+inline int FloatOrient3d(const float* a, const float* b, const float* c, const float* d) {
+  const float ux = b[0] - a[0], uy = b[1] - a[1], uz = b[2] - a[2];
+  const float vx = c[0] - a[0], vy = c[1] - a[1], vz = c[2] - a[2];
+  const float wx = d[0] - a[0], wy = d[1] - a[1], wz = d[2] - a[2];
+  const float xl = uy * vz, xr = uz * vy, yl = uz * vx, yr = ux * vz, zl = ux * vy, zr = uy * vx;
+  const float det = wx * (xl - xr) + wy * (yl - yr) + wz * (zl - zr);
+  const float permanent = std::fabs(wx) * (std::fabs(xl) + std::fabs(xr)) + std::fabs(wy) * (std::fabs(yl) + std::fabs(yr)) +
+                          std::fabs(wz) * (std::fabs(zl) + std::fabs(zr));
+  const float bound = 8.0f * float(kFloatUnit) * permanent + 0x1p-70f;
+  return int(det > bound) - int(det < -bound);
+}
+
+/// What Intersect does after its float-input checks, on prepared (finite, non-degenerate) triangles:
+/// the filtered double orientations, then IntersectRest. For the rare pairs with a vertex the float
+/// filter could not place (near the other plane).
+SPHERECHAIN_NOINLINE bool IntersectPreparedDouble(const PreparedTriangle& t1, const PreparedTriangle& t2,
+                                                  uint64_t* counter) {
+  const Vec3 v[6] = {{{t1.x[0], t1.y[0], t1.z[0]}}, {{t1.x[1], t1.y[1], t1.z[1]}}, {{t1.x[2], t1.y[2], t1.z[2]}},
+                     {{t2.x[0], t2.y[0], t2.z[0]}}, {{t2.x[1], t2.y[1], t2.z[1]}}, {{t2.x[2], t2.y[2], t2.z[2]}}};
+  const Plane plane2 = MakePlane(v[3], v[4], v[5]);
+  const Filtered f1[3] = {Side(plane2, v[3], v[0]), Side(plane2, v[3], v[1]), Side(plane2, v[3], v[2])};
+  if (CertifiedOneSide(f1[0], f1[1], f1[2])) return false;
+  const Plane plane1 = MakePlane(v[0], v[1], v[2]);
+  const Filtered f2[3] = {Side(plane1, v[0], v[3]), Side(plane1, v[0], v[4]), Side(plane1, v[0], v[5])};
+  if (CertifiedOneSide(f2[0], f2[1], f2[2])) return false;
+  return IntersectRest(v, plane1, plane2, f1, f2, counter);
+}
+
+/// The exact Orient3d of four vertices of the prepared pair (indices 0..5: t1's p, q, r, then t2's).
+SPHERECHAIN_NOINLINE int PreparedOrient3dExact(const PreparedTriangle* const t[2], int a, int b, int c, int d,
+                                               uint64_t* counter) {
+  auto vertex = [&](int i) {
+    const PreparedTriangle& p = *t[i / 3];
+    return Vec3{{p.x[i % 3], p.y[i % 3], p.z[i % 3]}};
+  };
+  return Orient3d(vertex(a), vertex(b), vertex(c), vertex(d), counter);
+}
+
+/// Intersect on prepared (finite, non-degenerate) triangles after the float filter both ways (sides1:
+/// FloatSides(t1, t2), sides2: FloatSides(t2, t1), neither all on one side). When it certified the side
+/// of every vertex (none near the other plane: the usual case), the canonical form and the interval
+/// test follow on those signs with float-filtered orientations (exact ones where that filter is
+/// unsure); otherwise IntersectPreparedDouble.
+inline bool IntersectPreparedRest(const PreparedTriangle& t1, const PreparedTriangle& t2, uint32_t sides1,
+                                  uint32_t sides2, uint64_t* counter) {
+  if (((((sides1 | sides1 >> 4) & 7) == 7) & (((sides2 | sides2 >> 4) & 7) == 7)) == 0) [[unlikely]]
+    return IntersectPreparedDouble(t1, t2, counter);
+  // Every side certified, so the filter is live: |coordinates| ≤ 2^40, as FloatOrient3d needs. Both
+  // orientations evaluated (independent: they overlap), then decided in the interval test's order.
+  const PreparedTriangle* const t[2] = {&t1, &t2};
+  auto vertex = [&](int i, float out[3]) {
+    const PreparedTriangle& p = *t[i >= 3];
+    const int k = i >= 3 ? i - 3 : i;
+    out[0] = p.x[k], out[1] = p.y[k], out[2] = p.z[k];
+  };
+  const Canonical& k = kCanonical.entry[(sides1 & 7) | (sides2 & 7) << 3];
+  float a1[3], b1[3], c1[3], a2[3], b2[3], c2[3];
+  vertex(k.a1, a1), vertex(k.b1, b1), vertex(k.c1, c1), vertex(k.a2, a2), vertex(k.b2, b2), vertex(k.c2, c2);
+  int first = FloatOrient3d(a1, b1, a2, b2);
+  int second = FloatOrient3d(a1, c1, c2, a2);
+  if (first == 0) first = PreparedOrient3dExact(t, k.a1, k.b1, k.a2, k.b2, counter);
+  if (first > 0) return false;
+  if (second == 0) second = PreparedOrient3dExact(t, k.a1, k.c1, k.c2, k.a2, counter);
+  return second <= 0;
+}
+
+/// The hot part: the float filter both ways, in registers; the rest out of line.
+inline bool IntersectPrepared(const PreparedTriangle& t1, const PreparedTriangle& t2, uint64_t* counter) {
+  const uint32_t sides1 = FloatSides(t1, t2);
+  if (OneSide(sides1) != 0) return false;
+  const uint32_t sides2 = FloatSides(t2, t1);
+  if (OneSide(sides2) != 0) return false;
+  return IntersectPreparedRest(t1, t2, sides1, sides2, counter);
 }
 
 }  // namespace
@@ -503,7 +673,95 @@ bool TriangleIsDegenerate(const float p[3], const float q[3], const float r[3]) 
   return Degenerate(MakePlane(v[0], v[1], v[2]), v[0], v[1], v[2], nullptr);
 }
 
+bool PrepareTriangle(const float p[3], const float q[3], const float r[3], PreparedTriangle* out) {
+  // The float plane and its bounds (section 6).
+  float n[3], perm[3], delta, m_p, m;
+  bool finite;
+#if SPHERECHAIN_TRIANGLE_SSE2
+  auto load3 = [](const float* v) {  // x, y, z, 0: reads exactly three floats, 4-byte aligned
+    double xy;
+    std::memcpy(&xy, v, sizeof xy);
+    return _mm_movelh_ps(_mm_castpd_ps(_mm_set_sd(xy)), _mm_load_ss(v + 2));
+  };
+  const __m128 P = load3(p), Q = load3(q), R = load3(r);
+  const __m128 U = _mm_sub_ps(Q, P), V = _mm_sub_ps(R, P);
+  // Component i of A: u_j v_k, of B: u_k v_j ((i, j, k) = (x, y, z) rotated): the products MakePlane takes.
+  const __m128 A = _mm_mul_ps(_mm_shuffle_ps(U, U, _MM_SHUFFLE(3, 0, 2, 1)), _mm_shuffle_ps(V, V, _MM_SHUFFLE(3, 1, 0, 2)));
+  const __m128 B = _mm_mul_ps(_mm_shuffle_ps(U, U, _MM_SHUFFLE(3, 1, 0, 2)), _mm_shuffle_ps(V, V, _MM_SHUFFLE(3, 0, 2, 1)));
+  const __m128 sign = _mm_set1_ps(-0.0f);
+  const __m128 N = _mm_sub_ps(A, B), PERM = _mm_add_ps(_mm_andnot_ps(sign, A), _mm_andnot_ps(sign, B));
+  alignas(16) float nv[4], pv[4], np[4];
+  _mm_store_ps(nv, N);
+  _mm_store_ps(pv, PERM);
+  _mm_store_ps(np, _mm_mul_ps(N, P));
+  for (int k = 0; k < 3; ++k) n[k] = nv[k], perm[k] = pv[k];
+  delta = (np[0] + np[1]) + np[2];
+  const __m128 abs_p = _mm_andnot_ps(sign, P);
+  __m128 mx = _mm_max_ps(abs_p, _mm_max_ps(_mm_andnot_ps(sign, Q), _mm_andnot_ps(sign, R)));
+  mx = _mm_max_ps(mx, _mm_shuffle_ps(mx, mx, _MM_SHUFFLE(1, 0, 3, 2)));
+  mx = _mm_max_ps(mx, _mm_shuffle_ps(mx, mx, _MM_SHUFFLE(2, 3, 0, 1)));
+  __m128 mp = _mm_max_ps(abs_p, _mm_shuffle_ps(abs_p, abs_p, _MM_SHUFFLE(1, 0, 3, 2)));
+  mp = _mm_max_ps(mp, _mm_shuffle_ps(mp, mp, _MM_SHUFFLE(2, 3, 0, 1)));
+  m = _mm_cvtss_f32(mx), m_p = _mm_cvtss_f32(mp);
+  // x − x is 0 for finite x, NaN for NaN and ±Inf (then max may have dropped it: checked apart).
+  const __m128 zero = _mm_setzero_ps();
+  finite = _mm_movemask_ps(_mm_and_ps(_mm_and_ps(_mm_cmpeq_ps(_mm_sub_ps(P, P), zero), _mm_cmpeq_ps(_mm_sub_ps(Q, Q), zero)),
+                                      _mm_cmpeq_ps(_mm_sub_ps(R, R), zero))) == 15;
+#else
+  const float ux = q[0] - p[0], uy = q[1] - p[1], uz = q[2] - p[2];
+  const float vx = r[0] - p[0], vy = r[1] - p[1], vz = r[2] - p[2];
+  const float xl = uy * vz, xr = uz * vy, yl = uz * vx, yr = ux * vz, zl = ux * vy, zr = uy * vx;
+  n[0] = xl - xr, n[1] = yl - yr, n[2] = zl - zr;
+  perm[0] = std::fabs(xl) + std::fabs(xr), perm[1] = std::fabs(yl) + std::fabs(yr), perm[2] = std::fabs(zl) + std::fabs(zr);
+  delta = (n[0] * p[0] + n[1] * p[1]) + n[2] * p[2];
+  m_p = std::max(std::fabs(p[0]), std::max(std::fabs(p[1]), std::fabs(p[2])));
+  m = std::max(m_p, std::max(std::max(std::max(std::fabs(q[0]), std::fabs(q[1])), std::fabs(q[2])),
+                             std::max(std::max(std::fabs(r[0]), std::fabs(r[1])), std::fabs(r[2]))));
+  // x − x is 0 for finite x, NaN for NaN and ±Inf.
+  const float nan_probe = (p[0] - p[0]) + (p[1] - p[1]) + (p[2] - p[2]) + (q[0] - q[0]) + (q[1] - q[1]) +
+                          (q[2] - q[2]) + (r[0] - r[0]) + (r[1] - r[1]) + (r[2] - r[2]);
+  finite = nan_probe == 0.0f;
+#endif
+  const bool live = finite && m <= kFilterMaxCoordinate;
+  const double sum = double(perm[0]) + double(perm[1]) + double(perm[2]);
+  const float g = live ? RoundUp(8.25 * kFloatUnit * sum + 0x1p-122) : kInfinity;
+  const float a = live ? RoundUp((11.25 * kFloatUnit * sum + 0x1p-122) * double(m_p) + 0x1p-120) : kInfinity;
+  const float x[4] = {p[0], q[0], r[0], g}, y[4] = {p[1], q[1], r[1], a}, z[4] = {p[2], q[2], r[2], live ? m : kInfinity};
+  const float plane[4] = {n[0], n[1], n[2], delta};
+  std::memcpy(out->x, x, sizeof x);
+  std::memcpy(out->y, y, sizeof y);
+  std::memcpy(out->z, z, sizeof z);
+  std::memcpy(out->plane, plane, sizeof plane);
+  if (!finite) return false;
+  // A component beyond its error bound η_i (4.02u rounds up the bound's own evaluation) certifies a
+  // non-zero area where nothing overflowed (live); else (slivers, underflow, huge coordinates) the exact
+  // test decides.
+  constexpr float kEta = 4.02f * float(kFloatUnit);
+  if (live && ((std::fabs(n[0]) > kEta * perm[0] + 0x1p-124f) | (std::fabs(n[1]) > kEta * perm[1] + 0x1p-124f) |
+               (std::fabs(n[2]) > kEta * perm[2] + 0x1p-124f)))
+    return true;
+  const Vec3 w[3] = {Load(p), Load(q), Load(r)};
+  return !Degenerate(MakePlane(w[0], w[1], w[2]), w[0], w[1], w[2], nullptr);
+}
+
+bool TrianglesIntersect(const PreparedTriangle& a, const PreparedTriangle& b) { return IntersectPrepared(a, b, nullptr); }
+
 namespace detail {
+
+bool TrianglesIntersectCounted(const PreparedTriangle& a, const PreparedTriangle& b, uint64_t* exact_evaluations) {
+  return IntersectPrepared(a, b, exact_evaluations);
+}
+
+int FloatPlaneSide(const PreparedTriangle& t, const PreparedTriangle& plane_of) {
+  return OneSide(FloatSides(t, plane_of));
+}
+
+int FloatOrientation(const float a[3], const float b[3], const float c[3], const float d[3]) {
+  for (const float* p : {a, b, c, d})
+    for (int k = 0; k < 3; ++k)
+      if (!(std::fabs(p[k]) <= kFilterMaxCoordinate)) return 0;  // out of the filter's range (or NaN)
+  return FloatOrient3d(a, b, c, d);
+}
 
 bool TrianglesIntersectCounted(const float p1[3], const float q1[3], const float r1[3], const float p2[3],
                                const float q2[3], const float r2[3], uint64_t* exact_evaluations) {

@@ -1,6 +1,8 @@
-// runtime::TrianglesIntersect / TriangleIsDegenerate: hand-made cases with known answers, then agreement
-// with CGAL's exact do_intersect / is_degenerate on random pairs built to be hard (coplanar, touching,
-// shared vertices and edges, 1-ulp nudges, large offsets, wide exponent ranges). Zero disagreements.
+// runtime::TrianglesIntersect / TriangleIsDegenerate / PrepareTriangle: hand-made cases with known
+// answers, then agreement with CGAL's exact do_intersect / is_degenerate / orientation on random pairs
+// built to be hard (coplanar, touching, shared vertices and edges, 1-ulp nudges, large offsets, wide
+// exponent ranges, vertices a hair off the other's plane), for the float path, the prepared path and the
+// prepared path's float filter alone (every sign it certifies must be CGAL's). Zero disagreements.
 #include <doctest/doctest.h>
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
@@ -28,6 +30,20 @@ bool Ours(const Tri& a, const Tri& b) {
   return rt::TrianglesIntersect(a[0].data(), a[1].data(), a[2].data(), b[0].data(), b[1].data(), b[2].data());
 }
 bool OursDegenerate(const Tri& t) { return rt::TriangleIsDegenerate(t[0].data(), t[1].data(), t[2].data()); }
+
+rt::PreparedTriangle Prepared(const Tri& t, bool* usable = nullptr) {
+  rt::PreparedTriangle p;
+  const bool ok = rt::PrepareTriangle(t[0].data(), t[1].data(), t[2].data(), &p);
+  if (usable) *usable = ok;
+  return p;
+}
+
+/// The prepared path: false when a triangle cannot intersect (PrepareTriangle false), else the prepared test.
+bool OursPrepared(const Tri& a, const Tri& b) {
+  bool usable_a = false, usable_b = false;
+  const rt::PreparedTriangle pa = Prepared(a, &usable_a), pb = Prepared(b, &usable_b);
+  return usable_a && usable_b && rt::TrianglesIntersect(pa, pb);
+}
 
 K::Triangle_3 ToCgal(const Tri& t) {
   auto p = [](const P3& v) { return K::Point_3(double(v[0]), double(v[1]), double(v[2])); };
@@ -61,6 +77,8 @@ void Expect(const Tri& a, const Tri& b, bool expected) {
       INFO(Describe(x, y));
       CHECK(Ours(x, y) == expected);
       CHECK(Ours(y, x) == expected);
+      CHECK(OursPrepared(x, y) == expected);
+      CHECK(OursPrepared(y, x) == expected);
     }
 }
 
@@ -75,7 +93,30 @@ float Nudge(float x, int ulps) {
 struct Tally {
   uint64_t pairs = 0, intersecting = 0, disjoint = 0, degenerate = 0, needed_exact = 0, exact_evaluations = 0;
   uint64_t disagreements = 0;
+  uint64_t filter_certified = 0, filter_deferred = 0;  // the prepared path's float filter, both directions
 };
+
+/// The exact side of t's vertices w.r.t. the plane of `plane_of` as the float filter reports it: +1 all
+/// strictly positive, −1 all strictly negative, 0 otherwise (CGAL orientation, exact).
+int ExactSide(const Tri& t, const Tri& plane_of) {
+  auto p = [](const P3& v) { return K::Point_3(double(v[0]), double(v[1]), double(v[2])); };
+  int pos = 0, neg = 0;
+  for (const P3& v : t) {
+    const CGAL::Orientation o = CGAL::orientation(p(plane_of[0]), p(plane_of[1]), p(plane_of[2]), p(v));
+    pos += o == CGAL::POSITIVE;
+    neg += o == CGAL::NEGATIVE;
+  }
+  return pos == 3 ? 1 : neg == 3 ? -1 : 0;
+}
+
+/// The float filter of prepared t against the plane of prepared `plane_of`: a certified side must be the
+/// exact one (an uncertain 0 is always allowed). Tallies certified / deferred; false on a wrong sign.
+bool FilterSound(const Tri& t, const rt::PreparedTriangle& pt, const Tri& plane_of, const rt::PreparedTriangle& pp,
+                 Tally* tally) {
+  const int side = rt::detail::FloatPlaneSide(pt, pp);
+  (side != 0 ? tally->filter_certified : tally->filter_deferred) += 1;
+  return side == 0 || side == ExactSide(t, plane_of);
+}
 
 /// Compares one pair with CGAL (both argument orders, and a vertex-permuted copy) and tallies it.
 void Compare(const Tri& a, const Tri& b, std::mt19937& rng, Tally* tally) {
@@ -88,6 +129,9 @@ void Compare(const Tri& a, const Tri& b, std::mt19937& rng, Tally* tally) {
     }
   };
   if (OursDegenerate(a) != deg_a || OursDegenerate(b) != deg_b) fail("TriangleIsDegenerate != CGAL is_degenerate");
+  bool usable_a = false, usable_b = false;
+  const rt::PreparedTriangle pa = Prepared(a, &usable_a), pb = Prepared(b, &usable_b);
+  if (usable_a == deg_a || usable_b == deg_b) fail("PrepareTriangle != !CGAL is_degenerate");
   if (deg_a || deg_b) {
     ++tally->degenerate;
     if (Ours(a, b) || Ours(b, a)) fail("degenerate triangle reported as intersecting");
@@ -101,11 +145,18 @@ void Compare(const Tri& a, const Tri& b, std::mt19937& rng, Tally* tally) {
   tally->exact_evaluations += exact;
   (expected ? tally->intersecting : tally->disjoint) += 1;
   if (got != expected) fail(expected ? "missed intersection (CGAL: true)" : "false intersection (CGAL: false)");
+  // The prepared path (float filter, then the same double filters and exact fallback), both orders.
+  if (rt::TrianglesIntersect(pa, pb) != expected || rt::TrianglesIntersect(pb, pa) != expected)
+    fail("prepared path != CGAL");
+  uint64_t prepared_exact = 0;
+  if (rt::detail::TrianglesIntersectCounted(pa, pb, &prepared_exact) != expected) fail("prepared path (counted) != CGAL");
+  if (!FilterSound(a, pa, b, pb, tally) || !FilterSound(b, pb, a, pa, tally)) fail("float filter certified a wrong side");
   // Argument order and vertex order (rotation + reflection) must not matter.
   const int r = int(rng() % 3), m = int(rng() % 2);
-  const Tri pa = {a[r], a[(r + 1 + m) % 3], a[(r + 2 - m) % 3]};
-  const Tri pb = {b[(r + 2) % 3], b[(r + 1) % 3], b[r]};
-  if (Ours(b, a) != expected || Ours(pa, pb) != expected || Ours(pb, pa) != expected)
+  const Tri permuted_a = {a[r], a[(r + 1 + m) % 3], a[(r + 2 - m) % 3]};
+  const Tri permuted_b = {b[(r + 2) % 3], b[(r + 1) % 3], b[r]};
+  if (Ours(b, a) != expected || Ours(permuted_a, permuted_b) != expected || Ours(permuted_b, permuted_a) != expected ||
+      OursPrepared(permuted_a, permuted_b) != expected)
     fail("answer depends on argument or vertex order");
 }
 
@@ -116,7 +167,8 @@ void Report(const char* name, const Tally& t) {
                             << " with a degenerate triangle (false, skipped vs CGAL); exact fallback in "
                             << t.needed_exact << " of " << tested << " tests ("
                             << (tested ? 100.0 * double(t.needed_exact) / double(tested) : 0.0) << "%), "
-                            << t.exact_evaluations << " exact orientations");
+                            << t.exact_evaluations << " exact orientations; prepared float filter: "
+                            << t.filter_certified << " sides certified, " << t.filter_deferred << " deferred");
   CHECK_MESSAGE(t.disagreements == 0, std::string(name) << ": " << t.disagreements << " disagreements with CGAL");
 }
 
@@ -427,5 +479,89 @@ TEST_CASE("heavy: triangle_intersect: agrees with CGAL where plain double orient
     Report("(i) exactly collinear triples at mixed scales (degenerate)", tally);
     CHECK(kept == 5000);
     CHECK(tally.degenerate == uint64_t(kept));
+  }
+}
+
+TEST_CASE("heavy: triangle_intersect: the prepared float filter certifies only exact sides, a hair off the plane too") {
+  // The semi-static float filter of TrianglesIntersect(PreparedTriangle, PreparedTriangle) certifies a
+  // side when n_f · x − δ_f is beyond its error bound. A bound too small would certify a wrong side for
+  // vertices very close to the other plane: here the second triangle's vertices sit on the first one's
+  // plane (rounded to float), or 1e-13..1e-1 triangle sizes off it, on one side or both, at character
+  // scale (|x| ≤ 20, triangles 1e-3..1 across: the narrow phase's workload) and at large offsets up to
+  // and beyond the filter's live range (2^40). Every side the filter certifies is compared with CGAL's
+  // exact orientation of each vertex (Compare: FilterSound), every answer with CGAL's do_intersect (the
+  // prepared path then also runs its float-filtered interval test); the interval test's float
+  // orientation filter is checked alone the same way.
+  std::mt19937 rng(20240613u);
+  std::uniform_real_distribution<double> unit(0.0, 1.0), coef(-0.5, 1.5);
+  constexpr double kCentres[] = {1.0, 20.0, 1000.0, 1e6, 1e11, 3e12};  // 3e12 > 2^40: filter off
+  Tally body, offset;
+  for (int i = 0; i < 60000; ++i) {
+    const bool far = i % 4 == 3;
+    const double centre_scale = far ? kCentres[2 + rng() % 4] : kCentres[rng() % 2];
+    const double size = std::pow(10.0, -3.0 + 3.0 * unit(rng)) * (far ? centre_scale * 1e-3 : 1.0);
+    double centre[3], corner[3][3];
+    for (double& c : centre) c = centre_scale * (2.0 * unit(rng) - 1.0);
+    Tri a;
+    for (int v = 0; v < 3; ++v)
+      for (int k = 0; k < 3; ++k) a[v][k] = float(centre[k] + size * (2.0 * unit(rng) - 1.0));
+    for (int v = 0; v < 3; ++v)
+      for (int k = 0; k < 3; ++k) corner[v][k] = double(a[v][k]);
+    double u[3], w[3], n[3];
+    for (int k = 0; k < 3; ++k) u[k] = corner[1][k] - corner[0][k], w[k] = corner[2][k] - corner[0][k];
+    n[0] = u[1] * w[2] - u[2] * w[1], n[1] = u[2] * w[0] - u[0] * w[2], n[2] = u[0] * w[1] - u[1] * w[0];
+    const double norm = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (!(norm > 0)) continue;
+    // Off the plane by d (0: on it, up to float rounding), the same side for all three vertices half the
+    // time (then the exact answer is "one side" and the filter may certify it), mixed otherwise.
+    const int kind = int(rng() % 8);
+    const double d = kind == 0 ? 0.0 : size * std::pow(10.0, -13.0 + 12.0 * unit(rng));
+    const bool same_side = rng() % 2;
+    const double side0 = rng() % 2 ? 1.0 : -1.0;
+    Tri b;
+    for (int v = 0; v < 3; ++v) {
+      const double s = coef(rng), t = coef(rng);
+      const double sign = same_side ? side0 : (rng() % 2 ? 1.0 : -1.0);
+      for (int k = 0; k < 3; ++k) b[v][k] = float(corner[0][k] + s * u[k] + t * w[k] + sign * d * n[k] / norm);
+      if (rng() % 4 == 0) b[v][rng() % 3] = Nudge(b[v][rng() % 3], int(rng() % 5) - 2);
+    }
+    Compare(a, b, rng, far ? &offset : &body);
+  }
+  // The interval test's float orientation filter alone: the fourth point on or a hair off the plane of
+  // the first three, at the same scales; a certified sign must be CGAL's.
+  uint64_t orient_certified = 0, orient_deferred = 0, orient_wrong = 0;
+  for (int i = 0; i < 100000; ++i) {
+    const double centre_scale = kCentres[rng() % 6], size = std::pow(10.0, -3.0 + 3.0 * unit(rng)) *
+                                                            (centre_scale > 20.0 ? centre_scale * 1e-3 : 1.0);
+    P3 q[4];
+    for (int v = 0; v < 3; ++v)
+      for (int k = 0; k < 3; ++k) q[v][k] = float(centre_scale * 0.5 + size * (2.0 * unit(rng) - 1.0));
+    const double d = i % 8 == 0 ? 0.0 : size * std::pow(10.0, -13.0 + 12.0 * unit(rng));
+    double u[3], w[3], n[3];
+    for (int k = 0; k < 3; ++k) u[k] = double(q[1][k]) - q[0][k], w[k] = double(q[2][k]) - q[0][k];
+    n[0] = u[1] * w[2] - u[2] * w[1], n[1] = u[2] * w[0] - u[0] * w[2], n[2] = u[0] * w[1] - u[1] * w[0];
+    const double norm = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (!(norm > 0)) continue;
+    const double s = coef(rng), t = coef(rng), sign = rng() % 2 ? 1.0 : -1.0;
+    for (int k = 0; k < 3; ++k) q[3][k] = float(double(q[0][k]) + s * u[k] + t * w[k] + sign * d * n[k] / norm);
+    const int got = rt::detail::FloatOrientation(q[0].data(), q[1].data(), q[2].data(), q[3].data());
+    auto p3 = [](const P3& v) { return K::Point_3(double(v[0]), double(v[1]), double(v[2])); };
+    const int exact = int(CGAL::orientation(p3(q[0]), p3(q[1]), p3(q[2]), p3(q[3])));
+    (got != 0 ? orient_certified : orient_deferred) += 1;
+    if (got != 0 && got != exact && ++orient_wrong <= 10) MESSAGE("float orientation wrong: " << got << " vs " << exact);
+  }
+  MESSAGE("(l) float orientation filter: " << orient_certified << " certified, " << orient_deferred << " deferred, "
+                                            << orient_wrong << " wrong");
+  CHECK(orient_wrong == 0);
+  CHECK(orient_certified > 1000);
+  CHECK(orient_deferred > 1000);
+  Report("(j) character scale, vertices on or a hair off the other plane", body);
+  Report("(k) offsets 1e3..3e12 (beyond 2^40 the float filter is off), vertices a hair off the plane", offset);
+  // The boundary is exercised: the filter both certifies and defers, and the answers go both ways.
+  for (const Tally* t : {&body, &offset}) {
+    CHECK(t->filter_certified > 1000);
+    CHECK(t->filter_deferred > 1000);
+    CHECK(t->intersecting > 100);
+    CHECK(t->disjoint > 100);
   }
 }
