@@ -247,7 +247,7 @@ struct NarrowPhaseContext::Internal {
       n += (code[l[0]] & code[l[1]] & code[l[2]]) == 0;
     }
     float* chunk_row[6];
-    for (int d = 0; d < 6; ++d) chunk_row[d] = &c.chunk_box_[d * c.chunk_pitch_ + c.chunk_offsets_[s]];
+    ChunkRows(c, s, chunk_row);
     const uint32_t chunks = (n + kChunk - 1) / kChunk;
     for (uint32_t q = 0; q < chunks; ++q) {
       F4 chunk_lo = Set1(kInf), chunk_hi = Set1(-kInf);
@@ -271,6 +271,11 @@ struct NarrowPhaseContext::Internal {
     for (uint32_t q = chunks; q < (chunks + 3) / 4 * 4; ++q)
       for (int d = 0; d < 3; ++d) chunk_row[d][q] = kInf, chunk_row[3 + d][q] = -kInf;
     c.kept_[s] = n;
+  }
+
+  /// The six rows (min x, y, z, max x, y, z) of sphere s's chunk boxes.
+  static void ChunkRows(NarrowPhaseContext& c, uint32_t s, float* row[6]) {
+    for (int d = 0; d < 6; ++d) row[d] = &c.chunk_box_[d * c.chunk_pitch_ + c.chunk_offsets_[s]];
   }
 
   /// Lanes (bits 0..3) of the four chunk boxes at `at` of six rows (min x, y, z, max x, y, z) that meet
@@ -297,7 +302,7 @@ struct NarrowPhaseContext::Internal {
     const uint32_t pool = c.pool_offsets_[s], m = c.kept_[s];
     const float* boxes = &c.kept_box_[8 * size_t{pool}];
     float* chunk_row[6];
-    for (int d = 0; d < 6; ++d) chunk_row[d] = &c.chunk_box_[d * c.chunk_pitch_ + c.chunk_offsets_[s]];
+    ChunkRows(c, s, chunk_row);
     const F4 lo[3] = {Set1(box[0]), Set1(box[1]), Set1(box[2])};
     const F4 hi[3] = {Set1(box[4]), Set1(box[5]), Set1(box[6])};
     const F4 olo = Load4(box), ohi = Load4(box + 4);
@@ -641,10 +646,10 @@ Status NarrowPhaseContext::Init(const AssetView& view) {
       pool_offsets_.push_back(pool_offsets_[s] + chunks * kChunk);
       chunk_offsets_.push_back(chunk_offsets_[s] + (chunks + 3) / 4 * 4);
     }
-    pool_pitch_ = pool_offsets_[S];
+    const size_t pool = pool_offsets_[S];
     chunk_pitch_ = chunk_offsets_[S];
-    kept_slot_.assign(pool_pitch_, 0);
-    kept_box_.assign(8 * pool_pitch_, 0.0f);
+    kept_slot_.assign(pool, 0);
+    kept_box_.assign(8 * pool, 0.0f);
     chunk_box_.assign(6 * chunk_pitch_, 0.0f);
     records_.assign(64, 0);
     hits_.assign(4 * records_.size(), 0);

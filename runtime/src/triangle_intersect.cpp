@@ -11,8 +11,13 @@
 // the error bounds hold and TwoSum / TwoProduct are exact throughout.
 //
 // Floating-point environment: IEEE float and double with round-to-nearest and no extended precision
-// (SSE2 and later, ARM, CUDA). Results flushed to zero (FTZ) do no harm: no double result comes near
-// 2^-1022, and section 6's bound covers float underflow, gradual or flushed. Subnormal inputs read as
+// (SSE2 and later, ARM, CUDA). Results flushed to zero (FTZ) do no harm to the double paths (no double
+// result comes near 2^-1022), and section 6's bound covers underflowing float products and sums, gradual
+// or flushed. One case it does not cover: under FTZ the float difference of two coordinates both below
+// ~2^-101 in magnitude can flush a non-zero difference to 0, an error relative to nothing, which the
+// bound's absolute terms do not reach; with gradual underflow (the IEEE default) such differences are
+// exact. Character coordinates are nowhere near that; a caller running with FTZ on such input should
+// use TrianglesIntersect on the floats (double filters only). Subnormal inputs read as
 // zero (DAZ) are not supported. Contraction into FMA (-ffp-contract=fast) only removes roundings from the filtered
 // expressions, so the bounds still hold; the error-free transformations keep their product out of reach
 // (every product feeds std::fma). -ffast-math (reassociation) would break them: refused below.
@@ -531,7 +536,8 @@ inline bool Intersect(const float* p1, const float* q1, const float* r1, const f
 // a_i = u_j v_k, b_i = u_k v_j, n_i = a_i − b_i, P_i = |a_i| + |b_i|, S = Σ P_i, and δ = n · p
 // ((n_x p_x + n_y p_y) + n_z p_z). The filter computes in float e(x) = ((n_x x_x + n_y x_y) + n_z x_z) − δ.
 // With u = 2^-24, γ_k = ku/(1 − ku), M_x = max_i |x_i|, M_p = max_i |p_i|, and "tiny" the absolute
-// errors of underflow, gradual or flushed to zero (≤ 2^-126 per operation):
+// errors of underflow, gradual or flushed to zero (≤ 2^-126 per product or sum; differences of
+// coordinates are exact when subnormal, flushed ones being the FTZ exception at the top of the file):
 //   |n_i − N_i| ≤ η_i = 4.01u P_i + 3·2^-126          (rounded differences, products and difference),
 //   |n_i| ≤ 1.0001 P_i,   e(x) − D(x) = [e(x) − (n · x − δ)] + (n − N) · (x − p) + (n · p − δ),
 //   |e(x) − (n · x − δ)| ≤ γ4 (Σ|n_i||x_i| + |δ|) + 7·2^-126,   |n · p − δ| ≤ γ3 Σ|n_i||p_i| + 3·2^-126,
@@ -583,8 +589,9 @@ inline int OneSide(uint32_t sides) { return int((sides & 7) == 7) - int((sides >
 
 /// Orient3d(a, b, c, d) of float points whose |coordinates| are at most 2^40, evaluated in float as
 /// MakePlane and Side do in double, certified by Shewchuk's orient3d bound A for float ((7 + 56u)u
-/// relative to the permanent, u = 2^-24; 8u here) plus 2^-70 for underflow (gradual or flushed: at
-/// most ~2^-81 at that range): +1 / −1 when certified, 0 when not (then the caller evaluates exactly).
+/// relative to the permanent, u = 2^-24; 8u here) plus 2^-70 for underflow of products and sums
+/// (gradual or flushed: at most ~2^-81 at that range; flushed differences: see the top of the file):
+/// +1 / −1 when certified, 0 when not (then the caller evaluates exactly).
 inline int FloatOrient3d(const float* a, const float* b, const float* c, const float* d) {
   const float ux = b[0] - a[0], uy = b[1] - a[1], uz = b[2] - a[2];
   const float vx = c[0] - a[0], vy = c[1] - a[1], vz = c[2] - a[2];

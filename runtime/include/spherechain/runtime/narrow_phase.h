@@ -137,7 +137,6 @@ class NarrowPhaseContext {
   std::vector<uint32_t> pool_offsets_;
   std::vector<uint32_t> kept_slot_;
   std::vector<float> kept_box_;
-  size_t pool_pitch_ = 0;
   // The box of each chunk of 8 kept boxes, six rows of chunk_pitch_ from the region's chunk offset
   // (chunk_offsets_, #S+1: its chunk count rounded up to 4), inverted boxes padding.
   std::vector<uint32_t> chunk_offsets_;

@@ -84,8 +84,9 @@ bool PrepareTriangle(const float p[3], const float q[3], const float r[3], Prepa
 /// order). First a semi-static float filter, four lanes: a's vertices x against b's float plane,
 /// n_f · x − δ_f, certified strictly on one side when beyond G_b · M_a + A_b (M_a: a's largest
 /// |coordinate|), then b's against a's; the bound covers the float normal's and offset's distance to the
-/// exact ones and every rounding (and underflow) of the float evaluation, for any float vertex (the
-/// derivation is in triangle_intersect.cpp). Triangles with a coordinate beyond 2^40 get an infinite
+/// exact ones and every rounding (and underflow) of the float evaluation, for any float vertex under
+/// gradual underflow, the IEEE default (with flush-to-zero, coordinates below ~2^-101 in magnitude are
+/// the exception; the derivation is in triangle_intersect.cpp). Triangles with a coordinate beyond 2^40 get an infinite
 /// bound. When the filter places every vertex strictly on a side of the other plane but neither triangle
 /// all on one side, Guigue–Devillers' canonical form follows from those signs and its two interval
 /// orientations are float-filtered too (Shewchuk's orient3d bound for float, exact where it is unsure);
