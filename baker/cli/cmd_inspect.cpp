@@ -54,6 +54,8 @@ nlohmann::json Describe(const runtime::AssetView& v) {
   j["chains"] = chains;
   j["mean_spheres_per_chain"] = chains.empty() ? 0.0 : double(total) / double(chains.size());
   j["excluded_pairs"] = a.excluded_pairs() ? a.excluded_pairs()->size() : 0;
+  // Schema v3: the refit from joint matrices (0 joints: not available — older schema or no skin).
+  j["joint_refit"] = {{"available", a.sphere_joints() != nullptr}, {"joints", a.sphere_joints() ? a.joint_count() : 0}};
   j["unassigned_triangles"] = v.triangle_count - (a.surrounding_triangles() ? a.surrounding_triangles()->size() : 0);
   if (const auto* p = a.params())
     j["params"] = {{"rays", p->rays()}, {"spheres_per_level", p->spheres_per_level()}, {"disk_step", p->disk_step()},
@@ -108,6 +110,10 @@ int RunInspect(const InspectArgs& args) {
       if (!j["accuracy"][m].is_null())
         std::printf("accuracy %-14s mean|F| %.4f  RMS %.4f\n", m, j["accuracy"][m]["mean_abs_F"].get<double>(),
                     j["accuracy"][m]["rms_F"].get<double>());
+  std::printf("refit from joint matrices: %s\n",
+              j["joint_refit"]["available"].get<bool>()
+                  ? ("yes, " + std::to_string(j["joint_refit"]["joints"].get<unsigned>()) + " joints").c_str()
+                  : "no (schema v1/v2 or a mesh without a skin: vertex refit only)");
   std::printf("fit: %s, contact margin %.4g (source units)\n", j["fit"].get<std::string>().c_str(),
               j["contact_margin"].get<double>());
   if (j.contains("coverage")) {

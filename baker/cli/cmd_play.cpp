@@ -1,5 +1,5 @@
 // spherechain play ASSET --mesh INPUT [--clip NAME | --morph POSES...] [--frames N] [--method m1|m2|both]
-//                  [--refit paper|frame] [--json OUT] [--poses-dir DIR] [--rig MHSKEL] [--repeat R]
+//                  [--refit paper|frame|joints] [--json OUT] [--poses-dir DIR] [--rig MHSKEL] [--repeat R]
 //
 // Plays an animation of the character the asset was baked from — a skinned clip, or the paper's
 // Bézier morph through key poses (§5.1, §6: 40 frames) — and runs the runtime on every frame: refit
@@ -57,6 +57,7 @@ struct FrameRow {
   runtime::DetectStats m1, m2;
   double refit_us = 0, detect_m1_us = 0, detect_m2_us = 0;
   double tracking_mean = 0, tracking_max = 0;  // |ΔF| vs the bind pose (see RefitTracking)
+  std::vector<double> joint_error;              // --refit joints: per sphere ‖c_joints − c_vertices‖ / r, %
   std::set<std::pair<int, int>> regions;
   std::vector<runtime::Collision> pairs;  // of M2 when run, else M1
   runtime::NarrowPhaseStats narrow;       // with --narrow-phase
@@ -119,13 +120,41 @@ class Player {
   }
 
   /// Fills row counters, timings and touching regions; returns false with `*error` on a runtime error.
-  bool Run(const float* positions, FrameRow* row, std::string* error) {
+  /// With `joint_matrices` (#J × 12, runtime JointRefitJob layout) the spheres come from the joints (timed)
+  /// and the vertex refit (pivot frame) on `positions` is their reference (row->joint_error).
+  bool Run(const float* positions, FrameRow* row, std::string* error, const float* joint_matrices = nullptr) {
     runtime::RefitJob refit;
     refit.context = ctx_;
     refit.mode = mode_;
     refit.positions = {positions, view_.vertex_count, 12};
-    row->refit_us = Time([&] { return refit.Run(); }, error);
-    if (row->refit_us < 0) return false;
+    if (joint_matrices) {
+      runtime::RefitJob reference = refit;
+      reference.mode = runtime::RefitMode::kPivotFrame;
+      if (runtime::Status s = reference.Run(); runtime::Failed(s))
+        return *error = std::string("runtime: ") + runtime::ToString(s), false;
+      const runtime::SphereArrays v = ctx_->spheres();
+      ref_.assign(v.x, v.x + v.count);
+      ref_.insert(ref_.end(), v.y, v.y + v.count);
+      ref_.insert(ref_.end(), v.z, v.z + v.count);
+      ref_.insert(ref_.end(), v.r, v.r + v.count);
+      runtime::JointRefitJob joints;
+      joints.asset = &view_;
+      joints.context = ctx_;
+      joints.joint_matrices = joint_matrices;
+      joints.joint_count = view_.asset->joint_count();
+      row->refit_us = Time([&] { return joints.Run(); }, error);
+      if (row->refit_us < 0) return false;
+      const runtime::SphereArrays j = ctx_->spheres();
+      const uint32_t S = j.count;
+      row->joint_error.resize(S);
+      for (uint32_t s = 0; s < S; ++s) {
+        const double dx = j.x[s] - ref_[s], dy = j.y[s] - ref_[S + s], dz = j.z[s] - ref_[2 * S + s];
+        row->joint_error[s] = 100.0 * std::sqrt(dx * dx + dy * dy + dz * dz) / ref_[3 * S + s];
+      }
+    } else {
+      row->refit_us = Time([&] { return refit.Run(); }, error);
+      if (row->refit_us < 0) return false;
+    }
     const runtime::Collision* regions_from = nullptr;
     uint32_t regions_count = 0;
     if (run_m1_) {
@@ -205,7 +234,22 @@ class Player {
   runtime::NarrowPhaseContext* narrow_ = nullptr;
   std::vector<runtime::TriangleContact> contacts_;
   uint32_t count_contacts_ = 0;
+  std::vector<float> ref_;  // the vertex refit's spheres (x, y, z, r blocks) under --refit joints
 };
+
+/// The skinning matrices of `scratch` (column-major 4×4, what the last SkinClip / SkinMorphFrame used)
+/// in the runtime's joint layout (#J × 12, row-major 3×4).
+void JointMatrices(const baker::SkinningScratch& scratch, std::vector<float>* out) {
+  out->resize(scratch.matrices.size() * runtime::kJointMatrixFloats);
+  for (size_t j = 0; j < scratch.matrices.size(); ++j)
+    runtime::JointMatrixFromColumnMajor(scratch.matrices[j].data(), out->data() + j * runtime::kJointMatrixFloats);
+}
+
+double Percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, size_t(q * double(v.size() - 1) + 0.5))];
+}
 
 int RunPlay(const PlayArgs& a) {
   LoadedAsset asset;
@@ -232,6 +276,14 @@ int RunPlay(const PlayArgs& a) {
     return Fail(std::string("runtime Context::Init: ") + runtime::ToString(s));
   const bool m1 = a.method != "m2", m2 = a.method != "m1";
   const runtime::RefitMode mode = a.refit == "paper" ? runtime::RefitMode::kPaper : runtime::RefitMode::kPivotFrame;
+  const bool joints = a.refit == "joints";
+  if (joints && !view.asset->sphere_joints())
+    return Fail("'" + a.asset + "' has no joint weights (schema v" + std::to_string(view.asset->schema_version()) +
+                ", or baked from a mesh without a skin): --refit joints needs an asset baked by this version from a "
+                "rigged character; re-bake it");
+  if (joints && view.asset->joint_count() != mesh.skin->joints.size())
+    return Fail("'" + a.asset + "' was baked for " + std::to_string(view.asset->joint_count()) + " joints, '" + a.mesh +
+                "' has " + std::to_string(mesh.skin->joints.size()));
   runtime::NarrowPhaseContext narrow;
   if (a.narrow_phase) {
     if (runtime::Status s = narrow.Init(view); runtime::Failed(s))
@@ -244,17 +296,27 @@ int RunPlay(const PlayArgs& a) {
   baker::SkinningScratch scratch;
   std::vector<FrameRow> rows(frames);
 
-  // The bind pose first: refit to the undeformed mesh (what a correct asset reports as no pairs).
+  // The bind pose first: refit to the undeformed mesh (what a correct asset reports as no pairs); the
+  // joint refit gets the rest pose's skinning matrices.
   FrameRow bind;
   bind.label = "bind";
-  if (!player.Run(mesh.positions.data(), &bind, &error)) return Fail(error);
+  std::vector<float> joint_matrices;
+  if (joints) {
+    baker::RestLocals(*mesh.skin, &scratch.locals);
+    if (auto s = baker::GlobalMatrices(*mesh.skin, scratch.locals, &scratch.globals); !s.ok()) return Fail(s.error());
+    if (auto s = baker::SkinningMatrices(*mesh.skin, scratch.globals, &scratch.matrices); !s.ok())
+      return Fail(s.error());
+    JointMatrices(scratch, &joint_matrices);
+  }
+  if (!player.Run(mesh.positions.data(), &bind, &error, joints ? joint_matrices.data() : nullptr)) return Fail(error);
   const RefitTracking tracking(view, mesh, ctx.spheres());
 
   for (uint32_t f = 0; f < frames; ++f) {
     FrameRow& row = rows[f];
     row.frame = f;
     if (auto s = anim.Frame(mesh, f, &scratch, &positions, &row.label); !s.ok()) return Fail(s.error());
-    if (!player.Run(positions.data(), &row, &error)) return Fail(error);
+    if (joints) JointMatrices(scratch, &joint_matrices);
+    if (!player.Run(positions.data(), &row, &error, joints ? joint_matrices.data() : nullptr)) return Fail(error);
     tracking.Measure(ctx.spheres(), positions.data(), &row.tracking_mean, &row.tracking_max);
     if (!a.dump_frames.empty()) {
       // One raw frame per file: #V×3 little-endian float32, for bench/runtime_bench and the CUDA bench.
@@ -322,6 +384,12 @@ int RunPlay(const PlayArgs& a) {
   for (const FrameRow& r : rows) track_sum += r.tracking_mean, track_max = std::max(track_max, r.tracking_max);
   std::printf("  refit (%s): mean %.1f us; tracking |dF| vs bind over surrounding-region vertices: mean %.4f, max %.4f\n",
               a.refit.c_str(), sum_refit / n, rows.empty() ? 0.0 : track_sum / n, track_max);
+  std::vector<double> joint_errors;
+  for (const FrameRow& r : rows) joint_errors.insert(joint_errors.end(), r.joint_error.begin(), r.joint_error.end());
+  if (joints)
+    std::printf("  joint refit vs vertex refit (pivot frame), centre distance / radius over spheres x frames: "
+                "median %.2f %%, p95 %.2f %%, max %.2f %%\n",
+                Percentile(joint_errors, 0.5), Percentile(joint_errors, 0.95), Percentile(joint_errors, 1.0));
   if (a.narrow_phase) {
     std::vector<double> us;
     uint64_t contacts = 0, frames_with_contacts = 0;
@@ -407,6 +475,11 @@ int RunPlay(const PlayArgs& a) {
                     {"mean_refit_us", sum_refit / n},
                     {"tracking_mean_abs_dF", rows.empty() ? 0.0 : track_sum / n},
                     {"tracking_max_abs_dF", track_max},
+                    {"joint_vs_vertex_centre_error_pct",
+                     joints ? nlohmann::json{{"median", Percentile(joint_errors, 0.5)},
+                                             {"p95", Percentile(joint_errors, 0.95)},
+                                             {"max", Percentile(joint_errors, 1.0)}}
+                            : nlohmann::json()},
                     {"mean_detect_m1_us", sum_m1 / n},
                     {"mean_detect_m2_us", sum_m2 / n},
                     {"regions_touching_frames", rf}};
@@ -437,8 +510,11 @@ void RegisterPlay(CLI::App& app, Commands* commands) {
   sub->add_option("--frames", args->frames, "Frames: the morph's length, or uniform samples of the clip (default 40)");
   sub->add_option("--method", args->method, "Broad phase: m1 (chains), m2 (all spheres), both")
       ->check(CLI::IsMember({"m1", "m2", "both"}));
-  sub->add_option("--refit", args->refit, "Refit: paper (centre = mean pivot displacement) or frame (pivot frame)")
-      ->check(CLI::IsMember({"paper", "frame"}));
+  sub->add_option("--refit", args->refit,
+                  "Refit: paper (centre = mean pivot displacement), frame (pivot frame, default) or joints (linear "
+                  "blend skinning of the centres from the joint matrices, JointRefitJob; reports its centre error "
+                  "against the pivot-frame refit)")
+      ->check(CLI::IsMember({"paper", "frame", "joints"}));
   sub->add_option("--repeat", args->repeat, "Runs per job per frame; timings are the minimum (default 5)");
   sub->add_option("--rig", args->rig, "MakeHuman rig (.mhskel) for an OBJ; default: default.mhskel beside the OBJ");
   sub->add_option("--dump-frames", args->dump_frames,

@@ -257,6 +257,19 @@ Result<BakeResult> Bake(const std::string& input_path, const BakeConfig& config,
     if (cov.ok()) r.coverage = cov.value();
     else if (ctx) ctx->Warn("coverage not measured: " + cov.error().message);
   }
+  if (mesh.skin) {
+    // The joint refit's centre weights (schema v3): a rig without usable rows is a warning, not an error.
+    uint32_t unweighted = 0;
+    auto w = CentreSkinWeights(mesh, r.surrounding, r.pivots, &unweighted);
+    if (!w.ok()) {
+      if (ctx) ctx->Warn("no joint weights in the asset (refit from joint matrices unavailable): " + w.error().message);
+    } else {
+      r.centre_weights = std::move(w).value();
+      if (unweighted && ctx)
+        ctx->Warn(std::to_string(unweighted) + " sphere(s) have no skinned vertex in their surrounding region: "
+                  "they follow joint 0 in the refit from joint matrices");
+    }
+  }
   {
     Context::Timer t(ctx, "write");
     AssetInputs in;
@@ -268,6 +281,7 @@ Result<BakeResult> Bake(const std::string& input_path, const BakeConfig& config,
     in.excluded = &r.excluded;
     in.surrounding = &r.surrounding;
     in.pivots = &r.pivots;
+    if (r.centre_weights) in.centre_weights = &*r.centre_weights;
     in.accuracy = r.accuracy;
     in.params = config.fit;
     const std::string canonical = CanonicalConfig(config);
@@ -397,6 +411,24 @@ json MakeBakeReport(const BakeResult& r, const BakeConfig& config, const Context
                    {"mean_abs_F", {{"phi1", r.sphere_accuracy[s].phi1.mean_abs_f},
                                    {"phi1_adjusted", r.sphere_accuracy[s].phi1_adjusted.mean_abs_f},
                                    {"phi2", r.sphere_accuracy[s].phi2.mean_abs_f}}}});
+  }
+  if (r.centre_weights) {
+    const CentreWeights& cw = *r.centre_weights;
+    for (size_t s = 0; s < spheres.size(); ++s) {
+      json inf = json::array();
+      for (size_t k = 0; k < 4; ++k)
+        if (cw.weights[4 * s + k] > 0.0f) {
+          const uint16_t jt = cw.joints[4 * s + k];
+          const int32_t node = r.mesh.skin->joints[jt].node;
+          const std::string name = node >= 0 && size_t(node) < r.mesh.skin->nodes.size()
+                                       ? r.mesh.skin->nodes[size_t(node)].name : std::string();
+          inf.push_back({{"joint", jt}, {"name", name}, {"weight", cw.weights[4 * s + k]}});
+        }
+      per[s]["centre_joints"] = inf;
+    }
+    j["joint_refit"] = {{"joints", cw.joint_count},
+                        {"derivation", "per sphere: mean skin weights of its surrounding-region vertices, the four "
+                                       "largest kept and renormalised; radius = bind radius"}};
   }
   j["sphere_table"] = per;
   j["params"] = json::parse(CanonicalConfig(config));

@@ -221,4 +221,60 @@ Result<Pivots> ChoosePivots(const Mesh& mesh, const std::vector<FittedSphere>& s
   return out;
 }
 
+Result<CentreWeights> CentreSkinWeights(const Mesh& mesh, const SurroundingRegions& surrounding,
+                                        const Pivots& pivots, uint32_t* unweighted) {
+  if (!mesh.skin) return MakeError(Error::Code::kConfig, "centre skin weights: the mesh has no skin");
+  const Skin& skin = *mesh.skin;
+  if (skin.joints.size() > 65535)
+    return MakeError(Error::Code::kConfig, "centre skin weights: " + std::to_string(skin.joints.size()) +
+                                               " joints, the asset indexes at most 65,535");
+  if (skin.weight_offsets.size() != size_t(mesh.vertex_count()) + 1)
+    return MakeError(Error::Code::kConfig, "centre skin weights: skin rows do not match the mesh's vertices");
+  const size_t S = surrounding.offsets.empty() ? 0 : surrounding.offsets.size() - 1;
+  CentreWeights out;
+  out.joint_count = uint32_t(skin.joints.size());
+  out.joints.assign(4 * S, 0);
+  out.weights.assign(4 * S, 0.0f);
+  uint32_t none = 0;
+  std::vector<double> sum(skin.joints.size(), 0.0);
+  std::vector<uint32_t> touched;
+  for (size_t s = 0; s < S; ++s) {
+    touched.clear();
+    double total = 0.0;
+    auto add = [&](const std::vector<uint32_t>& vertices) {
+      for (uint32_t v : vertices)
+        for (uint32_t k = skin.weight_offsets[v]; k < skin.weight_offsets[v + 1]; ++k) {
+          const uint32_t j = skin.weight_joints[k];
+          if (j >= sum.size() || !(skin.weights[k] > 0.0f)) continue;
+          if (sum[j] == 0.0) touched.push_back(j);
+          sum[j] += skin.weights[k];
+          total += skin.weights[k];
+        }
+    };
+    add(surrounding.Vertices(mesh, s));
+    if (touched.empty() && pivots.vertices.size() >= 12 * (s + 1))
+      add(std::vector<uint32_t>(pivots.vertices.begin() + long(12 * s), pivots.vertices.begin() + long(12 * (s + 1))));
+    if (touched.empty() || !(total > 0.0)) {
+      ++none;
+      out.weights[4 * s] = 1.0f;  // joint 0: the skin's root in glTF and assimp order
+      continue;
+    }
+    std::sort(touched.begin(), touched.end(), [&](uint32_t a, uint32_t b) {
+      return sum[a] != sum[b] ? sum[a] > sum[b] : a < b;
+    });
+    const size_t keep = std::min<size_t>(4, touched.size());
+    double kept = 0.0;
+    for (size_t k = 0; k < keep; ++k) kept += sum[touched[k]];
+    float acc = 0.0f;
+    for (size_t k = 0; k < keep; ++k) {
+      out.joints[4 * s + k] = uint16_t(touched[k]);
+      out.weights[4 * s + k] = k + 1 < keep ? float(sum[touched[k]] / kept) : 1.0f - acc;  // sums to 1 in float
+      acc += out.weights[4 * s + k];
+    }
+    for (uint32_t j : touched) sum[j] = 0.0;
+  }
+  if (unweighted) *unweighted = none;
+  return out;
+}
+
 }  // namespace spherechain::baker

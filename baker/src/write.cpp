@@ -139,6 +139,12 @@ std::vector<uint8_t> BuildAsset(const AssetInputs& in) {
                                   float(in.coverage->outside_p95_rel), float(in.coverage->outside_max_rel),
                                   in.coverage_voxel_rel);
   auto units = b.CreateString(mesh.units);
+  flatbuffers::Offset<flatbuffers::Vector<uint16_t>> sphere_joints_v;
+  flatbuffers::Offset<flatbuffers::Vector<float>> sphere_weights_v;
+  if (in.centre_weights) {
+    sphere_joints_v = b.CreateVector(in.centre_weights->joints);
+    sphere_weights_v = b.CreateVector(in.centre_weights->weights);
+  }
 
   fb::AssetBuilder ab(b);
   ab.add_schema_version(spherechain::runtime::kSchemaVersion);
@@ -146,6 +152,11 @@ std::vector<uint8_t> BuildAsset(const AssetInputs& in) {
   ab.add_contact_margin(float(in.contact_margin));
   ab.add_fit_method(fit_method);
   if (in.coverage) ab.add_coverage(coverage);
+  if (in.centre_weights) {
+    ab.add_joint_count(in.centre_weights->joint_count);
+    ab.add_sphere_joints(sphere_joints_v);
+    ab.add_sphere_joint_weights(sphere_weights_v);
+  }
   ab.add_fingerprint(fingerprint);
   ab.add_parts(parts_v);
   ab.add_units(units);

@@ -131,6 +131,25 @@ Status Semantics(const Asset& a, AssetView* view) {
   for (uint32_t v : *piv_v)
     if (v >= V) return Status::kErrorIndexOutOfRange;
 
+  // Joint weights (optional, schema v3): four influences per sphere.
+  const auto* sj = a.sphere_joints();
+  const auto* sw = a.sphere_joint_weights();
+  if (bool(sj) != bool(sw)) return Status::kErrorMissingField;
+  if (sj) {
+    if (sj->size() != size_t{4} * S || sw->size() != size_t{4} * S) return Status::kErrorCountMismatch;
+    for (uint16_t j : *sj)
+      if (j >= a.joint_count()) return Status::kErrorIndexOutOfRange;
+    for (uint32_t i = 0; i < S; ++i) {
+      float sum = 0.0f;
+      for (uint32_t k = 0; k < 4; ++k) {
+        const float w = sw->Get(4 * i + k);
+        if (!std::isfinite(w) || w < 0.0f) return Status::kErrorSkinWeights;
+        sum += w;
+      }
+      if (!(std::fabs(sum - 1.0f) <= 1e-3f)) return Status::kErrorSkinWeights;
+    }
+  }
+
   view->asset = &a;
   view->sphere_count = S;
   view->vertex_count = V;

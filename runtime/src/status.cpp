@@ -31,6 +31,11 @@ const char* ToString(Status s) {
     case Status::kErrorPivotFrame: return "kErrorPivotFrame: PivotFrame.mean_distance is <= 0";
     case Status::kErrorChainOrder: return "kErrorChainOrder: chain spheres not strictly ascending";
     case Status::kErrorContactMargin: return "kErrorContactMargin: Asset.contact_margin is negative";
+    case Status::kErrorSkinWeights:
+      return "kErrorSkinWeights: a sphere's joint weights are negative, not finite or do not sum to 1";
+    case Status::kErrorJointCount:
+      return "kErrorJointCount: the joint matrix count differs from the asset's Asset.joint_count";
+    case Status::kErrorNonFiniteJoints: return "kErrorNonFiniteJoints: a joint matrix holds a NaN or an infinity";
     case Status::kErrorExcludedPairs: return "kErrorExcludedPairs: excluded pairs not a < b or not strictly ascending";
   }
   return "unknown status";

@@ -64,6 +64,9 @@ struct AssetData {
   std::vector<uint32_t> tube_first_sphere;  // per tube
   std::vector<uint32_t> triangles;  // [opt] Asset.triangles (#T×3): empty = field absent
   std::vector<uint32_t> weld_ids;   // [opt] Asset.weld_ids (#V): empty = field absent
+  uint32_t joint_count = 0;                 // Asset.joint_count (schema v3)
+  std::vector<uint16_t> sphere_joints;      // [opt] #S×4: empty = field absent
+  std::vector<float> sphere_joint_weights;  // [opt] #S×4: empty = field absent
 };
 
 inline void Orthonormal(const float d[3], float u[3], float v[3]) {
@@ -186,6 +189,10 @@ inline AlignedBytes Serialize(const AssetData& d) {
   flatbuffers::Offset<flatbuffers::Vector<uint32_t>> tris, weld;
   if (!d.triangles.empty()) tris = b.CreateVector(d.triangles);
   if (!d.weld_ids.empty()) weld = b.CreateVector(d.weld_ids);
+  flatbuffers::Offset<flatbuffers::Vector<uint16_t>> sj;
+  flatbuffers::Offset<flatbuffers::Vector<float>> sw;
+  if (!d.sphere_joints.empty()) sj = b.CreateVector(d.sphere_joints);
+  if (!d.sphere_joint_weights.empty()) sw = b.CreateVector(d.sphere_joint_weights);
   auto gen = b.CreateString("asset_builder.h");
   auto units = b.CreateString("unknown");
   schema::AssetBuilder ab(b);
@@ -206,6 +213,9 @@ inline AlignedBytes Serialize(const AssetData& d) {
   if (!d.triangles.empty()) ab.add_triangles(tris);
   if (!d.weld_ids.empty()) ab.add_weld_ids(weld);
   if (d.contact_margin != 0.0f) ab.add_contact_margin(d.contact_margin);
+  if (d.joint_count != 0) ab.add_joint_count(d.joint_count);
+  if (!d.sphere_joints.empty()) ab.add_sphere_joints(sj);
+  if (!d.sphere_joint_weights.empty()) ab.add_sphere_joint_weights(sw);
   b.Finish(ab.Finish(), d.identifier.c_str());
   AlignedBytes out;
   out.assign(b.GetBufferPointer(), b.GetSize());

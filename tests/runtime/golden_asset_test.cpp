@@ -101,3 +101,51 @@ TEST_CASE("golden v2 asset (CesiumMan, cover fit, baked by spherechain 0.2.0) lo
   // A margin of 5 % of the height makes non-excluded bind neighbours touch: the override is honoured.
   CHECK(CountM2(view, ctx, 0.05f * 1.507f) > 0);
 }
+
+TEST_CASE("golden v3 asset (CesiumMan, cover fit, joint weights, baked by spherechain 0.2.0) refits from joints") {
+  const std::string path = spherechain::test::SourceFile("tests/data/golden/v3/cesium_man.sphc");
+  REQUIRE_MESSAGE(spherechain::test::Require(path), "the golden asset is part of the repository");
+  size_t size = 0;
+  std::vector<uint64_t> bytes = ReadAligned(path, &size);
+  AssetView view;
+  REQUIRE(LoadAsset(bytes.data(), size, &view) == Status::kOk);
+  CHECK(view.asset->schema_version() == 3);
+  CHECK(view.vertex_count == 3273);
+  CHECK(view.sphere_count == 128);
+  // The v3 fields: CesiumMan's skin has 19 joints; four influences per sphere.
+  CHECK(view.asset->joint_count() == 19);
+  REQUIRE(view.asset->sphere_joints() != nullptr);
+  CHECK(view.asset->sphere_joints()->size() == 4 * 128);
+  Context ctx;
+  REQUIRE(ctx.Init(view) == Status::kOk);
+  // Identity skinning matrices are the bind pose: the spheres come back as baked, and nothing collides.
+  std::vector<float> identity(19 * kJointMatrixFloats, 0.0f);
+  for (int j = 0; j < 19; ++j)
+    for (int d = 0; d < 3; ++d) identity[12 * j + 5 * d] = 1.0f;
+  JointRefitJob job;
+  job.asset = &view;
+  job.context = &ctx;
+  job.joint_matrices = identity.data();
+  job.joint_count = 19;
+  REQUIRE(job.Run() == Status::kOk);
+  const SphereArrays sp = ctx.spheres();
+  for (uint32_t s = 0; s < sp.count; ++s) {
+    const auto* b = view.asset->spheres()->Get(s);
+    CHECK(sp.x[s] == doctest::Approx(b->center().x()).epsilon(1e-5));
+    CHECK(sp.z[s] == doctest::Approx(b->center().z()).epsilon(1e-5));
+    CHECK(sp.r[s] == b->radius());
+  }
+  CHECK(CountM2(view, ctx) == 0);
+
+  // The v2 golden asset has no joint weights: the joint refit says so (re-bake), the vertex refit works.
+  const std::string v2 = spherechain::test::SourceFile("tests/data/golden/v2/cesium_man.sphc");
+  size_t size2 = 0;
+  std::vector<uint64_t> bytes2 = ReadAligned(v2, &size2);
+  AssetView view2;
+  REQUIRE(LoadAsset(bytes2.data(), size2, &view2) == Status::kOk);
+  Context ctx2;
+  REQUIRE(ctx2.Init(view2) == Status::kOk);
+  job.asset = &view2;
+  job.context = &ctx2;
+  CHECK(job.Run() == Status::kErrorMissingField);
+}

@@ -127,6 +127,34 @@ TEST_CASE("LoadAsset: semantic errors each give their status") {
   expect([](test::AssetData& d) { d.contact_margin = std::numeric_limits<float>::quiet_NaN(); }, Status::kErrorNonFinite);
   expect([](test::AssetData& d) { d.contact_margin = INFINITY; }, Status::kErrorNonFinite);
   expect([](test::AssetData& d) { d.contact_margin = -0.01f; }, Status::kErrorContactMargin);
+  // Joint weights (schema v3): four influences per sphere, indices < joint_count, weights a partition of 1.
+  auto with_joints = [](test::AssetData& d) {
+    d.joint_count = 3;
+    for (size_t i = 0; i < d.spheres.size(); ++i) {
+      d.sphere_joints.insert(d.sphere_joints.end(), {uint16_t(i % 3), uint16_t((i + 1) % 3), 0, 0});
+      d.sphere_joint_weights.insert(d.sphere_joint_weights.end(), {0.75f, 0.25f, 0.0f, 0.0f});
+    }
+  };
+  expect([&](test::AssetData& d) { with_joints(d); d.sphere_joints[5] = 3; }, Status::kErrorIndexOutOfRange);
+  expect([&](test::AssetData& d) { with_joints(d); d.joint_count = 0; }, Status::kErrorIndexOutOfRange);
+  expect([&](test::AssetData& d) { with_joints(d); d.sphere_joint_weights[4] = NAN; }, Status::kErrorSkinWeights);
+  expect([&](test::AssetData& d) { with_joints(d); d.sphere_joint_weights[4] = INFINITY; }, Status::kErrorSkinWeights);
+  expect([&](test::AssetData& d) {
+    with_joints(d);
+    d.sphere_joint_weights[4] = 1.25f;  // sums to 1 with the negative weight beside it
+    d.sphere_joint_weights[5] = -0.25f;
+  }, Status::kErrorSkinWeights);
+  expect([&](test::AssetData& d) { with_joints(d); d.sphere_joint_weights[9] = 0.2f; }, Status::kErrorSkinWeights);
+  expect([&](test::AssetData& d) { with_joints(d); d.sphere_joints.resize(d.sphere_joints.size() - 4); },
+         Status::kErrorCountMismatch);
+  expect([&](test::AssetData& d) { with_joints(d); d.sphere_joint_weights.clear(); }, Status::kErrorMissingField);
+  {
+    test::AssetData d = base;
+    with_joints(d);
+    REQUIRE(Load(d, &view) == Status::kOk);
+    CHECK(view.asset->joint_count() == 3);
+    CHECK(view.asset->sphere_joints()->size() == 4 * d.spheres.size());
+  }
   expect([](test::AssetData& d) { d.frames.pop_back(); }, Status::kErrorCountMismatch);
   expect([](test::AssetData& d) { d.pivot_vertices.pop_back(); }, Status::kErrorCountMismatch);
   expect([](test::AssetData& d) { d.triangle_spheres.pop_back(); }, Status::kErrorCountMismatch);

@@ -72,6 +72,7 @@ struct BakeResult {
   CoverageOptions coverage_options;                    ///< what it was measured with
   SurroundingRegions surrounding;
   Pivots pivots;
+  std::optional<CentreWeights> centre_weights;         ///< rigged mesh: the joint refit's (schema v3)
   std::vector<SphereAccuracy> sphere_accuracy;         ///< #S
   AccuracySummary accuracy;
   std::vector<uint8_t> asset;                          ///< the .sphc bytes

@@ -56,4 +56,22 @@ struct Pivots {
 Result<Pivots> ChoosePivots(const Mesh& mesh, const std::vector<FittedSphere>& spheres,
                             const SurroundingRegions& surrounding);
 
+/// Skin weights of every sphere's centre, for the refit from joint matrices (schema v3
+/// Asset.joint_count / sphere_joints / sphere_joint_weights; runtime JointRefitJob).
+struct CentreWeights {
+  uint32_t joint_count = 0;    ///< #J, the skin's joints
+  std::vector<uint16_t> joints;  ///< #S×4 joint indices, by descending weight (ties: lower index)
+  std::vector<float> weights;    ///< #S×4, >= 0, each sphere's four summing to 1; unused: joint 0, 0
+};
+
+/// Derivation: the mean of the skin weights (Skin rows) over the distinct vertices of sphere s's
+/// surrounding region — the blend under which the region's average point moves —, the four largest
+/// kept and renormalised to sum 1 (what a game's four-influence skinning keeps too). A sphere with an
+/// empty surrounding region (or none of whose vertices has an influence) takes the mean over its 12
+/// pivot vertices (`pivots`, chosen from its neighbourhood then); failing that, joint 0 with weight 1
+/// (counted in `*unweighted`; the caller warns). Cost O(Σ region vertices · influences), deterministic. Errors: kConfig when the
+/// mesh has no skin, its rows do not match its vertices, or it has more than 65,535 joints.
+Result<CentreWeights> CentreSkinWeights(const Mesh& mesh, const SurroundingRegions& surrounding,
+                                        const Pivots& pivots, uint32_t* unweighted = nullptr);
+
 }  // namespace spherechain::baker

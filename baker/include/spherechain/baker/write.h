@@ -48,6 +48,7 @@ struct AssetInputs {
   const std::vector<SpherePair>* excluded = nullptr;
   const SurroundingRegions* surrounding = nullptr;
   const Pivots* pivots = nullptr;
+  const CentreWeights* centre_weights = nullptr;  ///< [opt] Asset.joint_count / sphere_joints / _weights
   AccuracySummary accuracy;
   FitParams params;
   uint64_t config_hash = 0;

@@ -11,10 +11,12 @@ namespace spherechain::runtime {
 
 /// The schema version this SDK writes and reads (schemas/spherechain.fbs, Asset.schema_version). Bump
 /// on any change old readers cannot read or would misread; keep a golden asset per version in
-/// tests/data/golden/. v2 added Asset.contact_margin, fit_method and coverage.
-inline constexpr uint32_t kSchemaVersion = 2;
-/// The oldest schema version this SDK still reads: v1 assets load, with what v2 added absent
-/// (contact margin 0 — their spheres were tested unmargined —, fit "paper", no coverage).
+/// tests/data/golden/. v2 added Asset.contact_margin, fit_method and coverage; v3 joint_count,
+/// sphere_joints and sphere_joint_weights (the refit from joint matrices, JointRefitJob).
+inline constexpr uint32_t kSchemaVersion = 3;
+/// The oldest schema version this SDK still reads: v1 and v2 assets load, with what later versions
+/// added absent (v1: contact margin 0 — their spheres were tested unmargined —, fit "paper", no
+/// coverage; v1 and v2: no joint weights, so JointRefitJob answers kErrorMissingField — re-bake).
 inline constexpr uint32_t kMinSchemaVersion = 1;
 /// FlatBuffers file_identifier of a .sphc asset.
 inline constexpr char kFileIdentifier[5] = "SPHC";
@@ -71,7 +73,10 @@ struct AssetView {
 ///     3·#T of them, else kErrorCountMismatch —, optional `weld_ids`: #V entries, weld_ids[v] <= v and
 ///     weld_ids[weld_ids[v]] == weld_ids[v], else kErrorIndexOutOfRange), kErrorOffsets, kErrorNonFinite,
 ///     kErrorRadius, kErrorPivotFrame, kErrorChainOrder, kErrorExcludedPairs, kErrorContactMargin
-///     (contact_margin < 0; NaN or inf: kErrorNonFinite).
+///     (contact_margin < 0; NaN or inf: kErrorNonFinite), and the optional v3 joint weights:
+///     sphere_joints and sphere_joint_weights both present or both absent, 4·#S each
+///     (kErrorCountMismatch), joint indices < joint_count (kErrorIndexOutOfRange), weights finite,
+///     >= 0 and summing to 1 ± 1e-3 per sphere (kErrorSkinWeights).
 /// Returns kOk with `*out` filled.
 /// Cost: O(size) reads, no allocation, no exceptions; thread-safe (pure function of its inputs).
 /// Untrusted input: every truncated prefix and bit flip returns an error, never crashes (tested).

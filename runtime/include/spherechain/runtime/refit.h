@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 
+#include "spherechain/runtime/asset.h"
 #include "spherechain/runtime/context.h"
 #include "spherechain/runtime/status.h"
 
@@ -120,6 +121,54 @@ struct RefitJob {
   Status Check() const;
   /// Runs the refit. Returns Check()'s error (spheres untouched) or kOk. Non-finite positions give
   /// non-finite spheres (which then never overlap); they are not checked per frame.
+  Status Run() const;
+};
+
+/// Floats per joint matrix JointRefitJob reads: a 3×4 row-major affine matrix (rows r0, r1, r2 of
+/// the 4×4 skinning matrix, each [m_r0 m_r1 m_r2 t_r]), so p' = M · (p, 1).
+inline constexpr uint32_t kJointMatrixFloats = 12;
+
+/// Column-major 4×4 (glTF, ozz, glm: element (row r, column c) at [4c + r]) → the 3×4 row-major layout
+/// JointRefitJob reads. The bottom row (0 0 0 1 for an affine matrix) is dropped. Cost: 12 copies.
+inline void JointMatrixFromColumnMajor(const float m[16], float out[kJointMatrixFloats]) {
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 4; ++c) out[4 * r + c] = m[4 * c + r];
+}
+
+/// Refit from joint matrices, for games that skin on the GPU and hold no deformed vertex buffer on the
+/// CPU. Every sphere's centre is skinned like a vertex (linear blend skinning of its bind centre):
+///   c = Σ_k w_k · M_{j_k} · (c_bind, 1),   k = 0..3,
+/// with (j_k, w_k) = Asset.sphere_joints / sphere_joint_weights (schema v3: per sphere the mean skin
+/// weights of its surrounding region's vertices, four largest kept, summing to 1) and c_bind =
+/// Asset.spheres' centre. Radius rule: r = bind radius (a rig's joints are rigid; scale in the joint
+/// matrices moves centres but does not resize spheres). Tracking against the vertex refit (RefitJob,
+/// kPivotFrame) on the real clips: README, "Refit from joint matrices".
+///
+/// Inputs: `joint_matrices` #J × kJointMatrixFloats floats, packed: the skinning matrices
+/// M_j = (joint j's current model-space transform) · (its inverse bind matrix), in the skin's joint
+/// order (Asset.joint_count = #J; glTF skin.joints, assimp bones, .mhskel bones) — the same matrices
+/// that deform the vertices. Units: the asset's source units; output spheres in that model space.
+/// Borrowed for Run(). `asset`: the view the context was initialised with (its bytes are read: joint
+/// weights and bind spheres, zero-copy, so they must outlive the call).
+/// Output: the context's spheres (SoA), overwritten.
+/// Cost: O(#J) to check the matrices + O(#S · influences) — ≤ 4 × 12 multiply-adds per sphere;
+/// serial, no allocation, no exceptions.
+struct JointRefitJob {
+  const AssetView* asset = nullptr;       ///< the context's asset (schema v3 joint weights)
+  const float* joint_matrices = nullptr;  ///< #J × 12 floats [Limit: 4-byte aligned]
+  uint32_t joint_count = 0;               ///< #J [Limit: == Asset.joint_count, else kErrorJointCount]
+  Context* context = nullptr;             ///< initialised on `*asset`; its spheres are overwritten
+
+  /// True when Run() would not fail on arguments (does not read the matrices).
+  bool Validate() const { return Check() == Status::kOk; }
+  /// The status Run() would return for bad arguments, or kOk: kErrorNullArgument (asset, context or
+  /// joint_matrices null, or the asset view not loaded), kErrorInvalidJob (context not initialised, or
+  /// initialised on an asset with another sphere or vertex count), kErrorMissingField (the asset holds
+  /// no joint weights: baked from a mesh without a skin, or schema v1/v2 — re-bake), kErrorJointCount,
+  /// kErrorAlignment (joint_matrices not 4-byte aligned).
+  Status Check() const;
+  /// Runs the refit. Returns Check()'s error, or kErrorNonFiniteJoints when one of the #J matrices
+  /// holds a NaN or an infinity — in both cases the spheres are untouched — or kOk.
   Status Run() const;
 };
 

@@ -27,6 +27,9 @@ enum class [[nodiscard]] Status : uint32_t {
   kErrorOutOfMemory = 0x8000'0006u,   ///< Context::Init could not allocate (the only allocating call).
   kErrorNonFinitePositions = 0x8000'0007u,  ///< A deformed vertex position is NaN or infinite
                                             ///< (NarrowPhaseJob checks the positions it reads).
+  kErrorJointCount = 0x8000'0008u,    ///< JointRefitJob::joint_count != the asset's Asset.joint_count.
+  kErrorNonFiniteJoints = 0x8000'0009u,  ///< A joint matrix that some sphere follows holds a NaN or
+                                         ///< an infinity (JointRefitJob checks them before writing).
 
   // ---- asset envelope (LoadAsset) ---------------------------------------------------------------
   kErrorAssetTooSmall = 0x8000'0101u,   ///< Fewer bytes than a FlatBuffer header (8) — truncated file.
@@ -57,6 +60,8 @@ enum class [[nodiscard]] Status : uint32_t {
   kErrorExcludedPairs = 0x8000'020Cu,    ///< An excluded pair with a >= b, or the list not strictly
                                          ///< ascending by (a, b).
   kErrorContactMargin = 0x8000'020Du,    ///< Asset.contact_margin < 0 (schema v2).
+  kErrorSkinWeights = 0x8000'020Eu,      ///< A sphere's joint weight is negative or not finite, or its four
+                                         ///< weights do not sum to 1 ± 1e-3 (schema v3).
 };
 
 /// True for kOk and every success-with-detail (kOkTruncated). Cost: one compare.

@@ -719,7 +719,10 @@ struct Asset FLATBUFFERS_FINAL_CLASS : private flatbuffers::Table {
     VT_WELD_IDS = 52,
     VT_CONTACT_MARGIN = 54,
     VT_FIT_METHOD = 56,
-    VT_COVERAGE = 58
+    VT_COVERAGE = 58,
+    VT_JOINT_COUNT = 60,
+    VT_SPHERE_JOINTS = 62,
+    VT_SPHERE_JOINT_WEIGHTS = 64
   };
   uint32_t schema_version() const {
     return GetField<uint32_t>(VT_SCHEMA_VERSION, 0);
@@ -805,6 +808,15 @@ struct Asset FLATBUFFERS_FINAL_CLASS : private flatbuffers::Table {
   const spherechain::schema::Coverage *coverage() const {
     return GetPointer<const spherechain::schema::Coverage *>(VT_COVERAGE);
   }
+  uint32_t joint_count() const {
+    return GetField<uint32_t>(VT_JOINT_COUNT, 0);
+  }
+  const flatbuffers::Vector<uint16_t> *sphere_joints() const {
+    return GetPointer<const flatbuffers::Vector<uint16_t> *>(VT_SPHERE_JOINTS);
+  }
+  const flatbuffers::Vector<float> *sphere_joint_weights() const {
+    return GetPointer<const flatbuffers::Vector<float> *>(VT_SPHERE_JOINT_WEIGHTS);
+  }
   bool Verify(flatbuffers::Verifier &verifier) const {
     return VerifyTableStart(verifier) &&
            VerifyField<uint32_t>(verifier, VT_SCHEMA_VERSION, 4) &&
@@ -861,6 +873,11 @@ struct Asset FLATBUFFERS_FINAL_CLASS : private flatbuffers::Table {
            verifier.VerifyString(fit_method()) &&
            VerifyOffset(verifier, VT_COVERAGE) &&
            verifier.VerifyTable(coverage()) &&
+           VerifyField<uint32_t>(verifier, VT_JOINT_COUNT, 4) &&
+           VerifyOffset(verifier, VT_SPHERE_JOINTS) &&
+           verifier.VerifyVector(sphere_joints()) &&
+           VerifyOffset(verifier, VT_SPHERE_JOINT_WEIGHTS) &&
+           verifier.VerifyVector(sphere_joint_weights()) &&
            verifier.EndTable();
   }
 };
@@ -953,6 +970,15 @@ struct AssetBuilder {
   void add_coverage(flatbuffers::Offset<spherechain::schema::Coverage> coverage) {
     fbb_.AddOffset(Asset::VT_COVERAGE, coverage);
   }
+  void add_joint_count(uint32_t joint_count) {
+    fbb_.AddElement<uint32_t>(Asset::VT_JOINT_COUNT, joint_count, 0);
+  }
+  void add_sphere_joints(flatbuffers::Offset<flatbuffers::Vector<uint16_t>> sphere_joints) {
+    fbb_.AddOffset(Asset::VT_SPHERE_JOINTS, sphere_joints);
+  }
+  void add_sphere_joint_weights(flatbuffers::Offset<flatbuffers::Vector<float>> sphere_joint_weights) {
+    fbb_.AddOffset(Asset::VT_SPHERE_JOINT_WEIGHTS, sphere_joint_weights);
+  }
   explicit AssetBuilder(flatbuffers::FlatBufferBuilder &_fbb)
         : fbb_(_fbb) {
     start_ = fbb_.StartTable();
@@ -993,8 +1019,14 @@ inline flatbuffers::Offset<Asset> CreateAsset(
     flatbuffers::Offset<flatbuffers::Vector<uint32_t>> weld_ids = 0,
     float contact_margin = 0.0f,
     flatbuffers::Offset<flatbuffers::String> fit_method = 0,
-    flatbuffers::Offset<spherechain::schema::Coverage> coverage = 0) {
+    flatbuffers::Offset<spherechain::schema::Coverage> coverage = 0,
+    uint32_t joint_count = 0,
+    flatbuffers::Offset<flatbuffers::Vector<uint16_t>> sphere_joints = 0,
+    flatbuffers::Offset<flatbuffers::Vector<float>> sphere_joint_weights = 0) {
   AssetBuilder builder_(_fbb);
+  builder_.add_sphere_joint_weights(sphere_joint_weights);
+  builder_.add_sphere_joints(sphere_joints);
+  builder_.add_joint_count(joint_count);
   builder_.add_coverage(coverage);
   builder_.add_fit_method(fit_method);
   builder_.add_contact_margin(contact_margin);
@@ -1055,7 +1087,10 @@ inline flatbuffers::Offset<Asset> CreateAssetDirect(
     const std::vector<uint32_t> *weld_ids = nullptr,
     float contact_margin = 0.0f,
     const char *fit_method = nullptr,
-    flatbuffers::Offset<spherechain::schema::Coverage> coverage = 0) {
+    flatbuffers::Offset<spherechain::schema::Coverage> coverage = 0,
+    uint32_t joint_count = 0,
+    const std::vector<uint16_t> *sphere_joints = nullptr,
+    const std::vector<float> *sphere_joint_weights = nullptr) {
   auto generator__ = generator ? _fbb.CreateString(generator) : 0;
   auto parts__ = parts ? _fbb.CreateVector<flatbuffers::Offset<spherechain::schema::MeshPart>>(*parts) : 0;
   auto units__ = units ? _fbb.CreateString(units) : 0;
@@ -1076,6 +1111,8 @@ inline flatbuffers::Offset<Asset> CreateAssetDirect(
   auto triangles__ = triangles ? _fbb.CreateVector<uint32_t>(*triangles) : 0;
   auto weld_ids__ = weld_ids ? _fbb.CreateVector<uint32_t>(*weld_ids) : 0;
   auto fit_method__ = fit_method ? _fbb.CreateString(fit_method) : 0;
+  auto sphere_joints__ = sphere_joints ? _fbb.CreateVector<uint16_t>(*sphere_joints) : 0;
+  auto sphere_joint_weights__ = sphere_joint_weights ? _fbb.CreateVector<float>(*sphere_joint_weights) : 0;
   return spherechain::schema::CreateAsset(
       _fbb,
       schema_version,
@@ -1105,7 +1142,10 @@ inline flatbuffers::Offset<Asset> CreateAssetDirect(
       weld_ids__,
       contact_margin,
       fit_method__,
-      coverage);
+      coverage,
+      joint_count,
+      sphere_joints__,
+      sphere_joint_weights__);
 }
 
 /// Bind-pose coverage of the body by the spheres (baker coverage.h MeasureCoverage).
