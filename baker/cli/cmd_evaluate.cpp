@@ -512,6 +512,8 @@ int RunEvaluate(const EvaluateArgs& a) {
     j["refit"] = a.refit;
     j["body_height"] = height;
     j["margin_rel"] = a.margin;
+    j["contact_margin"] = ctx.contact_margin();  // the asset's: what the proxy's spheres were grown by
+    j["contact_margin_rel"] = double(ctx.contact_margin()) / height;
     nlohmann::json fr = nlohmann::json::array();
     for (uint32_t f = 0; f < anim.frames; ++f) {
       const FrameEval& r = rows[f];
