@@ -18,6 +18,7 @@
 //   naive M2            AoS double loop + exclusion matrix over the refitted spheres
 //   FCL DynAABBTree M2  fcl::DynamicAABBTreeCollisionManager, spheres updated, collide + sphere test
 //   Bullet btDbvt M2    btDbvtBroadphase, AABBs updated, overlapping pairs then the sphere test
+// "broad phase per frame": DetectStats::box_tests and sphere_tests of DetectJob (means over the frames).
 // Peers get the refitted spheres (refit not included) and apply the same excluded pairs; their pair
 // counts are checked against DetectJob M2 every frame, and M1's against a naive loop over the pairs
 // sharing a chain. Ratios: peer / sc M2 detect (the same all-pairs work) and peer / sc refit+M1 (the
@@ -642,15 +643,22 @@ int main(int argc, char** argv) {
   // Refitted spheres per frame (inputs of the peers) and the reference M2 counts.
   std::vector<std::vector<float>> sx(w.frames.size()), sy = sx, sz = sx, sr = sx;
   std::vector<uint32_t> m2_count(w.frames.size()), m1_count(w.frames.size());
+  uint64_t broad[2][2] = {};  // [M1, M2] × [box tests, sphere tests] over the frames
   for (size_t f = 0; f < w.frames.size(); ++f) {
     set_frame(f);
     if (refit.Run() != sc::Status::kOk) return 1;
     const sc::SphereArrays s = ctx.spheres();
     sx[f].assign(s.x, s.x + S), sy[f].assign(s.y, s.y + S), sz[f].assign(s.z, s.z + S), sr[f].assign(s.r, s.r + S);
+    sc::DetectStats st;
+    m2.stats = &st;
     if (m2.Run() != sc::Status::kOk) return 1;
     m2_count[f] = count;
+    broad[1][0] += st.box_tests, broad[1][1] += st.sphere_tests;
+    m1.stats = &st;
     if (m1.Run() != sc::Status::kOk) return 1;
     m1_count[f] = count;
+    broad[0][0] += st.box_tests, broad[0][1] += st.sphere_tests;
+    m1.stats = m2.stats = nullptr;
   }
   // The peers test the radii DetectJob tests: grown by the asset's contact margin (schema v2; 0 for v1).
   const float margin = ctx.contact_margin();
@@ -848,7 +856,9 @@ int main(int argc, char** argv) {
 #if SPHERECHAIN_BENCH_BULLET
   std::printf(", Bullet %.1f", double(bullet_tests) / F);
 #endif
-  std::printf("\n%s\n", runs > 1 ? "(each row: best of the medians of several runs)" : "");
+  std::printf("\nbroad phase per frame (mean): M1 %.1f block-pair tests, %.1f sphere tests; M2 %.1f, %.1f\n",
+              double(broad[0][0]) / F, double(broad[0][1]) / F, double(broad[1][0]) / F, double(broad[1][1]) / F);
+  std::printf("%s\n", runs > 1 ? "(each row: best of the medians of several runs)" : "");
   std::printf("%-22s %12s %10s\n", "", "median us", "vs M2");
   for (const Row& r : rows) std::printf("%-22s %12.3f %10.2f\n", r.name, r.us, r.us / m2_us);
   std::printf("\n%-22s %14s %14s\n", "ratio (peer / sc)", "/ sc M2 det.", "/ sc refit+M1");

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <limits>
 #include <new>
 
 namespace spherechain::runtime {
@@ -18,9 +19,8 @@ Status Context::Init(const AssetView& view) {
   const uint32_t C = view.chain_count;
   SPHERECHAIN_TRY {
     constexpr uint32_t kPad = 8;  // SoA rows are read in chunks of 8; padding spheres never overlap
-    for (auto* v : {&x_, &y_, &z_}) v->assign(S + kPad, 1e18f);
-    r_.assign(S + kPad, 0.0f);
-    mr_.assign(S + kPad, 0.0f);
+    // Padding (id #S in the broad phase's slots): NaN, never overlaps, ignored by the block boxes.
+    for (auto* v : {&x_, &y_, &z_, &r_}) v->assign(S + kPad, std::numeric_limits<float>::quiet_NaN());
     contact_margin_ = a.contact_margin();
     for (auto* v : {&bind_x_, &bind_y_, &bind_z_, &bind_r_}) v->resize(S);
     for (auto* v : {&local_x_, &local_y_, &local_z_, &offset_x_, &offset_y_, &offset_z_, &radius_scale_})
@@ -59,81 +59,89 @@ Status Context::Init(const AssetView& view) {
     excl_neighbors_.resize(E);
     for (uint32_t i = 0; i < E; ++i) excl_neighbors_[i] = ex->Get(i)->b();  // sorted by (a, b) already
 
-    // Skip streams (see kernels::ExclusionCursor): the kernels test 8-lane chunks aligned to 8 in
-    // SoA blocks padded to a multiple of 8, numbered in test order; a chunk holding lanes that must
-    // not count (excluded pairs, j <= i on a diagonal block, padding) gets one entry with those lanes.
-    auto skip = [](std::vector<uint64_t>& stream, uint64_t chunk, uint32_t bits) {
-      if (!bits) return;
-      if (!stream.empty() && (stream.back() >> 32) == chunk)
-        stream.back() |= bits;
-      else
-        stream.push_back(chunk << 32 | bits);
+    // Broad-phase layout (kernels::BroadPhaseArgs): spheres grouped by body region (Asset.sphere_regions,
+    // R0..R4; without it, by chain mask), groups ascending, each split at bind pose into blocks of 8
+    // slots by a kd split — the left part gets 8·ceil(n/16) spheres along the longest axis of the
+    // part's centres (ties by id), so every block but a group's last is full — and padded to 8 with the
+    // id #S. (On MakeHuman, region groups test ~12 % fewer instructions than chain-mask classes, which
+    // leave more partial blocks; one group for all spheres tests more pairs.)
+    const auto* regions = a.sphere_regions();  // [opt], #S when present (LoadAsset)
+    std::vector<uint32_t> ids(S), group(S);
+    for (uint32_t s = 0; s < S; ++s) ids[s] = s, group[s] = regions ? regions->Get(s) : chain_mask_[s];
+    std::stable_sort(ids.begin(), ids.end(), [&](uint32_t p, uint32_t q) { return group[p] < group[q]; });
+    const float* bind[3] = {bind_x_.data(), bind_y_.data(), bind_z_.data()};
+    auto split = [&](auto&& self, uint32_t* first, uint32_t n) -> void {
+      if (n <= 8) return;
+      float lo[3], hi[3];
+      for (int k = 0; k < 3; ++k) lo[k] = hi[k] = bind[k][first[0]];
+      for (uint32_t i = 1; i < n; ++i)
+        for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], bind[k][first[i]]), hi[k] = std::max(hi[k], bind[k][first[i]]);
+      int axis = 0;
+      for (int k = 1; k < 3; ++k)
+        if (hi[k] - lo[k] > hi[axis] - lo[axis]) axis = k;
+      const uint32_t left = 8 * ((n + 15) / 16);
+      const float* v = bind[axis];
+      std::nth_element(first, first + left, first + n, [&](uint32_t p, uint32_t q) { return v[p] < v[q] || (v[p] == v[q] && p < q); });
+      self(self, first, left);
+      self(self, first + left, n - left);
     };
-    // M2: row i tests b in chunks from (i+1) & ~7 to the end of x_ (padded to #S + kPad).
-    uint64_t chunk = 0;
-    for (uint32_t i = 0; i + 1 < S; ++i) {
-      const uint32_t first = (i + 1) & ~7u;
-      skip(m2_excl_, chunk, (1u << (i + 1 - first)) - 1u);  // lanes first..i
-      for (uint32_t e = excl_offsets_[i]; e < excl_offsets_[i + 1]; ++e) {
-        const uint32_t j = excl_neighbors_[e] - first;
-        skip(m2_excl_, chunk + j / 8, 1u << (j % 8));
-      }
-      const uint32_t chunks = (S - first + 7) / 8;
-      skip(m2_excl_, chunk + chunks - 1, 0xffu & ~((1u << (S - first - 8 * (chunks - 1))) - 1u) & 0xffu);  // >= S
-      chunk += chunks;
+    for (uint32_t g = 0; g < S;) {
+      uint32_t e = g;
+      while (e < S && group[ids[e]] == group[ids[g]]) ++e;
+      split(split, ids.data() + g, e - g);
+      for (uint32_t i = g; i < e; ++i) order_.push_back(ids[i]);
+      while (order_.size() % 8) order_.push_back(S);
+      g = e;
     }
-    if (chunk > UINT32_MAX) return *this = Context{}, Status::kErrorOutOfMemory;
-    m2_excl_.push_back(UINT64_MAX);
-
-    // M1 layout: classes of equal chain mask (spheres in no chain left out), ascending mask then id;
-    // per class A its span (A, then every later class B with mask_A & mask_B != 0), padded to 8.
-    std::vector<uint32_t> by_mask;
-    for (uint32_t s = 0; s < S; ++s)
-      if (chain_mask_[s]) by_mask.push_back(s);
-    std::stable_sort(by_mask.begin(), by_mask.end(), [&](uint32_t p, uint32_t q) { return chain_mask_[p] < chain_mask_[q]; });
-    std::vector<uint32_t> class_begin;  // into by_mask, #K+1
-    for (uint32_t g = 0; g < by_mask.size(); ++g)
-      if (g == 0 || chain_mask_[by_mask[g]] != chain_mask_[by_mask[g - 1]]) class_begin.push_back(g);
-    const uint32_t K = static_cast<uint32_t>(class_begin.size());
-    class_begin.push_back(static_cast<uint32_t>(by_mask.size()));
+    const uint32_t B = static_cast<uint32_t>(order_.size() / 8);
+    blocks_ = B;
+    box_pitch_ = (B + 7) / 8 * 8;
+    live_stride_ = (B + 7) / 8;
+    chain_mask1_.assign(chain_mask_.begin(), chain_mask_.end());
+    chain_mask1_.push_back(0u);
     auto excluded = [&](uint32_t p, uint32_t q) {  // IsExcluded before sphere_count_ is set
       if (p > q) std::swap(p, q);
       return std::binary_search(excl_neighbors_.begin() + excl_offsets_[p], excl_neighbors_.begin() + excl_offsets_[p + 1], q);
     };
-    uint64_t keys = 0;
-    chunk = 0;
-    for (uint32_t A = 0; A < K; ++A) {
-      const uint32_t mask_a = chain_mask_[by_mask[class_begin[A]]];
-      const uint32_t begin = static_cast<uint32_t>(m1_order_.size()), rows = class_begin[A + 1] - class_begin[A];
-      for (uint32_t B = A; B < K; ++B)
-        if (mask_a & chain_mask_[by_mask[class_begin[B]]])
-          for (uint32_t g = class_begin[B]; g < class_begin[B + 1]; ++g) m1_order_.push_back(static_cast<uint16_t>(by_mask[g]));
-      const uint32_t cols = static_cast<uint32_t>(m1_order_.size()) - begin;
-      while (m1_order_.size() % 8) m1_order_.push_back(0);
-      if (chunk > UINT32_MAX || m1_excl_.size() > UINT32_MAX) return *this = Context{}, Status::kErrorOutOfMemory;
-      spans_.insert(spans_.end(), {begin, rows, cols, static_cast<uint32_t>(chunk), static_cast<uint32_t>(m1_excl_.size()),
-                                   static_cast<uint32_t>(keys)});
-      keys += uint64_t{rows} * (rows - 1) / 2 + uint64_t{rows} * (cols - rows);
-      if (keys > UINT32_MAX) return *this = Context{}, Status::kErrorOutOfMemory;
-      for (uint32_t i = 0; i < rows; ++i) {
-        if (i + 1 >= cols) continue;
-        for (uint32_t j0 = (i + 1) & ~7u; j0 < cols; j0 += 8, ++chunk) {
-          uint32_t bits = 0;
-          for (uint32_t k = 0; k < 8; ++k) {
-            const uint32_t j = j0 + k;
-            bits |= static_cast<uint32_t>(j <= i || j >= cols || excluded(m1_order_[begin + i], m1_order_[begin + j])) << k;
-          }
-          skip(m1_excl_, chunk, bits);
+    uint64_t key_slots = 0;
+    for (int method = 0; method < 2; ++method) {  // 0 = M1, 1 = M2
+      allowed_[method].assign(size_t{B} * B, 0u);
+      live_[method].assign(size_t{B} * live_stride_, 0u);
+      key_begin_[method].assign(B + 1, 0u);
+      uint64_t keys = 0;
+      for (uint32_t I = 0; I < B; ++I) {
+        if (keys > UINT32_MAX) return *this = Context{}, Status::kErrorOutOfMemory;
+        key_begin_[method][I] = static_cast<uint32_t>(keys);
+        for (uint32_t J = I; J < B; ++J) {
+          uint64_t lanes = 0;
+          for (uint32_t row = 0; row < 8; ++row)
+            for (uint32_t l = 0; l < 8; ++l) {
+              const uint32_t a = order_[8 * I + row], b = order_[8 * J + l];
+              const bool ok = a < S && b < S && (I < J || l > row) && !excluded(a, b) &&
+                              (method == 1 || (chain_mask_[a] & chain_mask_[b]) != 0);
+              lanes |= uint64_t{ok} << (8 * row + l);
+            }
+          allowed_[method][size_t{I} * B + J] = lanes;
+          if (lanes) live_[method][size_t{I} * live_stride_ + (J - I) / 8] |= static_cast<uint8_t>(1u << ((J - I) % 8));
+          keys += static_cast<uint64_t>(std::popcount(lanes));
         }
       }
+      if (keys > UINT32_MAX) return *this = Context{}, Status::kErrorOutOfMemory;
+      key_begin_[method][B] = static_cast<uint32_t>(keys);
+      key_slots = std::max(key_slots, keys);
     }
-    if (chunk > UINT32_MAX) return *this = Context{}, Status::kErrorOutOfMemory;
-    m1_excl_.push_back(UINT64_MAX);
-    const uint32_t G = static_cast<uint32_t>(m1_order_.size());
-    for (auto* v : {&gx_, &gy_, &gz_}) v->assign(G, 1e18f);
-    gr_.assign(G, 0.0f);
-    m1_keys_.resize(keys);
-    span_hits_.assign(K, 0u);
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    for (auto* v : {&gx_, &gy_, &gz_, &gr_}) v->assign(order_.size(), nan);
+    for (auto* v : {&tx_, &ty_, &tz_, &tr_}) v->assign(size_t{8} * box_pitch_, nan);
+    box_.assign(size_t{7} * (box_pitch_ + 8), 0.0f);
+    for (uint32_t I = B; I < box_pitch_ + 8; ++I) {  // empty boxes past the blocks (read, never kept)
+      for (int k = 0; k < 3; ++k) {
+        box_[(2 * k) * (box_pitch_ + 8) + I] = std::numeric_limits<float>::infinity();
+        box_[(2 * k + 1) * (box_pitch_ + 8) + I] = -std::numeric_limits<float>::infinity();
+      }
+    }
+    keys_.resize(key_slots);
+    row_hits_.assign(size_t{3} * B, 0u);
     use_avx_ = kernels::HasAvx();
   } SPHERECHAIN_CATCH_BAD_ALLOC {
     *this = Context{};
@@ -147,11 +155,7 @@ Status Context::Init(const AssetView& view) {
   // Exact candidate counts.
   const uint64_t all = uint64_t{S} * (S - 1) / 2;
   m2_candidates_ = static_cast<uint32_t>(all - excl_neighbors_.size());
-  uint64_t m1 = m1_keys_.size();  // distinct pairs sharing a chain, minus the excluded ones among them
-  for (uint32_t s = 0; s < S; ++s)
-    for (uint32_t i = excl_offsets_[s]; i < excl_offsets_[s + 1]; ++i)
-      m1 -= (chain_mask_[s] & chain_mask_[excl_neighbors_[i]]) != 0;
-  m1_candidates_ = static_cast<uint32_t>(m1);
+  m1_candidates_ = key_begin_[0][blocks_];  // non-excluded pairs sharing a chain: M1's allowed lanes
   return Status::kOk;
 }
 

@@ -1,4 +1,5 @@
-// DetectJob: brute-force sphere overlap tests, M1 (per chain) and M2 (all spheres), paper §5.2.
+// DetectJob: sphere overlap tests, M1 (per chain) and M2 (all spheres), paper §5.2, behind a broad
+// phase over blocks of 8 spheres (kernels.inl BlockRow).
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -14,49 +15,78 @@ float JobMargin(const DetectJob& job) { return job.margin < 0.0f ? job.context->
 
 struct DetectTaskData {
   const Context* ctx;
+  bool m1;
 };
 
-void DetectSpanTask(void* data, uint32_t begin, uint32_t end) {
-  const Context& ctx = *static_cast<DetectTaskData*>(data)->ctx;
-  for (uint32_t s = begin; s < end; ++s) Context::Internal::DetectSpan(ctx, s);
+void DetectRowTask(void* data, uint32_t begin, uint32_t end) {
+  const DetectTaskData& d = *static_cast<DetectTaskData*>(data);
+  for (uint32_t I = begin; I < end; ++I) Context::Internal::DetectRowBlock(*d.ctx, d.m1, I);
 }
 
 }  // namespace
 
-// M1 tests each distinct pair sharing a chain once: spheres are grouped by chain-membership class and
-// each class's span holds the class then every later class sharing a chain with it (Context::Init),
-// so those pairs are (row of the class) × (later column of its span). Hits are keyed by (first common
-// chain, a, b) and sorted, which is exactly the documented order (chain lists are ascending);
-// raw_pairs adds, per hit, the number of chains holding the pair (the paper's per-chain count).
-void Context::Internal::DetectSpan(const Context& c, uint32_t span) {
-  const uint32_t* sp = c.spans_.data() + size_t{6} * span;
-  const kernels::SpanArgs args{c.gx_.data(), c.gy_.data(), c.gz_.data(), c.gr_.data(), c.m1_order_.data(),
-                               c.chain_mask_.data(), sp[0], sp[1], sp[2], sp[3], c.m1_excl_.data() + sp[4],
-                               c.m1_keys_.data() + sp[5]};
-  c.span_hits_[span] = c.use_avx_ ? kernels::SpanAvx(args) : kernels::SpanSse(args);
+// One row block of the broad phase (kernels::BlockRow): its hit keys into its own slots of keys_ and
+// its counters into row_hits_ (disjoint per row block, so tasks may run in any order on any thread).
+void Context::Internal::DetectRowBlock(const Context& c, bool m1, uint32_t I) {
+  const int method = m1 ? 0 : 1;
+  const size_t pitch = c.box_pitch_ + 8;
+  float* box = c.box_.data();
+  const kernels::BroadPhaseArgs args{c.gx_.data(), c.gy_.data(), c.gz_.data(), c.gr_.data(),
+                                     box, box + pitch, box + 2 * pitch, box + 3 * pitch, box + 4 * pitch,
+                                     box + 5 * pitch, box + 6 * pitch, c.order_.data(), c.chain_mask1_.data(),
+                                     c.allowed_[method].data(), c.live_[method].data(), c.blocks_, c.live_stride_, m1,
+                                     c.keys_.data(), c.key_begin_[method].data()};
+  uint32_t* counters = c.row_hits_.data() + size_t{3} * I;
+  counters[0] = c.use_avx_ ? kernels::BlockRowAvx(args, I, &counters[1], &counters[2])
+                           : kernels::BlockRowSse(args, I, &counters[1], &counters[2]);
 }
 
-Status Context::Internal::DetectM1(const DetectJob& job) {
+// Both methods: gather the spheres (radii grown by the margin) in the layout's slot order, plain and
+// lane-major; block boxes; per row block the cull and the 8×8 tests (parallel_for: one task index per
+// row block); then the per-row-block key runs are compacted and sorted. Keys are (first common chain,
+// M1 only) << 32 | a << 16 | b, so the sorted keys are exactly the documented order; the depths and
+// the counters are computed as before the broad phase, with the same operations (bit-identical).
+Status Context::Internal::Detect(const DetectJob& job) {
   const Context& c = *job.context;
-  const uint32_t G = static_cast<uint32_t>(c.m1_order_.size());
+  const bool m1 = job.method == DetectMethod::kM1;
+  const int method = m1 ? 0 : 1;
   const float m = JobMargin(job);
-  for (uint32_t g = 0; g < G; ++g) {  // (padding lanes gather sphere 0; the skip stream masks them)
-    const uint32_t s = c.m1_order_[g];
-    c.gx_[g] = c.x_[s], c.gy_[g] = c.y_[s], c.gz_[g] = c.z_[s], c.gr_[g] = c.r_[s] + m;
+  const uint32_t B = c.blocks_, P = c.box_pitch_;
+  const float *x = c.x_.data(), *y = c.y_.data(), *z = c.z_.data(), *r = c.r_.data();
+  float *gx = c.gx_.data(), *gy = c.gy_.data(), *gz = c.gz_.data(), *gr = c.gr_.data();
+  float *tx = c.tx_.data(), *ty = c.ty_.data(), *tz = c.tz_.data(), *tr = c.tr_.data();
+  for (uint32_t I = 0; I < B; ++I)  // padding slots read id #S: NaN
+    for (uint32_t l = 0, g = 8 * I, t = I; l < 8; ++l, ++g, t += P) {
+      const uint32_t s = c.order_[g];
+      const float sx = x[s], sy = y[s], sz = z[s], sr = r[s] + m;
+      gx[g] = sx, gy[g] = sy, gz[g] = sz, gr[g] = sr;
+      tx[t] = sx, ty[t] = sy, tz[t] = sz, tr[t] = sr;
+    }
+  {
+    const size_t pitch = P + 8;
+    float* box = c.box_.data();
+    const kernels::BlockBoxArgs args{c.tx_.data(), c.ty_.data(), c.tz_.data(), c.tr_.data(), P,
+                                     box, box + pitch, box + 2 * pitch, box + 3 * pitch, box + 4 * pitch,
+                                     box + 5 * pitch, box + 6 * pitch};
+    if (c.use_avx_)
+      kernels::BlockBoxesAvx(args);
+    else
+      kernels::BlockBoxesSse(args);
   }
-  const uint32_t P = static_cast<uint32_t>(c.span_hits_.size());
   if (job.parallel_for.run) {
-    DetectTaskData data{&c};
-    job.parallel_for.run(job.parallel_for.user, P, &DetectSpanTask, &data);
+    DetectTaskData data{&c, m1};
+    job.parallel_for.run(job.parallel_for.user, B, &DetectRowTask, &data);
   } else {
-    for (uint32_t p = 0; p < P; ++p) DetectSpan(c, p);
+    for (uint32_t I = 0; I < B; ++I) DetectRowBlock(c, m1, I);
   }
-  uint64_t* keys = c.m1_keys_.data();
-  uint32_t distinct = 0, raw = 0;
-  for (uint32_t p = 0; p < P; ++p) {  // compact the per-span key blocks
-    const uint32_t slot = c.spans_[size_t{6} * p + 5], n = c.span_hits_[p];
+  uint64_t* keys = c.keys_.data();
+  uint32_t distinct = 0, box_tests = 0, sphere_tests = 0;
+  for (uint32_t I = 0; I < B; ++I) {  // compact the per-row-block key runs
+    const uint32_t slot = c.key_begin_[method][I], n = c.row_hits_[size_t{3} * I];
     if (n && slot != distinct) std::memmove(keys + distinct, keys + slot, sizeof(uint64_t) * n);
     distinct += n;
+    box_tests += c.row_hits_[size_t{3} * I + 1];
+    sphere_tests += c.row_hits_[size_t{3} * I + 2];
   }
   if (distinct <= 32) {  // a handful of hits per frame: insertion sort
     for (uint32_t i = 1; i < distinct; ++i) {
@@ -69,39 +99,38 @@ Status Context::Internal::DetectM1(const DetectJob& job) {
     std::sort(keys, keys + distinct);
   }
   const uint32_t written = distinct < job.capacity ? distinct : job.capacity;
-  const SphereArrays s = c.spheres();
-  for (uint32_t k = 0; k < written; ++k) {
-    const uint32_t a = static_cast<uint32_t>(keys[k] >> 16) & 0xffffu, b = static_cast<uint32_t>(keys[k]) & 0xffffu;
-    const float dx = s.x[b] - s.x[a], dy = s.y[b] - s.y[a], dz = s.z[b] - s.z[a];
-    job.output[k] = {static_cast<uint16_t>(a), static_cast<uint16_t>(b),
-                     s.r[a] + s.r[b] - std::sqrt(dx * dx + dy * dy + dz * dz), c.chain_mask_[a] & c.chain_mask_[b]};
-  }
-  for (uint32_t k = 0; k < distinct; ++k) {
-    const uint32_t a = static_cast<uint32_t>(keys[k] >> 16) & 0xffffu, b = static_cast<uint32_t>(keys[k]) & 0xffffu;
-    raw += static_cast<uint32_t>(std::popcount(c.chain_mask_[a] & c.chain_mask_[b]));
+  uint32_t raw = distinct;
+  if (m1) {
+    for (uint32_t k = 0; k < written; ++k) {
+      const uint32_t a = static_cast<uint32_t>(keys[k] >> 16) & 0xffffu, b = static_cast<uint32_t>(keys[k]) & 0xffffu;
+      const float dx = x[b] - x[a], dy = y[b] - y[a], dz = z[b] - z[a];
+      job.output[k] = {static_cast<uint16_t>(a), static_cast<uint16_t>(b),
+                       r[a] + r[b] - std::sqrt(dx * dx + dy * dy + dz * dz), c.chain_mask_[a] & c.chain_mask_[b]};
+    }
+    raw = 0;
+    for (uint32_t k = 0; k < distinct; ++k) {
+      const uint32_t a = static_cast<uint32_t>(keys[k] >> 16) & 0xffffu, b = static_cast<uint32_t>(keys[k]) & 0xffffu;
+      raw += static_cast<uint32_t>(std::popcount(c.chain_mask_[a] & c.chain_mask_[b]));
+    }
+  } else {  // M2's depth as it always was: grown radii, then 2m taken off (bit-identical results)
+    for (uint32_t k = 0; k < written; ++k) {
+      const uint32_t a = static_cast<uint32_t>(keys[k] >> 16) & 0xffffu, b = static_cast<uint32_t>(keys[k]) & 0xffffu;
+      const float dx = x[b] - x[a], dy = y[b] - y[a], dz = z[b] - z[a];
+      const float ra = m != 0.0f ? r[a] + m : r[a], rb = m != 0.0f ? r[b] + m : r[b];
+      float depth = ra + rb - std::sqrt(dx * dx + dy * dy + dz * dz);
+      if (m != 0.0f) depth -= 2.0f * m;
+      job.output[k] = {static_cast<uint16_t>(a), static_cast<uint16_t>(b), depth, c.chain_mask_[a] & c.chain_mask_[b]};
+    }
   }
   *job.count = written;
-  if (job.stats) *job.stats = {c.m1_tests_, raw, distinct};
-  return distinct > written ? Status::kOkTruncated : Status::kOk;
-}
-
-Status Context::Internal::DetectM2(const DetectJob& job) {
-  const Context& c = *job.context;
   const uint32_t S = c.sphere_count_;
-  const float m = JobMargin(job);
-  const float* r = c.r_.data();
-  if (m != 0.0f) {  // grown radii (padding stays 0: its spheres are far away)
-    for (uint32_t s = 0; s < S; ++s) c.mr_[s] = c.r_[s] + m;
-    r = c.mr_.data();
+  if (job.stats) {
+    job.stats->tests = m1 ? c.m1_tests_ : static_cast<uint32_t>(uint64_t{S} * (S - 1) / 2);
+    job.stats->raw_pairs = raw;
+    job.stats->distinct_pairs = distinct;
+    job.stats->box_tests = box_tests;
+    job.stats->sphere_tests = sphere_tests;
   }
-  const kernels::AllPairsArgs args{c.x_.data(), c.y_.data(), c.z_.data(), r, S, c.m2_excl_.data(),
-                                   c.chain_mask_.data(), job.output, job.capacity};
-  const uint32_t distinct = c.use_avx_ ? kernels::AllPairsAvx(args) : kernels::AllPairsSse(args);
-  const uint32_t written = distinct < job.capacity ? distinct : job.capacity;
-  if (m != 0.0f)
-    for (uint32_t k = 0; k < written; ++k) job.output[k].depth -= 2.0f * m;  // depth of the spheres themselves
-  *job.count = written;
-  if (job.stats) *job.stats = {static_cast<uint32_t>(uint64_t{S} * (S - 1) / 2), distinct, distinct};
   return distinct > written ? Status::kOkTruncated : Status::kOk;
 }
 
@@ -129,7 +158,7 @@ Status DetectJob::Check() const {
 
 Status DetectJob::Run() const {
   if (Status s = Check(); s != Status::kOk) return s;
-  return method == DetectMethod::kM1 ? Context::Internal::DetectM1(*this) : Context::Internal::DetectM2(*this);
+  return Context::Internal::Detect(*this);
 }
 
 }  // namespace spherechain::runtime

@@ -12,9 +12,8 @@ namespace spherechain::runtime {
 
 struct Context::Internal {
   static void Refit(const RefitJob& job, uint32_t begin, uint32_t end);
-  static void DetectSpan(const Context& ctx, uint32_t span);
-  static Status DetectM1(const DetectJob& job);
-  static Status DetectM2(const DetectJob& job);
+  static void DetectRowBlock(const Context& ctx, bool m1, uint32_t row_block);
+  static Status Detect(const DetectJob& job);
 };
 
 /// Kernels over plain arrays, compiled twice (kernels.cpp): SSE2 (any x86-64) and AVX, picked per
@@ -33,40 +32,44 @@ struct RefitArgs {
   bool frame_mode;                // kPivotFrame
 };
 
-/// Overlap tests of every pair (row i < rows, column j > i < columns) of a span of gathered SoA
-/// spheres, in 8-lane chunks aligned to 8 (spans padded to multiples of 8) numbered from `chunk`;
-/// lanes to ignore (excluded pairs, j <= i, padding) come from the sorted skip stream `excl`
-/// ((chunk << 32) | lane bits, UINT64_MAX-terminated, positioned at this span's first entry).
-/// Each remaining overlapping pair writes first_chain << 32 | min(a, b) << 16 | max(a, b) to `keys`
-/// (a, b = order[...], first_chain = the lowest chain holding both). Returns the number of keys.
-struct SpanArgs {
-  const float *x, *y, *z, *r;
-  const uint16_t* order;
-  const uint32_t* chain_mask;  // #S
-  uint32_t begin, rows, columns;
-  uint32_t chunk;
-  const uint64_t* excl;
+/// Broad phase of DetectJob (M1 and M2 share it), one row block per call: spheres sit in blocks of 8
+/// (Context::Init's layout: per chain-membership class, bind-pose kd split), gathered per frame in
+/// block order (x, y, z, r grown by the margin; padding lanes NaN). Row block I is tested against
+/// every block J >= I that the method's static table keeps (`live`: some allowed lane); a block pair
+/// survives when the distance between the boxes of the two blocks' centres is below the sum of their
+/// largest |radius| — computed with the sphere test's own float operations, so that it never drops a
+/// pair the sphere test would report (see kernels.inl) — and then its 8×8 sphere tests run, masked by
+/// `allowed` (row r's lanes in byte r: not padding, j > i on the diagonal block, not excluded, and for
+/// M1 sharing a chain). Each hit writes (first common chain, M1 only) << 32 | min(a,b) << 16 | max(a,b)
+/// at keys[key_begin[I] ...]. Returns the number of keys; counters go to *box_tests / *sphere_tests.
+struct BroadPhaseArgs {
+  const float *x, *y, *z, *r;             // G = 8·B gathered spheres, block order
+  const float *lx, *hx, *ly, *hy, *lz, *hz, *br;  // per block (B + 8, padding blocks empty): box of
+                                          // the centres, largest |grown radius| (NaN lanes ignored)
+  const uint32_t* order;                  // G: sphere id per slot (padding: #S)
+  const uint32_t* chain_mask;             // #S + 1
+  const uint64_t* allowed;                // B×B, [I·B + J] for J >= I: lanes of the pair, byte r = row r
+  const uint8_t* live;                    // B × live_stride: bit k of byte c ⇔ allowed[I][I+8c+k] != 0
+  uint32_t blocks, live_stride;
+  bool m1;                                // keys carry the first common chain
   uint64_t* keys;
+  const uint32_t* key_begin;              // B: first key slot of each row block
 };
 
-/// M2: every pair a < b of the #S spheres (rows a, chunks of b aligned to 8 from a+1, arrays padded
-/// to a multiple of 8), skip stream as above; writes the first `capacity` overlapping pairs to `out`
-/// in (a, b) order and returns how many there are.
-struct AllPairsArgs {
-  const float *x, *y, *z, *r;
-  uint32_t count;
-  const uint64_t* excl;
-  const uint32_t* chain_mask;
-  Collision* out;
-  uint32_t capacity;
+/// Block boxes of the transposed gathered spheres: t* hold lane l of block I at [l · pitch + I]
+/// (pitch a multiple of 8 >= B; padding NaN). Writes lx..br for I < pitch.
+struct BlockBoxArgs {
+  const float *tx, *ty, *tz, *tr;
+  uint32_t pitch;
+  float *lx, *hx, *ly, *hy, *lz, *hz, *br;
 };
 
 void RefitSse(const RefitArgs& a, uint32_t begin, uint32_t end);
 void RefitAvx(const RefitArgs& a, uint32_t begin, uint32_t end);
-uint32_t SpanSse(const SpanArgs& a);
-uint32_t SpanAvx(const SpanArgs& a);
-uint32_t AllPairsSse(const AllPairsArgs& a);
-uint32_t AllPairsAvx(const AllPairsArgs& a);
+void BlockBoxesSse(const BlockBoxArgs& a);
+void BlockBoxesAvx(const BlockBoxArgs& a);
+uint32_t BlockRowSse(const BroadPhaseArgs& a, uint32_t I, uint32_t* box_tests, uint32_t* sphere_tests);
+uint32_t BlockRowAvx(const BroadPhaseArgs& a, uint32_t I, uint32_t* box_tests, uint32_t* sphere_tests);
 bool HasAvx();  // the CPU and OS support AVX (false on a non-x86 build)
 
 }  // namespace kernels

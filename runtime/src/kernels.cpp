@@ -26,6 +26,10 @@ inline V Sqrt(V v) { return _mm_sqrt_ps(v); }
 inline M Gt(V a, V b) { return _mm_cmpgt_ps(a, b); }
 inline M And(M a, M b) { return _mm_and_ps(a, b); }
 inline V Blend(M m, V a, V b) { return _mm_or_ps(_mm_and_ps(m, a), _mm_andnot_ps(m, b)); }
+inline V Min(V a, V b) { return _mm_min_ps(a, b); }
+inline V Max(V a, V b) { return _mm_max_ps(a, b); }
+inline V Abs(V a) { return _mm_andnot_ps(_mm_set1_ps(-0.0f), a); }
+inline uint32_t LtMask(V a, V b) { return static_cast<uint32_t>(_mm_movemask_ps(_mm_cmplt_ps(a, b))); }
 inline uint32_t Overlap4(V xi, V yi, V zi, V ri, const float* x, const float* y, const float* z, const float* r) {
   const V dx = Load(x) - xi, dy = Load(y) - yi, dz = Load(z) - zi, rr = Load(r) + ri;
   return static_cast<uint32_t>(_mm_movemask_ps(_mm_cmplt_ps(dx * dx + dy * dy + dz * dz, rr * rr)));
@@ -52,6 +56,10 @@ inline V Sqrt(V v) { return _mm256_sqrt_ps(v); }
 inline M Gt(V a, V b) { return _mm256_cmp_ps(a, b, _CMP_GT_OQ); }
 inline M And(M a, M b) { return _mm256_and_ps(a, b); }
 inline V Blend(M m, V a, V b) { return _mm256_blendv_ps(b, a, m); }
+inline V Min(V a, V b) { return _mm256_min_ps(a, b); }
+inline V Max(V a, V b) { return _mm256_max_ps(a, b); }
+inline V Abs(V a) { return _mm256_andnot_ps(_mm256_set1_ps(-0.0f), a); }
+inline uint32_t LtMask(V a, V b) { return static_cast<uint32_t>(_mm256_movemask_ps(_mm256_cmp_ps(a, b, _CMP_LT_OQ))); }
 inline uint32_t Overlap8(V xi, V yi, V zi, V ri, const float* x, const float* y, const float* z, const float* r) {
   const V dx = Load(x) - xi, dy = Load(y) - yi, dz = Load(z) - zi, rr = Load(r) + ri;
   return static_cast<uint32_t>(_mm256_movemask_ps(_mm256_cmp_ps(dx * dx + dy * dy + dz * dz, rr * rr, _CMP_LT_OQ)));
@@ -65,10 +73,10 @@ inline uint32_t Overlap8(V xi, V yi, V zi, V ri, const float* x, const float* y,
 
 void RefitSse(const RefitArgs& a, uint32_t begin, uint32_t end) { sse::Refit(a, begin, end); }
 void RefitAvx(const RefitArgs& a, uint32_t begin, uint32_t end) { avx::Refit(a, begin, end); }
-uint32_t SpanSse(const SpanArgs& a) { return sse::Span(a); }
-uint32_t SpanAvx(const SpanArgs& a) { return avx::Span(a); }
-uint32_t AllPairsSse(const AllPairsArgs& a) { return sse::AllPairs(a); }
-uint32_t AllPairsAvx(const AllPairsArgs& a) { return avx::AllPairs(a); }
+void BlockBoxesSse(const BlockBoxArgs& a) { sse::BlockBoxes(a); }
+void BlockBoxesAvx(const BlockBoxArgs& a) { avx::BlockBoxes(a); }
+uint32_t BlockRowSse(const BroadPhaseArgs& a, uint32_t I, uint32_t* b, uint32_t* s) { return sse::BlockRow(a, I, b, s); }
+uint32_t BlockRowAvx(const BroadPhaseArgs& a, uint32_t I, uint32_t* b, uint32_t* s) { return avx::BlockRow(a, I, b, s); }
 bool HasAvx() {
   __builtin_cpu_init();
   return __builtin_cpu_supports("avx");
@@ -87,6 +95,10 @@ inline V Sqrt(V v) { return std::sqrt(v); }
 inline M Gt(V a, V b) { return a > b; }
 inline M And(M a, M b) { return a && b; }
 inline V Blend(M m, V a, V b) { return m ? a : b; }
+inline V Min(V a, V b) { return a < b ? a : b; }
+inline V Max(V a, V b) { return a > b ? a : b; }
+inline V Abs(V a) { return std::fabs(a); }
+inline uint32_t LtMask(V a, V b) { return a < b ? 1u : 0u; }
 inline uint32_t Overlap8(V xi, V yi, V zi, V ri, const float* x, const float* y, const float* z, const float* r) {
   uint32_t bits = 0;
   for (uint32_t k = 0; k < 8; ++k) {
@@ -100,10 +112,10 @@ inline uint32_t Overlap8(V xi, V yi, V zi, V ri, const float* x, const float* y,
 
 void RefitSse(const RefitArgs& a, uint32_t begin, uint32_t end) { scalar::Refit(a, begin, end); }
 void RefitAvx(const RefitArgs& a, uint32_t begin, uint32_t end) { scalar::Refit(a, begin, end); }
-uint32_t SpanSse(const SpanArgs& a) { return scalar::Span(a); }
-uint32_t SpanAvx(const SpanArgs& a) { return scalar::Span(a); }
-uint32_t AllPairsSse(const AllPairsArgs& a) { return scalar::AllPairs(a); }
-uint32_t AllPairsAvx(const AllPairsArgs& a) { return scalar::AllPairs(a); }
+void BlockBoxesSse(const BlockBoxArgs& a) { scalar::BlockBoxes(a); }
+void BlockBoxesAvx(const BlockBoxArgs& a) { scalar::BlockBoxes(a); }
+uint32_t BlockRowSse(const BroadPhaseArgs& a, uint32_t I, uint32_t* b, uint32_t* s) { return scalar::BlockRow(a, I, b, s); }
+uint32_t BlockRowAvx(const BroadPhaseArgs& a, uint32_t I, uint32_t* b, uint32_t* s) { return scalar::BlockRow(a, I, b, s); }
 bool HasAvx() { return false; }
 
 #endif

@@ -1,5 +1,6 @@
 // Kernel bodies, included once per instruction set by kernels.cpp inside a namespace that defines:
 //   V (a vector of kW floats), M (its comparison mask), kW, Set1, Load, Store, Sqrt, Gt, Blend, And,
+//   Min / Max (a op b, else b when either is NaN: minps / maxps), Abs, LtMask (bit k ⇔ lane k a < b),
 //   and Overlap8 (the 8-lane overlap bit mask of one row sphere against 8 spheres).
 // No '#pragma once': meant to be included several times. The formulas are refit.h's and §5.2's, with
 // the same operations in the same order (so the results are bit-identical across variants):
@@ -80,65 +81,79 @@ void Refit(const RefitArgs& a, uint32_t begin, uint32_t end) {
   }
 }
 
-// The skip stream (Context::Init), one compare per chunk (branch-free): `next` is the entry at `excl`.
-struct ExclusionCursor {
-  const uint64_t* excl;
-  uint64_t next;
-  inline uint32_t Apply(uint32_t bits, uint32_t chunk) {
-    const bool here = static_cast<uint32_t>(next >> 32) == chunk;
-    bits &= ~(here ? static_cast<uint32_t>(next) : 0u);
-    excl += here;
-    next = *excl;
-    return bits;
-  }
-};
-
-uint32_t Span(const SpanArgs& a) {
-  const float* __restrict x = a.x + a.begin;
-  const float* __restrict y = a.y + a.begin;
-  const float* __restrict z = a.z + a.begin;
-  const float* __restrict r = a.r + a.begin;
-  const uint32_t rows = a.rows, columns = a.columns;
-  ExclusionCursor ex{a.excl, *a.excl};
-  uint32_t chunk = a.chunk, hits = 0;
-  for (uint32_t i = 0; i < rows && i + 1 < columns; ++i) {
-    const V xi = Set1(x[i]), yi = Set1(y[i]), zi = Set1(z[i]), ri = Set1(r[i]);
-    for (uint32_t j0 = (i + 1) & ~7u; j0 < columns; j0 += 8, ++chunk) {
-      uint32_t bits = ex.Apply(Overlap8(xi, yi, zi, ri, x + j0, y + j0, z + j0, r + j0), chunk);
-      while (bits) [[unlikely]] {
-        const uint32_t sa = a.order[a.begin + i], sb = a.order[a.begin + j0 + static_cast<uint32_t>(std::countr_zero(bits))];
-        bits &= bits - 1;
-        const uint64_t first_chain = static_cast<uint32_t>(std::countr_zero(a.chain_mask[sa] & a.chain_mask[sb]));
-        a.keys[hits++] = first_chain << 32 | (sa < sb ? (sa << 16 | sb) : (sb << 16 | sa));
-      }
+// Block boxes (see kernels::BlockBoxArgs), kW blocks at a time: lane l of blocks I.. is contiguous in
+// the transposed copy, so the reduction over a block's 8 lanes is vertical. Min(v, acc) / Max(v, acc)
+// return acc when v is NaN: NaN lanes (padding, or a sphere whose coordinate or radius is NaN, which the
+// sphere test never reports) leave the box as it is; an all-NaN axis leaves it empty (+inf, −inf).
+void BlockBoxes(const BlockBoxArgs& a) {
+  const V inf = Set1(__builtin_inff()), ninf = Set1(-__builtin_inff()), zero = Set1(0.0f);
+  for (uint32_t I = 0; I < a.pitch; I += kW) {
+    V lx = inf, hx = ninf, ly = inf, hy = ninf, lz = inf, hz = ninf, br = zero;
+    for (uint32_t l = 0; l < 8; ++l) {
+      const size_t o = size_t{l} * a.pitch + I;
+      const V x = Load(a.tx + o), y = Load(a.ty + o), z = Load(a.tz + o);
+      lx = Min(x, lx), hx = Max(x, hx), ly = Min(y, ly), hy = Max(y, hy), lz = Min(z, lz), hz = Max(z, hz);
+      br = Max(Abs(Load(a.tr + o)), br);
     }
+    Store(a.lx + I, lx), Store(a.hx + I, hx), Store(a.ly + I, ly), Store(a.hy + I, hy);
+    Store(a.lz + I, lz), Store(a.hz + I, hz), Store(a.br + I, br);
   }
-  return hits;
 }
 
-uint32_t AllPairs(const AllPairsArgs& a) {
+// One row block of the broad phase (see kernels::BroadPhaseArgs). The block-pair test is the sphere
+// test's formula on bounds: per axis a gap g = max(loJ − hiI, loI − hiJ, 0) (NaN terms skipped), kept
+// when g_x² + g_y² + g_z² < (R_I + R_J)², same operations in the same order, no FMA. It never drops a
+// pair the sphere test reports: for a in I, b in J the exact |x_b − x_a| is >= each non-NaN gap term,
+// and rounding is monotonic, so fl(dx) >= g per axis, fl(dx²+dy²+dz²) >= fl(g²) (squares and sums are
+// monotonic on values >= 0), while |fl(r_a + r_b)| <= fl(R_I + R_J); so g² >= (R_I + R_J)² implies
+// d² >= rr², i.e. no overlap. (A NaN d² or rr² never overlaps; infinite bounds only keep more pairs.)
+uint32_t BlockRow(const BroadPhaseArgs& a, uint32_t I, uint32_t* box_tests, uint32_t* sphere_tests) {
   const float* __restrict x = a.x;
   const float* __restrict y = a.y;
   const float* __restrict z = a.z;
   const float* __restrict r = a.r;
-  const uint32_t count = a.count, capacity = a.capacity;
-  ExclusionCursor ex{a.excl, *a.excl};
-  uint32_t chunk = 0, distinct = 0;
-  for (uint32_t i = 0; i + 1 < count; ++i) {
-    const V xi = Set1(x[i]), yi = Set1(y[i]), zi = Set1(z[i]), ri = Set1(r[i]);
-    for (uint32_t b0 = (i + 1) & ~7u; b0 < count; b0 += 8, ++chunk) {
-      uint32_t bits = ex.Apply(Overlap8(xi, yi, zi, ri, x + b0, y + b0, z + b0, r + b0), chunk);
-      while (bits) [[unlikely]] {
-        const uint32_t b = b0 + static_cast<uint32_t>(std::countr_zero(bits));
-        bits &= bits - 1;
-        if (distinct < capacity) {
-          const float dx = x[b] - x[i], dy = y[b] - y[i], dz = z[b] - z[i];
-          a.out[distinct] = {static_cast<uint16_t>(i), static_cast<uint16_t>(b),
-                             r[i] + r[b] - std::sqrt(dx * dx + dy * dy + dz * dz), a.chain_mask[i] & a.chain_mask[b]};
+  const V zero = Set1(0.0f);
+  const V lxi = Set1(a.lx[I]), hxi = Set1(a.hx[I]), lyi = Set1(a.ly[I]), hyi = Set1(a.hy[I]);
+  const V lzi = Set1(a.lz[I]), hzi = Set1(a.hz[I]), bri = Set1(a.br[I]);
+  const uint8_t* live = a.live + size_t{I} * a.live_stride;
+  const uint64_t* allowed = a.allowed + size_t{I} * a.blocks;
+  uint64_t* keys = a.keys + a.key_begin[I];
+  uint32_t hits = 0, boxes = 0, spheres = 0;
+  for (uint32_t c = 0, J0 = I; J0 < a.blocks; ++c, J0 += 8) {
+    uint32_t near = live[c];
+    if (!near) continue;
+    boxes += static_cast<uint32_t>(std::popcount(near));
+    uint32_t kept = 0;
+    for (uint32_t k = 0; k < 8; k += kW) {
+      const uint32_t J = J0 + k;
+      const V gx = Max(Load(a.lx + J) - hxi, Max(lxi - Load(a.hx + J), zero));
+      const V gy = Max(Load(a.ly + J) - hyi, Max(lyi - Load(a.hy + J), zero));
+      const V gz = Max(Load(a.lz + J) - hzi, Max(lzi - Load(a.hz + J), zero));
+      const V rr = Load(a.br + J) + bri;
+      kept |= LtMask(gx * gx + gy * gy + gz * gz, rr * rr) << k;
+    }
+    near &= kept;
+    while (near) {
+      const uint32_t J = J0 + static_cast<uint32_t>(std::countr_zero(near));
+      near &= near - 1;
+      const uint64_t allow = allowed[J];
+      spheres += static_cast<uint32_t>(std::popcount(allow));
+      const uint32_t col = 8 * J;
+      for (uint32_t row = 0; row < 8; ++row) {
+        const uint32_t lanes = static_cast<uint32_t>(allow >> (8 * row)) & 0xffu;
+        if (!lanes) continue;
+        const uint32_t i = 8 * I + row;
+        uint32_t bits = Overlap8(Set1(x[i]), Set1(y[i]), Set1(z[i]), Set1(r[i]), x + col, y + col, z + col, r + col) & lanes;
+        while (bits) [[unlikely]] {
+          const uint32_t sa = a.order[i], sb = a.order[col + static_cast<uint32_t>(std::countr_zero(bits))];
+          bits &= bits - 1;
+          const uint64_t first_chain = a.m1 ? static_cast<uint32_t>(std::countr_zero(a.chain_mask[sa] & a.chain_mask[sb])) : 0u;
+          keys[hits++] = first_chain << 32 | (sa < sb ? (sa << 16 | sb) : (sb << 16 | sa));
         }
-        ++distinct;
       }
     }
   }
-  return distinct;
+  *box_tests = boxes;
+  *sphere_tests = spheres;
+  return hits;
 }

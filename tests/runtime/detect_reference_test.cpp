@@ -174,11 +174,11 @@ TEST_CASE("DetectJob M1 and M2 equal the reference loops on irregular chains and
   }
 }
 
-// M1's broad cull (per-chunk bounding boxes, kernels.inl) against the brute-force reference: scenes
+// The broad phase (block boxes, kernels.inl BlockRow), M1 and M2, against the brute-force reference: scenes
 // with tight clusters far apart (most chunks skipped), spheres straddling clusters, pairs touching or
 // within a few ulps of touching, huge and tiny magnitudes, negative / zero radii, NaN and infinite
 // spheres. Outputs must be identical (pairs, order, depth bits, stats) to testing every pair.
-TEST_CASE("DetectJob M1 broad cull equals brute force on clustered, far, degenerate and non-finite spheres") {
+TEST_CASE("DetectJob M1 and M2 broad cull equal brute force on clustered, far, degenerate and non-finite spheres") {
   std::mt19937 rng(777);
   std::uniform_real_distribution<float> u(0.0f, 1.0f);
   for (int trial = 0; trial < 40; ++trial) {
@@ -233,24 +233,28 @@ TEST_CASE("DetectJob M1 broad cull equals brute force on clustered, far, degener
     if (trial % 4 == 2) {  // one giant sphere spanning the clusters
       x[S / 2] = 150.0f * scale, r[S / 2] = 120.0f * scale;
     }
-    const Reference ref = ReferenceDetect(d, ctx.spheres(), DetectMethod::kM1);
-    for (int parallel = 0; parallel < 2; ++parallel) {
-      std::vector<Collision> out(DetectBound(view, DetectMethod::kM1));
-      uint32_t n = 0;
-      DetectStats st;
-      DetectJob job;
-      job.context = &ctx;
-      job.output = out.data();
-      job.capacity = static_cast<uint32_t>(out.size());
-      job.count = &n;
-      job.stats = &st;
-      if (parallel)
-        job.parallel_for.run = [](void*, uint32_t count, ParallelFor::Task task, void* data) {
-          for (uint32_t i = count; i-- > 0;) task(data, i, i + 1);
-        };
-      REQUIRE(job.Run() == Status::kOk);
-      CAPTURE(trial);
-      CheckEqualsReference(out.data(), n, st, ref);
+    for (DetectMethod method : {DetectMethod::kM1, DetectMethod::kM2}) {
+      const Reference ref = ReferenceDetect(d, ctx.spheres(), method);
+      for (int parallel = 0; parallel < 2; ++parallel) {
+        std::vector<Collision> out(DetectBound(view, method));
+        uint32_t n = 0;
+        DetectStats st;
+        DetectJob job;
+        job.context = &ctx;
+        job.method = method;
+        job.output = out.data();
+        job.capacity = static_cast<uint32_t>(out.size());
+        job.count = &n;
+        job.stats = &st;
+        if (parallel)
+          job.parallel_for.run = [](void*, uint32_t count, ParallelFor::Task task, void* data) {
+            for (uint32_t i = count; i-- > 0;) task(data, i, i + 1);
+          };
+        REQUIRE(job.Run() == Status::kOk);
+        CAPTURE(trial);
+        CAPTURE(static_cast<int>(method));
+        CheckEqualsReference(out.data(), n, st, ref);
+      }
     }
   }
 }

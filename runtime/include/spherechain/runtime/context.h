@@ -42,10 +42,10 @@ struct SphereArrays {
 
 /// Per-asset workspace, created once per asset (and per character instance when several share an
 /// asset): SoA sphere state, the refit data copied out of the asset into SoA, per-sphere
-/// chain-membership masks (used to de-duplicate M1 pairs across chains and to tag results), the M1
-/// layout (spheres grouped by chain mask, so M1's distinct candidate pairs are row × span blocks), the
-/// excluded (adjacent) pairs as per-sphere neighbour lists and as per-8-lane-chunk masks of the
-/// M1/M2 test sequences, and scratch for M1 hits (also used by the parallel M1 path).
+/// chain-membership masks (used to de-duplicate M1 pairs across chains and to tag results), the
+/// excluded (adjacent) pairs as per-sphere neighbour lists, and the broad phase's layout: spheres in
+/// blocks of 8 (grouped by body region, split at bind pose), per pair of blocks and per method the
+/// lanes to test (excluded pairs, M1's pairs sharing no chain and padding masked out), and scratch.
 /// Ownership: owns its memory; after Init it no longer reads the asset bytes (jobs never touch the
 /// AssetView), so the bytes may be released if no one calls SurroundingTriangles any more.
 /// Thread safety: one job at a time per context; different contexts are independent.
@@ -61,8 +61,8 @@ class Context {
   /// (Asset.spheres). The only allocating call of the runtime (catches std::bad_alloc).
   /// Returns kOk; kErrorNullArgument when `!view.valid()`; kErrorOutOfMemory (context left empty; a
   /// runtime built with -fno-exceptions terminates on allocation failure instead).
-  /// Cost: O(#S + Σ|chain|²·degree) time; memory ~100 B per sphere + 8 B per distinct M1 candidate
-  /// pair (Σ|chain|²/2 at most) + 8 B per excluded pair + 18 B per (sphere, class sharing a chain).
+  /// Cost: O(#S² · log degree) time; memory ~150 B per sphere + 8 B per non-excluded sphere pair
+  /// (hit keys; #S²/2 pairs at most) + ~#S²/4 B of block-pair lane tables + 2 B per excluded pair.
   Status Init(const AssetView& view);
 
   /// True after a successful Init.
@@ -103,8 +103,7 @@ class Context {
   uint32_t sphere_count_ = 0, vertex_count_ = 0, chain_count_ = 0;
   uint32_t m1_candidates_ = 0, m2_candidates_ = 0;
   float contact_margin_ = 0.0f;
-  mutable std::vector<float> mr_;                     // #S + kPad: radii grown by the margin (M2 scratch)
-  std::vector<float> x_, y_, z_, r_;                  // current spheres, #S + kPad each (far-away padding)
+  std::vector<float> x_, y_, z_, r_;                  // current spheres, #S + kPad each (NaN padding)
   std::vector<float> bind_x_, bind_y_, bind_z_, bind_r_;  // Asset.spheres, #S each
   std::vector<uint32_t> pivot_vertices_;              // #S×12, Asset.pivot_vertices
   std::vector<float> local_x_, local_y_, local_z_;    // PivotFrame.local_center, #S + kPad each (0 padding)
@@ -115,18 +114,20 @@ class Context {
   std::vector<uint16_t> excl_neighbors_;              // #excluded: partners b > a of each sphere a, sorted
   bool use_avx_ = false;                              // kernels: AVX (runtime dispatch) or SSE2 baseline
   uint32_t m1_tests_ = 0;                             // Σ_chains n(n−1)/2 (DetectStats::tests of M1)
-  // M1 layout: spheres grouped in classes of equal chain_mask; per class A a span [A's spheres, then
-  // those of every later class sharing a chain with A], gathered contiguously each frame: M1's distinct
-  // candidate pairs are exactly (row i of A, column j > i of A's span).
-  std::vector<uint16_t> m1_order_;                    // #G sphere id at each gathered position (spans
-                                                      // padded to multiples of 8 with 0)
-  std::vector<uint32_t> spans_;                       // 6 per class: begin, rows, columns, first chunk,
-                                                      // first skip entry, first key slot
-  std::vector<uint64_t> m1_excl_, m2_excl_;           // skip streams (chunk << 32 | lane bits), UINT64_MAX ends
-  mutable std::vector<float> gx_, gy_, gz_, gr_;      // #G: spheres gathered in M1 order (scratch)
-  mutable std::vector<uint64_t> m1_keys_;             // per class pair block of candidate slots (scratch):
-                                                      // (first common chain << 32 | a << 16 | b) per hit
-  mutable std::vector<uint32_t> span_hits_;           // hits per span (scratch)
+  // Broad-phase layout (DetectJob, both methods): B blocks of 8 slots; spheres grouped by region
+  // (Asset.sphere_regions; without it by chain mask), each group split at bind pose into blocks by a
+  // kd split (halves of multiples of 8 along the longest axis of its centres), padded to 8 per group.
+  uint32_t blocks_ = 0, box_pitch_ = 0, live_stride_ = 0;  // B; B rounded up to 8; ceil(B / 8)
+  std::vector<uint32_t> order_;                       // 8B: sphere id per slot (padding: #S, NaN sphere)
+  std::vector<uint32_t> chain_mask1_;                 // #S + 1: chain_mask_ and 0 for the padding id
+  std::vector<uint64_t> allowed_[2];                  // [M1, M2] B×B lane masks of block pairs J >= I
+  std::vector<uint8_t> live_[2];                      // [M1, M2] B × live_stride_: pair has a lane
+  std::vector<uint32_t> key_begin_[2];                // [M1, M2] B + 1: key slots of each row block
+  mutable std::vector<float> gx_, gy_, gz_, gr_;      // 8B: spheres gathered in slot order (scratch)
+  mutable std::vector<float> tx_, ty_, tz_, tr_;      // 8 × box_pitch_: the same, lane-major (scratch)
+  mutable std::vector<float> box_;                    // 7 × (box_pitch_ + 8): block boxes (scratch)
+  mutable std::vector<uint64_t> keys_;                // hit keys, max over methods of Σ allowed lanes
+  mutable std::vector<uint32_t> row_hits_;            // 3 × B: keys, box tests, sphere tests per row block
 };
 
 }  // namespace spherechain::runtime
