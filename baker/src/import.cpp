@@ -163,7 +163,8 @@ Result<Mesh> ImportMesh(const std::string& path, const ImportOptions& options, C
         std::end(kSupportedExtensions))
       return detail::FileError(Error::Code::kFormat, path,
                                "unsupported format '" + (ext.empty() ? std::string("(no extension)") : "." + ext) +
-                                   "': the baker reads glTF/GLB, FBX, DAE, X, OBJ, BLEND, 3DS, PLY and STL");
+                                   "': the baker reads glTF/GLB, FBX, DAE/ZAE, X, OBJ, BLEND, 3DS, PLY, STL, IQM, SMD, MD5MESH, "
+                                   "MS3D and B3D");
     const uintmax_t bytes = std::filesystem::file_size(path, ec);
     if (ec) return detail::FileError(Error::Code::kIo, path, "cannot stat file: " + ec.message());
     if (bytes > kMaxInputBytes)

@@ -9,6 +9,7 @@
 // (B: the mesh's bind transform above), so Σ w · Global_rest(node) · inverse_bind · p = p at rest. Meshes without bones in a skinned scene follow their node rigidly.
 // Clips: aiAnimation, times ticks / mTicksPerSecond (25 when 0).
 #include <assimp/BaseImporter.h>
+#include <assimp/DefaultIOSystem.h>
 #include <assimp/Importer.hpp>
 #include <assimp/importerdesc.h>
 #include <assimp/anim.h>
@@ -18,6 +19,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <map>
 #include <sstream>
 #include <string>
@@ -44,7 +46,8 @@ std::string NodeName(const aiNode* n, size_t slot) {
 /// content sniffing can never hand a file to any other of its ~60 parsers. The removed importers are
 /// deleted here (Importer only deletes those still registered).
 void KeepAllowedImporters(Assimp::Importer& importer) {
-  static constexpr const char* kAssimpFormats[] = {"fbx", "dae", "x", "blend", "3ds", "ply", "stl"};
+  static constexpr const char* kAssimpFormats[] = {"fbx", "dae", "zae",     "x",    "blend", "3ds", "ply",
+                                                   "stl", "iqm", "smd", "md5mesh", "ms3d", "b3d"};
   std::vector<Assimp::BaseImporter*> drop;
   for (size_t i = 0; i < importer.GetImporterCount(); ++i) {
     const aiImporterDesc* desc = importer.GetImporterInfo(i);
@@ -61,7 +64,58 @@ void KeepAllowedImporters(Assimp::Importer& importer) {
   }
 }
 
+/// assimp's file access confined to the input's folder: every Open / Exists of a file outside it
+/// (after resolving "..", "." and symbolic links), or of a file over kMaxInputBytes, or for writing,
+/// fails and is recorded, so the import either goes on without it or fails with the reason.
+class ConfinedIOSystem : public Assimp::DefaultIOSystem {
+ public:
+  explicit ConfinedIOSystem(std::string folder) : folder_(std::move(folder)) {}
+  bool Exists(const char* file) const override { return file && Allowed(file, nullptr) && DefaultIOSystem::Exists(file); }
+  Assimp::IOStream* Open(const char* file, const char* mode) override {
+    if (!file) return nullptr;
+    std::string why;
+    if (mode && std::string(mode).find_first_of("wa+") != std::string::npos) why = "opened for writing";
+    if (!why.empty() || !Allowed(file, &why)) {
+      refused_.push_back(std::string(file) + " (" + why + ")");
+      return nullptr;
+    }
+    return DefaultIOSystem::Open(file, mode);
+  }
+  const std::vector<std::string>& refused() const { return refused_; }
+
+ private:
+  bool Allowed(const std::string& file, std::string* why) const {
+    if (!InsideFolder(folder_, file)) {
+      if (why) *why = "outside the input's folder " + folder_;
+      return false;
+    }
+    std::error_code ec;
+    const uintmax_t bytes = std::filesystem::file_size(file, ec);
+    if (!ec && bytes > kMaxInputBytes) {
+      if (why) *why = std::to_string(bytes) + " bytes, over the input limit";
+      return false;
+    }
+    return true;
+  }
+  std::string folder_;
+  std::vector<std::string> refused_;
+};
+
 }  // namespace
+
+bool InsideFolder(const std::string& folder, const std::string& file) {
+  std::error_code ec;
+  const std::filesystem::path f = std::filesystem::weakly_canonical(std::filesystem::absolute(file, ec), ec);
+  if (ec) return false;
+  const std::filesystem::path d = std::filesystem::weakly_canonical(std::filesystem::absolute(folder, ec), ec);
+  if (ec) return false;
+  auto fi = f.begin();
+  for (auto di = d.begin(); di != d.end(); ++di, ++fi) {
+    if (di->empty()) continue;  // a trailing separator
+    if (fi == f.end() || *fi != *di) return false;
+  }
+  return true;
+}
 
 Result<Mesh> ImportAssimp(const std::string& path, const ImportOptions& options, Context* ctx) {
   Assimp::Importer importer;
@@ -69,12 +123,24 @@ Result<Mesh> ImportAssimp(const std::string& path, const ImportOptions& options,
   const std::string ext = LowerExtension(path);
   if (ext.empty() || !importer.IsExtensionSupported("." + ext))
     return FileError(Error::Code::kFormat, path,
-                     "unsupported file extension '" + ext + "' (the baker reads glTF/GLB, FBX, DAE, X, OBJ, BLEND, 3DS, PLY and STL)");
+                     "unsupported file extension '" + ext +
+                         "' (the baker reads glTF/GLB, FBX, DAE/ZAE, X, OBJ, BLEND, 3DS, PLY, STL, IQM, SMD, MD5MESH, "
+                         "MS3D and B3D)");
   // No skeleton placeholder meshes (BVH etc.): only real geometry is imported.
   importer.SetPropertyBool(AI_CONFIG_IMPORT_NO_SKELETON_MESHES, true);
+  std::error_code ec;
+  auto* io = new ConfinedIOSystem(std::filesystem::weakly_canonical(std::filesystem::absolute(path, ec), ec)
+                                      .parent_path()
+                                      .string());
+  importer.SetIOHandler(io);  // the importer owns it from here
   const aiScene* scene = importer.ReadFile(path, aiProcess_Triangulate);
+  std::string refused;
+  for (const std::string& r : io->refused()) refused += (refused.empty() ? "" : "; ") + r;
   if (!scene || !scene->mRootNode)
-    return FileError(Error::Code::kFormat, path, std::string("assimp cannot read it: ") + importer.GetErrorString());
+    return FileError(Error::Code::kFormat, path,
+                     std::string("assimp cannot read it: ") + importer.GetErrorString() +
+                         (refused.empty() ? "" : " (refused to read: " + refused + ")"));
+  if (!refused.empty() && ctx) ctx->Warn("import: " + path + ": refused to read " + refused);
   if (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE)
     return FileError(Error::Code::kFormat, path, "assimp read an incomplete scene");
 

@@ -31,6 +31,11 @@ Result<Mesh> ImportAssimp(const std::string& path, const ImportOptions& options,
 /// Errors: kIo, kFormat (unparsable line, broken rig JSON), kInvalidMesh (index 0 / out of range).
 Result<Mesh> ImportObj(const std::string& path, const ImportOptions& options, Context* ctx);
 
+/// True when `file` (relative paths: to the current directory, as fopen reads them), with "..",
+/// "." and symbolic links resolved, lies inside `folder` (resolved the same way). What the assimp
+/// importers may open besides the input itself (import.h kSupportedExtensions).
+bool InsideFolder(const std::string& folder, const std::string& file);
+
 /// "path: message" — every importer error names the file first.
 inline Error FileError(Error::Code code, const std::string& path, const std::string& message) {
   return MakeError(code, path + ": " + message);

@@ -57,7 +57,7 @@ std::string TriangleBytes() {
 
 TEST_CASE("Import policy: formats outside the allowlist are kFormat, naming the supported ones") {
   PolicyDir d;
-  for (const char* name : {"notes.txt", "model.off", "scene.md5mesh", "noextension", "model.ifc"}) {
+  for (const char* name : {"notes.txt", "model.off", "scene.lwo", "noextension", "model.ifc"}) {
     CAPTURE(name);
     auto r = ImportMesh(d.Write(name, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"));
     REQUIRE(!r.ok());

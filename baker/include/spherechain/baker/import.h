@@ -14,10 +14,14 @@ inline constexpr uint64_t kMaxInputBytes = uint64_t{512} << 20;
 inline constexpr uint32_t kMaxInputVertices = uint32_t{1} << 26;
 inline constexpr uint32_t kMaxInputTriangles = uint32_t{1} << 26;
 /// The formats the baker reads (lower-case extensions), and through what: gltf/glb → tinygltf,
-/// obj → our own reader, fbx/dae/x/blend/3ds/ply/stl → assimp with only those importers registered
-/// (content sniffing can never reach another assimp importer). Everything else: kFormat.
-inline constexpr const char* kSupportedExtensions[] = {"gltf", "glb", "obj", "fbx", "dae", "x",
-                                                       "blend", "3ds", "ply", "stl"};
+/// obj → our own reader, fbx/dae/zae (Collada archive)/x/blend/3ds/ply/stl and the game-character
+/// formats iqm/smd/md5mesh/ms3d/b3d → assimp with only those importers registered (content sniffing
+/// can never reach another assimp importer) and reading files only inside the input's folder, each at
+/// most kMaxInputBytes (a file a format refers to — an MD5 animation, a Collada archive's entries —
+/// outside that folder, through ".." or a symbolic link, is refused). Everything else: kFormat.
+inline constexpr const char* kSupportedExtensions[] = {"gltf", "glb",   "obj", "fbx",     "dae",  "zae",
+                                                       "x",    "blend", "3ds", "ply",     "stl",  "iqm",
+                                                       "smd",  "md5mesh", "ms3d", "b3d"};
 
 /// Quality findings on an imported mesh that the baker keeps (they are legal input) but reports.
 struct MeshIssues {

@@ -1,0 +1,95 @@
+// The game-character formats read through assimp (import.h kSupportedExtensions: zae, iqm, smd,
+// md5mesh, ms3d, b3d) on Debian's assimp-testmodels, what the bake makes of each, and the confinement
+// of assimp's file access to the input's folder.
+#include <doctest/doctest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <unistd.h>
+
+#include "spherechain/baker/bake.h"
+#include "spherechain/baker/import.h"
+#include "test_data.h"
+
+using namespace spherechain;
+using namespace spherechain::baker;
+namespace fs = std::filesystem;
+
+TEST_CASE("import formats: every character format of assimp-testmodels imports, with its skin where it has one") {
+  struct Case {
+    const char* rel;
+    const char* format;
+    bool skinned;
+  };
+  // human.zae and mrfixit.iqm come without bones through assimp 5.2 (static meshes); the SMD and MD5
+  // files carry a skeleton.
+  for (const Case& c : {Case{"Collada/human.zae", "zae", false}, Case{"IQM/mrfixit.iqm", "iqm", false},
+                        Case{"SMD/WusonSMD.smd", "smd", true}, Case{"B3D/WusonBlitz.b3d", "b3d", false},
+                        Case{"MS3D/Wuson.ms3d", "ms3d", false}, Case{"MD5/SimpleCube.md5mesh", "md5mesh", true}}) {
+    CAPTURE(c.rel);
+    const std::string path = test::AssimpModel(c.rel);
+    if (!test::Require(path)) continue;
+    auto r = ImportMesh(path);
+    REQUIRE_MESSAGE(r.ok(), (r.ok() ? "" : r.error().message));
+    CHECK(r->source_format == c.format);
+    CHECK(r->triangle_count() > 0);
+    CHECK(r->vertex_count() > 0);
+    if (c.skinned) {
+      REQUIRE(r->skin.has_value());
+      CHECK(!r->skin->joints.empty());
+      CHECK(r->skin->weight_offsets.size() == r->vertex_count() + 1);
+    }
+  }
+}
+
+TEST_CASE("import formats: the two humans bake; the creatures and the cube are refused with the reason") {
+  for (const char* rel : {"Collada/human.zae", "IQM/mrfixit.iqm"}) {
+    CAPTURE(rel);
+    const std::string path = test::AssimpModel(rel);
+    if (!test::Require(path)) continue;
+    auto r = Bake(path, BakeConfig{});
+    REQUIRE_MESSAGE(r.ok(), (r.ok() ? "" : r.error().message));
+    CHECK(r->fit.spheres.size() <= 128);
+    CHECK(r->chains.size() == 6);
+    CHECK(r->unassigned_triangles == 0);
+    CHECK(r->segmentation.method == "geometry");  // no skin: segmented from the shape alone
+    CHECK(!r->centre_weights.has_value());       // and no joint refit
+  }
+  for (const char* rel : {"SMD/WusonSMD.smd", "B3D/WusonBlitz.b3d", "MS3D/Wuson.ms3d", "MD5/SimpleCube.md5mesh"}) {
+    CAPTURE(rel);
+    const std::string path = test::AssimpModel(rel);
+    if (!test::Require(path)) continue;
+    auto r = Bake(path, BakeConfig{});
+    REQUIRE(!r.ok());
+    CHECK(r.error().message.find("not a standing body") != std::string::npos);
+  }
+}
+
+TEST_CASE("import formats: assimp reads nothing outside the input's folder (an MD5 animation linked from outside)") {
+  const std::string cube = test::AssimpModel("MD5/SimpleCube.md5mesh");
+  if (!test::Require(cube)) return;
+  const fs::path root = fs::temp_directory_path() / ("spherechain_import_formats." + std::to_string(::getpid()));
+  fs::remove_all(root);
+  fs::create_directories(root / "model");
+  fs::create_directories(root / "elsewhere");
+  fs::copy_file(cube, root / "model" / "cube.md5mesh");
+  // The MD5 importer looks for <name>.md5anim beside the mesh; this one is a link to a file outside.
+  std::ofstream(root / "elsewhere" / "secret.md5anim") << "MD5Version 10\n";
+  fs::create_symlink(root / "elsewhere" / "secret.md5anim", root / "model" / "cube.md5anim");
+  std::vector<std::string> warnings;
+  Context ctx;
+  ctx.sink = [&](Context::Level level, const std::string& m) {
+    if (level == Context::Level::kWarn) warnings.push_back(m);
+  };
+  auto r = ImportMesh((root / "model" / "cube.md5mesh").string(), ImportOptions{}, &ctx);
+  REQUIRE_MESSAGE(r.ok(), (r.ok() ? "" : r.error().message));  // the mesh itself is inside: it imports
+  bool refused = false;
+  for (const std::string& w : warnings)
+    refused = refused || (w.find("cube.md5anim") != std::string::npos && w.find("outside the input's folder") != std::string::npos);
+  CHECK_MESSAGE(refused, "expected a warning that cube.md5anim (a link out of the folder) was refused");
+  CHECK(r->clips.empty());
+  fs::remove_all(root);
+}
