@@ -79,6 +79,7 @@ struct Workload {
   test::AlignedBytes bytes;
   uint32_t vertex_count = 0;
   std::vector<std::vector<float>> frames;  // #F × (#V×3)
+  std::vector<std::vector<float>> joints;  // [opt] #F × (#J×12): frame_NNNN.joints beside frame_NNNN.f32
 };
 
 // ~ the paper's workload: 80 spheres, 6 chains of 22–23 (Table 1 pairs the four limbs), limbs swinging.
@@ -152,7 +153,21 @@ bool FromFiles(const std::string& asset, const std::string& frames, Workload* w)
   } else {
     files.push_back(frames);
   }
+  // Joint matrices (play --dump-frames writes frame_NNNN.joints for an asset with joint weights): all
+  // frames' or none.
+  const uint32_t J = view.asset->sphere_joints() ? view.asset->joint_count() : 0;
+  bool all_joints = J > 0 && std::filesystem::is_directory(frames);
+  for (const std::string& file : files)
+    all_joints = all_joints && std::filesystem::exists(std::filesystem::path(file).replace_extension(".joints"));
   for (const std::string& file : files) {
+    if (all_joints) {
+      const std::string jf = std::filesystem::path(file).replace_extension(".joints").string();
+      if (!ReadFile(jf, &raw) || raw.size() != size_t{J} * 12 * 4)
+        return std::fprintf(stderr, "%s: not #J×12 float32 (#J = %u)\n", jf.c_str(), J), false;
+      std::vector<float> m(size_t{J} * 12);
+      std::memcpy(m.data(), raw.data(), raw.size());
+      w->joints.push_back(std::move(m));
+    }
     if (!ReadFile(file, &raw) || raw.size() % (per_frame * 4) != 0 || raw.empty())
       return std::fprintf(stderr, "%s: not a multiple of #V×3 float32 (#V = %u)\n", file.c_str(), view.vertex_count), false;
     for (size_t off = 0; off < raw.size(); off += per_frame * 4) {
@@ -738,6 +753,16 @@ int main(int argc, char** argv) {
     g_sink = g_sink + count;
   });
   (void)refit_us;
+  if (w.joints.size() == F) {
+    sc::JointRefitJob joints;
+    joints.asset = &view;
+    joints.context = &ctx;
+    joints.joint_count = view.asset->joint_count();
+    measure("sc refit joints", [&](size_t f) {
+      joints.joint_matrices = w.joints[f].data();
+      (void)joints.Run();
+    });
+  }
 
   struct Aos {
     float x, y, z, r;

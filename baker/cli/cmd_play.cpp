@@ -325,6 +325,15 @@ int RunPlay(const PlayArgs& a) {
       const std::string path = (fs::path(a.dump_frames) / name).string();
       if (auto s = baker::WriteFileAtomic(path, positions.data(), positions.size() * sizeof(float)); !s.ok())
         return Fail(s.error());
+      // And its joint matrices (frame_NNNN.joints: #J × 12 float32, JointRefitJob's layout) when the
+      // asset can refit from them.
+      if (view.asset->sphere_joints() && view.asset->joint_count() == scratch.matrices.size()) {
+        std::vector<float> jm;
+        JointMatrices(scratch, &jm);
+        std::snprintf(name, sizeof name, "frame_%04u.joints", f);
+        const std::string jpath = (fs::path(a.dump_frames) / name).string();
+        if (auto s = baker::WriteFileAtomic(jpath, jm.data(), jm.size() * sizeof(float)); !s.ok()) return Fail(s.error());
+      }
     }
   }
 
@@ -518,7 +527,8 @@ void RegisterPlay(CLI::App& app, Commands* commands) {
   sub->add_option("--repeat", args->repeat, "Runs per job per frame; timings are the minimum (default 5)");
   sub->add_option("--rig", args->rig, "MakeHuman rig (.mhskel) for an OBJ; default: default.mhskel beside the OBJ");
   sub->add_option("--dump-frames", args->dump_frames,
-                  "Folder to write each frame's deformed positions to (frame_NNNN.f32: #V×3 float32), for bench/")
+                  "Folder to write each frame's deformed positions to (frame_NNNN.f32: #V×3 float32), for bench/; "
+                  "with a v3 asset also its joint matrices (frame_NNNN.joints: #J×12 float32, JointRefitJob's layout)")
       ->check(CLI::ExistingDirectory);
   sub->add_option("--json", args->json, "Write the per-frame table and summary as JSON");
   sub->add_flag("--narrow-phase", args->narrow_phase,

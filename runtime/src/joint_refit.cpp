@@ -1,4 +1,5 @@
 // JointRefitJob: sphere centres by linear blend skinning of their bind centres, see refit.h.
+#include <cmath>
 #include <cstdint>
 #if defined(__SSE2__) || defined(_M_X64)
 #include <emmintrin.h>
@@ -23,18 +24,29 @@ Status JointRefitJob::Check() const {
 
 Status JointRefitJob::Run() const {
   if (Status s = Check(); s != Status::kOk) return s;
-  // Every matrix finite before anything is written: x·0 is 0 for finite x and NaN for NaN or ±inf,
-  // so one sum over all 12·#J floats tells (vectorises; ~0.1 µs for 163 joints).
+  // Every matrix finite before anything is written: a float is NaN or ±inf exactly when its exponent
+  // bits are all ones; OR-accumulate that test over all 12·#J floats (SSE2: ~0.05 µs for 163 joints).
   {
-    const uint32_t n = joint_count * kJointMatrixFloats;
-    float probe[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+    const uint32_t n = joint_count * kJointMatrixFloats;  // a multiple of 4
+#if defined(__SSE2__) || defined(_M_X64)
+    const __m128i exponent = _mm_set1_epi32(0x7f800000);
+    __m128i bad0 = _mm_setzero_si128(), bad1 = _mm_setzero_si128();
     uint32_t i = 0;
-    for (; i + 8 <= n; i += 8)
-      for (int l = 0; l < 8; ++l) probe[l] += joint_matrices[i + l] * 0.0f;
-    for (; i < n; ++i) probe[0] += joint_matrices[i] * 0.0f;
-    float all = 0.0f;
-    for (float p : probe) all += p;
-    if (all != 0.0f) return Status::kErrorNonFiniteJoints;
+    for (; i + 8 <= n; i += 8) {
+      const __m128i a0 = _mm_and_si128(_mm_castps_si128(_mm_loadu_ps(joint_matrices + i)), exponent);
+      const __m128i a1 = _mm_and_si128(_mm_castps_si128(_mm_loadu_ps(joint_matrices + i + 4)), exponent);
+      bad0 = _mm_or_si128(bad0, _mm_cmpeq_epi32(a0, exponent));
+      bad1 = _mm_or_si128(bad1, _mm_cmpeq_epi32(a1, exponent));
+    }
+    for (; i < n; i += 4) {
+      const __m128i a0 = _mm_and_si128(_mm_castps_si128(_mm_loadu_ps(joint_matrices + i)), exponent);
+      bad0 = _mm_or_si128(bad0, _mm_cmpeq_epi32(a0, exponent));
+    }
+    if (_mm_movemask_epi8(_mm_or_si128(bad0, bad1)) != 0) return Status::kErrorNonFiniteJoints;
+#else
+    for (uint32_t i = 0; i < n; ++i)
+      if (!std::isfinite(joint_matrices[i])) return Status::kErrorNonFiniteJoints;
+#endif
   }
   const schema::Asset& a = *asset->asset;
   // Raw little-endian arrays in place (the runtime targets little-endian hosts, as FlatBuffers' data()
