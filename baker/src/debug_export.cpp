@@ -234,16 +234,24 @@ std::string RenderSvg(const Mesh& mesh, const runtime::AssetView& a, const Pictu
   // looking across, so screen x = −front (the character faces the viewer's left).
   struct View { Eigen::Vector3f sx, sy, toward_viewer; const char* name; };
   const View views[2] = {{f.left, f.up, f.front, "front"}, {-f.front, f.up, f.left, "side (character's left)"}};
-  // Common scale from the extent of the positions shown.
-  Eigen::Vector3f lo = Eigen::Vector3f::Constant(1e30f), hi = Eigen::Vector3f::Constant(-1e30f);
-  for (uint32_t v = 0; v < mesh.vertex_count(); ++v) {
-    lo = lo.cwiseMin(P(v));
-    hi = hi.cwiseMax(P(v));
-  }
-  const float extent = (hi - lo).maxCoeff();
-  const Eigen::Vector3f mid = 0.5f * (lo + hi);
+  // One scale for every panel, the largest at which each view's projection (mesh and spheres) fits its
+  // panel (a T-pose or wide arms included); each view centred on its own projected extent.
   const int panel = width_px / 4, height = int(panel * 1.9f);
-  const float scale = 0.9f * height / extent;
+  Eigen::Vector2f lo2[2], hi2[2];
+  float scale = 1e30f;
+  for (int vi = 0; vi < 2; ++vi) {
+    lo2[vi] = Eigen::Vector2f::Constant(1e30f);
+    hi2[vi] = Eigen::Vector2f::Constant(-1e30f);
+    auto extend = [&](const Eigen::Vector3f& p, float r) {
+      const Eigen::Vector2f q(p.dot(views[vi].sx), p.dot(views[vi].sy));
+      lo2[vi] = lo2[vi].cwiseMin(q - Eigen::Vector2f::Constant(r));
+      hi2[vi] = hi2[vi].cwiseMax(q + Eigen::Vector2f::Constant(r));
+    };
+    for (uint32_t v = 0; v < mesh.vertex_count(); ++v) extend(P(v), 0.0f);
+    for (const FrameSphere& S : pic.spheres) extend(Eigen::Vector3f(S.center.data()), S.radius);
+    const Eigen::Vector2f e = (hi2[vi] - lo2[vi]).cwiseMax(Eigen::Vector2f::Constant(1e-12f));
+    scale = std::min({scale, 0.94f * float(panel) / e.x(), 0.92f * float(height) / e.y()});
+  }
 
   std::ostringstream svg;
   svg << "<svg xmlns='http://www.w3.org/2000/svg' width='" << panel * 4 << "' height='" << height + 40
@@ -252,9 +260,10 @@ std::string RenderSvg(const Mesh& mesh, const runtime::AssetView& a, const Pictu
   svg.precision(1);
   for (int vi = 0; vi < 2; ++vi) {
     const View& V = views[vi];
+    const Eigen::Vector2f mid = 0.5f * (lo2[vi] + hi2[vi]);
     auto project = [&](const Eigen::Vector3f& p, float ox) {
-      const Eigen::Vector3f d = p - mid;
-      return Eigen::Vector2f(ox + panel * 0.5f + scale * d.dot(V.sx), 20 + height * 0.5f - scale * d.dot(V.sy));
+      return Eigen::Vector2f(ox + panel * 0.5f + scale * (p.dot(V.sx) - mid.x()),
+                             20 + height * 0.5f - scale * (p.dot(V.sy) - mid.y()));
     };
     // Triangles far → near.
     std::vector<uint32_t> order(mesh.triangle_count());
