@@ -11,6 +11,7 @@ void Register(CLI::App& app, Commands* commands) {
   RegisterPlay(app, commands);
   RegisterValidate(app, commands);
   RegisterEvaluate(app, commands);
+  RegisterView(app, commands);
 }
 
 int Dispatch(const Commands& commands) {

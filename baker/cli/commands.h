@@ -25,6 +25,7 @@ void RegisterExportDebug(CLI::App& app, Commands* commands);
 void RegisterPlay(CLI::App& app, Commands* commands);
 void RegisterValidate(CLI::App& app, Commands* commands);
 void RegisterEvaluate(CLI::App& app, Commands* commands);
+void RegisterView(CLI::App& app, Commands* commands);
 
 /// A baker::Context whose log lines go to spdlog.
 baker::Context MakeLoggingContext();

@@ -1,0 +1,109 @@
+# `spherechain view` on the MakeHuman morph, opened from disk in a real browser (headless Chromium,
+# software WebGL): the HTML is self-contained and <= 10 MB; on a frame with contacts (hand on the opposite
+# shoulder) the page reports ready with no console output, and the screenshot has the contact colour
+# where the page says the contact triangles are, a drawn body and the timeline's bars; at the start of
+# the morph (frame 0, no contacts) no pixel of the contact colour. Without three.js, `view` fails saying how to install it
+# and writes nothing. Skips (visibly) when ../shared/data, Chromium or three.js is absent.
+cmake_policy(VERSION 3.22)
+if(NOT EXISTS ${MESH} OR NOT EXISTS ${ASSET})
+  message("SKIPPED: ${MESH} or ${ASSET} not found (../shared/data is absent)")
+  return()
+endif()
+file(REMOVE_RECURSE ${WORK})
+file(MAKE_DIRECTORY ${WORK})
+
+# Without three.js (an empty --three folder): exit 1, a message naming `npm ci`, no file.
+execute_process(COMMAND ${CLI} -q view ${ASSET} --mesh ${MESH} --three ${WORK} -o ${WORK}/none.html
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 1 OR NOT "${out}${err}" MATCHES "three.js not found.*npm ci" OR EXISTS ${WORK}/none.html)
+  message(FATAL_ERROR "view without three.js: expected exit 1, a message naming `npm ci` and no file; got ${rc}:\n${out}${err}")
+endif()
+
+execute_process(COMMAND ${CLI} -q view ${ASSET} --mesh ${MESH} -o ${WORK}/makehuman.html
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  if("${out}${err}" MATCHES "three.js not found")
+    message("SKIPPED: three.js is not installed (run `npm ci` in viewer/):\n${out}${err}")
+    return()
+  endif()
+  message(FATAL_ERROR "view failed (${rc}):\n${out}${err}")
+endif()
+message(STATUS "${out}")
+file(SIZE ${WORK}/makehuman.html size)
+math(EXPR kb "${size} / 1024")
+message(STATUS "makehuman.html: ${kb} KiB")
+if(size GREATER 10485760)
+  message(FATAL_ERROR "makehuman.html is ${kb} KiB, over 10 MiB")
+endif()
+# Self-contained: no script or import from elsewhere.
+file(STRINGS ${WORK}/makehuman.html remote REGEX "src=\"(https?:)?//|from ['\"]https?:|\"https?://[^\"]*\\.js\"")
+if(remote)
+  message(FATAL_ERROR "makehuman.html loads something from the network:\n${remote}")
+endif()
+
+find_program(CHROMIUM NAMES chromium chromium-browser google-chrome)
+if(NOT CHROMIUM)
+  message("SKIPPED: chromium not found (Debian: apt-get install chromium; scripts/setup.sh installs it)")
+  return()
+endif()
+find_program(PYTHON NAMES python3 PATHS /usr/bin NO_DEFAULT_PATH)
+if(NOT PYTHON)
+  find_program(PYTHON NAMES python3)
+endif()
+
+set(chrome ${CHROMIUM} --headless --no-sandbox --disable-gpu --use-angle=swiftshader --enable-unsafe-swiftshader
+    --hide-scrollbars --no-first-run --user-data-dir=${WORK}/profile --window-size=1000,780
+    --virtual-time-budget=15000)
+# frame 12: hand on the opposite shoulder (R1 × R4 in contact); frame 0: the bind pose, no contact
+foreach(case "12;some" "0;none")
+  list(GET case 0 frame)
+  list(GET case 1 expect)
+  set(url "file://${WORK}/makehuman.html#frame=${frame}&size=1000x600")
+  execute_process(COMMAND ${chrome} --dump-dom ${url} RESULT_VARIABLE rc OUTPUT_VARIABLE dom ERROR_VARIABLE err
+                  TIMEOUT 120)
+  string(REGEX MATCH "<body[^>]*>" body "${dom}")
+  if(NOT rc EQUAL 0 OR NOT body MATCHES "data-status=\"ready\"")
+    message(FATAL_ERROR "frame ${frame}: the page did not report ready (chromium exit ${rc}): '${body}'\n${err}")
+  endif()
+  string(REGEX MATCH "data-contacts=\"([0-9]+)\"" _ "${body}")
+  set(n_contacts ${CMAKE_MATCH_1})
+  string(REGEX MATCH "data-view=\"([-0-9,]+)\"" _ "${body}")
+  set(view_rect ${CMAKE_MATCH_1})
+  string(REGEX MATCH "data-contact-box=\"([-0-9,]*)\"" _ "${body}")
+  set(contact_box ${CMAKE_MATCH_1})
+  message(STATUS "frame ${frame}: ${body}")
+  if(NOT body MATCHES "data-frame=\"${frame}\"")
+    message(FATAL_ERROR "frame ${frame}: the page shows another frame: ${body}")
+  endif()
+
+  set(png ${WORK}/frame_${frame}.png)
+  execute_process(COMMAND ${chrome} --enable-logging=stderr --v=0 --screenshot=${png} ${url}
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE log TIMEOUT 120)
+  if(NOT rc EQUAL 0 OR NOT EXISTS ${png})
+    message(FATAL_ERROR "frame ${frame}: no screenshot (chromium exit ${rc}):\n${out}${log}")
+  endif()
+  # The page logs nothing; the only console lines allowed are software GL's performance notes.
+  string(REGEX MATCHALL "[^\n]*:CONSOLE[^\n]*" console "${log}")
+  list(FILTER console EXCLUDE REGEX "GL Driver Message \\(OpenGL, Performance")
+  if(console)
+    message(FATAL_ERROR "frame ${frame}: console output:\n${console}")
+  endif()
+
+  if(expect STREQUAL "some")
+    if(NOT n_contacts GREATER 0 OR contact_box STREQUAL "")
+      message(FATAL_ERROR "frame ${frame}: expected contacts, the page reports ${n_contacts} (box '${contact_box}')")
+    endif()
+    set(check --contact-box ${contact_box} --min-contact 20)
+  else()
+    if(NOT n_contacts EQUAL 0)
+      message(FATAL_ERROR "frame ${frame} (start of the morph): expected no contacts, the page reports ${n_contacts}")
+    endif()
+    set(check --no-contact)
+  endif()
+  execute_process(COMMAND ${PYTHON} ${CMAKE_CURRENT_LIST_DIR}/view_check.py ${png} --view ${view_rect} ${check}
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  message(STATUS "${out}${err}")
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "frame ${frame}: screenshot check failed (${png})")
+  endif()
+endforeach()
