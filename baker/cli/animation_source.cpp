@@ -43,6 +43,21 @@ std::string Hex(uint64_t v) {
 
 }  // namespace
 
+void AddAnimationOptions(CLI::App* sub, std::string* asset, std::string* rig, AnimationArgs* anim) {
+  sub->add_option("asset", *asset, ".sphc asset baked from the mesh")->required()->check(CLI::ExistingFile);
+  sub->add_option("--mesh", anim->mesh, "The character file the asset was baked from (checked by fingerprint)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  sub->add_option("--clip", anim->clip, "Clip to play (default: the first clip; none: the morph)");
+  sub->add_option("--morph", anim->morph,
+                  "Key pose files (.json), pose names in the poses folder, or folders; morph through them");
+  sub->add_option("--poses-dir", anim->poses_dir,
+                  "Folder of default key poses (default: poses/<character> in the installed share/spherechain/, "
+                  "else the source tree's data/, else data/poses/<character> upward from the current directory)");
+  sub->add_option("--frames", anim->frames, "Frames: the morph's length, or uniform samples of the clip (default 40)");
+  sub->add_option("--rig", *rig, "MakeHuman rig (.mhskel) for an OBJ; default: default.mhskel beside the OBJ");
+}
+
 std::string AnimationSource::Describe() const {
   if (clip) return "clip '" + clip->name + "' (" + std::to_string(clip->duration_s) + " s)";
   return "morph through " + std::to_string(poses.size()) + " key poses from " + poses_from;

@@ -2,6 +2,8 @@
 // poses), shared by `play` and `evaluate`, and the mesh ↔ asset fingerprint check.
 #pragma once
 
+#include <CLI/CLI.hpp>
+
 #include <string>
 #include <vector>
 
@@ -20,6 +22,11 @@ struct AnimationArgs {
   std::string poses_dir;           ///< --poses-dir
   uint32_t frames = 40;            ///< --frames
 };
+
+/// Registers the options every animating command shares on `sub` — ASSET (positional, an existing
+/// file), --mesh (required, existing), --clip, --morph, --poses-dir, --frames and --rig — into `asset`,
+/// `rig` and `anim` (--mesh fills anim->mesh). The pointers must outlive the parse.
+void AddAnimationOptions(CLI::App* sub, std::string* asset, std::string* rig, AnimationArgs* anim);
 
 /// The chosen animation: a clip sampled uniformly, or the Bézier morph through key poses.
 struct AnimationSource {

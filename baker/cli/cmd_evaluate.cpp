@@ -47,9 +47,8 @@ using RegionPair = std::pair<int, int>;
 using SpherePairKey = std::pair<uint32_t, uint32_t>;
 
 struct EvaluateArgs {
-  std::string asset, mesh, clip, poses_dir, rig, json, png, refit = "frame";
-  std::vector<std::string> morph;
-  uint32_t frames = 40;
+  std::string asset, rig, json, png, refit = "frame";
+  AnimationArgs anim;  // --mesh, --clip, --morph, --poses-dir, --frames
   double margin = 0.01;
   double min_recall = std::numeric_limits<double>::quiet_NaN();
   bool coverage = true;
@@ -169,11 +168,11 @@ int RunEvaluate(const EvaluateArgs& a) {
   LoadedAsset asset;
   baker::Mesh mesh;
   std::string error;
-  if (!OpenAssetAndMesh(a.asset, a.mesh, a.rig, &asset, &mesh, &error)) return Fail(error);
+  if (!OpenAssetAndMesh(a.asset, a.anim.mesh, a.rig, &asset, &mesh, &error)) return Fail(error);
   const runtime::AssetView& view = asset.view;
   baker::Context log = MakeLoggingContext();
 
-  AnimationArgs anim_args{a.mesh, a.clip, a.morph, a.poses_dir, a.frames};
+  const AnimationArgs& anim_args = a.anim;
   AnimationSource anim;
   if (!OpenAnimation(mesh, anim_args, &anim, &error)) return Fail(error);
 
@@ -420,7 +419,7 @@ int RunEvaluate(const EvaluateArgs& a) {
   const double n_recall = Ratio(double(narrow_true), double(gt)), n_precision = Ratio(double(narrow_true), double(narrow_total));
 
   std::printf("evaluate: %s + %s — %s, %u frames, %u spheres, %u triangles, body height %.4g, margin %.4g (%.2f %%)\n",
-              a.asset.c_str(), a.mesh.c_str(), anim.Describe().c_str(), anim.frames, view.sphere_count, T, height, margin,
+              a.asset.c_str(), a.anim.mesh.c_str(), anim.Describe().c_str(), anim.frames, view.sphere_count, T, height, margin,
               100.0 * a.margin);
   std::printf("\n%5s  %-26s %8s %8s %8s %8s  %-22s %-22s %-22s %s\n", "frame", "pose", "contacts", "narrow", "excluded",
               "same sph", "exact regions", "proxy M1", "proxy M2", "missed by M2 / false alarms");
@@ -507,7 +506,7 @@ int RunEvaluate(const EvaluateArgs& a) {
   if (!a.json.empty()) {
     nlohmann::json j;
     j["asset"] = a.asset;
-    j["mesh"] = a.mesh;
+    j["mesh"] = a.anim.mesh;
     j["animation"] = anim.Describe();
     j["refit"] = a.refit;
     j["body_height"] = height;
@@ -593,19 +592,11 @@ void RegisterEvaluate(CLI::App& app, Commands* commands) {
       "evaluate",
       "Measure the proxy against exact triangle intersection of the deformed mesh, frame by frame: the proxy's "
       "recall and false alarms, the narrow phase's recall and precision, bind-pose coverage and protrusion");
-  sub->add_option("asset", args->asset, ".sphc asset baked from the mesh")->required()->check(CLI::ExistingFile);
-  sub->add_option("--mesh", args->mesh, "The character file the asset was baked from (checked by fingerprint)")
-      ->required()
-      ->check(CLI::ExistingFile);
-  sub->add_option("--clip", args->clip, "Clip to play (default: the first clip; none: the morph)");
-  sub->add_option("--morph", args->morph, "Key pose files (.json), pose names in the poses folder, or folders");
-  sub->add_option("--poses-dir", args->poses_dir, "Folder of default key poses (default: as for play)");
-  sub->add_option("--frames", args->frames, "Frames: the morph's length, or uniform samples of the clip (default 40)");
+  AddAnimationOptions(sub, &args->asset, &args->rig, &args->anim);
   sub->add_option("--margin", args->margin,
                   "A reported region pair is a false alarm when no triangles of the two regions come within this "
                   "distance, as a fraction of the body height (default 0.01)");
   sub->add_option("--refit", args->refit, "Refit: paper or frame (default)")->check(CLI::IsMember({"paper", "frame"}));
-  sub->add_option("--rig", args->rig, "MakeHuman rig (.mhskel) for an OBJ; default: default.mhskel beside the OBJ");
   sub->add_option("--json", args->json, "Write per-frame results and the summary as JSON");
   sub->add_option("--png", args->png,
                   "Write a picture of the frame with the most missed contacts: contact triangles red (missed) / amber "

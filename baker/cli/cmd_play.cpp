@@ -34,9 +34,8 @@ namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
 struct PlayArgs {
-  std::string asset, mesh, clip, json, poses_dir, rig, dump_frames, method = "both", refit = "frame";
-  std::vector<std::string> morph;
-  uint32_t frames = 40;
+  std::string asset, json, rig, dump_frames, method = "both", refit = "frame";
+  AnimationArgs anim;  // --mesh, --clip, --morph, --poses-dir, --frames
   uint32_t repeat = 5;
   bool narrow_phase = false;
 };
@@ -255,15 +254,10 @@ int RunPlay(const PlayArgs& a) {
   LoadedAsset asset;
   baker::Mesh mesh;
   std::string error;
-  if (!OpenAssetAndMesh(a.asset, a.mesh, a.rig, &asset, &mesh, &error)) return Fail(error);
+  if (!OpenAssetAndMesh(a.asset, a.anim.mesh, a.rig, &asset, &mesh, &error)) return Fail(error);
   const runtime::AssetView& view = asset.view;
 
-  AnimationArgs anim_args;
-  anim_args.mesh = a.mesh;
-  anim_args.clip = a.clip;
-  anim_args.morph = a.morph;
-  anim_args.poses_dir = a.poses_dir;
-  anim_args.frames = a.frames;
+  const AnimationArgs& anim_args = a.anim;
   AnimationSource anim;
   if (!OpenAnimation(mesh, anim_args, &anim, &error)) return Fail(error);
   const baker::Clip* clip = anim.clip;
@@ -282,7 +276,7 @@ int RunPlay(const PlayArgs& a) {
                 ", or baked from a mesh without a skin): --refit joints needs an asset baked by this version from a "
                 "rigged character; re-bake it");
   if (joints && view.asset->joint_count() != mesh.skin->joints.size())
-    return Fail("'" + a.asset + "' was baked for " + std::to_string(view.asset->joint_count()) + " joints, '" + a.mesh +
+    return Fail("'" + a.asset + "' was baked for " + std::to_string(view.asset->joint_count()) + " joints, '" + a.anim.mesh +
                 "' has " + std::to_string(mesh.skin->joints.size()));
   runtime::NarrowPhaseContext narrow;
   if (a.narrow_phase) {
@@ -339,7 +333,7 @@ int RunPlay(const PlayArgs& a) {
 
   // ---- report ------------------------------------------------------------------------------------
   std::printf("play: %s + %s — %s, %u frames, %u spheres, %u chains, refit %s, timings = min of %u runs\n",
-              a.asset.c_str(), a.mesh.c_str(),
+              a.asset.c_str(), a.anim.mesh.c_str(),
               anim.Describe().c_str(),
               frames, view.sphere_count, view.chain_count, a.refit.c_str(), std::max(1u, a.repeat));
   if (!clip) {
@@ -420,7 +414,7 @@ int RunPlay(const PlayArgs& a) {
   if (!a.json.empty()) {
     nlohmann::json j;
     j["asset"] = a.asset;
-    j["mesh"] = a.mesh;
+    j["mesh"] = a.anim.mesh;
     j["method"] = a.method;
     j["refit"] = a.refit;
     j["repeat"] = std::max(1u, a.repeat);
@@ -506,17 +500,7 @@ void RegisterPlay(CLI::App& app, Commands* commands) {
   CLI::App* sub = app.add_subcommand(
       "play", "Play an animation (skinned clip or the paper's Bezier morph of key poses, §5.1/§6) and report "
               "sphere collisions per frame with M1 and M2 (§5.2)");
-  sub->add_option("asset", args->asset, ".sphc asset baked from the mesh")->required()->check(CLI::ExistingFile);
-  sub->add_option("--mesh", args->mesh, "The character file the asset was baked from (checked by fingerprint)")
-      ->required()
-      ->check(CLI::ExistingFile);
-  sub->add_option("--clip", args->clip, "Clip to play (default: the first clip; none: the morph)");
-  sub->add_option("--morph", args->morph,
-                  "Key pose files (.json), pose names in the poses folder, or folders; morph through them");
-  sub->add_option("--poses-dir", args->poses_dir,
-                  "Folder of default key poses (default: poses/<character> in the installed share/spherechain/, "
-                  "else the source tree's data/, else data/poses/<character> upward from the current directory)");
-  sub->add_option("--frames", args->frames, "Frames: the morph's length, or uniform samples of the clip (default 40)");
+  AddAnimationOptions(sub, &args->asset, &args->rig, &args->anim);
   sub->add_option("--method", args->method, "Broad phase: m1 (chains), m2 (all spheres), both")
       ->check(CLI::IsMember({"m1", "m2", "both"}));
   sub->add_option("--refit", args->refit,
@@ -525,7 +509,6 @@ void RegisterPlay(CLI::App& app, Commands* commands) {
                   "against the pivot-frame refit)")
       ->check(CLI::IsMember({"paper", "frame", "joints"}));
   sub->add_option("--repeat", args->repeat, "Runs per job per frame; timings are the minimum (default 5)");
-  sub->add_option("--rig", args->rig, "MakeHuman rig (.mhskel) for an OBJ; default: default.mhskel beside the OBJ");
   sub->add_option("--dump-frames", args->dump_frames,
                   "Folder to write each frame's deformed positions to (frame_NNNN.f32: #V×3 float32), for bench/; "
                   "with a v3 asset also its joint matrices (frame_NNNN.joints: #J×12 float32, JointRefitJob's layout)")

@@ -36,9 +36,8 @@ namespace {
 namespace fs = std::filesystem;
 
 struct ViewArgs {
-  std::string asset, mesh, clip, output, poses_dir, rig, three, method = "m2";
-  std::vector<std::string> morph;
-  uint32_t frames = 40;
+  std::string asset, output, rig, three, method = "m2";
+  AnimationArgs anim;  // --mesh, --clip, --morph, --poses-dir, --frames
 };
 
 constexpr const char* kThreeModule = "build/three.module.min.js";
@@ -147,15 +146,10 @@ int RunView(const ViewArgs& a) {
   LoadedAsset asset;
   baker::Mesh mesh;
   std::string error;
-  if (!OpenAssetAndMesh(a.asset, a.mesh, a.rig, &asset, &mesh, &error)) return Fail(error);
+  if (!OpenAssetAndMesh(a.asset, a.anim.mesh, a.rig, &asset, &mesh, &error)) return Fail(error);
   const runtime::AssetView& view = asset.view;
 
-  AnimationArgs anim_args;
-  anim_args.mesh = a.mesh;
-  anim_args.clip = a.clip;
-  anim_args.morph = a.morph;
-  anim_args.poses_dir = a.poses_dir;
-  anim_args.frames = a.frames;
+  const AnimationArgs& anim_args = a.anim;
   AnimationSource anim;
   if (!OpenAnimation(mesh, anim_args, &anim, &error)) return Fail(error);
 
@@ -268,7 +262,7 @@ int RunView(const ViewArgs& a) {
   nlohmann::json data = {
       {"format", "spherechain-view 1"},
       {"asset", fs::path(a.asset).filename().string()},
-      {"mesh", fs::path(a.mesh).filename().string()},
+      {"mesh", fs::path(a.anim.mesh).filename().string()},
       {"animation", anim.Describe()},
       {"method", a.method},
       {"vertex_count", V},
@@ -297,7 +291,7 @@ int RunView(const ViewArgs& a) {
     return Fail("view: the compiled-in page (viewer/page.html) lacks its markers");
   if (auto s = baker::WriteFileAtomic(a.output, page); !s.ok()) return Fail(s.error());
   std::printf("view: %s + %s — %s, %u frames, %u spheres; %s pairs max %u, contacts %llu (max %u a frame)\n",
-              a.asset.c_str(), a.mesh.c_str(), anim.Describe().c_str(), F, S, a.method == "m1" ? "M1" : "M2", max_pairs,
+              a.asset.c_str(), a.anim.mesh.c_str(), anim.Describe().c_str(), F, S, a.method == "m1" ? "M1" : "M2", max_pairs,
               static_cast<unsigned long long>(total_contacts), max_contacts);
   std::printf("wrote %s (%.2f MB, three.js %s embedded; open it from disk, #frame=N shows frame N)\n", a.output.c_str(),
               double(page.size()) / (1024.0 * 1024.0), three_version.c_str());
@@ -311,19 +305,10 @@ void RegisterView(CLI::App& app, Commands* commands) {
   CLI::App* sub = app.add_subcommand(
       "view", "Write a self-contained HTML viewer (three.js embedded, opens offline): the animated mesh by region, "
               "refit spheres, colliding sphere pairs and contact triangles (narrow phase) per frame, with a timeline");
-  sub->add_option("asset", args->asset, ".sphc asset baked from the mesh")->required()->check(CLI::ExistingFile);
-  sub->add_option("--mesh", args->mesh, "The character file the asset was baked from (checked by fingerprint)")
-      ->required()
-      ->check(CLI::ExistingFile);
+  AddAnimationOptions(sub, &args->asset, &args->rig, &args->anim);
   sub->add_option("-o,--output", args->output, "HTML file to write")->required();
-  sub->add_option("--clip", args->clip, "Clip to play (default: the first clip; none: the morph)");
-  sub->add_option("--morph", args->morph,
-                  "Key pose files (.json), pose names in the poses folder, or folders; morph through them");
-  sub->add_option("--poses-dir", args->poses_dir, "Folder of default key poses (as for play)");
-  sub->add_option("--frames", args->frames, "Frames: the morph's length, or uniform samples of the clip (default 40)");
   sub->add_option("--method", args->method, "Broad phase whose sphere pairs are shown: m1 (chains) or m2 (all, default)")
       ->check(CLI::IsMember({"m1", "m2"}));
-  sub->add_option("--rig", args->rig, "MakeHuman rig (.mhskel) for an OBJ; default: default.mhskel beside the OBJ");
   sub->add_option("--three", args->three,
                   "three.js package folder (build/three.module.min.js, examples/jsm/controls/OrbitControls.js); "
                   "default: the installed share/spherechain/three, else viewer/node_modules/three (npm ci in viewer/)");

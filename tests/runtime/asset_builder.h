@@ -29,6 +29,20 @@ struct Tube {
   float sphere_scale = 1.0f;   // sphere radius = sphere_scale · radius
 };
 
+/// A DetectJob on `ctx` writing into `out` (capacity out.size()), its count into *n, its stats into *stats.
+inline runtime::DetectJob MakeDetectJob(const runtime::Context& ctx, runtime::DetectMethod method,
+                                        std::vector<runtime::Collision>& out, uint32_t* n,
+                                        runtime::DetectStats* stats) {
+  runtime::DetectJob job;
+  job.context = &ctx;
+  job.method = method;
+  job.output = out.data();
+  job.capacity = static_cast<uint32_t>(out.size());
+  job.count = n;
+  job.stats = stats;
+  return job;
+}
+
 /// Bytes with 8-byte alignment (LoadAsset's requirement).
 struct AlignedBytes {
   std::vector<uint64_t> storage;

@@ -82,13 +82,7 @@ DetectStats CheckAgainstBruteForce(const Context& ctx, DetectMethod method, floa
     std::vector<Collision> out(S * (S - 1) / 2 + 1);
     uint32_t n = 0;
     DetectStats st;
-    DetectJob job;
-    job.context = &ctx;
-    job.method = method;
-    job.output = out.data();
-    job.capacity = static_cast<uint32_t>(out.size());
-    job.count = &n;
-    job.stats = &st;
+    DetectJob job = test::MakeDetectJob(ctx, method, out, &n, &st);
     job.margin = job_margin;
     if (hook == 1) job.parallel_for.run = &ParallelReverse;
     if (hook == 2) job.parallel_for.run = &ParallelChunks;

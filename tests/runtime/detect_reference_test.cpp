@@ -147,13 +147,7 @@ TEST_CASE("DetectJob M1 and M2 equal the reference loops on irregular chains and
         std::vector<Collision> out(DetectBound(view, m));
         uint32_t n = 0;
         DetectStats st;
-        DetectJob job;
-        job.context = &ctx;
-        job.method = m;
-        job.output = out.data();
-        job.capacity = static_cast<uint32_t>(out.size());
-        job.count = &n;
-        job.stats = &st;
+        DetectJob job = test::MakeDetectJob(ctx, m, out, &n, &st);
         if (parallel)
           job.parallel_for.run = [](void*, uint32_t count, ParallelFor::Task task, void* data) {
             for (uint32_t i = count; i-- > 0;) task(data, i, i + 1);  // reverse order, one index a task
@@ -239,13 +233,7 @@ TEST_CASE("DetectJob M1 and M2 broad cull equal brute force on clustered, far, d
         std::vector<Collision> out(DetectBound(view, method));
         uint32_t n = 0;
         DetectStats st;
-        DetectJob job;
-        job.context = &ctx;
-        job.method = method;
-        job.output = out.data();
-        job.capacity = static_cast<uint32_t>(out.size());
-        job.count = &n;
-        job.stats = &st;
+        DetectJob job = test::MakeDetectJob(ctx, method, out, &n, &st);
         if (parallel)
           job.parallel_for.run = [](void*, uint32_t count, ParallelFor::Task task, void* data) {
             for (uint32_t i = count; i-- > 0;) task(data, i, i + 1);

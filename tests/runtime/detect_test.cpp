@@ -33,13 +33,7 @@ struct Scene {
                                 ParallelFor pf = {}) {
     std::vector<Collision> out(DetectBound(view, method));
     uint32_t n = 0;
-    DetectJob job;
-    job.context = &ctx;
-    job.method = method;
-    job.output = out.data();
-    job.capacity = static_cast<uint32_t>(out.size());
-    job.count = &n;
-    job.stats = stats;
+    DetectJob job = test::MakeDetectJob(ctx, method, out, &n, stats);
     job.parallel_for = pf;
     const Status s = job.Run();
     if (status) *status = s;

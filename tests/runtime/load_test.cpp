@@ -189,4 +189,43 @@ TEST_CASE("ToString names every status and Succeeded/Failed split them") {
   CHECK(Failed(Status::kErrorCorrupt));
   CHECK(std::string(ToString(static_cast<Status>(0x1234u))) == "unknown status");
   CHECK(std::string(ToString(Status::kErrorVertexCount)).rfind("kErrorVertexCount", 0) == 0);
+  // Every status of status.h: its string starts with its own name, and the error bit decides Failed().
+  const std::pair<Status, const char*> all[] = {
+      {Status::kOk, "kOk"},
+      {Status::kOkTruncated, "kOkTruncated"},
+      {Status::kErrorNullArgument, "kErrorNullArgument"},
+      {Status::kErrorAlignment, "kErrorAlignment"},
+      {Status::kErrorInvalidJob, "kErrorInvalidJob"},
+      {Status::kErrorVertexCount, "kErrorVertexCount"},
+      {Status::kErrorStride, "kErrorStride"},
+      {Status::kErrorOutOfMemory, "kErrorOutOfMemory"},
+      {Status::kErrorNonFinitePositions, "kErrorNonFinitePositions"},
+      {Status::kErrorJointCount, "kErrorJointCount"},
+      {Status::kErrorNonFiniteJoints, "kErrorNonFiniteJoints"},
+      {Status::kErrorAssetTooSmall, "kErrorAssetTooSmall"},
+      {Status::kErrorAssetTooLarge, "kErrorAssetTooLarge"},
+      {Status::kErrorIdentifier, "kErrorIdentifier"},
+      {Status::kErrorVersionTooOld, "kErrorVersionTooOld"},
+      {Status::kErrorVersionTooNew, "kErrorVersionTooNew"},
+      {Status::kErrorCorrupt, "kErrorCorrupt"},
+      {Status::kErrorMissingField, "kErrorMissingField"},
+      {Status::kErrorNoSpheres, "kErrorNoSpheres"},
+      {Status::kErrorTooManySpheres, "kErrorTooManySpheres"},
+      {Status::kErrorTooManyChains, "kErrorTooManyChains"},
+      {Status::kErrorCountMismatch, "kErrorCountMismatch"},
+      {Status::kErrorIndexOutOfRange, "kErrorIndexOutOfRange"},
+      {Status::kErrorOffsets, "kErrorOffsets"},
+      {Status::kErrorNonFinite, "kErrorNonFinite"},
+      {Status::kErrorRadius, "kErrorRadius"},
+      {Status::kErrorPivotFrame, "kErrorPivotFrame"},
+      {Status::kErrorChainOrder, "kErrorChainOrder"},
+      {Status::kErrorExcludedPairs, "kErrorExcludedPairs"},
+      {Status::kErrorContactMargin, "kErrorContactMargin"},
+      {Status::kErrorSkinWeights, "kErrorSkinWeights"},
+  };
+  for (const auto& [status, name] : all) {
+    CAPTURE(name);
+    CHECK(std::string(ToString(status)).rfind(name, 0) == 0);
+    CHECK(Failed(status) == (std::string(name).rfind("kError", 0) == 0));
+  }
 }
