@@ -45,7 +45,8 @@ TEST_CASE("import formats: every character format of assimp-testmodels imports, 
   }
 }
 
-TEST_CASE("import formats: the two humans bake; the creatures and the cube are refused with the reason") {
+// "heavy": two real bakes (the ASan half of CI skips it; it runs once, in the normal suite).
+TEST_CASE("import formats (heavy): the two humans bake, the creatures and the cube are refused with the reason") {
   for (const char* rel : {"Collada/human.zae", "IQM/mrfixit.iqm"}) {
     CAPTURE(rel);
     const std::string path = test::AssimpModel(rel);

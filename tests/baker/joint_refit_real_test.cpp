@@ -65,7 +65,8 @@ TEST_CASE("centre skin weights: the mean of the region's vertex weights, four la
   CHECK(!CentreSkinWeights(bare, sr, pivots).ok());
 }
 
-TEST_CASE("joint refit on CesiumMan's walk: bind spheres at rest, centres within a fraction of a radius of the vertex refit") {
+// "heavy": a real bake (the ASan half of CI skips it; it runs once, in the normal suite).
+TEST_CASE("joint refit on CesiumMan's walk (heavy): bind spheres at rest, centres within a fraction of a radius of the vertex refit") {
   const std::string path = test::SharedData("gltf/CesiumMan.gltf");
   if (!test::Require(path)) return;
   auto baked = Bake(path, BakeConfig{});
