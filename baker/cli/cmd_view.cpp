@@ -259,11 +259,15 @@ int RunView(const ViewArgs& a) {
   const char* up = "y";
   if (view.asset->up_axis() == schema::UpAxis::Z) up = "z";
   if (view.asset->up_axis() == schema::UpAxis::X) up = "x";
+  // The page names files, not the machine's folders: the poses folder by its last component.
+  std::string animation = anim.Describe();
+  if (const size_t at = animation.find(anim.poses_from); !anim.poses_from.empty() && at != std::string::npos)
+    animation.replace(at, anim.poses_from.size(), fs::path(anim.poses_from).filename().string());
   nlohmann::json data = {
       {"format", "spherechain-view 1"},
       {"asset", fs::path(a.asset).filename().string()},
       {"mesh", fs::path(a.anim.mesh).filename().string()},
-      {"animation", anim.Describe()},
+      {"animation", animation},
       {"method", a.method},
       {"vertex_count", V},
       {"triangle_count", T},
