@@ -309,7 +309,10 @@ int RunPlay(const PlayArgs& a) {
     FrameRow& row = rows[f];
     row.frame = f;
     if (auto s = anim.Frame(mesh, f, &scratch, &positions, &row.label); !s.ok()) return Fail(s.error());
-    if (joints) JointMatrices(scratch, &joint_matrices);
+    // The frame's joint matrices, in the runtime's layout: for the joint refit and for --dump-frames.
+    const bool dump_joints = !a.dump_frames.empty() && view.asset->sphere_joints() &&
+                             view.asset->joint_count() == scratch.matrices.size();
+    if (joints || dump_joints) JointMatrices(scratch, &joint_matrices);
     if (!player.Run(positions.data(), &row, &error, joints ? joint_matrices.data() : nullptr)) return Fail(error);
     tracking.Measure(ctx.spheres(), positions.data(), &row.tracking_mean, &row.tracking_max);
     if (!a.dump_frames.empty()) {
@@ -321,12 +324,11 @@ int RunPlay(const PlayArgs& a) {
         return Fail(s.error());
       // And its joint matrices (frame_NNNN.joints: #J × 12 float32, JointRefitJob's layout) when the
       // asset can refit from them.
-      if (view.asset->sphere_joints() && view.asset->joint_count() == scratch.matrices.size()) {
-        std::vector<float> jm;
-        JointMatrices(scratch, &jm);
+      if (dump_joints) {
         std::snprintf(name, sizeof name, "frame_%04u.joints", f);
         const std::string jpath = (fs::path(a.dump_frames) / name).string();
-        if (auto s = baker::WriteFileAtomic(jpath, jm.data(), jm.size() * sizeof(float)); !s.ok()) return Fail(s.error());
+        if (auto s = baker::WriteFileAtomic(jpath, joint_matrices.data(), joint_matrices.size() * sizeof(float)); !s.ok())
+          return Fail(s.error());
       }
     }
   }

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "runtime/asset_builder.h"
+#include "runtime/detect_check.h"
 #include "test_data.h"
 
 using namespace spherechain;
@@ -93,13 +94,7 @@ DetectStats CheckAgainstBruteForce(const Context& ctx, DetectMethod method, floa
     CHECK(st.distinct_pairs == ref.stats.distinct_pairs);
     CHECK(st.sphere_tests >= st.distinct_pairs);
     CHECK(st.sphere_tests <= (method == DetectMethod::kM1 ? ctx.m1_candidate_pairs() : ctx.m2_candidate_pairs()));
-    REQUIRE(n == ref.pairs.size());
-    for (uint32_t k = 0; k < n; ++k) {
-      CHECK(out[k].a == ref.pairs[k].a);
-      CHECK(out[k].b == ref.pairs[k].b);
-      CHECK(out[k].chains == ref.pairs[k].chains);
-      CHECK(std::bit_cast<uint32_t>(out[k].depth) == std::bit_cast<uint32_t>(ref.pairs[k].depth));
-    }
+    test::CheckSameCollisions(out.data(), n, ref.pairs);
     if (hook == 0) {
       serial = st;
     } else {

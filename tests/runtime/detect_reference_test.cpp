@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "runtime/asset_builder.h"
+#include "runtime/detect_check.h"
 
 using namespace spherechain;
 using namespace spherechain::runtime;
@@ -74,13 +75,7 @@ void CheckEqualsReference(const Collision* out, uint32_t n, const DetectStats& s
   CHECK(st.tests == ref.stats.tests);
   CHECK(st.raw_pairs == ref.stats.raw_pairs);
   CHECK(st.distinct_pairs == ref.stats.distinct_pairs);
-  REQUIRE(n == ref.pairs.size());
-  for (uint32_t k = 0; k < n; ++k) {
-    CHECK(out[k].a == ref.pairs[k].a);
-    CHECK(out[k].b == ref.pairs[k].b);
-    CHECK(out[k].chains == ref.pairs[k].chains);
-    CHECK(std::bit_cast<uint32_t>(out[k].depth) == std::bit_cast<uint32_t>(ref.pairs[k].depth));
-  }
+  test::CheckSameCollisions(out, n, ref.pairs);
 }
 
 /// Random chains (sorted, unique; each sphere joins chain c with a probability drawn in
