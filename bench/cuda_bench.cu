@@ -132,13 +132,14 @@ int main(int argc, char** argv) {
   std::printf("device: %s, %d SMs, peak memory bandwidth %.0f GB/s (%d kHz x %d bit x 2)\n", prop.name, sms, peak_gbs,
               mem_khz, bus_bits);
 
+  runtime::Model model;  // built once on the host; the device copy reads it
+  runtime::Workspace ws;
+  if (model.Init(view) != runtime::Status::kOk || ws.Init(model) != runtime::Status::kOk) return 1;
   sc::DeviceAsset asset;
-  if (sc::Status s = asset.Upload(view); s != sc::Status::kOk) {
+  if (sc::Status s = asset.Upload(model); s != sc::Status::kOk) {
     std::printf("Upload failed: %s (%s)\n", sc::ToString(s), sc::LastCudaErrorString());
     return 1;
   }
-  runtime::Context ctx;
-  if (ctx.Init(view) != runtime::Status::kOk) return 1;
   float* d_rest = nullptr;
   CK(cudaMalloc(&d_rest, mesh.positions.size() * 4));
   CK(cudaMemcpy(d_rest, mesh.positions.data(), mesh.positions.size() * 4, cudaMemcpyHostToDevice));
@@ -191,11 +192,13 @@ int main(int argc, char** argv) {
         const double t0 = NowUs();
         for (uint32_t i = 0; i < cpu_n; ++i) {
           runtime::RefitJob refit;
-          refit.context = &ctx;
+          refit.model = &model;
+          refit.workspace = &ws;
           refit.positions = {host.data() + size_t{i} * V * 3, V, 12};
           uint32_t n = 0;
           runtime::DetectJob det;
-          det.context = &ctx;
+          det.model = &model;
+          det.workspace = &ws;
           det.method = method;
           det.output = out.data();
           det.capacity = static_cast<uint32_t>(out.size());

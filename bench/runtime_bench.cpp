@@ -5,6 +5,7 @@
 //   runtime_bench ASSET.sphc FRAMES [--reps R] [--runs K] [--narrow-only] [--cgal-frames N] [--per-frame]
 //   runtime_bench ASSET.sphc FRAMES --profile R   (refit + M1 over all frames R times, nothing else:
 //                                                   for valgrind --tool=callgrind instruction counts)
+//   runtime_bench ASSET.sphc FRAMES --batch-only [--characters N] [--runs K]   (only "many characters")
 //     FRAMES: a .f32 file of #F×#V×3 little-endian float32 positions, or a folder of .f32 files (one
 //     frame each, #V×3, sorted by name).
 //
@@ -46,6 +47,7 @@
 #include <functional>
 #include <numeric>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -53,6 +55,11 @@
 #include "spherechain/runtime/runtime.h"
 #include "spherechain/runtime/triangle_intersect.h"
 
+#if SPHERECHAIN_BENCH_TBB
+#include <tbb/blocked_range.h>
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+#endif
 #if SPHERECHAIN_BENCH_FCL
 #include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>
 #include <fcl/geometry/shape/sphere.h>
@@ -583,11 +590,129 @@ bool NarrowPhase(const Workload& w, const sc::AssetView& view, int runs, int cga
   return ok;
 }
 
+
+// ---------------------------------------------------------------------------------------------------
+// Many characters per frame: BatchJob over N workspaces sharing one Model, character c of batch b on
+// frame (c + b) mod #F (each its own pose), refit from its vertex buffer (and from its joint matrices when
+// the frames carry them) + M1, serial, then through the ParallelFor hook with TBB limited to 1 and 2
+// threads (tbb::global_control). Characters/s = N / (median time of a batch); best median of the runs.
+
+#if SPHERECHAIN_BENCH_TBB
+// The ParallelFor hook on TBB: one tbb::parallel_for over the task indices (auto partitioner).
+void TbbParallelFor(void*, uint32_t count, sc::ParallelFor::Task task, void* data) {
+  tbb::parallel_for(tbb::blocked_range<uint32_t>(0, count),
+                    [&](const tbb::blocked_range<uint32_t>& r) { task(data, r.begin(), r.end()); });
+}
+#endif
+
+bool ManyCharacters(const Workload& w, const sc::Model& model, uint32_t n, int runs) {
+  const size_t F = w.frames.size();
+  std::vector<sc::Workspace> ws(n);
+  for (sc::Workspace& x : ws)
+    if (x.Init(model) != sc::Status::kOk) return std::fprintf(stderr, "Workspace::Init failed\n"), false;
+  constexpr uint32_t kCapacity = 1024;  // records per character (MakeHuman: ~30 pairs a frame)
+  std::vector<sc::Collision> out(size_t{n} * kCapacity);
+  std::vector<uint32_t> count(n);
+  std::vector<sc::CharacterFrame> chars(n);
+  for (uint32_t c = 0; c < n; ++c) {
+    chars[c].workspace = &ws[c];
+    chars[c].output = out.data() + size_t{c} * kCapacity;
+    chars[c].capacity = kCapacity;
+    chars[c].count = &count[c];
+  }
+  sc::BatchJob batch;
+  batch.model = &model;
+  batch.characters = chars.data();
+  batch.character_count = n;
+  batch.method = sc::DetectMethod::kM1;
+  batch.joint_count = model.joint_count();
+  const bool joints = w.joints.size() == F && model.joint_count() != 0;
+  auto set_frames = [&](size_t b) {
+    for (uint32_t c = 0; c < n; ++c) {
+      const size_t f = (c + b) % F;
+      chars[c].positions = {w.frames[f].data(), w.vertex_count, 12};
+      if (joints) chars[c].joint_matrices = w.joints[f].data();
+    }
+  };
+  // Reference: every character's records and counts from the serial batch, checked in every run below.
+  std::vector<uint64_t> want(F);
+  auto digest = [&] {
+    uint64_t h = 1469598103934665603ull;
+    for (uint32_t c = 0; c < n; ++c) {
+      h = (h ^ count[c]) * 1099511628211ull;
+      for (uint32_t k = 0; k < count[c]; ++k) {
+        const sc::Collision& x = out[size_t{c} * kCapacity + k];
+        h = (h ^ (uint64_t{x.a} << 16 | x.b)) * 1099511628211ull;
+      }
+    }
+    return h;
+  };
+  bool ok = true;
+  batch.source = sc::RefitSource::kVertices;
+  for (size_t b = 0; b < F; ++b) set_frames(b), ok = ok && batch.Run() == sc::Status::kOk, want[b] = digest();
+  // Median of the batch times over the #F frame offsets (each batch timed alone: one frame of N characters).
+  auto median_batch_us = [&]() {
+    std::vector<double> us;
+    for (size_t b = 0; b < F; ++b) {
+      set_frames(b);
+      const auto t0 = Clock::now();
+      if (batch.Run() != sc::Status::kOk) ok = false;
+      us.push_back(std::chrono::duration<double, std::micro>(Clock::now() - t0).count());
+      if (batch.source == sc::RefitSource::kVertices && digest() != want[b]) ok = false;
+    }
+    std::nth_element(us.begin(), us.begin() + us.size() / 2, us.end());
+    return us[us.size() / 2];
+  };
+  struct Line {
+    std::string name;
+    double us;
+  };
+  std::vector<Line> lines;
+  auto measure = [&](const std::string& name) {
+    double best = 1e300;
+    for (int k = 0; k < runs; ++k) best = std::min(best, median_batch_us());
+    lines.push_back({name, best});
+    return best;
+  };
+  double one = 0, two = 0;
+  for (sc::RefitSource source : {sc::RefitSource::kVertices, sc::RefitSource::kJoints}) {
+    if (source == sc::RefitSource::kJoints && !joints) continue;
+    batch.source = source;
+    const std::string src = source == sc::RefitSource::kVertices ? "vertices" : "joints";
+    batch.parallel_for = {};
+    measure("serial (no hook), refit " + src + " + M1");
+#if SPHERECHAIN_BENCH_TBB
+    batch.parallel_for.run = &TbbParallelFor;
+    batch.parallel_grain = 4;
+    for (int threads : {1, 2}) {
+      tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
+      const double us = measure("TBB " + std::to_string(threads) + " thread" + (threads > 1 ? "s" : "") + ", refit " + src + " + M1");
+      if (source == sc::RefitSource::kVertices) (threads == 1 ? one : two) = us;
+    }
+#endif
+  }
+  std::printf("\nmany characters per frame (BatchJob, %u characters sharing one Model, character c of batch b on frame "
+              "(c + b) mod %zu; median batch over the %zu offsets%s)\n",
+              n, F, F, runs > 1 ? ", best of the runs" : "");
+  std::printf("%-44s %12s %12s %14s\n", "", "us / batch", "us / char.", "characters/s");
+  for (const Line& l : lines)
+    std::printf("%-44s %12.1f %12.3f %14.0f\n", l.name.c_str(), l.us, l.us / n, 1e6 * n / l.us);
+#if SPHERECHAIN_BENCH_TBB
+  std::printf("scaling, TBB 2 threads / 1 thread (refit vertices + M1): %.2fx (hardware threads: %u)\n", one / two,
+              std::thread::hardware_concurrency());
+#else
+  std::printf("TBB not found at configure time (Debian: libtbb-dev): only the serial batch was timed\n");
+#endif
+  if (!ok) std::fprintf(stderr, "MISMATCH: a batch failed or its records differ from the serial batch's\n");
+  return ok;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  bool synthetic = false, narrow_only = false, per_frame = false;
+  bool synthetic = false, narrow_only = false, per_frame = false, batch_only = false;
   int reps = 200, runs = 1, profile = 0, cgal_frames = 10;
+  uint32_t characters = 1000;
   uint32_t frame_count = 40;
   std::vector<std::string> positional;
   for (int i = 1; i < argc; ++i) {
@@ -598,6 +723,8 @@ int main(int argc, char** argv) {
     else if (a == "--runs" && i + 1 < argc) runs = std::max(1, std::atoi(argv[++i]));
     else if (a == "--profile" && i + 1 < argc) profile = std::max(1, std::atoi(argv[++i]));
     else if (a == "--narrow-only") narrow_only = true;
+    else if (a == "--batch-only") batch_only = true;
+    else if (a == "--characters" && i + 1 < argc) characters = uint32_t(std::max(1, std::atoi(argv[++i])));
     else if (a == "--per-frame") per_frame = true;
     else if (a == "--cgal-frames" && i + 1 < argc) cgal_frames = std::max(0, std::atoi(argv[++i]));
     else positional.push_back(a);
@@ -612,29 +739,34 @@ int main(int argc, char** argv) {
                          "[--cgal-frames N] [--per-frame]\n"
                          "       runtime_bench ASSET.sphc FRAMES(.f32 file | folder) [--reps R] [--runs K] "
                          "[--narrow-only] [--cgal-frames N] [--per-frame]\n"
-                         "       runtime_bench ASSET.sphc FRAMES --profile R\n");
+                         "       runtime_bench ASSET.sphc FRAMES --profile R\n"
+                         "       runtime_bench ASSET.sphc FRAMES --batch-only [--characters N] [--runs K]\n");
     return 2;
   }
 
   sc::AssetView view;
   if (sc::Status s = sc::LoadAsset(w.bytes.data(), w.bytes.size, &view); s != sc::Status::kOk)
     return std::fprintf(stderr, "load: %s\n", sc::ToString(s)), 1;
-  sc::Context ctx;
-  if (sc::Status s = ctx.Init(view); s != sc::Status::kOk) return std::fprintf(stderr, "init: %s\n", sc::ToString(s)), 1;
+  sc::Model model;  // shared by every character of the asset
+  sc::Workspace ws;  // one character
+  if (sc::Status s = model.Init(view); s != sc::Status::kOk || (s = ws.Init(model)) != sc::Status::kOk)
+    return std::fprintf(stderr, "init: %s\n", sc::ToString(s)), 1;
   const uint32_t S = view.sphere_count;
   uint32_t chain_total = 0;
   for (const auto* c : *view.asset->chains()) chain_total += c->spheres()->size();
   std::printf("asset: %u spheres, %u chains (avg %.1f spheres), %u vertices, %zu frames, %d reps, contact margin %g\n",
               S, view.chain_count, view.chain_count ? double(chain_total) / view.chain_count : 0.0, view.vertex_count,
-              w.frames.size(), reps, double(ctx.contact_margin()));
+              w.frames.size(), reps, double(model.contact_margin()));
 
   std::vector<sc::Collision> out(std::max(sc::DetectBound(view, sc::DetectMethod::kM1),
                                           sc::DetectBound(view, sc::DetectMethod::kM2)));
   uint32_t count = 0;
   sc::RefitJob refit;
-  refit.context = &ctx;
+  refit.model = &model;
+  refit.workspace = &ws;
   sc::DetectJob m1;
-  m1.context = &ctx;
+  m1.model = &model;
+  m1.workspace = &ws;
   m1.method = sc::DetectMethod::kM1;
   m1.output = out.data();
   m1.capacity = static_cast<uint32_t>(out.size());
@@ -654,6 +786,7 @@ int main(int argc, char** argv) {
     return 0;
   }
   if (narrow_only) return NarrowPhase(w, view, runs, cgal_frames, per_frame) ? 0 : 1;
+  if (batch_only) return ManyCharacters(w, model, characters, runs) ? 0 : 1;
 
   // Refitted spheres per frame (inputs of the peers) and the reference M2 counts.
   std::vector<std::vector<float>> sx(w.frames.size()), sy = sx, sz = sx, sr = sx;
@@ -662,7 +795,7 @@ int main(int argc, char** argv) {
   for (size_t f = 0; f < w.frames.size(); ++f) {
     set_frame(f);
     if (refit.Run() != sc::Status::kOk) return 1;
-    const sc::SphereArrays s = ctx.spheres();
+    const sc::SphereArrays s = ws.spheres();
     sx[f].assign(s.x, s.x + S), sy[f].assign(s.y, s.y + S), sz[f].assign(s.z, s.z + S), sr[f].assign(s.r, s.r + S);
     sc::DetectStats st;
     m2.stats = &st;
@@ -676,7 +809,7 @@ int main(int argc, char** argv) {
     m1.stats = m2.stats = nullptr;
   }
   // The peers test the radii DetectJob tests: grown by the asset's contact margin (schema v2; 0 for v1).
-  const float margin = ctx.contact_margin();
+  const float margin = model.contact_margin();
   std::vector<std::vector<float>> gr(w.frames.size());
   for (size_t f = 0; f < w.frames.size(); ++f) {
     gr[f] = sr[f];
@@ -684,12 +817,12 @@ int main(int argc, char** argv) {
   }
   std::vector<uint8_t> excluded(size_t{S} * S, 0);
   for (uint32_t a = 0; a < S; ++a)
-    for (uint32_t b = 0; b < S; ++b) excluded[size_t{a} * S + b] = ctx.IsExcluded(a, b);
+    for (uint32_t b = 0; b < S; ++b) excluded[size_t{a} * S + b] = model.IsExcluded(a, b);
   // M1 cross-check: naive loop over the distinct pairs sharing a chain.
   uint32_t m1_distinct_tests = 0, excluded_pairs = 0;
   for (uint32_t a = 0; a < S; ++a)
     for (uint32_t b = a + 1; b < S; ++b) {
-      m1_distinct_tests += (ctx.chain_mask(a) & ctx.chain_mask(b)) != 0;
+      m1_distinct_tests += (model.chain_mask(a) & model.chain_mask(b)) != 0;
       excluded_pairs += excluded[size_t{a} * S + b];
     }
   bool mismatch = false;
@@ -698,16 +831,16 @@ int main(int argc, char** argv) {
     for (uint32_t a = 0; a < S; ++a)
       for (uint32_t b = a + 1; b < S; ++b) {
         const float dx = sx[f][b] - sx[f][a], dy = sy[f][b] - sy[f][a], dz = sz[f][b] - sz[f][a], rr = gr[f][b] + gr[f][a];
-        n += (ctx.chain_mask(a) & ctx.chain_mask(b)) && dx * dx + dy * dy + dz * dz < rr * rr && !excluded[size_t{a} * S + b];
+        n += (model.chain_mask(a) & model.chain_mask(b)) && dx * dx + dy * dy + dz * dz < rr * rr && !excluded[size_t{a} * S + b];
       }
     if (n != m1_count[f]) mismatch = true;
   }
   if (mismatch) std::fprintf(stderr, "MISMATCH: DetectJob M1 differs from a naive loop over the chain pairs\n");
   auto load_spheres = [&](size_t f) {
-    std::copy(sx[f].begin(), sx[f].end(), ctx.mutable_x());
-    std::copy(sy[f].begin(), sy[f].end(), ctx.mutable_y());
-    std::copy(sz[f].begin(), sz[f].end(), ctx.mutable_z());
-    std::copy(sr[f].begin(), sr[f].end(), ctx.mutable_r());
+    std::copy(sx[f].begin(), sx[f].end(), ws.mutable_x());
+    std::copy(sy[f].begin(), sy[f].end(), ws.mutable_y());
+    std::copy(sz[f].begin(), sz[f].end(), ws.mutable_z());
+    std::copy(sr[f].begin(), sr[f].end(), ws.mutable_r());
   };
   auto overlap = [&](size_t f, uint32_t a, uint32_t b) {
     const float dx = sx[f][a] - sx[f][b], dy = sy[f][a] - sy[f][b], dz = sz[f][a] - sz[f][b], rr = gr[f][a] + gr[f][b];
@@ -755,8 +888,8 @@ int main(int argc, char** argv) {
   (void)refit_us;
   if (w.joints.size() == F) {
     sc::JointRefitJob joints;
-    joints.asset = &view;
-    joints.context = &ctx;
+    joints.model = &model;
+    joints.workspace = &ws;
     joints.joint_count = view.asset->joint_count();
     measure("sc refit joints", [&](size_t f) {
       joints.joint_matrices = w.joints[f].data();
@@ -888,6 +1021,7 @@ int main(int argc, char** argv) {
   for (const Row& r : rows) std::printf("%-22s %12.3f %10.2f\n", r.name, r.us, r.us / m2_us);
   std::printf("\n%-22s %14s %14s\n", "ratio (peer / sc)", "/ sc M2 det.", "/ sc refit+M1");
   for (const Peer& p : peers) std::printf("%-22s %13.1fx %13.1fx\n", p.name, p.us / m2_us, p.us / m1_us);
+  if (!ManyCharacters(w, model, characters, runs)) mismatch = true;
   if (!NarrowPhase(w, view, runs, cgal_frames, per_frame)) mismatch = true;
   if (mismatch) {
     std::fprintf(stderr, "MISMATCH: a pair count differs (see above)\n");

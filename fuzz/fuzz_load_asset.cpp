@@ -1,5 +1,5 @@
 // libFuzzer target: LoadAsset on untrusted bytes, then everything a game does with a loaded asset
-// (Context::Init, RefitJob, DetectJob M1/M2, SurroundingTriangles). See load_asset_sequence.h and
+// (Model::Init and InitInPlace, Workspace::Init, RefitJob, DetectJob M1/M2, SurroundingTriangles). See load_asset_sequence.h and
 // fuzz/README.md. Seed corpus: fuzz/corpus/load_asset/.
 #include <cstdio>
 #include <cstdlib>

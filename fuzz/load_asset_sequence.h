@@ -1,7 +1,7 @@
 // The sequence the load_asset fuzzer runs on one input, shared with the corpus-replay doctest
 // (tests/runtime/fuzz_corpus_test.cpp) so every configuration replays the corpus without libFuzzer.
 //
-// Bytes → LoadAsset → (if it loads) Context::Init → RefitJob (both modes, positions derived from the
+// Bytes → LoadAsset → (if it loads) Model::Init (and InitInPlace) → Workspace::Init → RefitJob (both modes, positions derived from the
 // input, NaN/Inf/huge/denormal included) → DetectJob M1 and M2 into DetectBound-sized buffers (and
 // once more truncated) → SurroundingTriangles / PivotTriangles for every sphere, checking the
 // documented invariants of each output. Header-only; needs only spherechain::runtime.
@@ -41,12 +41,23 @@ inline const char* RunLoadAssetSequence(const uint8_t* data, size_t size, bool* 
   if (!view.valid() || view.sphere_count == 0) return "LoadAsset kOk with an empty view";
   if (loaded) *loaded = true;
 
-  Context ctx;
-  const Status init = ctx.Init(view);
+  Model model;
+  const Status init = model.Init(view);
   if (init == Status::kErrorOutOfMemory) return nullptr;  // documented, e.g. a huge chain
-  if (init != Status::kOk) return "Context::Init failed on a loaded asset";
+  if (init != Status::kOk) return "Model::Init failed on a loaded asset";
   const uint32_t S = view.sphere_count, V = view.vertex_count, T = view.triangle_count;
-  if (ctx.sphere_count() != S || ctx.vertex_count() != V) return "Context counts differ from the view";
+  if (model.sphere_count() != S || model.vertex_count() != V) return "Model counts differ from the view";
+  if (model.bytes() != Model::RequiredBytes(view)) return "Model::RequiredBytes differs from the model's size";
+  {  // the caller-memory variant: same size, too small refused
+    const size_t need = Model::RequiredBytes(view);
+    std::unique_ptr<uint64_t[]> mem(new uint64_t[need / 8 + 2]);
+    Model in_place;
+    if (in_place.InitInPlace(view, mem.get(), need - 1) != Status::kErrorBufferTooSmall)
+      return "Model::InitInPlace accepted a buffer one byte short";
+    if (in_place.InitInPlace(view, mem.get(), need) != Status::kOk) return "Model::InitInPlace failed";
+  }
+  Workspace ctx;
+  if (ctx.Init(model) != Status::kOk) return "Workspace::Init failed";
 
   // Surrounding regions and pivots: every index in range.
   for (uint32_t s = 0; s < S; ++s) {
@@ -72,7 +83,8 @@ inline const char* RunLoadAssetSequence(const uint8_t* data, size_t size, bool* 
     }
     for (RefitMode mode : {RefitMode::kPivotFrame, RefitMode::kPaper}) {
       RefitJob refit;
-      refit.context = &ctx;
+      refit.model = &model;
+      refit.workspace = &ctx;
       refit.mode = mode;
       refit.positions = {pos.data(), V, stride_floats * 4u};
       if (refit.Run() != Status::kOk) return "RefitJob failed on valid arguments";
@@ -87,7 +99,8 @@ inline const char* RunLoadAssetSequence(const uint8_t* data, size_t size, bool* 
       uint32_t n = ~0u;
       DetectStats stats;
       DetectJob detect;
-      detect.context = &ctx;
+      detect.model = &model;
+      detect.workspace = &ctx;
       detect.method = method;
       detect.output = out.data();
       detect.capacity = capacity;
@@ -101,12 +114,12 @@ inline const char* RunLoadAssetSequence(const uint8_t* data, size_t size, bool* 
       for (uint32_t i = 0; i < n; ++i) {
         const Collision& c = out[i];
         if (!(c.a < c.b) || c.b >= S) return "DetectJob: pair not a < b < #S";
-        if (ctx.IsExcluded(c.a, c.b)) return "DetectJob: reported an excluded pair";
+        if (model.IsExcluded(c.a, c.b)) return "DetectJob: reported an excluded pair";
         if (method == DetectMethod::kM1 && c.chains == 0) return "DetectJob M1: pair with no chain";
       }
     }
   }
-  ctx.ResetToBindPose();
+  if (ctx.ResetToBindPose(model) != Status::kOk) return "ResetToBindPose failed";
   return nullptr;
 }
 

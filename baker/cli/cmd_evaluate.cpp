@@ -176,9 +176,10 @@ int RunEvaluate(const EvaluateArgs& a) {
   AnimationSource anim;
   if (!OpenAnimation(mesh, anim_args, &anim, &error)) return Fail(error);
 
-  runtime::Context ctx;
-  if (runtime::Status s = ctx.Init(view); runtime::Failed(s))
-    return Fail("'" + a.asset + "': runtime Context::Init: " + runtime::ToString(s));
+  runtime::Model model;
+  runtime::Workspace ws;
+  if (runtime::Status s = model.Init(view); runtime::Failed(s) || runtime::Failed(s = ws.Init(model)))
+    return Fail("'" + a.asset + "': runtime Model / Workspace::Init: " + runtime::ToString(s));
   runtime::NarrowPhaseContext narrow;
   if (runtime::Status s = narrow.Init(view); runtime::Failed(s))
     return Fail("'" + a.asset + "': narrow phase: " + runtime::ToString(s) +
@@ -211,13 +212,14 @@ int RunEvaluate(const EvaluateArgs& a) {
   baker::SkinningScratch scratch;
   std::vector<FrameEval> rows(anim.frames);
   const bool tty = isatty(2);
-  // M1 (m = 0) or M2 (m = 1) on the context's current spheres with contact margin `margin` (−1: the
+  // M1 (m = 0) or M2 (m = 1) on the workspace's current spheres with contact margin `margin` (−1: the
   // asset's); the reported region pairs and sphere pairs are added to the sets.
   auto detect = [&](int m, float margin, std::set<RegionPair>* regions, std::set<SpherePairKey>* pairs) {
     auto& out = m == 0 ? out_m1 : out_m2;
     uint32_t n = 0;
     runtime::DetectJob det;
-    det.context = &ctx;
+    det.model = &model;
+    det.workspace = &ws;
     det.method = m == 0 ? runtime::DetectMethod::kM1 : runtime::DetectMethod::kM2;
     det.margin = margin;
     det.output = out.data();
@@ -238,7 +240,8 @@ int RunEvaluate(const EvaluateArgs& a) {
     if (auto s = anim.Frame(mesh, f, &scratch, &positions, &row.label); !s.ok()) return Fail(s.error());
     // Proxy: refit, M1, M2.
     runtime::RefitJob refit;
-    refit.context = &ctx;
+    refit.model = &model;
+    refit.workspace = &ws;
     refit.mode = mode;
     refit.positions = {positions.data(), V, 12};
     if (runtime::Status s = refit.Run(); runtime::Failed(s)) return Fail(std::string("refit: ") + runtime::ToString(s));
@@ -340,8 +343,8 @@ int RunEvaluate(const EvaluateArgs& a) {
       pt.false_frames += any_false;
     }
     {
-      const runtime::SphereArrays sp = ctx.spheres();
-      const float m = ctx.contact_margin();
+      const runtime::SphereArrays sp = ws.spheres();
+      const float m = model.contact_margin();
       auto gap = [&](SpherePairKey k) {
         const float dx = sp.x[k.first] - sp.x[k.second], dy = sp.y[k.first] - sp.y[k.second],
                     dz = sp.z[k.first] - sp.z[k.second];
@@ -458,7 +461,7 @@ int RunEvaluate(const EvaluateArgs& a) {
 
   if (!sweep.empty()) {
     std::printf("\ncontact margin sweep (same refit spheres; the asset's margin is %.4g = %.2f %% of height):\n",
-                double(ctx.contact_margin()), 100.0 * ctx.contact_margin() / height);
+                double(model.contact_margin()), 100.0 * model.contact_margin() / height);
     std::printf("%10s %8s  %18s  %18s  %18s  %11s  %14s  %14s\n", "margin %h", "margin", "region recall M1", "region recall M2",
                 "sphere recall M2", "false M1/M2", "false frames", "pairs/frame M2");
     for (const SweepPoint& pt : sweep)
@@ -475,7 +478,8 @@ int RunEvaluate(const EvaluateArgs& a) {
     std::string label;
     if (auto s = anim.Frame(mesh, f, &scratch, &positions, &label); !s.ok()) return Fail(s.error());
     runtime::RefitJob refit;
-    refit.context = &ctx;
+    refit.model = &model;
+    refit.workspace = &ws;
     refit.mode = mode;
     refit.positions = {positions.data(), V, 12};
     if (runtime::Failed(refit.Run())) return Fail("refit failed on the picture's frame");
@@ -488,7 +492,7 @@ int RunEvaluate(const EvaluateArgs& a) {
       const bool found = rows[f].m2_spheres.count({std::min(sa, sb), std::max(sa, sb)}) > 0;
       for (uint32_t t : {p.a, p.b}) marks[t] = std::max<uint8_t>(marks[t], found ? 2 : 1);
     }
-    const runtime::SphereArrays sp = ctx.spheres();
+    const runtime::SphereArrays sp = ws.spheres();
     std::vector<baker::FrameSphere> spheres;
     for (uint32_t s = 0; s < sp.count; ++s)
       spheres.push_back({{sp.x[s], sp.y[s], sp.z[s]}, sp.r[s],
@@ -511,8 +515,8 @@ int RunEvaluate(const EvaluateArgs& a) {
     j["refit"] = a.refit;
     j["body_height"] = height;
     j["margin_rel"] = a.margin;
-    j["contact_margin"] = ctx.contact_margin();  // the asset's: what the proxy's spheres were grown by
-    j["contact_margin_rel"] = double(ctx.contact_margin()) / height;
+    j["contact_margin"] = model.contact_margin();  // the asset's: what the proxy's spheres were grown by
+    j["contact_margin_rel"] = double(model.contact_margin()) / height;
     nlohmann::json fr = nlohmann::json::array();
     for (uint32_t f = 0; f < anim.frames; ++f) {
       const FrameEval& r = rows[f];

@@ -153,9 +153,10 @@ int RunView(const ViewArgs& a) {
   AnimationSource anim;
   if (!OpenAnimation(mesh, anim_args, &anim, &error)) return Fail(error);
 
-  runtime::Context ctx;
-  if (runtime::Status s = ctx.Init(view); runtime::Failed(s))
-    return Fail(std::string("runtime Context::Init: ") + runtime::ToString(s));
+  runtime::Model model;
+  runtime::Workspace ws;
+  if (runtime::Status s = model.Init(view); runtime::Failed(s) || runtime::Failed(s = ws.Init(model)))
+    return Fail(std::string("runtime Model / Workspace::Init: ") + runtime::ToString(s));
   runtime::NarrowPhaseContext narrow;
   if (runtime::Status s = narrow.Init(view); runtime::Failed(s))
     return Fail("'" + a.asset + "': narrow phase: " + runtime::ToString(s) +
@@ -187,11 +188,12 @@ int RunView(const ViewArgs& a) {
   for (uint32_t f = 0; f < F; ++f) {
     const runtime::PositionsView positions{frames[f].data(), V, 12};
     runtime::RefitJob refit;
-    refit.context = &ctx;
+    refit.model = &model;
+    refit.workspace = &ws;
     refit.positions = positions;
     if (runtime::Status s = refit.Run(); runtime::Failed(s))
       return Fail("view: frame " + std::to_string(f) + ": refit: " + runtime::ToString(s));
-    const runtime::SphereArrays sp = ctx.spheres();
+    const runtime::SphereArrays sp = ws.spheres();
     std::vector<float> spheres(4 * size_t(S));
     for (uint32_t s = 0; s < S; ++s) {
       spheres[4 * s] = sp.x[s];
@@ -201,7 +203,8 @@ int RunView(const ViewArgs& a) {
     }
     uint32_t pair_count = 0;
     runtime::DetectJob detect;
-    detect.context = &ctx;
+    detect.model = &model;
+    detect.workspace = &ws;
     detect.method = method;
     detect.output = pairs.data();
     detect.capacity = static_cast<uint32_t>(pairs.size());

@@ -1,4 +1,4 @@
-// DeviceAsset::Upload — the SoA arrays runtime::Context::Init builds, packed into one device block.
+// DeviceAsset::Upload — the runtime::Model's SoA arrays, packed into one device block.
 #include "spherechain/cuda/asset.h"
 
 #include <cstring>
@@ -16,10 +16,10 @@ namespace {
 struct Packer {
   std::vector<unsigned char> bytes;
   template <typename T>
-  size_t Add(const std::vector<T>& v) {
+  size_t Add(const T* v, size_t count) {
     const size_t off = (bytes.size() + 15) & ~size_t{15};
-    bytes.resize(off + v.size() * sizeof(T) + 16);  // +16: never an empty section
-    if (!v.empty()) std::memcpy(bytes.data() + off, v.data(), v.size() * sizeof(T));
+    bytes.resize(off + count * sizeof(T) + 16);  // +16: never an empty section
+    if (count) std::memcpy(bytes.data() + off, v, count * sizeof(T));
     return off;
   }
 };
@@ -48,54 +48,31 @@ void DeviceAsset::Release() {
   desc_ = {};
 }
 
-Status DeviceAsset::Upload(const runtime::AssetView& view) {
+Status DeviceAsset::Upload(const runtime::Model& model) {
   Release();
-  if (!view.valid()) return Status::kErrorNullArgument;
-  const schema::Asset& a = *view.asset;
-  const uint32_t S = view.sphere_count, C = view.chain_count;
+  if (!model.initialized()) return Status::kErrorNullArgument;
+  const runtime::ModelArrays& a = model.arrays();
+  const uint32_t S = model.sphere_count(), C = model.chain_count();
   Packer pk;
   size_t o_pv, o_local, o_offset, o_bind, o_mask, o_coff, o_cs, o_eoff, o_en;
-  uint32_t max_chain = 0;
   try {
-    // Same values as Context::Init (radius_scale = bind radius / mean_distance, one float division).
+    // The model's SoA arrays, packed as float4 rows (x, y, z, w) for the device's 16-byte loads: the same
+    // floats, so the same arithmetic as the CPU jobs.
     std::vector<float4> local(S), offset(S), bind(S);
     for (uint32_t s = 0; s < S; ++s) {
-      const schema::Sphere* sp = a.spheres()->Get(s);
-      const schema::PivotFrame* f = a.pivot_frames()->Get(s);
-      bind[s] = float4{sp->center().x(), sp->center().y(), sp->center().z(), sp->radius()};
-      local[s] = float4{f->local_center().x(), f->local_center().y(), f->local_center().z(),
-                        sp->radius() / f->mean_distance()};
-      offset[s] = float4{f->centroid_offset().x(), f->centroid_offset().y(), f->centroid_offset().z(), 0.0f};
+      bind[s] = float4{a.bind_x[s], a.bind_y[s], a.bind_z[s], a.bind_r[s]};
+      local[s] = float4{a.local_x[s], a.local_y[s], a.local_z[s], a.radius_scale[s]};
+      offset[s] = float4{a.offset_x[s], a.offset_y[s], a.offset_z[s], 0.0f};
     }
-    std::vector<uint32_t> pv(a.pivot_vertices()->begin(), a.pivot_vertices()->end());
-    std::vector<uint32_t> mask(S, 0u), coff(C + 1, 0u);
-    std::vector<uint16_t> cs;
-    for (uint32_t c = 0; c < C; ++c) {
-      const auto* list = a.chains()->Get(c)->spheres();
-      coff[c + 1] = coff[c] + list->size();
-      max_chain = list->size() > max_chain ? list->size() : max_chain;
-      for (uint16_t s : *list) {
-        cs.push_back(s);
-        mask[s] |= 1u << c;
-      }
-    }
-    const auto* ex = a.excluded_pairs();
-    const uint32_t E = ex ? ex->size() : 0;
-    std::vector<uint32_t> eoff(S + 1, 0u);
-    std::vector<uint16_t> en(E);
-    for (uint32_t i = 0; i < E; ++i) ++eoff[ex->Get(i)->a() + 1];
-    for (uint32_t s = 0; s < S; ++s) eoff[s + 1] += eoff[s];
-    for (uint32_t i = 0; i < E; ++i) en[i] = ex->Get(i)->b();  // sorted by (a, b) (LoadAsset checked)
-
-    o_pv = pk.Add(pv);
-    o_local = pk.Add(local);
-    o_offset = pk.Add(offset);
-    o_bind = pk.Add(bind);
-    o_mask = pk.Add(mask);
-    o_coff = pk.Add(coff);
-    o_cs = pk.Add(cs);
-    o_eoff = pk.Add(eoff);
-    o_en = pk.Add(en);
+    o_pv = pk.Add(a.pivot_vertices, size_t{12} * S);
+    o_local = pk.Add(local.data(), local.size());
+    o_offset = pk.Add(offset.data(), offset.size());
+    o_bind = pk.Add(bind.data(), bind.size());
+    o_mask = pk.Add(a.chain_mask, S);
+    o_coff = pk.Add(a.chain_offsets, C + 1);
+    o_cs = pk.Add(a.chain_spheres, a.chain_offsets[C]);
+    o_eoff = pk.Add(a.excl_offsets, S + 1);
+    o_en = pk.Add(a.excl_neighbors, a.excluded_count);
   } catch (const std::bad_alloc&) {
     return Status::kErrorOutOfMemory;
   }
@@ -120,11 +97,11 @@ Status DeviceAsset::Upload(const runtime::AssetView& view) {
   desc_.excl_offsets = reinterpret_cast<const uint32_t*>(base + o_eoff);
   desc_.excl_neighbors = reinterpret_cast<const uint16_t*>(base + o_en);
   desc_.sphere_count = S;
-  desc_.vertex_count = view.vertex_count;
+  desc_.vertex_count = model.vertex_count();
   desc_.chain_count = C;
-  desc_.max_chain_length = max_chain;
-  desc_.excluded_count = a.excluded_pairs() ? a.excluded_pairs()->size() : 0;
-  desc_.contact_margin = a.contact_margin();  // as Context::Init (field absent in v1 assets: 0)
+  desc_.max_chain_length = a.max_chain_length;
+  desc_.excluded_count = a.excluded_count;
+  desc_.contact_margin = model.contact_margin();  // Asset.contact_margin (absent in v1 assets: 0)
   return Status::kOk;
 }
 

@@ -4,7 +4,8 @@
 //  - GroupKernel<kWarp=false>: a block per instance, a thread per sphere (kThreadPerSphere);
 //  - GroupKernel<kWarp=true>:  a warp per instance, 4 per block (kWarpPerInstance);
 //  - ChainKernel: a block per (instance, chain), a thread per chain sphere (kBlockPerChain, M1).
-// Each refits the spheres it needs into shared memory (DevRefitSphere, the CPU formulas), syncs, runs
+// Each refits the spheres it needs into shared memory (DevRefitSphere: runtime/formulas.h, the formulas
+// the CPU's scalar path and SIMD kernels compile), syncs, runs
 // the overlap tests on the radii grown by the instance's contact margin (FrameParams::margin, else its
 // asset's: DetectJob's JobMargin; the stored spheres keep their own radii), and appends hits (with the
 // spheres' own depth) to one device array with warp-aggregated atomicAdd
@@ -18,8 +19,67 @@
 #include <utility>
 
 #include "internal.h"
-#include "refit_device.cuh"
 #include "spherechain/cuda/batch.h"
+#include "spherechain/runtime/formulas.h"
+
+namespace spherechain::cuda::detail {
+
+// The per-frame formulas are runtime/formulas.h's (SPHERECHAIN_HD = __host__ __device__ under nvcc), one
+// lane per thread; the target is compiled with --fmad=false like the host (no FMA contraction), so the
+// spheres and pairs are the CPU's bit for bit. Only the device memory access is written here.
+using Ops = runtime::formulas::ScalarOps;
+
+/// RefitJob for one sphere `s`: 12 vertex reads (strided, read-only path), the four pivot centroids
+/// (formulas::TriangleCentroid3), then formulas::RefitLanes (kPivotFrame with its kPaper fallback, or
+/// kPaper). Returns (x, y, z, r).
+__device__ __forceinline__ float4 DevRefitSphere(const DeviceAssetDesc& a, const char* base, uint32_t stride,
+                                                 uint32_t s, bool frame_mode) {
+  float px[4], py[4], pz[4];
+  const uint32_t* idx = a.pivot_vertices + size_t{12} * s;
+#pragma unroll
+  for (int k = 0; k < 4; ++k) {
+    float v[3][3];
+#pragma unroll
+    for (int t = 0; t < 3; ++t) {
+      const float* q = reinterpret_cast<const float*>(base + size_t{__ldg(idx + 3 * k + t)} * stride);
+      v[t][0] = __ldg(q);
+      v[t][1] = __ldg(q + 1);
+      v[t][2] = __ldg(q + 2);
+    }
+    float c[3];
+    runtime::formulas::TriangleCentroid3(v[0], v[1], v[2], c);
+    px[k] = c[0], py[k] = c[1], pz[k] = c[2];
+  }
+  const float4 local = __ldg(a.frame_local + s);  // (local_center, radius_scale)
+  const float4 off = __ldg(a.frame_offset + s);   // (centroid_offset, 0)
+  float out[4];
+  runtime::formulas::RefitLanes<Ops>(px, py, pz, local.x, local.y, local.z, off.x, off.y, off.z, local.w, frame_mode,
+                                     out);
+  return make_float4(out[0], out[1], out[2], out[3]);
+}
+
+/// DetectJob's overlap test (formulas::OverlapLanes) on the radii grown by the margin m (one float add
+/// each, as DetectJob's gather does; with m == 0 that is r itself).
+__device__ __forceinline__ bool DevOverlap(const float4& A, const float4& B, float m) {
+  return runtime::formulas::OverlapLanes<Ops>(A.x, A.y, A.z, A.w + m, B.x, B.y, B.z, B.w + m);
+}
+
+/// The reported depth (formulas::SphereDepth): `grow` = 0 as M1 (own radii); `grow` = m as M2 with a
+/// margin m ≠ 0.
+__device__ __forceinline__ float DevDepth(const float4& A, const float4& B, float grow) {
+  return runtime::formulas::SphereDepth<Ops>(A.x, A.y, A.z, A.w, B.x, B.y, B.z, B.w, grow);
+}
+
+/// True when (a, b), a < b, is an excluded (adjacent) pair: scan of a's sorted partner list.
+__device__ __forceinline__ bool DevIsExcluded(const DeviceAssetDesc& d, uint32_t a, uint32_t b) {
+  for (uint32_t i = __ldg(d.excl_offsets + a), e = __ldg(d.excl_offsets + a + 1); i < e; ++i) {
+    const uint32_t n = d.excl_neighbors[i];
+    if (n >= b) return n == b;
+  }
+  return false;
+}
+
+}  // namespace spherechain::cuda::detail
 
 namespace cg = cooperative_groups;
 

@@ -11,32 +11,34 @@ namespace spherechain::runtime {
 namespace {
 
 // The margin a job tests with: its own when >= 0, else the asset's.
-float JobMargin(const DetectJob& job) { return job.margin < 0.0f ? job.context->contact_margin() : job.margin; }
+float JobMargin(const DetectJob& job) { return job.margin < 0.0f ? job.model->contact_margin() : job.margin; }
 
 struct DetectTaskData {
-  const Context* ctx;
+  const Model* model;
+  Workspace* ws;
   bool m1;
 };
 
 void DetectRowTask(void* data, uint32_t begin, uint32_t end) {
   const DetectTaskData& d = *static_cast<DetectTaskData*>(data);
-  for (uint32_t I = begin; I < end; ++I) Context::Internal::DetectRowBlock(*d.ctx, d.m1, I);
+  for (uint32_t I = begin; I < end; ++I) Model::Internal::DetectRowBlock(*d.model, *d.ws, d.m1, I);
 }
 
 }  // namespace
 
-// One row block of the broad phase (kernels::BlockRow): its hit keys into its own slots of keys_ and
-// its counters into row_hits_ (disjoint per row block, so tasks may run in any order on any thread).
-void Context::Internal::DetectRowBlock(const Context& c, bool m1, uint32_t I) {
+// One row block of the broad phase (kernels::BlockRow): its hit keys into its own slots of the
+// workspace's keys and its counters into row_hits (disjoint per row block, so tasks may run in any
+// order on any thread).
+void Model::Internal::DetectRowBlock(const Model& c, Workspace& w, bool m1, uint32_t I) {
   const int method = m1 ? 0 : 1;
   const size_t pitch = c.box_pitch_ + 8;
-  float* box = c.box_.data();
-  const kernels::BroadPhaseArgs args{c.gx_.data(), c.gy_.data(), c.gz_.data(), c.gr_.data(),
+  float* box = w.box_;
+  const kernels::BroadPhaseArgs args{w.gx_, w.gy_, w.gz_, w.gr_,
                                      box, box + pitch, box + 2 * pitch, box + 3 * pitch, box + 4 * pitch,
-                                     box + 5 * pitch, box + 6 * pitch, c.order_.data(), c.chain_mask1_.data(),
-                                     c.allowed_[method].data(), c.live_[method].data(), c.blocks_, c.live_stride_, m1,
-                                     c.keys_.data(), c.key_begin_[method].data()};
-  uint32_t* counters = c.row_hits_.data() + size_t{3} * I;
+                                     box + 5 * pitch, box + 6 * pitch, c.order_, c.a_.chain_mask,
+                                     c.allowed_[method], c.live_[method], c.blocks_, c.live_stride_, m1,
+                                     w.keys_, c.key_begin_[method]};
+  uint32_t* counters = w.row_hits_ + size_t{3} * I;
   counters[0] = c.use_avx_ ? kernels::BlockRowAvx(args, I, &counters[1], &counters[2])
                            : kernels::BlockRowSse(args, I, &counters[1], &counters[2]);
 }
@@ -46,15 +48,16 @@ void Context::Internal::DetectRowBlock(const Context& c, bool m1, uint32_t I) {
 // row block); then the per-row-block key runs are compacted and sorted. Keys are (first common chain,
 // M1 only) << 32 | a << 16 | b, so the sorted keys are exactly the documented order; the depths and
 // the counters are computed as before the broad phase, with the same operations (bit-identical).
-Status Context::Internal::Detect(const DetectJob& job) {
-  const Context& c = *job.context;
+Status Model::Internal::Detect(const DetectJob& job) {
+  const Model& c = *job.model;
+  Workspace& w = *job.workspace;
   const bool m1 = job.method == DetectMethod::kM1;
   const int method = m1 ? 0 : 1;
   const float m = JobMargin(job);
   const uint32_t B = c.blocks_, P = c.box_pitch_;
-  const float *x = c.x_.data(), *y = c.y_.data(), *z = c.z_.data(), *r = c.r_.data();
-  float *gx = c.gx_.data(), *gy = c.gy_.data(), *gz = c.gz_.data(), *gr = c.gr_.data();
-  float *tx = c.tx_.data(), *ty = c.ty_.data(), *tz = c.tz_.data(), *tr = c.tr_.data();
+  const float *x = w.x_, *y = w.y_, *z = w.z_, *r = w.r_;
+  float *gx = w.gx_, *gy = w.gy_, *gz = w.gz_, *gr = w.gr_;
+  float *tx = w.tx_, *ty = w.ty_, *tz = w.tz_, *tr = w.tr_;
   for (uint32_t I = 0; I < B; ++I)  // padding slots read id #S: NaN
     for (uint32_t l = 0, g = 8 * I, t = I; l < 8; ++l, ++g, t += P) {
       const uint32_t s = c.order_[g];
@@ -64,8 +67,8 @@ Status Context::Internal::Detect(const DetectJob& job) {
     }
   {
     const size_t pitch = P + 8;
-    float* box = c.box_.data();
-    const kernels::BlockBoxArgs args{c.tx_.data(), c.ty_.data(), c.tz_.data(), c.tr_.data(), P,
+    float* box = w.box_;
+    const kernels::BlockBoxArgs args{w.tx_, w.ty_, w.tz_, w.tr_, P,
                                      box, box + pitch, box + 2 * pitch, box + 3 * pitch, box + 4 * pitch,
                                      box + 5 * pitch, box + 6 * pitch};
     if (c.use_avx_)
@@ -74,19 +77,19 @@ Status Context::Internal::Detect(const DetectJob& job) {
       kernels::BlockBoxesSse(args);
   }
   if (job.parallel_for.run) {
-    DetectTaskData data{&c, m1};
+    DetectTaskData data{&c, &w, m1};
     job.parallel_for.run(job.parallel_for.user, B, &DetectRowTask, &data);
   } else {
-    for (uint32_t I = 0; I < B; ++I) DetectRowBlock(c, m1, I);
+    for (uint32_t I = 0; I < B; ++I) DetectRowBlock(c, w, m1, I);
   }
-  uint64_t* keys = c.keys_.data();
+  uint64_t* keys = w.keys_;
   uint32_t distinct = 0, box_tests = 0, sphere_tests = 0;
   for (uint32_t I = 0; I < B; ++I) {  // compact the per-row-block key runs
-    const uint32_t slot = c.key_begin_[method][I], n = c.row_hits_[size_t{3} * I];
+    const uint32_t slot = c.key_begin_[method][I], n = w.row_hits_[size_t{3} * I];
     if (n && slot != distinct) std::memmove(keys + distinct, keys + slot, sizeof(uint64_t) * n);
     distinct += n;
-    box_tests += c.row_hits_[size_t{3} * I + 1];
-    sphere_tests += c.row_hits_[size_t{3} * I + 2];
+    box_tests += w.row_hits_[size_t{3} * I + 1];
+    sphere_tests += w.row_hits_[size_t{3} * I + 2];
   }
   if (distinct <= 32) {  // a handful of hits per frame: insertion sort
     for (uint32_t i = 1; i < distinct; ++i) {
@@ -99,27 +102,25 @@ Status Context::Internal::Detect(const DetectJob& job) {
     std::sort(keys, keys + distinct);
   }
   const uint32_t written = distinct < job.capacity ? distinct : job.capacity;
+  const uint32_t* mask = c.a_.chain_mask;
   uint32_t raw = distinct;
   if (m1) {
     for (uint32_t k = 0; k < written; ++k) {
       const uint32_t a = static_cast<uint32_t>(keys[k] >> 16) & 0xffffu, b = static_cast<uint32_t>(keys[k]) & 0xffffu;
-      const float dx = x[b] - x[a], dy = y[b] - y[a], dz = z[b] - z[a];
       job.output[k] = {static_cast<uint16_t>(a), static_cast<uint16_t>(b),
-                       r[a] + r[b] - std::sqrt(dx * dx + dy * dy + dz * dz), c.chain_mask_[a] & c.chain_mask_[b]};
+                       formulas::SphereDepth<formulas::ScalarOps>(x[a], y[a], z[a], r[a], x[b], y[b], z[b], r[b], 0.0f),
+                       mask[a] & mask[b]};
     }
     raw = 0;
     for (uint32_t k = 0; k < distinct; ++k) {
       const uint32_t a = static_cast<uint32_t>(keys[k] >> 16) & 0xffffu, b = static_cast<uint32_t>(keys[k]) & 0xffffu;
-      raw += static_cast<uint32_t>(std::popcount(c.chain_mask_[a] & c.chain_mask_[b]));
+      raw += static_cast<uint32_t>(std::popcount(mask[a] & mask[b]));
     }
   } else {  // M2's depth as it always was: grown radii, then 2m taken off (bit-identical results)
     for (uint32_t k = 0; k < written; ++k) {
       const uint32_t a = static_cast<uint32_t>(keys[k] >> 16) & 0xffffu, b = static_cast<uint32_t>(keys[k]) & 0xffffu;
-      const float dx = x[b] - x[a], dy = y[b] - y[a], dz = z[b] - z[a];
-      const float ra = m != 0.0f ? r[a] + m : r[a], rb = m != 0.0f ? r[b] + m : r[b];
-      float depth = ra + rb - std::sqrt(dx * dx + dy * dy + dz * dz);
-      if (m != 0.0f) depth -= 2.0f * m;
-      job.output[k] = {static_cast<uint16_t>(a), static_cast<uint16_t>(b), depth, c.chain_mask_[a] & c.chain_mask_[b]};
+      const float depth = formulas::SphereDepth<formulas::ScalarOps>(x[a], y[a], z[a], r[a], x[b], y[b], z[b], r[b], m);
+      job.output[k] = {static_cast<uint16_t>(a), static_cast<uint16_t>(b), depth, mask[a] & mask[b]};
     }
   }
   *job.count = written;
@@ -149,16 +150,16 @@ uint32_t DetectBound(const AssetView& view, DetectMethod method) {
 }
 
 Status DetectJob::Check() const {
-  if (!context || !count || (!output && capacity > 0)) return Status::kErrorNullArgument;
-  if (!context->initialized() || (method != DetectMethod::kM1 && method != DetectMethod::kM2) ||
-      !std::isfinite(margin))
+  if (!count || (!output && capacity > 0)) return Status::kErrorNullArgument;
+  if (Status s = Model::Internal::CheckPair(model, workspace); s != Status::kOk) return s;
+  if ((method != DetectMethod::kM1 && method != DetectMethod::kM2) || !std::isfinite(margin))
     return Status::kErrorInvalidJob;
   return Status::kOk;
 }
 
 Status DetectJob::Run() const {
   if (Status s = Check(); s != Status::kOk) return s;
-  return Context::Internal::Detect(*this);
+  return Model::Internal::Detect(*this);
 }
 
 }  // namespace spherechain::runtime

@@ -1,5 +1,5 @@
-// Private: job kernels with access to Context's arrays (one definition, used by refit.cpp/detect.cpp),
-// and the SIMD kernels (kernels.cpp) they dispatch to.
+// Private: job kernels with access to Model's and Workspace's arrays (one definition, used by
+// refit.cpp / detect.cpp / batch.cpp), and the SIMD kernels (kernels.cpp) they dispatch to.
 #pragma once
 
 #include <cstddef>
@@ -10,15 +10,24 @@
 
 namespace spherechain::runtime {
 
-struct Context::Internal {
+struct Model::Internal {
   static void Refit(const RefitJob& job, uint32_t begin, uint32_t end);
-  static void DetectRowBlock(const Context& ctx, bool m1, uint32_t row_block);
+  static void DetectRowBlock(const Model& model, Workspace& ws, bool m1, uint32_t row_block);
   static Status Detect(const DetectJob& job);
+  /// Shared argument checks of the jobs: kErrorNullArgument (either null), kErrorInvalidJob (either not
+  /// initialised), kErrorWorkspaceModel (the workspace was made for another model), else kOk.
+  static Status CheckPair(const Model* model, const Workspace* ws) {
+    if (!model || !ws) return Status::kErrorNullArgument;
+    if (!model->initialized() || !ws->initialized()) return Status::kErrorInvalidJob;
+    if (!ws->made_for(*model)) return Status::kErrorWorkspaceModel;
+    return Status::kOk;
+  }
 };
 
 /// Kernels over plain arrays, compiled twice (kernels.cpp): SSE2 (any x86-64) and AVX, picked per
-/// context at Init (`__builtin_cpu_supports`); a scalar build elsewhere. Same operations in the same
-/// order as the scalar formulas of refit.h / §5.2, no FMA: every variant gives bit-identical results.
+/// model at Init (`__builtin_cpu_supports`); a scalar build elsewhere. Same operations in the same
+/// order — the formulas themselves are spherechain/runtime/formulas.inl, included once per instruction
+/// set — no FMA: every variant gives bit-identical results (tests/runtime/formulas_test.cpp).
 namespace kernels {
 
 /// Refit of spheres [begin, end) (see RefitJob, refit.h). Per-sphere arrays are readable up to a
@@ -33,7 +42,7 @@ struct RefitArgs {
 };
 
 /// Broad phase of DetectJob (M1 and M2 share it), one row block per call: spheres sit in blocks of 8
-/// (Context::Init's layout: per chain-membership class, bind-pose kd split), gathered per frame in
+/// (Model::Init's layout: per chain-membership class, bind-pose kd split), gathered per frame in
 /// block order (x, y, z, r grown by the margin; padding lanes NaN). Row block I is tested against
 /// every block J >= I that the method's static table keeps (`live`: some allowed lane); a block pair
 /// survives when the distance between the boxes of the two blocks' centres is below the sum of their

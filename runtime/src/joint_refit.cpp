@@ -6,18 +6,15 @@
 #include <xmmintrin.h>
 #endif
 
-#include "spherechain/runtime/refit.h"
+#include "internal.h"
 
 namespace spherechain::runtime {
 
 Status JointRefitJob::Check() const {
-  if (!asset || !context || !joint_matrices || !asset->valid()) return Status::kErrorNullArgument;
-  if (!context->initialized() || context->sphere_count() != asset->sphere_count ||
-      context->vertex_count() != asset->vertex_count)
-    return Status::kErrorInvalidJob;
-  const schema::Asset& a = *asset->asset;
-  if (!a.sphere_joints() || !a.sphere_joint_weights() || a.joint_count() == 0) return Status::kErrorMissingField;
-  if (joint_count != a.joint_count()) return Status::kErrorJointCount;
+  if (!joint_matrices) return Status::kErrorNullArgument;
+  if (Status s = Model::Internal::CheckPair(model, workspace); s != Status::kOk) return s;
+  if (model->joint_count() == 0) return Status::kErrorMissingField;
+  if (joint_count != model->joint_count()) return Status::kErrorJointCount;
   if (reinterpret_cast<uintptr_t>(joint_matrices) % alignof(float) != 0) return Status::kErrorAlignment;
   return Status::kOk;
 }
@@ -48,21 +45,17 @@ Status JointRefitJob::Run() const {
       if (!std::isfinite(joint_matrices[i])) return Status::kErrorNonFiniteJoints;
 #endif
   }
-  const schema::Asset& a = *asset->asset;
-  // Raw little-endian arrays in place (the runtime targets little-endian hosts, as FlatBuffers' data()
-  // does): Sphere is a 16-byte struct {x, y, z, r}.
-  static_assert(sizeof(schema::Sphere) == 4 * sizeof(float), "schema::Sphere is four packed floats");
-  const float* bind = reinterpret_cast<const float*>(a.spheres()->Data());
-  const uint16_t* joints = a.sphere_joints()->data();
-  const float* weights = a.sphere_joint_weights()->data();
-  float* x = context->mutable_x();
-  float* y = context->mutable_y();
-  float* z = context->mutable_z();
-  float* r = context->mutable_r();
+  const ModelArrays& ma = model->arrays();
+  const uint16_t* joints = ma.sphere_joints;
+  const float* weights = ma.sphere_joint_weights;
+  float* x = workspace->mutable_x();
+  float* y = workspace->mutable_y();
+  float* z = workspace->mutable_z();
+  float* r = workspace->mutable_r();
   const float* M = joint_matrices;
-  const uint32_t S = asset->sphere_count;
+  const uint32_t S = model->sphere_count();
   for (uint32_t s = 0; s < S; ++s) {
-    const float* b = bind + 4 * s;
+    const float b[4] = {ma.bind_x[s], ma.bind_y[s], ma.bind_z[s], ma.bind_r[s]};
     const uint16_t* js = joints + 4 * s;
     const float* ws = weights + 4 * s;
     // Blend the matrices (influences by descending weight: stop at the first 0), then transform once.

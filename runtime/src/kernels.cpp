@@ -1,5 +1,5 @@
 // SIMD kernels of RefitJob and DetectJob (see internal.h): kernels.inl compiled for SSE2 (baseline
-// x86-64) and AVX (function-level target, chosen at Context::Init), or scalar on other targets.
+// x86-64) and AVX (function-level target, chosen at Model::Init), or scalar on other targets.
 #include <bit>
 #include <cmath>
 #include <cstring>
@@ -30,9 +30,19 @@ inline V Min(V a, V b) { return _mm_min_ps(a, b); }
 inline V Max(V a, V b) { return _mm_max_ps(a, b); }
 inline V Abs(V a) { return _mm_andnot_ps(_mm_set1_ps(-0.0f), a); }
 inline uint32_t LtMask(V a, V b) { return static_cast<uint32_t>(_mm_movemask_ps(_mm_cmplt_ps(a, b))); }
+struct Ops {  // formulas.inl's lane interface
+  using V = __m128;
+  using M = __m128;
+  static V Set1(float v) { return _mm_set1_ps(v); }
+  static V Sqrt(V v) { return _mm_sqrt_ps(v); }
+  static M Gt(V a, V b) { return _mm_cmpgt_ps(a, b); }
+  static M Lt(V a, V b) { return _mm_cmplt_ps(a, b); }
+  static M And(M a, M b) { return _mm_and_ps(a, b); }
+  static V Blend(M m, V a, V b) { return _mm_or_ps(_mm_and_ps(m, a), _mm_andnot_ps(m, b)); }
+};
+#include "spherechain/runtime/formulas.inl"
 inline uint32_t Overlap4(V xi, V yi, V zi, V ri, const float* x, const float* y, const float* z, const float* r) {
-  const V dx = Load(x) - xi, dy = Load(y) - yi, dz = Load(z) - zi, rr = Load(r) + ri;
-  return static_cast<uint32_t>(_mm_movemask_ps(_mm_cmplt_ps(dx * dx + dy * dy + dz * dz, rr * rr)));
+  return static_cast<uint32_t>(_mm_movemask_ps(OverlapLanes<Ops>(xi, yi, zi, ri, Load(x), Load(y), Load(z), Load(r))));
 }
 inline uint32_t Overlap8(V xi, V yi, V zi, V ri, const float* x, const float* y, const float* z, const float* r) {
   return Overlap4(xi, yi, zi, ri, x, y, z, r) | Overlap4(xi, yi, zi, ri, x + 4, y + 4, z + 4, r + 4) << 4;
@@ -60,9 +70,19 @@ inline V Min(V a, V b) { return _mm256_min_ps(a, b); }
 inline V Max(V a, V b) { return _mm256_max_ps(a, b); }
 inline V Abs(V a) { return _mm256_andnot_ps(_mm256_set1_ps(-0.0f), a); }
 inline uint32_t LtMask(V a, V b) { return static_cast<uint32_t>(_mm256_movemask_ps(_mm256_cmp_ps(a, b, _CMP_LT_OQ))); }
+struct Ops {  // formulas.inl's lane interface
+  using V = __m256;
+  using M = __m256;
+  static V Set1(float v) { return _mm256_set1_ps(v); }
+  static V Sqrt(V v) { return _mm256_sqrt_ps(v); }
+  static M Gt(V a, V b) { return _mm256_cmp_ps(a, b, _CMP_GT_OQ); }
+  static M Lt(V a, V b) { return _mm256_cmp_ps(a, b, _CMP_LT_OQ); }
+  static M And(M a, M b) { return _mm256_and_ps(a, b); }
+  static V Blend(M m, V a, V b) { return _mm256_blendv_ps(b, a, m); }
+};
+#include "spherechain/runtime/formulas.inl"
 inline uint32_t Overlap8(V xi, V yi, V zi, V ri, const float* x, const float* y, const float* z, const float* r) {
-  const V dx = Load(x) - xi, dy = Load(y) - yi, dz = Load(z) - zi, rr = Load(r) + ri;
-  return static_cast<uint32_t>(_mm256_movemask_ps(_mm256_cmp_ps(dx * dx + dy * dy + dz * dz, rr * rr, _CMP_LT_OQ)));
+  return static_cast<uint32_t>(_mm256_movemask_ps(OverlapLanes<Ops>(xi, yi, zi, ri, Load(x), Load(y), Load(z), Load(r))));
 }
 #include "kernels.inl"
 #ifdef __clang__
@@ -99,14 +119,14 @@ inline V Min(V a, V b) { return a < b ? a : b; }
 inline V Max(V a, V b) { return a > b ? a : b; }
 inline V Abs(V a) { return std::fabs(a); }
 inline uint32_t LtMask(V a, V b) { return a < b ? 1u : 0u; }
+using Ops = formulas::ScalarOps;
 inline uint32_t Overlap8(V xi, V yi, V zi, V ri, const float* x, const float* y, const float* z, const float* r) {
   uint32_t bits = 0;
-  for (uint32_t k = 0; k < 8; ++k) {
-    const float dx = x[k] - xi, dy = y[k] - yi, dz = z[k] - zi, rr = r[k] + ri;
-    bits |= static_cast<uint32_t>(dx * dx + dy * dy + dz * dz < rr * rr) << k;
-  }
+  for (uint32_t k = 0; k < 8; ++k)
+    bits |= static_cast<uint32_t>(formulas::OverlapLanes<Ops>(xi, yi, zi, ri, x[k], y[k], z[k], r[k])) << k;
   return bits;
 }
+using formulas::RefitLanes;
 #include "kernels.inl"
 }  // namespace scalar
 

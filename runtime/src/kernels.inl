@@ -2,15 +2,14 @@
 //   V (a vector of kW floats), M (its comparison mask), kW, Set1, Load, Store, Sqrt, Gt, Blend, And,
 //   Min / Max (a op b, else b when either is NaN: minps / maxps), Abs, LtMask (bit k ⇔ lane k a < b),
 //   and Overlap8 (the 8-lane overlap bit mask of one row sphere against 8 spheres).
-// No '#pragma once': meant to be included several times. The formulas are refit.h's and §5.2's, with
-// the same operations in the same order (so the results are bit-identical across variants):
-//   - BuildPivotFrame's scale max_k sqrt(d_k²) is computed as sqrt(max_k d_k²) (sqrt is monotonic
-//     and correctly rounded, so the two are equal, NaN lanes included);
-//   - kPaper's centre mean(p) + offset reuses the frame origin (the same expression).
+// and Ops (formulas.inl's lane interface, with formulas.inl included after it: RefitLanes, OverlapLanes).
+// No '#pragma once': meant to be included several times. The per-sphere formulas are not written here:
+// they are formulas.inl's (the same text the scalar path and CUDA compile), so the results are
+// bit-identical across variants (tests/runtime/formulas_test.cpp checks every lane).
 
 // Refit of spheres [begin, end), kW at a time: scalar centroids of the 12 pivot vertices into
-// per-lane arrays, then the frame, the centre and the radius in vector registers, both modes
-// computed and blended per lane (degenerate pivots fall back to kPaper).
+// per-lane arrays (formulas::CentroidCoord), then RefitLanes — the frame, the centre and the radius
+// in vector registers, degenerate pivots falling back to kPaper per lane.
 void Refit(const RefitArgs& a, uint32_t begin, uint32_t end) {
   alignas(64) float p[4][3][kW];
   alignas(64) float out[4][kW];
@@ -23,54 +22,18 @@ void Refit(const RefitArgs& a, uint32_t begin, uint32_t end) {
         const float* va = reinterpret_cast<const float*>(a.base + idx[3 * k] * a.stride);
         const float* vb = reinterpret_cast<const float*>(a.base + idx[3 * k + 1] * a.stride);
         const float* vc = reinterpret_cast<const float*>(a.base + idx[3 * k + 2] * a.stride);
-        p[k][0][l] = (va[0] + vb[0] + vc[0]) * (1.0f / 3.0f);
-        p[k][1][l] = (va[1] + vb[1] + vc[1]) * (1.0f / 3.0f);
-        p[k][2][l] = (va[2] + vb[2] + vc[2]) * (1.0f / 3.0f);
+        p[k][0][l] = formulas::CentroidCoord(va[0], vb[0], vc[0]);
+        p[k][1][l] = formulas::CentroidCoord(va[1], vb[1], vc[1]);
+        p[k][2][l] = formulas::CentroidCoord(va[2], vb[2], vc[2]);
       }
     }
     V px[4], py[4], pz[4];
     for (int k = 0; k < 4; ++k) px[k] = Load(p[k][0]), py[k] = Load(p[k][1]), pz[k] = Load(p[k][2]);
-    const V quarter = Set1(0.25f), half = Set1(0.5f);
-    const V ox = quarter * (px[0] + px[1] + px[2] + px[3]);
-    const V oy = quarter * (py[0] + py[1] + py[2] + py[3]);
-    const V oz = quarter * (pz[0] + pz[1] + pz[2] + pz[3]);
-    V cx, cy, cz;
-    const V paper_x = ox + Load(a.offset_x + s0), paper_y = oy + Load(a.offset_y + s0),
-            paper_z = oz + Load(a.offset_z + s0);
-    if (a.frame_mode) {
-      V max_d2 = Set1(0.0f);
-      for (int k = 0; k < 4; ++k) {
-        const V dx = px[k] - ox, dy = py[k] - oy, dz = pz[k] - oz;
-        const V d2 = dx * dx + dy * dy + dz * dz;
-        max_d2 = Blend(Gt(d2, max_d2), d2, max_d2);
-      }
-      const V eps = Set1(1e-6f) * (Set1(1.0f) + Sqrt(max_d2));
-      V xx = px[1] - px[0], xy = py[1] - py[0], xz = pz[1] - pz[0];
-      const V xl = Sqrt(xx * xx + xy * xy + xz * xz);
-      const M x_ok = Gt(xl, eps);
-      xx = xx / xl, xy = xy / xl, xz = xz / xl;
-      V wx = half * (px[2] + px[3]) - half * (px[0] + px[1]);
-      V wy = half * (py[2] + py[3]) - half * (py[0] + py[1]);
-      V wz = half * (pz[2] + pz[3]) - half * (pz[0] + pz[1]);
-      const V wdx = wx * xx + wy * xy + wz * xz;
-      wx = wx - wdx * xx, wy = wy - wdx * xy, wz = wz - wdx * xz;
-      const V yl = Sqrt(wx * wx + wy * wy + wz * wz);
-      const M ok = And(x_ok, Gt(yl, eps));
-      wx = wx / yl, wy = wy / yl, wz = wz / yl;
-      const V zx = xy * wz - xz * wy, zy = xz * wx - xx * wz, zz = xx * wy - xy * wx;
-      const V lx = Load(a.local_x + s0), ly = Load(a.local_y + s0), lz = Load(a.local_z + s0);
-      cx = Blend(ok, ox + lx * xx + ly * wx + lz * zx, paper_x);
-      cy = Blend(ok, oy + lx * xy + ly * wy + lz * zy, paper_y);
-      cz = Blend(ok, oz + lx * xz + ly * wz + lz * zz, paper_z);
-    } else {
-      cx = paper_x, cy = paper_y, cz = paper_z;
-    }
-    V dist[4];
-    for (int k = 0; k < 4; ++k) {
-      const V dx = cx - px[k], dy = cy - py[k], dz = cz - pz[k];
-      dist[k] = Sqrt(dx * dx + dy * dy + dz * dz);
-    }
-    const V r = Load(a.radius_scale + s0) * (quarter * (dist[0] + dist[1] + dist[2] + dist[3]));
+    V c[4];
+    RefitLanes<Ops>(px, py, pz, Load(a.local_x + s0), Load(a.local_y + s0), Load(a.local_z + s0),
+                    Load(a.offset_x + s0), Load(a.offset_y + s0), Load(a.offset_z + s0), Load(a.radius_scale + s0),
+                    a.frame_mode, c);
+    const V cx = c[0], cy = c[1], cz = c[2], r = c[3];
     if (n == kW) {
       Store(a.x + s0, cx), Store(a.y + s0, cy), Store(a.z + s0, cz), Store(a.r + s0, r);
     } else {

@@ -8,10 +8,10 @@ const char* ToString(Status s) {
     case Status::kOkTruncated: return "kOkTruncated: success, but the output buffer was too small";
     case Status::kErrorNullArgument: return "kErrorNullArgument: a required pointer is null";
     case Status::kErrorAlignment: return "kErrorAlignment: asset bytes must be 8-byte aligned, positions 4-byte aligned";
-    case Status::kErrorInvalidJob: return "kErrorInvalidJob: job fields inconsistent (context not initialised, bad mode)";
+    case Status::kErrorInvalidJob: return "kErrorInvalidJob: job fields inconsistent (model or workspace not initialised, bad mode)";
     case Status::kErrorVertexCount: return "kErrorVertexCount: positions count differs from the asset's vertex count";
     case Status::kErrorStride: return "kErrorStride: positions stride must be >= 12 and a multiple of 4";
-    case Status::kErrorOutOfMemory: return "kErrorOutOfMemory: context allocation failed";
+    case Status::kErrorOutOfMemory: return "kErrorOutOfMemory: model or workspace allocation failed";
     case Status::kErrorNonFinitePositions: return "kErrorNonFinitePositions: a deformed vertex position is NaN or infinite";
     case Status::kErrorAssetTooSmall: return "kErrorAssetTooSmall: asset truncated (smaller than a FlatBuffer header)";
     case Status::kErrorAssetTooLarge: return "kErrorAssetTooLarge: asset larger than kMaxAssetBytes";
@@ -36,6 +36,9 @@ const char* ToString(Status s) {
     case Status::kErrorJointCount:
       return "kErrorJointCount: the joint matrix count differs from the asset's Asset.joint_count";
     case Status::kErrorNonFiniteJoints: return "kErrorNonFiniteJoints: a joint matrix holds a NaN or an infinity";
+    case Status::kErrorWorkspaceModel:
+      return "kErrorWorkspaceModel: the workspace was made for another model (nothing written)";
+    case Status::kErrorBufferTooSmall: return "kErrorBufferTooSmall: caller memory smaller than RequiredBytes()";
     case Status::kErrorExcludedPairs: return "kErrorExcludedPairs: excluded pairs not a < b or not strictly ascending";
   }
   return "unknown status";

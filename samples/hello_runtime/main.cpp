@@ -35,8 +35,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "error: '%s': %s\n", argv[1], runtime::ToString(s));
     return 1;
   }
-  runtime::Context ctx;  // once per asset: the only allocation
-  if (runtime::Status s = ctx.Init(asset); runtime::Failed(s)) {
+  runtime::Model model;  // once per asset (shared by every character of it): one allocation
+  runtime::Workspace ws;  // once per character: its spheres and scratch, one allocation
+  if (runtime::Status s = model.Init(asset); runtime::Failed(s) || runtime::Failed(s = ws.Init(model))) {
     std::fprintf(stderr, "error: %s\n", runtime::ToString(s));
     return 1;
   }
@@ -68,10 +69,12 @@ int main(int argc, char** argv) {
   std::vector<runtime::Collision> pairs(runtime::DetectBound(asset, runtime::DetectMethod::kM2));
   uint32_t count = 0;
   runtime::RefitJob refit;
-  refit.context = &ctx;
+  refit.model = &model;
+  refit.workspace = &ws;
   refit.positions = {positions.data(), uint32_t(positions.size() / 3), 12};
   runtime::DetectJob detect;
-  detect.context = &ctx;
+  detect.model = &model;
+  detect.workspace = &ws;
   detect.method = runtime::DetectMethod::kM2;
   detect.output = pairs.data();
   detect.capacity = uint32_t(pairs.size());

@@ -78,8 +78,10 @@ TEST_CASE("joint refit on CesiumMan's walk (heavy): bind spheres at rest, centre
   std::memcpy(storage.data(), r.asset.data(), r.asset.size());
   runtime::AssetView view;
   REQUIRE(runtime::LoadAsset(storage.data(), r.asset.size(), &view) == runtime::Status::kOk);
-  runtime::Context ctx;
-  REQUIRE(ctx.Init(view) == runtime::Status::kOk);
+  runtime::Model model;
+  runtime::Workspace ctx;
+  REQUIRE(model.Init(view) == runtime::Status::kOk);
+  REQUIRE(ctx.Init(model) == runtime::Status::kOk);
   const uint32_t S = view.sphere_count, J = view.asset->joint_count();
 
   SkinningScratch scratch;
@@ -89,8 +91,8 @@ TEST_CASE("joint refit on CesiumMan's walk (heavy): bind spheres at rest, centre
       runtime::JointMatrixFromColumnMajor(scratch.matrices[j].data(), matrices.data() + size_t{j} * 12);
   };
   runtime::JointRefitJob joints;
-  joints.asset = &view;
-  joints.context = &ctx;
+  joints.model = &model;
+  joints.workspace = &ctx;
   joints.joint_matrices = matrices.data();
   joints.joint_count = J;
 
@@ -116,7 +118,8 @@ TEST_CASE("joint refit on CesiumMan's walk (heavy): bind spheres at rest, centre
     std::vector<float> jx(ctx.spheres().x, ctx.spheres().x + S), jy(ctx.spheres().y, ctx.spheres().y + S),
         jz(ctx.spheres().z, ctx.spheres().z + S);
     runtime::RefitJob vertex;
-    vertex.context = &ctx;
+    vertex.model = &model;
+    vertex.workspace = &ctx;
     vertex.positions = {positions.data(), view.vertex_count, 12};
     REQUIRE(vertex.Run() == runtime::Status::kOk);
     for (uint32_t s = 0; s < S; ++s)

@@ -30,21 +30,23 @@ inline bool RequireDevice() {
   return false;
 }
 
-/// One asset on host (bytes, view, CPU context, rest positions) and device.
+/// One asset on host (bytes, view, CPU model and workspace, rest positions) and device.
 struct AssetSet {
   Mesh mesh;
   AlignedBytes bytes;
   runtime::AssetView view;
-  runtime::Context ctx;
+  runtime::Model model;   // the CPU model the device copy is uploaded from
+  runtime::Workspace ws;  // a CPU character of it (the reference runs)
   sc::DeviceAsset device;
 };
 
-/// Loads `set->bytes` into the view, the CPU context and the device copy.
+/// Loads `set->bytes` into the view, the CPU model and workspace, and the device copy (from the model).
 inline void LoadBytes(AssetSet* s) {
   REQUIRE(runtime::LoadAsset(s->bytes.data(), s->bytes.size, &s->view) == runtime::Status::kOk);
-  REQUIRE(s->ctx.Init(s->view) == runtime::Status::kOk);
-  REQUIRE(s->device.Upload(s->view) == sc::Status::kOk);
-  CHECK(s->device.contact_margin() == s->ctx.contact_margin());
+  REQUIRE(s->model.Init(s->view) == runtime::Status::kOk);
+  REQUIRE(s->ws.Init(s->model) == runtime::Status::kOk);
+  REQUIRE(s->device.Upload(s->model) == sc::Status::kOk);
+  CHECK(s->device.contact_margin() == s->model.contact_margin());
 }
 
 inline void LoadSet(AssetSet* s, AssetData d) {
@@ -129,7 +131,7 @@ inline bool NearRel(float a, float b, float tol = 1e-5f) {
 
 /// The margin instance spheres of `a` are tested with under `fp` (as DetectJob's: < 0 the asset's).
 inline float FrameMargin(const AssetSet& a, const sc::FrameParams& fp) {
-  return fp.margin < 0.0f ? a.ctx.contact_margin() : fp.margin;
+  return fp.margin < 0.0f ? a.model.contact_margin() : fp.margin;
 }
 
 /// Checks the GPU frame against the CPU runtime (DetectJob with fp.margin) for every instance. Pairs
@@ -147,7 +149,7 @@ inline void CompareWithCpu(const std::vector<AssetSet*>& assets, const DeviceIns
   for (size_t i = 0; i < inst.host.size(); ++i) {
     AssetSet& a = *assets[inst.table[i].asset];
     const float m = FrameMargin(a, fp);
-    const CpuFrame cpu = CpuReference(a.ctx, a.view, inst.host[i].data(), 12, fp.mode, fp.method, fp.margin);
+    const CpuFrame cpu = CpuReference(a.model, a.ws, a.view, inst.host[i].data(), 12, fp.mode, fp.method, fp.margin);
     cpu_total += cpu.pairs.size();
     if (fp.write_spheres) {
       const uint32_t off = batch.sphere_offset(static_cast<uint32_t>(i));

@@ -136,7 +136,7 @@ TEST_CASE("cuda: invalid instances give the documented status") {
   CHECK(batch.Init(dev, 1, bad.data(), 2) == sc::Status::kErrorInvalidJob);
   CHECK(batch.Init(nullptr, 1, inst.table.data(), 2) == sc::Status::kErrorNullArgument);
   sc::DeviceAsset empty;
-  CHECK(empty.Upload(AssetView{}) == sc::Status::kErrorNullArgument);
+  CHECK(empty.Upload(runtime::Model{}) == sc::Status::kErrorNullArgument);
   const sc::DeviceAsset* dev_empty[] = {&empty};
   CHECK(batch.Init(dev_empty, 1, inst.table.data(), 2) == sc::Status::kErrorInvalidJob);
   CHECK(batch.Run({}, 0) == sc::Status::kErrorInvalidJob);  // not initialised

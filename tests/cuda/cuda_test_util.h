@@ -96,16 +96,17 @@ struct CpuFrame {
   std::vector<float> x, y, z, r;
 };
 
-inline CpuFrame CpuReference(runtime::Context& ctx, const runtime::AssetView& view, const float* positions,
+inline CpuFrame CpuReference(const runtime::Model& model, runtime::Workspace& ws, const runtime::AssetView& view, const float* positions,
                              uint32_t stride_bytes, runtime::RefitMode mode, runtime::DetectMethod method,
                              float margin = -1.0f) {
   CpuFrame f;
   runtime::RefitJob refit;
-  refit.context = &ctx;
+  refit.model = &model;
+  refit.workspace = &ws;
   refit.mode = mode;
   refit.positions = {positions, view.vertex_count, stride_bytes};
   if (refit.Run() != runtime::Status::kOk) return f;
-  const runtime::SphereArrays s = ctx.spheres();
+  const runtime::SphereArrays s = ws.spheres();
   f.x.assign(s.x, s.x + s.count);
   f.y.assign(s.y, s.y + s.count);
   f.z.assign(s.z, s.z + s.count);
@@ -113,7 +114,8 @@ inline CpuFrame CpuReference(runtime::Context& ctx, const runtime::AssetView& vi
   f.pairs.resize(runtime::DetectBound(view, method));
   uint32_t n = 0;
   runtime::DetectJob det;
-  det.context = &ctx;
+  det.model = &model;
+  det.workspace = &ws;
   det.method = method;
   det.margin = margin;
   det.output = f.pairs.data();

@@ -148,7 +148,7 @@ TEST_CASE("cuda: FrameParams::margin < 0 uses each instance's asset margin in a 
   const std::vector<AssetSet*> assets = {&s0, &s1, &s2};
   for (int k = 0; k < 3; ++k) {
     CHECK(assets[k]->device.contact_margin() == own[k]);
-    CHECK(assets[k]->ctx.contact_margin() == own[k]);
+    CHECK(assets[k]->model.contact_margin() == own[k]);
   }
   DeviceInstances inst;
   inst.Build(assets, 96, 2468u);  // instance i of asset i % 3
@@ -257,7 +257,8 @@ TEST_CASE("cuda: FrameParams::margin NaN or infinite gives kErrorInvalidJob and 
   // The CPU job agrees on the same margins.
   uint32_t n = 0;
   runtime::DetectJob det;
-  det.context = &star.ctx;
+  det.model = &star.model;
+  det.workspace = &star.ws;
   det.count = &n;
   det.margin = std::nanf("");
   CHECK(det.Run() == runtime::Status::kErrorInvalidJob);

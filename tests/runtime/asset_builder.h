@@ -29,12 +29,24 @@ struct Tube {
   float sphere_scale = 1.0f;   // sphere radius = sphere_scale · radius
 };
 
-/// A DetectJob on `ctx` writing into `out` (capacity out.size()), its count into *n, its stats into *stats.
-inline runtime::DetectJob MakeDetectJob(const runtime::Context& ctx, runtime::DetectMethod method,
+/// One character of one asset, for the tests: the asset's Model and a Workspace made for it.
+struct Character {
+  runtime::Model model;
+  runtime::Workspace ws;
+  /// model.Init(view), then ws.Init(model); the first error.
+  runtime::Status Init(const runtime::AssetView& view) {
+    if (runtime::Status s = model.Init(view); s != runtime::Status::kOk) return s;
+    return ws.Init(model);
+  }
+};
+
+/// A DetectJob on `ch` writing into `out` (capacity out.size()), its count into *n, its stats into *stats.
+inline runtime::DetectJob MakeDetectJob(Character& ch, runtime::DetectMethod method,
                                         std::vector<runtime::Collision>& out, uint32_t* n,
                                         runtime::DetectStats* stats) {
   runtime::DetectJob job;
-  job.context = &ctx;
+  job.model = &ch.model;
+  job.workspace = &ch.ws;
   job.method = method;
   job.output = out.data();
   job.capacity = static_cast<uint32_t>(out.size());
@@ -69,6 +81,7 @@ struct AssetData {
   std::string identifier = "SPHC";
   float contact_margin = 0.0f;  ///< Asset.contact_margin (schema v2) [source units]; 0 = not written
   uint32_t vertex_count = 0, triangle_count = 0;
+  uint64_t positions_hash = 0, indices_hash = 0;  ///< Asset.fingerprint hashes (0 = not written)
   std::vector<schema::Sphere> spheres;
   std::vector<std::vector<uint16_t>> chains;
   std::vector<schema::SpherePair> excluded;
@@ -186,7 +199,7 @@ inline AssetData MakeTubes(const std::vector<Tube>& tubes, const std::vector<std
 /// Serialises `d` into a finished FlatBuffer with identifier `d.identifier`.
 inline AlignedBytes Serialize(const AssetData& d) {
   flatbuffers::FlatBufferBuilder b(1024);
-  auto fp = schema::CreateFingerprint(b, d.vertex_count, d.triangle_count, 0, 0);
+  auto fp = schema::CreateFingerprint(b, d.vertex_count, d.triangle_count, d.positions_hash, d.indices_hash);
   auto params = schema::CreateBakeParams(b, 80, 2, 0.25f, 0.3f, 4, b.CreateString("geometry"), 0);
   auto spheres = b.CreateVectorOfStructs(d.spheres);
   std::vector<flatbuffers::Offset<schema::Chain>> chains;

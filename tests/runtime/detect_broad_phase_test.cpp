@@ -32,15 +32,15 @@ struct Brute {
 // ‖cA − cB‖² < ((rA + m) + (rB + m))²; depth rA + rB − ‖cA − cB‖ (M1) or, as M2 computes it,
 // ((rA + m) + (rB + m) − ‖cA − cB‖) − 2m when m ≠ 0. M1 keeps pairs sharing a chain, ordered by
 // (first common chain, a, b); raw_pairs counts a hit once per common chain.
-Brute BruteForce(const Context& ctx, DetectMethod method, float m) {
+Brute BruteForce(test::Character& ctx, DetectMethod method, float m) {
   Brute out;
-  const SphereArrays s = ctx.spheres();
+  const SphereArrays s = ctx.ws.spheres();
   const uint32_t S = s.count;
   std::vector<std::pair<uint64_t, Collision>> hits;
   for (uint32_t a = 0; a < S; ++a)
     for (uint32_t b = a + 1; b < S; ++b) {
-      const uint32_t common = ctx.chain_mask(a) & ctx.chain_mask(b);
-      if (ctx.IsExcluded(a, b) || (method == DetectMethod::kM1 && !common)) continue;
+      const uint32_t common = ctx.model.chain_mask(a) & ctx.model.chain_mask(b);
+      if (ctx.model.IsExcluded(a, b) || (method == DetectMethod::kM1 && !common)) continue;
       const float dx = s.x[b] - s.x[a], dy = s.y[b] - s.y[a], dz = s.z[b] - s.z[a];
       const float ra = s.r[a] + m, rb = s.r[b] + m, rr = rb + ra;
       const float d2 = dx * dx + dy * dy + dz * dz;
@@ -74,10 +74,10 @@ void ParallelChunks(void*, uint32_t count, ParallelFor::Task task, void* data) {
 
 // Runs the job serially and with both hooks, every run checked against the brute force; a half-size
 // buffer keeps the documented prefix. Returns the serial stats.
-DetectStats CheckAgainstBruteForce(const Context& ctx, DetectMethod method, float job_margin) {
-  const float m = job_margin < 0.0f ? ctx.contact_margin() : job_margin;
+DetectStats CheckAgainstBruteForce(test::Character& ctx, DetectMethod method, float job_margin) {
+  const float m = job_margin < 0.0f ? ctx.model.contact_margin() : job_margin;
   const Brute ref = BruteForce(ctx, method, m);
-  const uint32_t S = ctx.sphere_count();
+  const uint32_t S = ctx.model.sphere_count();
   DetectStats serial;
   for (int hook = 0; hook < 3; ++hook) {
     std::vector<Collision> out(S * (S - 1) / 2 + 1);
@@ -93,7 +93,7 @@ DetectStats CheckAgainstBruteForce(const Context& ctx, DetectMethod method, floa
     CHECK(st.raw_pairs == ref.stats.raw_pairs);
     CHECK(st.distinct_pairs == ref.stats.distinct_pairs);
     CHECK(st.sphere_tests >= st.distinct_pairs);
-    CHECK(st.sphere_tests <= (method == DetectMethod::kM1 ? ctx.m1_candidate_pairs() : ctx.m2_candidate_pairs()));
+    CHECK(st.sphere_tests <= (method == DetectMethod::kM1 ? ctx.model.m1_candidate_pairs() : ctx.model.m2_candidate_pairs()));
     test::CheckSameCollisions(out.data(), n, ref.pairs);
     if (hook == 0) {
       serial = st;
@@ -110,10 +110,10 @@ DetectStats CheckAgainstBruteForce(const Context& ctx, DetectMethod method, floa
 
 // Moves each tube of spheres (a limb) as a bent chain: rigid rotation of the whole tube about its first
 // sphere, then a bend at its middle sphere, plus a little noise and radius change.
-void PoseTubes(const test::AssetData& d, Context* ctx, std::mt19937* rng, float spread) {
+void PoseTubes(const test::AssetData& d, test::Character* ctx, std::mt19937* rng, float spread) {
   std::uniform_real_distribution<float> u(-1.0f, 1.0f);
-  float *x = ctx->mutable_x(), *y = ctx->mutable_y(), *z = ctx->mutable_z(), *r = ctx->mutable_r();
-  const uint32_t S = ctx->sphere_count();
+  float *x = ctx->ws.mutable_x(), *y = ctx->ws.mutable_y(), *z = ctx->ws.mutable_z(), *r = ctx->ws.mutable_r();
+  const uint32_t S = ctx->model.sphere_count();
   for (size_t t = 0; t < d.tube_first_sphere.size(); ++t) {
     const uint32_t s0 = d.tube_first_sphere[t];
     const uint32_t s1 = t + 1 < d.tube_first_sphere.size() ? d.tube_first_sphere[t + 1] : S;
@@ -177,7 +177,7 @@ TEST_CASE("DetectJob broad phase equals brute force on moving limb-like bodies, 
     const test::AlignedBytes bytes = test::Serialize(d);
     AssetView view;
     REQUIRE(LoadAsset(bytes.data(), bytes.size, &view) == Status::kOk);
-    Context ctx;
+    test::Character ctx;
     REQUIRE(ctx.Init(view) == Status::kOk);
     CAPTURE(trial);
     for (int pose = 0; pose < 4; ++pose) {
@@ -186,7 +186,7 @@ TEST_CASE("DetectJob broad phase equals brute force on moving limb-like bodies, 
         for (DetectMethod m : {DetectMethod::kM1, DetectMethod::kM2}) {
           const DetectStats st = CheckAgainstBruteForce(ctx, m, job_margin);
           ++runs;
-          culled_runs += st.sphere_tests < (m == DetectMethod::kM1 ? ctx.m1_candidate_pairs() : ctx.m2_candidate_pairs());
+          culled_runs += st.sphere_tests < (m == DetectMethod::kM1 ? ctx.model.m1_candidate_pairs() : ctx.model.m2_candidate_pairs());
         }
       }
     }
@@ -203,22 +203,22 @@ TEST_CASE("DetectJob broad phase culls bodies far apart and keeps every pair of 
   const test::AlignedBytes bytes = test::Serialize(d);
   AssetView view;
   REQUIRE(LoadAsset(bytes.data(), bytes.size, &view) == Status::kOk);
-  Context ctx;
+  test::Character ctx;
   REQUIRE(ctx.Init(view) == Status::kOk);
-  const uint32_t S = ctx.sphere_count();
-  float *x = ctx.mutable_x(), *y = ctx.mutable_y(), *z = ctx.mutable_z(), *r = ctx.mutable_r();
+  const uint32_t S = ctx.model.sphere_count();
+  float *x = ctx.ws.mutable_x(), *y = ctx.ws.mutable_y(), *z = ctx.ws.mutable_z(), *r = ctx.ws.mutable_r();
   for (uint32_t s = 0; s < S; ++s)  // tubes 1000 apart, each a straight line of touching-free spheres
     x[s] = 1000.0f * static_cast<float>(s / 16), y[s] = 3.0f * static_cast<float>(s % 16), z[s] = 0.0f, r[s] = 1.0f;
   for (DetectMethod m : {DetectMethod::kM1, DetectMethod::kM2}) {
     const DetectStats st = CheckAgainstBruteForce(ctx, m, 0.0f);
     CHECK(st.distinct_pairs == 0);
-    CHECK(st.sphere_tests * 4 <= ctx.m2_candidate_pairs());  // only pairs inside a tube survive
+    CHECK(st.sphere_tests * 4 <= ctx.model.m2_candidate_pairs());  // only pairs inside a tube survive
   }
   for (uint32_t s = 0; s < S; ++s) x[s] = 0.0f, y[s] = 0.01f * static_cast<float>(s), z[s] = 0.0f;  // one pile
   for (DetectMethod m : {DetectMethod::kM1, DetectMethod::kM2}) {
     const DetectStats st = CheckAgainstBruteForce(ctx, m, 0.0f);
-    CHECK(st.distinct_pairs == ctx.m2_candidate_pairs());  // one chain holds all: M1 == M2 here
-    CHECK(st.sphere_tests == ctx.m2_candidate_pairs());
+    CHECK(st.distinct_pairs == ctx.model.m2_candidate_pairs());  // one chain holds all: M1 == M2 here
+    CHECK(st.sphere_tests == ctx.model.m2_candidate_pairs());
   }
 }
 
@@ -235,12 +235,12 @@ TEST_CASE("DetectJob broad phase equals brute force on the repository's real ass
     bytes.assign(raw.data(), raw.size());
     AssetView view;
     REQUIRE(LoadAsset(bytes.data(), bytes.size, &view) == Status::kOk);
-    Context ctx;
+    test::Character ctx;
     REQUIRE(ctx.Init(view) == Status::kOk);
     CAPTURE(rel);
-    const uint32_t S = ctx.sphere_count();
+    const uint32_t S = ctx.model.sphere_count();
     const auto* regions = view.asset->sphere_regions();
-    const SphereArrays bind = ctx.spheres();
+    const SphereArrays bind = ctx.ws.spheres();
     const std::vector<float> bx(bind.x, bind.x + S), by(bind.y, bind.y + S), bz(bind.z, bind.z + S);
     float lo = bx[0], hi = bx[0];
     for (uint32_t s = 0; s < S; ++s) lo = std::min({lo, bx[s], by[s], bz[s]}), hi = std::max({hi, bx[s], by[s], bz[s]});
@@ -255,9 +255,9 @@ TEST_CASE("DetectJob broad phase equals brute force on the repository's real ass
       for (uint32_t s = 0; s < S; ++s) {
         const int g = regions ? regions->Get(s) % 8 : 0;
         const float c = std::cos(angle[g]), sn = std::sin(angle[g]);
-        ctx.mutable_x()[s] = c * bx[s] - sn * by[s] + shift[g][0];
-        ctx.mutable_y()[s] = sn * bx[s] + c * by[s] + shift[g][1];
-        ctx.mutable_z()[s] = bz[s] + shift[g][2];
+        ctx.ws.mutable_x()[s] = c * bx[s] - sn * by[s] + shift[g][0];
+        ctx.ws.mutable_y()[s] = sn * bx[s] + c * by[s] + shift[g][1];
+        ctx.ws.mutable_z()[s] = bz[s] + shift[g][2];
       }
       for (DetectMethod m : {DetectMethod::kM1, DetectMethod::kM2})
         for (float job_margin : {-1.0f, 0.0f, 0.01f * size}) (void)CheckAgainstBruteForce(ctx, m, job_margin);

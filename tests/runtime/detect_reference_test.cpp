@@ -114,7 +114,7 @@ TEST_CASE("DetectJob M1 and M2 equal the reference loops on irregular chains and
     const test::AlignedBytes bytes = test::Serialize(d);
     AssetView view;
     REQUIRE(LoadAsset(bytes.data(), bytes.size, &view) == Status::kOk);
-    Context ctx;
+    test::Character ctx;
     REQUIRE(ctx.Init(view) == Status::kOk);
     uint32_t m1_candidates = 0;
     for (uint32_t a = 0; a < S; ++a)
@@ -125,19 +125,19 @@ TEST_CASE("DetectJob M1 and M2 equal the reference loops on irregular chains and
                    (std::binary_search(list.begin(), list.end(), a) && std::binary_search(list.begin(), list.end(), b));
         m1_candidates += shared && !Excluded(d, a, b);
       }
-    CHECK(ctx.m1_candidate_pairs() == m1_candidates);
-    CHECK(ctx.m2_candidate_pairs() == S * (S - 1) / 2 - d.excluded.size());
+    CHECK(ctx.model.m1_candidate_pairs() == m1_candidates);
+    CHECK(ctx.model.m2_candidate_pairs() == S * (S - 1) / 2 - d.excluded.size());
     // Dense random spheres in a small box: many overlaps, some exactly touching (never overlapping).
     for (uint32_t s = 0; s < S; ++s) {
-      ctx.mutable_x()[s] = 6.0f * u(rng);
-      ctx.mutable_y()[s] = 6.0f * u(rng);
-      ctx.mutable_z()[s] = (s % 5 == 0) ? 0.0f : 6.0f * u(rng);
-      ctx.mutable_r()[s] = 0.2f + 0.8f * u(rng);
+      ctx.ws.mutable_x()[s] = 6.0f * u(rng);
+      ctx.ws.mutable_y()[s] = 6.0f * u(rng);
+      ctx.ws.mutable_z()[s] = (s % 5 == 0) ? 0.0f : 6.0f * u(rng);
+      ctx.ws.mutable_r()[s] = 0.2f + 0.8f * u(rng);
     }
-    ctx.mutable_x()[1] = ctx.mutable_x()[0] + 2.0f, ctx.mutable_y()[1] = ctx.mutable_y()[0];
-    ctx.mutable_z()[1] = ctx.mutable_z()[0], ctx.mutable_r()[0] = ctx.mutable_r()[1] = 1.0f;  // touching
+    ctx.ws.mutable_x()[1] = ctx.ws.mutable_x()[0] + 2.0f, ctx.ws.mutable_y()[1] = ctx.ws.mutable_y()[0];
+    ctx.ws.mutable_z()[1] = ctx.ws.mutable_z()[0], ctx.ws.mutable_r()[0] = ctx.ws.mutable_r()[1] = 1.0f;  // touching
     for (DetectMethod m : {DetectMethod::kM1, DetectMethod::kM2}) {
-      const Reference ref = ReferenceDetect(d, ctx.spheres(), m);
+      const Reference ref = ReferenceDetect(d, ctx.ws.spheres(), m);
       for (int parallel = 0; parallel < 2; ++parallel) {
         std::vector<Collision> out(DetectBound(view, m));
         uint32_t n = 0;
@@ -151,7 +151,7 @@ TEST_CASE("DetectJob M1 and M2 equal the reference loops on irregular chains and
         CAPTURE(trial);
         CAPTURE(static_cast<int>(m));
         CheckEqualsReference(out.data(), n, st, ref);
-        if (m == DetectMethod::kM1) CHECK(n <= ctx.m1_candidate_pairs());
+        if (m == DetectMethod::kM1) CHECK(n <= ctx.model.m1_candidate_pairs());
         // Truncation keeps the documented prefix.
         const uint32_t cap = n / 2;
         job.capacity = cap;
@@ -180,9 +180,9 @@ TEST_CASE("DetectJob M1 and M2 broad cull equal brute force on clustered, far, d
     const test::AlignedBytes bytes = test::Serialize(d);
     AssetView view;
     REQUIRE(LoadAsset(bytes.data(), bytes.size, &view) == Status::kOk);
-    Context ctx;
+    test::Character ctx;
     REQUIRE(ctx.Init(view) == Status::kOk);
-    float *x = ctx.mutable_x(), *y = ctx.mutable_y(), *z = ctx.mutable_z(), *r = ctx.mutable_r();
+    float *x = ctx.ws.mutable_x(), *y = ctx.ws.mutable_y(), *z = ctx.ws.mutable_z(), *r = ctx.ws.mutable_r();
     // Scale of the scene: ordinary, huge (ulp ≫ 1) or tiny (near the subnormal range).
     const float scale = trial % 5 == 3 ? 3e15f : trial % 5 == 4 ? 1e-19f : 1.0f;
     const uint32_t clusters = 2 + trial % 5;
@@ -223,7 +223,7 @@ TEST_CASE("DetectJob M1 and M2 broad cull equal brute force on clustered, far, d
       x[S / 2] = 150.0f * scale, r[S / 2] = 120.0f * scale;
     }
     for (DetectMethod method : {DetectMethod::kM1, DetectMethod::kM2}) {
-      const Reference ref = ReferenceDetect(d, ctx.spheres(), method);
+      const Reference ref = ReferenceDetect(d, ctx.ws.spheres(), method);
       for (int parallel = 0; parallel < 2; ++parallel) {
         std::vector<Collision> out(DetectBound(view, method));
         uint32_t n = 0;

@@ -19,13 +19,14 @@ struct Scene {
   test::AssetData data;
   test::AlignedBytes bytes;
   AssetView view;
-  Context ctx;
+  test::Character ctx;
   explicit Scene(test::AssetData d, test::Mesh m) : mesh(std::move(m)), data(std::move(d)) {
     bytes = test::Serialize(data);
     REQUIRE(LoadAsset(bytes.data(), bytes.size, &view) == Status::kOk);
     REQUIRE(ctx.Init(view) == Status::kOk);
     RefitJob refit;
-    refit.context = &ctx;
+    refit.model = &ctx.model;
+    refit.workspace = &ctx.ws;
     refit.positions = {mesh.positions.data(), mesh.vertex_count(), 12};
     REQUIRE(refit.Run() == Status::kOk);
   }
@@ -59,7 +60,7 @@ std::set<std::pair<int, int>> Pairs(const std::vector<Collision>& v) {
 
 TEST_CASE("Two crossing tubes report exactly their crossing spheres (M1 and M2)") {
   Scene sc = TwoTubes(true);
-  const SphereArrays s = sc.ctx.spheres();
+  const SphereArrays s = sc.ctx.ws.spheres();
   // Brute-force reference from the bind spheres: pairs between tube A (0..7) and tube B (8..15).
   std::set<std::pair<int, int>> want;
   for (int a = 0; a < 16; ++a)
@@ -99,10 +100,10 @@ TEST_CASE("Tubes apart report no collision") {
 TEST_CASE("Excluded (adjacent) pairs are never reported even though they overlap") {
   Scene sc = TwoTubes(true);
   // Neighbouring rings overlap (spacing 1.2 < 2 r): the raw test hits them; they must be skipped.
-  const SphereArrays s = sc.ctx.spheres();
+  const SphereArrays s = sc.ctx.ws.spheres();
   CHECK(std::fabs(s.x[1] - s.x[0]) < s.r[0] + s.r[1]);
   for (DetectMethod m : {DetectMethod::kM1, DetectMethod::kM2})
-    for (const Collision& c : sc.Detect(m)) CHECK_FALSE(sc.ctx.IsExcluded(c.a, c.b));
+    for (const Collision& c : sc.Detect(m)) CHECK_FALSE(sc.ctx.model.IsExcluded(c.a, c.b));
   // Removing the exclusions makes them appear: the test can fail.
   test::Mesh mesh;
   test::AssetData d = test::TwoTubes(false, &mesh);
@@ -135,9 +136,9 @@ TEST_CASE("M1 distinct pairs are a subset of M2 pairs, and raw M1 counts duplica
   for (const Collision& col : m1) CHECK(col.chains == 3u);
   for (const Collision& col : m2)
     if (!p1.count({col.a, col.b})) CHECK(col.chains == 0u);
-  CHECK(m1.size() <= sc.ctx.m1_candidate_pairs());
-  CHECK(sc.ctx.m1_candidate_pairs() <= DetectBound(sc.view, DetectMethod::kM1));
-  CHECK(sc.ctx.m2_candidate_pairs() == 24 * 23 / 2 - 21);
+  CHECK(m1.size() <= sc.ctx.model.m1_candidate_pairs());
+  CHECK(sc.ctx.model.m1_candidate_pairs() <= DetectBound(sc.view, DetectMethod::kM1));
+  CHECK(sc.ctx.model.m2_candidate_pairs() == 24 * 23 / 2 - 21);
 }
 
 TEST_CASE("A too-small output buffer gives kOkTruncated with count == capacity") {
@@ -149,7 +150,8 @@ TEST_CASE("A too-small output buffer gives kOkTruncated with count == capacity")
     uint32_t n = 99;
     DetectStats st;
     DetectJob job;
-    job.context = &sc.ctx;
+    job.model = &sc.ctx.model;
+    job.workspace = &sc.ctx.ws;
     job.method = m;
     job.output = out.data();
     job.capacity = 2;
@@ -174,7 +176,8 @@ TEST_CASE("DetectJob argument errors and the parallel_for path") {
   DetectJob job;
   uint32_t n = 0;
   CHECK(job.Run() == Status::kErrorNullArgument);
-  job.context = &sc.ctx;
+  job.model = &sc.ctx.model;
+  job.workspace = &sc.ctx.ws;
   CHECK(job.Run() == Status::kErrorNullArgument);  // count null
   job.count = &n;
   job.capacity = 4;

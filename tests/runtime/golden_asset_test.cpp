@@ -6,6 +6,7 @@
 #include <fstream>
 #include <vector>
 
+#include "runtime/asset_builder.h"
 #include "spherechain/runtime/runtime.h"
 #include "test_data.h"
 
@@ -23,11 +24,12 @@ std::vector<uint64_t> ReadAligned(const std::string& path, size_t* size) {
 }
 
 /// Pairs M2 reports on the context's current spheres with the given margin (−1: the asset's).
-uint32_t CountM2(const AssetView& view, const Context& ctx, float margin = -1.0f) {
+uint32_t CountM2(const AssetView& view, spherechain::test::Character& ctx, float margin = -1.0f) {
   std::vector<Collision> out(DetectBound(view, DetectMethod::kM2));
   uint32_t count = 99;
   DetectJob job;
-  job.context = &ctx;
+  job.model = &ctx.model;
+  job.workspace = &ctx.ws;
   job.method = DetectMethod::kM2;
   job.margin = margin;
   job.output = out.data();
@@ -51,10 +53,10 @@ TEST_CASE("golden v1 asset (CesiumMan, baked by spherechain 0.1.0) loads with it
   CHECK(view.triangle_count == 4672);
   CHECK(view.sphere_count == 101);
   CHECK(view.chain_count == 6);
-  Context ctx;
+  spherechain::test::Character ctx;
   REQUIRE(ctx.Init(view) == Status::kOk);
   // v1 has no contact margin: read as 0. At the bind pose (spheres as baked) nothing collides.
-  CHECK(ctx.contact_margin() == 0.0f);
+  CHECK(ctx.model.contact_margin() == 0.0f);
   CHECK(CountM2(view, ctx) == 0);
 
   // The same bytes stamped with another schema version are refused with the version status.
@@ -93,9 +95,9 @@ TEST_CASE("golden v2 asset (CesiumMan, cover fit, baked by spherechain 0.2.0) lo
   REQUIRE(view.asset->coverage() != nullptr);
   CHECK(view.asset->coverage()->coverage() > 0.85f);
   CHECK(view.asset->coverage()->protrusion() < 0.05f);
-  Context ctx;
+  spherechain::test::Character ctx;
   REQUIRE(ctx.Init(view) == Status::kOk);
-  CHECK(ctx.contact_margin() == view.asset->contact_margin());
+  CHECK(ctx.model.contact_margin() == view.asset->contact_margin());
   // Bind pose, grown by the asset's margin: quiet (pairs within two margins are excluded at bake).
   CHECK(CountM2(view, ctx) == 0);
   // A margin of 5 % of the height makes non-excluded bind neighbours touch: the override is honoured.
@@ -116,19 +118,19 @@ TEST_CASE("golden v3 asset (CesiumMan, cover fit, joint weights, baked by sphere
   CHECK(view.asset->joint_count() == 19);
   REQUIRE(view.asset->sphere_joints() != nullptr);
   CHECK(view.asset->sphere_joints()->size() == 4 * 128);
-  Context ctx;
+  spherechain::test::Character ctx;
   REQUIRE(ctx.Init(view) == Status::kOk);
   // Identity skinning matrices are the bind pose: the spheres come back as baked, and nothing collides.
   std::vector<float> identity(19 * kJointMatrixFloats, 0.0f);
   for (int j = 0; j < 19; ++j)
     for (int d = 0; d < 3; ++d) identity[12 * j + 5 * d] = 1.0f;
   JointRefitJob job;
-  job.asset = &view;
-  job.context = &ctx;
+  job.model = &ctx.model;
+  job.workspace = &ctx.ws;
   job.joint_matrices = identity.data();
   job.joint_count = 19;
   REQUIRE(job.Run() == Status::kOk);
-  const SphereArrays sp = ctx.spheres();
+  const SphereArrays sp = ctx.ws.spheres();
   for (uint32_t s = 0; s < sp.count; ++s) {
     const auto* b = view.asset->spheres()->Get(s);
     CHECK(sp.x[s] == doctest::Approx(b->center().x()).epsilon(1e-5));
@@ -143,9 +145,9 @@ TEST_CASE("golden v3 asset (CesiumMan, cover fit, joint weights, baked by sphere
   std::vector<uint64_t> bytes2 = ReadAligned(v2, &size2);
   AssetView view2;
   REQUIRE(LoadAsset(bytes2.data(), size2, &view2) == Status::kOk);
-  Context ctx2;
+  spherechain::test::Character ctx2;
   REQUIRE(ctx2.Init(view2) == Status::kOk);
-  job.asset = &view2;
-  job.context = &ctx2;
+  job.model = &ctx2.model;
+  job.workspace = &ctx2.ws;
   CHECK(job.Run() == Status::kErrorMissingField);
 }

@@ -18,7 +18,7 @@ struct Rig {
   test::AssetData data;
   test::AlignedBytes bytes;
   AssetView view;
-  Context ctx;
+  test::Character ctx;
   explicit Rig(float w0 = 1.0f, bool joints = true) {
     data = test::TwoTubes(true, &mesh);
     if (joints) {
@@ -34,8 +34,8 @@ struct Rig {
   }
   Status Run(const std::vector<float>& matrices, uint32_t count = 3) {
     JointRefitJob job;
-    job.asset = &view;
-    job.context = &ctx;
+    job.model = &ctx.model;
+    job.workspace = &ctx.ws;
     job.joint_matrices = matrices.data();
     job.joint_count = count;
     return job.Run();
@@ -61,7 +61,7 @@ void SetRigid(std::vector<float>& m, uint32_t j, float angle, float tx, float ty
 TEST_CASE("joint refit: identity matrices give back the bind spheres") {
   Rig rig(0.6f);
   REQUIRE(rig.Run(Identity(3)) == Status::kOk);
-  const SphereArrays sp = rig.ctx.spheres();
+  const SphereArrays sp = rig.ctx.ws.spheres();
   for (uint32_t s = 0; s < sp.count; ++s) {
     const auto& b = rig.data.spheres[s];
     CHECK(sp.x[s] == doctest::Approx(b.center().x()).epsilon(1e-6));
@@ -77,7 +77,7 @@ TEST_CASE("joint refit: one rigid motion of every joint moves the spheres as the
   for (uint32_t j = 0; j < 3; ++j) SetRigid(m, j, 0.8f, 3.0f, -2.0f, 5.0f);
   REQUIRE(rig.Run(m) == Status::kOk);
   std::vector<float> jx, jy, jz, jr;
-  const SphereArrays sp = rig.ctx.spheres();
+  const SphereArrays sp = rig.ctx.ws.spheres();
   jx.assign(sp.x, sp.x + sp.count);
   jy.assign(sp.y, sp.y + sp.count);
   jz.assign(sp.z, sp.z + sp.count);
@@ -89,10 +89,11 @@ TEST_CASE("joint refit: one rigid motion of every joint moves the spheres as the
     for (int r = 0; r < 3; ++r) moved[3 * v + r] = m[4 * r] * p[0] + m[4 * r + 1] * p[1] + m[4 * r + 2] * p[2] + m[4 * r + 3];
   }
   RefitJob vertex;
-  vertex.context = &rig.ctx;
+  vertex.model = &rig.ctx.model;
+  vertex.workspace = &rig.ctx.ws;
   vertex.positions = {moved.data(), static_cast<uint32_t>(moved.size() / 3), 12};
   REQUIRE(vertex.Run() == Status::kOk);
-  const SphereArrays vp = rig.ctx.spheres();
+  const SphereArrays vp = rig.ctx.ws.spheres();
   for (uint32_t s = 0; s < vp.count; ++s) {
     CHECK(jx[s] == doctest::Approx(vp.x[s]).epsilon(1e-4));
     CHECK(jy[s] == doctest::Approx(vp.y[s]).epsilon(1e-4));
@@ -106,7 +107,7 @@ TEST_CASE("joint refit: the blend of two joints moves a centre by the weighted s
   std::vector<float> m = Identity(3);
   SetRigid(m, 2, 0.0f, 4.0f, 0.0f, -8.0f);  // joint 2 translates; joints 0 and 1 stay
   REQUIRE(rig.Run(m) == Status::kOk);
-  const SphereArrays sp = rig.ctx.spheres();
+  const SphereArrays sp = rig.ctx.ws.spheres();
   for (uint32_t s = 0; s < sp.count; ++s) {
     const auto& b = rig.data.spheres[s];
     CHECK(sp.x[s] == doctest::Approx(b.center().x() + 0.25f * 4.0f).epsilon(1e-5));
@@ -128,10 +129,10 @@ TEST_CASE("joint refit: bad input gets its status and leaves the spheres untouch
   std::vector<float> m = Identity(3);
   SetRigid(m, 0, 0.3f, 1, 2, 3);
   REQUIRE(rig.Run(m) == Status::kOk);
-  const SphereArrays sp = rig.ctx.spheres();
+  const SphereArrays sp = rig.ctx.ws.spheres();
   const std::vector<float> before(sp.x, sp.x + sp.count);
   auto untouched = [&] {
-    for (uint32_t s = 0; s < sp.count; ++s) CHECK(rig.ctx.spheres().x[s] == before[s]);
+    for (uint32_t s = 0; s < sp.count; ++s) CHECK(rig.ctx.ws.spheres().x[s] == before[s]);
   };
   std::vector<float> bad = m;
   bad[12 * 1 + 7] = std::numeric_limits<float>::quiet_NaN();  // joint 1: some spheres follow it
@@ -146,8 +147,8 @@ TEST_CASE("joint refit: bad input gets its status and leaves the spheres untouch
   untouched();
 
   JointRefitJob job;
-  job.asset = &rig.view;
-  job.context = &rig.ctx;
+  job.model = &rig.ctx.model;
+  job.workspace = &rig.ctx.ws;
   job.joint_count = 3;
   CHECK(job.Check() == Status::kErrorNullArgument);  // no matrices
   job.joint_matrices = m.data();
@@ -156,19 +157,24 @@ TEST_CASE("joint refit: bad input gets its status and leaves the spheres untouch
   job.joint_matrices = reinterpret_cast<const float*>(raw.data() + 1);
   CHECK(job.Check() == Status::kErrorAlignment);
   job.joint_matrices = m.data();
-  Context empty;
-  job.context = &empty;
+  test::Character empty;
+  job.model = &empty.model;
+  job.workspace = &empty.ws;
   CHECK(job.Check() == Status::kErrorInvalidJob);
-  // A context initialised on another asset (one tube: other sphere count).
+  // A workspace made for another asset's model (one tube: other sphere count): refused, nothing written.
   test::Mesh other_mesh;
   test::Tube tube;
   const test::AlignedBytes other = test::Serialize(test::MakeTubes({tube}, {}, &other_mesh));
   AssetView other_view;
   REQUIRE(LoadAsset(other.data(), other.size, &other_view) == Status::kOk);
-  Context other_ctx;
+  test::Character other_ctx;
   REQUIRE(other_ctx.Init(other_view) == Status::kOk);
-  job.context = &other_ctx;
-  CHECK(job.Check() == Status::kErrorInvalidJob);
+  job.model = &rig.ctx.model;
+  job.workspace = &other_ctx.ws;
+  CHECK(job.Check() == Status::kErrorWorkspaceModel);
+  CHECK(job.Run() == Status::kErrorWorkspaceModel);
+  job.model = &other_ctx.model;  // its own model holds no joint weights
+  CHECK(job.Check() == Status::kErrorMissingField);
   untouched();
 
   // An asset without joint weights (schema v1/v2, or a mesh without a skin): re-bake.

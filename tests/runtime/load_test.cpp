@@ -2,9 +2,13 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <fstream>
+#include <iterator>
 #include <limits>
+#include <string>
 
 #include "runtime/asset_builder.h"
+#include "test_data.h"
 
 using namespace spherechain;
 using namespace spherechain::runtime;
@@ -65,7 +69,7 @@ TEST_CASE("LoadAsset: single bit flips never crash and a success is still semant
       ++rejected;
       continue;
     }
-    Context ctx;  // a flipped-but-valid asset must still be usable safely
+    test::Character ctx;  // a flipped-but-valid asset must still be usable safely
     REQUIRE(ctx.Init(view) == Status::kOk);
   }
   CHECK(rejected > 0);
@@ -202,6 +206,8 @@ TEST_CASE("ToString names every status and Succeeded/Failed split them") {
       {Status::kErrorNonFinitePositions, "kErrorNonFinitePositions"},
       {Status::kErrorJointCount, "kErrorJointCount"},
       {Status::kErrorNonFiniteJoints, "kErrorNonFiniteJoints"},
+      {Status::kErrorWorkspaceModel, "kErrorWorkspaceModel"},
+      {Status::kErrorBufferTooSmall, "kErrorBufferTooSmall"},
       {Status::kErrorAssetTooSmall, "kErrorAssetTooSmall"},
       {Status::kErrorAssetTooLarge, "kErrorAssetTooLarge"},
       {Status::kErrorIdentifier, "kErrorIdentifier"},
@@ -228,4 +234,12 @@ TEST_CASE("ToString names every status and Succeeded/Failed split them") {
     CHECK(std::string(ToString(status)).rfind(name, 0) == 0);
     CHECK(Failed(status) == (std::string(name).rfind("kError", 0) == 0));
   }
+  // The list above is status.h's: as many entries as the header has enumerators (`kName = 0x...`), so a
+  // status added without a ToString case and an entry here fails.
+  std::ifstream header(spherechain::test::SourceFile("runtime/include/spherechain/runtime/status.h"));
+  REQUIRE(header.good());
+  size_t enumerators = 0;
+  for (std::string line; std::getline(header, line);)
+    if (line.find(" = 0x") != std::string::npos && line.find("  k") == 0) ++enumerators;
+  CHECK(enumerators == std::size(all));
 }

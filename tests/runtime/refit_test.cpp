@@ -15,7 +15,7 @@ struct Fixture {
   test::Mesh mesh;
   test::AlignedBytes bytes;
   AssetView view;
-  Context ctx;
+  test::Character ctx;
   explicit Fixture(bool crossing = true) {
     bytes = test::Serialize(test::TwoTubes(crossing, &mesh));
     REQUIRE(LoadAsset(bytes.data(), bytes.size, &view) == Status::kOk);
@@ -23,7 +23,8 @@ struct Fixture {
   }
   Status Refit(const std::vector<float>& pos, RefitMode mode) {
     RefitJob job;
-    job.context = &ctx;
+    job.model = &ctx.model;
+    job.workspace = &ctx.ws;
     job.mode = mode;
     job.positions = {pos.data(), static_cast<uint32_t>(pos.size() / 3), 12};
     return job.Run();
@@ -62,7 +63,7 @@ TEST_CASE("Refit at the bind pose reproduces the bind spheres (both modes)") {
   Fixture fx;
   for (RefitMode mode : {RefitMode::kPaper, RefitMode::kPivotFrame}) {
     REQUIRE(fx.Refit(fx.mesh.positions, mode) == Status::kOk);
-    const SphereArrays s = fx.ctx.spheres();
+    const SphereArrays s = fx.ctx.ws.spheres();
     for (uint32_t i = 0; i < s.count; ++i) {
       const schema::Sphere* b = fx.view.asset->spheres()->Get(i);
       CHECK(s.x[i] == doctest::Approx(b->center().x()).epsilon(1e-5).scale(1));
@@ -78,7 +79,8 @@ TEST_CASE("kPivotFrame: a rigid motion of the mesh moves every sphere rigidly an
   std::vector<Collision> before(DetectBound(fx.view, DetectMethod::kM2)), after(before.size());
   uint32_t n_before = 0, n_after = 0;
   DetectJob det;
-  det.context = &fx.ctx;
+  det.model = &fx.ctx.model;
+  det.workspace = &fx.ctx.ws;
   det.method = DetectMethod::kM2;
   det.output = before.data();
   det.capacity = static_cast<uint32_t>(before.size());
@@ -92,7 +94,7 @@ TEST_CASE("kPivotFrame: a rigid motion of the mesh moves every sphere rigidly an
   AxisAngle(1 * inv, 2 * inv, 3 * inv, 1.1f, R);
   const float t[3] = {5.0f, -3.0f, 2.5f};
   REQUIRE(fx.Refit(test::Transform(fx.mesh.positions, R, t), RefitMode::kPivotFrame) == Status::kOk);
-  const SphereArrays s = fx.ctx.spheres();
+  const SphereArrays s = fx.ctx.ws.spheres();
   for (uint32_t i = 0; i < s.count; ++i) {
     const schema::Sphere* b = fx.view.asset->spheres()->Get(i);
     const float c[3] = {b->center().x(), b->center().y(), b->center().z()};
@@ -120,7 +122,7 @@ TEST_CASE("kPaper: a translation moves every sphere by the same vector, a rotati
   float I[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
   const float t[3] = {-1.5f, 7.0f, 0.25f};
   REQUIRE(fx.Refit(test::Transform(fx.mesh.positions, I, t), RefitMode::kPaper) == Status::kOk);
-  SphereArrays s = fx.ctx.spheres();
+  SphereArrays s = fx.ctx.ws.spheres();
   for (uint32_t i = 0; i < s.count; ++i) {
     const schema::Sphere* b = fx.view.asset->spheres()->Get(i);
     CHECK(s.x[i] == doctest::Approx(b->center().x() + t[0]).epsilon(1e-5).scale(1));
@@ -133,7 +135,7 @@ TEST_CASE("kPaper: a translation moves every sphere by the same vector, a rotati
   AxisAngle(0, 0, 1, 1.0f, R);
   const float zero[3] = {0, 0, 0};
   REQUIRE(fx.Refit(test::Transform(fx.mesh.positions, R, zero), RefitMode::kPaper) == Status::kOk);
-  s = fx.ctx.spheres();
+  s = fx.ctx.ws.spheres();
   float worst = 0;
   for (uint32_t i = 0; i < s.count; ++i) {
     const schema::Sphere* b = fx.view.asset->spheres()->Get(i);
@@ -152,16 +154,17 @@ TEST_CASE("Refit reads an interleaved vertex buffer through the stride") {
   std::vector<float> packed = fx.mesh.positions;
   for (float& v : packed) v += 1.0f;
   REQUIRE(fx.Refit(packed, RefitMode::kPivotFrame) == Status::kOk);
-  const std::vector<float> want_x(fx.ctx.spheres().x, fx.ctx.spheres().x + fx.ctx.sphere_count());
-  const std::vector<float> want_r(fx.ctx.spheres().r, fx.ctx.spheres().r + fx.ctx.sphere_count());
-  fx.ctx.ResetToBindPose();
+  const std::vector<float> want_x(fx.ctx.ws.spheres().x, fx.ctx.ws.spheres().x + fx.ctx.model.sphere_count());
+  const std::vector<float> want_r(fx.ctx.ws.spheres().r, fx.ctx.ws.spheres().r + fx.ctx.model.sphere_count());
+  (void)fx.ctx.ws.ResetToBindPose(fx.ctx.model);
   RefitJob job;
-  job.context = &fx.ctx;
+  job.model = &fx.ctx.model;
+  job.workspace = &fx.ctx.ws;
   job.positions = {interleaved.data(), V, 32};
   REQUIRE(job.Run() == Status::kOk);
-  for (uint32_t i = 0; i < fx.ctx.sphere_count(); ++i) {
-    CHECK(fx.ctx.spheres().x[i] == want_x[i]);
-    CHECK(fx.ctx.spheres().r[i] == want_r[i]);
+  for (uint32_t i = 0; i < fx.ctx.model.sphere_count(); ++i) {
+    CHECK(fx.ctx.ws.spheres().x[i] == want_x[i]);
+    CHECK(fx.ctx.ws.spheres().r[i] == want_r[i]);
   }
 }
 
@@ -170,7 +173,8 @@ TEST_CASE("RefitJob rejects bad arguments with the documented statuses") {
   std::vector<float> pos = fx.mesh.positions;
   RefitJob job;
   CHECK(job.Run() == Status::kErrorNullArgument);
-  job.context = &fx.ctx;
+  job.model = &fx.ctx.model;
+  job.workspace = &fx.ctx.ws;
   job.positions = {pos.data(), fx.mesh.vertex_count() - 1, 12};
   CHECK(job.Run() == Status::kErrorVertexCount);
   job.positions = {pos.data(), fx.mesh.vertex_count() + 1, 12};
@@ -187,8 +191,9 @@ TEST_CASE("RefitJob rejects bad arguments with the documented statuses") {
   CHECK_FALSE(job.Validate());
   job.mode = RefitMode::kPivotFrame;
   CHECK(job.Validate());
-  Context empty;
-  job.context = &empty;
+  test::Character empty;
+  job.model = &empty.model;
+  job.workspace = &empty.ws;
   CHECK(job.Run() == Status::kErrorInvalidJob);
 }
 
@@ -199,10 +204,11 @@ TEST_CASE("RefitJob through a parallel_for hook equals the serial run") {
   const float t[3] = {1, 2, 3};
   const std::vector<float> pos = test::Transform(fx.mesh.positions, R, t);
   REQUIRE(fx.Refit(pos, RefitMode::kPivotFrame) == Status::kOk);
-  const std::vector<float> serial(fx.ctx.spheres().z, fx.ctx.spheres().z + fx.ctx.sphere_count());
-  fx.ctx.ResetToBindPose();
+  const std::vector<float> serial(fx.ctx.ws.spheres().z, fx.ctx.ws.spheres().z + fx.ctx.model.sphere_count());
+  (void)fx.ctx.ws.ResetToBindPose(fx.ctx.model);
   RefitJob job;
-  job.context = &fx.ctx;
+  job.model = &fx.ctx.model;
+  job.workspace = &fx.ctx.ws;
   job.positions = {pos.data(), fx.mesh.vertex_count(), 12};
   job.parallel_grain = 3;
   int calls = 0;
@@ -213,5 +219,5 @@ TEST_CASE("RefitJob through a parallel_for hook equals the serial run") {
   };
   REQUIRE(job.Run() == Status::kOk);
   CHECK(calls == 1);
-  for (uint32_t i = 0; i < fx.ctx.sphere_count(); ++i) CHECK(fx.ctx.spheres().z[i] == serial[i]);
+  for (uint32_t i = 0; i < fx.ctx.model.sphere_count(); ++i) CHECK(fx.ctx.ws.spheres().z[i] == serial[i]);
 }

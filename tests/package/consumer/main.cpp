@@ -1,5 +1,5 @@
 // consumer ASSET.sphc — loads an asset through the installed runtime and prints what it holds.
-// Exit 0 when LoadAsset and Context::Init succeed, 1 otherwise (the message names the status).
+// Exit 0 when LoadAsset, Model::Init and Workspace::Init succeed, 1 otherwise (the message names the status).
 #include <cstdio>
 #include <vector>
 
@@ -18,8 +18,10 @@ int main(int argc, char** argv) {
   AssetView asset;
   if (Status s = LoadAsset(bytes.data(), size, &asset); Failed(s))
     return std::fprintf(stderr, "error: '%s': %s\n", argv[1], ToString(s)), 1;
-  Context ctx;
-  if (Status s = ctx.Init(asset); Failed(s)) return std::fprintf(stderr, "error: %s\n", ToString(s)), 1;
+  Model model;
+  Workspace ws;
+  if (Status s = model.Init(asset); Failed(s) || Failed(s = ws.Init(model)))
+    return std::fprintf(stderr, "error: %s\n", ToString(s)), 1;
   std::printf("spheres %u chains %u vertices %u triangles %u m2_bound %u\n", asset.sphere_count, asset.chain_count,
               asset.vertex_count, asset.triangle_count, DetectBound(asset, DetectMethod::kM2));
   return 0;

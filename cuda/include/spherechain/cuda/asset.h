@@ -4,13 +4,14 @@
 #include <cstdint>
 
 #include "spherechain/cuda/status.h"
-#include "spherechain/runtime/asset.h"
+#include "spherechain/runtime/model.h"
 
 namespace spherechain::cuda {
 
 /// Device pointers, counts and contact margin of one uploaded asset. POD, shared by host and device
 /// code; every pointer is DEVICE memory owned by the DeviceAsset it came from (lifetime: until Release /
-/// the DeviceAsset's destruction). Layout mirrors runtime::Context's SoA (same values, same arithmetic):
+/// the DeviceAsset's destruction). The values are runtime::Model's arrays (ModelArrays), the same floats, so
+/// the device evaluates the same formulas (spherechain/runtime/formulas.h) on the same inputs:
 struct DeviceAssetDesc {
   const uint32_t* pivot_vertices = nullptr;  ///< #S×12: vertex indices (< #V) of the 4 pivot triangles
                                              ///< (Asset.pivot_vertices)
@@ -30,13 +31,13 @@ struct DeviceAssetDesc {
   uint32_t excluded_count = 0;               ///< #excluded (len(Asset.excluded_pairs))
   float contact_margin = 0.0f;               ///< the asset's contact margin [Units: source units]
                                              ///< (Asset.contact_margin, schema v2; 0 for v1 assets), as
-                                             ///< runtime::Context::contact_margin(): the margin
+                                             ///< runtime::Model::contact_margin(): the margin
                                              ///< Batch::Run tests this asset's instances with when
                                              ///< FrameParams::margin < 0
 };
 
-/// Owning device copy of what refit and detect need from one asset (runtime::AssetView), uploaded
-/// once. Move-only. Thread safety: Upload/Release are not thread-safe on one object; const use
+/// Owning device copy of what refit and detect need from one asset — its runtime::Model (built once on
+/// the host; the device copy reads it, it does not prepare the asset again), uploaded once. Move-only. Thread safety: Upload/Release are not thread-safe on one object; const use
 /// (desc(), being referenced by a Batch) is.
 class DeviceAsset {
  public:
@@ -47,14 +48,15 @@ class DeviceAsset {
   DeviceAsset& operator=(DeviceAsset&& o) noexcept;
   ~DeviceAsset();
 
-  /// Copies `view`'s refit/detect data to the current device (one cudaMalloc, one synchronous
-  /// cudaMemcpy) and keeps the asset's contact margin (Asset.contact_margin; 0 for v1 assets). The
-  /// asset bytes are no longer needed afterwards.
-  /// Returns kOk; kErrorNullArgument (`!view.valid()`); kErrorOutOfMemory (host/device allocation);
-  /// kErrorCuda (LastCudaError()). On failure the object is left empty.
+  /// Copies `model`'s refit/detect arrays (ModelArrays: pivot vertices, pivot-frame coordinates, radius
+  /// scales, bind spheres, chains, excluded pairs) to the current device (one cudaMalloc, one synchronous
+  /// cudaMemcpy) and keeps the asset's contact margin (Model::contact_margin()). Neither the model nor the
+  /// asset bytes are needed afterwards.
+  /// Returns kOk; kErrorNullArgument (model not initialised); kErrorOutOfMemory (host/device
+  /// allocation); kErrorCuda (LastCudaError()). On failure the object is left empty.
   /// Cost: O(#S + Σ|chain| + #excluded) host work, ~100 B per sphere of device memory, synchronous.
   /// Must not be called while a Batch referencing this asset runs (it frees the old copy).
-  Status Upload(const runtime::AssetView& view);
+  Status Upload(const runtime::Model& model);
   /// Frees the device memory (cudaFree, synchronising). Safe on an empty object.
   void Release();
 

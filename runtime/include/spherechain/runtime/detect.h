@@ -4,7 +4,7 @@
 #include <cstdint>
 
 #include "spherechain/runtime/asset.h"
-#include "spherechain/runtime/context.h"
+#include "spherechain/runtime/model.h"
 #include "spherechain/runtime/status.h"
 
 namespace spherechain::runtime {
@@ -46,20 +46,21 @@ struct DetectStats {
 
 /// Most Collision records a DetectJob with `method` can write for this asset: an upper bound, so a
 /// buffer of this size is never truncated. M2: #S(#S−1)/2; M1: min(Σ_chains n(n−1)/2, #S(#S−1)/2).
-/// 0 for an invalid view or method. Cost O(#chains), no allocation. (Context::m1_candidate_pairs() /
+/// 0 for an invalid view or method. Cost O(#chains), no allocation. (Model::m1_candidate_pairs() /
 /// m2_candidate_pairs() give the exact, smaller numbers.)
 uint32_t DetectBound(const AssetView& view, DetectMethod method);
 
-/// ozz-style job: reports overlapping non-excluded sphere pairs of the context's current spheres
-/// (after RefitJob::Run, or bind pose). Overlap: ‖cA − cB‖² < (rA + rB + 2m)² (11 operations), m the
-/// contact margin (DetectJob::margin). The set, order, depths and counters (but box_tests and
+/// ozz-style job: reports overlapping non-excluded sphere pairs of one character's current spheres
+/// (`workspace`, after RefitJob::Run, or bind pose), with `model`'s chains, exclusions and broad-phase
+/// layout. Overlap: ‖cA − cB‖² < (rA + rB + 2m)² (11 operations, formulas::OverlapLanes), m the
+/// contact margin (DetectJob::margin); depths by formulas::SphereDepth. The set, order, depths and counters (but box_tests and
 /// sphere_tests) are exactly those of testing every candidate pair, bit for bit, NaN and infinite
 /// spheres included (tests/runtime/detect_reference_test.cpp, detect_broad_phase_test.cpp compare them
 /// with brute force).
 /// Output order (deterministic, identical with or without parallel_for): M1 — by chain, each pair
 /// under the first chain containing both a and b, rows i < j of that chain's ascending list;
 /// M2 — lexicographic (a, b).
-/// Broad phase (both methods): Context::Init puts the spheres in blocks of 8 (grouped by body region,
+/// Broad phase (both methods): Model::Init puts the spheres in blocks of 8 (grouped by body region,
 /// Asset.sphere_regions, else by chains; split at bind pose along the longest axis); per frame each
 /// block gets the box of its centres and its largest |radius|, a pair of blocks is kept when the gap
 /// between the boxes is below the sum of those radii (with the sphere test's own float operations:
@@ -71,10 +72,12 @@ uint32_t DetectBound(const AssetView& view, DetectMethod method);
 /// MakeHuman's 128 spheres over its 40-frame morph: 182 block tests, 46 kept pairs, 1,470 candidate
 /// pairs tested of M2's 8,128); a sort of the hits. No allocation, no exceptions.
 /// parallel_for [opt] (both methods): one task index per row block of 8 spheres (its block pairs
-/// and sphere tests, into the context's scratch), then a serial merge and sort; same output.
+/// and sphere tests, into the workspace's scratch), then a serial merge and sort; same output.
+/// Thread safety: one job per workspace at a time; the model is only read (shared by any number of
+/// characters and threads).
 struct DetectJob {
-  const Context* context = nullptr;  ///< initialised; spheres read, per-frame scratch written (mutable):
-                                     ///< one job per context at a time
+  const Model* model = nullptr;    ///< initialised; read only
+  Workspace* workspace = nullptr;  ///< made for `model`: its spheres are read, its scratch written
   DetectMethod method = DetectMethod::kM1;
   Collision* output = nullptr;  ///< [opt when capacity == 0] caller buffer of `capacity` records
   uint32_t capacity = 0;        ///< records `output` holds; DetectBound() never truncates
@@ -83,16 +86,17 @@ struct DetectJob {
   ParallelFor parallel_for;     ///< [opt]
   /// Contact margin [Units: source units]: spheres are tested with every radius grown by it (a pair is
   /// reported when ‖cA − cB‖ < rA + rB + 2·margin, as physics engines' contact offset / skin width).
-  /// < 0 (default): the asset's, Context::contact_margin() (Asset.contact_margin); NaN or +inf:
+  /// < 0 (default): the asset's, Model::contact_margin() (Asset.contact_margin); NaN or +inf:
   /// kErrorInvalidJob. [Limit: finite]
   float margin = -1.0f;
 
   /// True when Run() would not fail on arguments.
   bool Validate() const { return Check() == Status::kOk; }
-  /// kErrorNullArgument (context or count null, or output null with capacity > 0),
-  /// kErrorInvalidJob (context not initialised, unknown method, margin NaN or infinite), else kOk.
+  /// kErrorNullArgument (model, workspace or count null, or output null with capacity > 0),
+  /// kErrorInvalidJob (model or workspace not initialised, unknown method, margin NaN or infinite),
+  /// kErrorWorkspaceModel (workspace made for another model), else kOk.
   Status Check() const;
-  /// Returns Check()'s error (outputs untouched), kOk, or kOkTruncated when more pairs overlapped
+  /// Returns Check()'s error (outputs and workspace untouched), kOk, or kOkTruncated when more pairs overlapped
   /// than `capacity`: output holds the first `capacity` in the documented order, *count == capacity.
   Status Run() const;
 };

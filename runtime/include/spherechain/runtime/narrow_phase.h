@@ -27,7 +27,7 @@
 #include <vector>
 
 #include "spherechain/runtime/asset.h"
-#include "spherechain/runtime/context.h"
+#include "spherechain/runtime/model.h"
 #include "spherechain/runtime/detect.h"
 #include "spherechain/runtime/status.h"
 #include "spherechain/runtime/triangle_intersect.h"

@@ -5,7 +5,8 @@
 #include <cstdint>
 
 #include "spherechain/runtime/asset.h"
-#include "spherechain/runtime/context.h"
+#include "spherechain/runtime/formulas.h"
+#include "spherechain/runtime/model.h"
 #include "spherechain/runtime/status.h"
 
 namespace spherechain::runtime {
@@ -42,35 +43,14 @@ struct PivotFrameBasis {
 /// Returns false (frame undefined, `*out` holds o and unspecified axes) when |p1 − p0| or the
 /// residual |w − (w·x)x| is <= 1e-6 · (1 + max |p_k − o|) (collinear / coincident pivots).
 /// The baker MUST fill PivotFrame.local_center with PivotFrameToLocal(BuildPivotFrame(bind p), c)
-/// so runtime and baker agree bit for bit. Cost: ~60 flops, inline, no allocation.
+/// so runtime and baker agree bit for bit. The formula is formulas::PivotFrameLanes (formulas.inl), the
+/// one the SIMD kernels and CUDA evaluate. Cost: ~60 flops, inline, no allocation.
 inline bool BuildPivotFrame(const float p[4][3], PivotFrameBasis* out) {
-  float scale = 0.0f;
-  for (int k = 0; k < 3; ++k) out->origin[k] = 0.25f * (p[0][k] + p[1][k] + p[2][k] + p[3][k]);
-  for (int i = 0; i < 4; ++i) {
-    const float dx = p[i][0] - out->origin[0], dy = p[i][1] - out->origin[1], dz = p[i][2] - out->origin[2];
-    const float d = std::sqrt(dx * dx + dy * dy + dz * dz);
-    scale = d > scale ? d : scale;
-  }
-  const float eps = 1e-6f * (1.0f + scale);
-  float x[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
-  const float xl = std::sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
-  if (!(xl > eps)) return false;
-  for (float& v : x) v /= xl;
-  float w[3];
-  for (int k = 0; k < 3; ++k) w[k] = 0.5f * (p[2][k] + p[3][k]) - 0.5f * (p[0][k] + p[1][k]);
-  const float wx = w[0] * x[0] + w[1] * x[1] + w[2] * x[2];
-  for (int k = 0; k < 3; ++k) w[k] -= wx * x[k];
-  const float yl = std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
-  if (!(yl > eps)) return false;
-  for (float& v : w) v /= yl;
-  for (int k = 0; k < 3; ++k) {
-    out->axes[0][k] = x[k];
-    out->axes[1][k] = w[k];
-  }
-  out->axes[2][0] = x[1] * w[2] - x[2] * w[1];
-  out->axes[2][1] = x[2] * w[0] - x[0] * w[2];
-  out->axes[2][2] = x[0] * w[1] - x[1] * w[0];
-  return true;
+  const float px[4] = {p[0][0], p[1][0], p[2][0], p[3][0]};
+  const float py[4] = {p[0][1], p[1][1], p[2][1], p[3][1]};
+  const float pz[4] = {p[0][2], p[1][2], p[2][2], p[3][2]};
+  const bool ok = formulas::PivotFrameLanes<formulas::ScalarOps>(px, py, pz, out->origin, out->axes);
+  return ok;
 }
 
 /// Model-space point `c` → coordinates in frame `f` (local = Rᵀ (c − o)). Baker: local_center.
@@ -79,45 +59,51 @@ inline void PivotFrameToLocal(const PivotFrameBasis& f, const float c[3], float 
   for (int a = 0; a < 3; ++a) local[a] = d[0] * f.axes[a][0] + d[1] * f.axes[a][1] + d[2] * f.axes[a][2];
 }
 
-/// Frame coordinates → model space (c = o + R local). What kPivotFrame refit computes.
+/// Frame coordinates → model space (c = o + R local). What kPivotFrame refit computes
+/// (formulas::FrameToModelLane).
 inline void PivotFrameToModel(const PivotFrameBasis& f, const float local[3], float c[3]) {
   for (int k = 0; k < 3; ++k)
-    c[k] = f.origin[k] + local[0] * f.axes[0][k] + local[1] * f.axes[1][k] + local[2] * f.axes[2][k];
+    c[k] = formulas::FrameToModelLane<formulas::ScalarOps>(f.origin, f.axes, local[0], local[1], local[2], k);
 }
 
 /// Mean distance from `c` to p[0..3]. Baker: PivotFrame.mean_distance = PivotMeanDistance(bind p,
-/// bind centre); centroid_offset = bind centre − mean(p). Runtime radius uses the same function.
+/// bind centre); centroid_offset = bind centre − mean(p). Runtime radius uses the same formula
+/// (formulas::PivotMeanDistanceLanes).
 inline float PivotMeanDistance(const float p[4][3], const float c[3]) {
-  float s = 0.0f;
-  for (int i = 0; i < 4; ++i) {
-    const float dx = c[0] - p[i][0], dy = c[1] - p[i][1], dz = c[2] - p[i][2];
-    s += std::sqrt(dx * dx + dy * dy + dz * dz);
-  }
-  return 0.25f * s;
+  const float px[4] = {p[0][0], p[1][0], p[2][0], p[3][0]};
+  const float py[4] = {p[0][1], p[1][1], p[2][1], p[3][1]};
+  const float pz[4] = {p[0][2], p[1][2], p[2][2], p[3][2]};
+  return formulas::PivotMeanDistanceLanes<formulas::ScalarOps>(px, py, pz, c[0], c[1], c[2]);
 }
 
 /// Centroid of triangle (a, b, c): (a + b + c) / 3, computed as the runtime does it.
 inline void TriangleCentroid(const float a[3], const float b[3], const float c[3], float out[3]) {
-  for (int k = 0; k < 3; ++k) out[k] = (a[k] + b[k] + c[k]) * (1.0f / 3.0f);
+  formulas::TriangleCentroid3(a, b, c, out);
 }
 
-/// ozz-style job: refits every sphere of `context` to the deformed `positions` (§5.1).
-/// Inputs: positions (#V vertices, strided), mode, parallel_for [opt]. Output: context's spheres
-/// (Context::spheres(), SoA, same space/units as positions).
-/// Cost: O(#S) — 12 vertex reads + ~120 flops per sphere; no allocation, no exceptions. With
-/// parallel_for set, spheres are split into ranges (`parallel_grain` spheres per task index).
+/// ozz-style job: refits every sphere of one character (`workspace`) to its deformed `positions` (§5.1),
+/// with the per-asset data of `model`. Per sphere: the centroids p0..p3 of its 4 pivot triangles, then
+/// formulas::RefitLanes (centre per RefitMode, radius = radius_scale · mean distance to the p_k).
+/// Inputs: positions (#V vertices, strided), mode, parallel_for [opt]. Output: the workspace's spheres
+/// (Workspace::spheres(), SoA, same space/units as positions).
+/// Cost: O(#S) — 12 vertex reads + ~120 flops per sphere (SSE2 or AVX, bit-identical to the scalar
+/// formulas); no allocation, no exceptions. With parallel_for set, spheres are split into ranges
+/// (`parallel_grain` spheres per task index). Thread safety: one job per workspace at a time; the model
+/// is only read.
 struct RefitJob {
   PositionsView positions;                    ///< deformed vertex positions (see PositionsView)
   RefitMode mode = RefitMode::kPivotFrame;    ///< see RefitMode
-  Context* context = nullptr;                 ///< initialised workspace; its spheres are overwritten
+  const Model* model = nullptr;               ///< initialised; read only (shared across characters)
+  Workspace* workspace = nullptr;             ///< made for `model`; its spheres are overwritten
   ParallelFor parallel_for;                   ///< [opt]
   uint32_t parallel_grain = 64;               ///< [Limit: > 0] spheres per parallel task index
 
   /// True when Run() would not fail on arguments (does not read the positions).
   bool Validate() const { return Check() == Status::kOk; }
-  /// The status Run() would return for bad arguments, or kOk: kErrorNullArgument (context or
-  /// positions.data null), kErrorInvalidJob (context not initialised, unknown mode, grain 0),
-  /// kErrorAlignment (positions.data not 4-byte aligned), kErrorStride, kErrorVertexCount.
+  /// The status Run() would return for bad arguments, or kOk: kErrorNullArgument (model, workspace or
+  /// positions.data null), kErrorInvalidJob (model or workspace not initialised, unknown mode, grain 0),
+  /// kErrorWorkspaceModel (workspace made for another model), kErrorAlignment (positions.data not 4-byte
+  /// aligned), kErrorStride, kErrorVertexCount.
   Status Check() const;
   /// Runs the refit. Returns Check()'s error (spheres untouched) or kOk. Non-finite positions give
   /// non-finite spheres (which then never overlap); they are not checked per frame.
@@ -148,24 +134,23 @@ inline void JointMatrixFromColumnMajor(const float m[16], float out[kJointMatrix
 /// M_j = (joint j's current model-space transform) · (its inverse bind matrix), in the skin's joint
 /// order (Asset.joint_count = #J; glTF skin.joints, assimp bones, .mhskel bones) — the same matrices
 /// that deform the vertices. Units: the asset's source units; output spheres in that model space.
-/// Borrowed for Run(). `asset`: the view the context was initialised with (its bytes are read: joint
-/// weights and bind spheres, zero-copy, so they must outlive the call).
-/// Output: the context's spheres (SoA), overwritten.
+/// Borrowed for Run(). The joint weights and bind spheres are the model's (copied out of the asset at
+/// Model::Init: the asset bytes are not read). Output: the workspace's spheres (SoA), overwritten.
 /// Cost: O(#J) to check the matrices + O(#S · influences) — ≤ 4 × 12 multiply-adds per sphere;
-/// serial, no allocation, no exceptions.
+/// serial, no allocation, no exceptions. Thread safety: one job per workspace at a time.
 struct JointRefitJob {
-  const AssetView* asset = nullptr;       ///< the context's asset (schema v3 joint weights)
+  const Model* model = nullptr;           ///< initialised; its centre joint weights (schema v3) are read
+  Workspace* workspace = nullptr;         ///< made for `model`; its spheres are overwritten
   const float* joint_matrices = nullptr;  ///< #J × 12 floats [Limit: 4-byte aligned]
-  uint32_t joint_count = 0;               ///< #J [Limit: == Asset.joint_count, else kErrorJointCount]
-  Context* context = nullptr;             ///< initialised on `*asset`; its spheres are overwritten
+  uint32_t joint_count = 0;               ///< #J [Limit: == Model::joint_count(), else kErrorJointCount]
 
   /// True when Run() would not fail on arguments (does not read the matrices).
   bool Validate() const { return Check() == Status::kOk; }
-  /// The status Run() would return for bad arguments, or kOk: kErrorNullArgument (asset, context or
-  /// joint_matrices null, or the asset view not loaded), kErrorInvalidJob (context not initialised, or
-  /// initialised on an asset with another sphere or vertex count), kErrorMissingField (the asset holds
-  /// no joint weights: baked from a mesh without a skin, or schema v1/v2 — re-bake), kErrorJointCount,
-  /// kErrorAlignment (joint_matrices not 4-byte aligned).
+  /// The status Run() would return for bad arguments, or kOk: kErrorNullArgument (model, workspace or
+  /// joint_matrices null), kErrorInvalidJob (model or workspace not initialised), kErrorWorkspaceModel
+  /// (workspace made for another model), kErrorMissingField (the asset holds no joint weights: baked
+  /// from a mesh without a skin, or schema v1/v2 — re-bake), kErrorJointCount, kErrorAlignment
+  /// (joint_matrices not 4-byte aligned).
   Status Check() const;
   /// Runs the refit. Returns Check()'s error, or kErrorNonFiniteJoints when one of the #J matrices
   /// holds a NaN or an infinity — in both cases the spheres are untouched — or kOk.

@@ -20,16 +20,20 @@ enum class [[nodiscard]] Status : uint32_t {
   // ---- argument / programmer errors -------------------------------------------------------------
   kErrorNullArgument = 0x8000'0001u,  ///< A required pointer was null (or size 0 with a non-null ask).
   kErrorAlignment = 0x8000'0002u,     ///< Asset bytes not 8-byte aligned, or positions not 4-byte aligned.
-  kErrorInvalidJob = 0x8000'0003u,    ///< Job fields inconsistent (unknown mode/method, context not
-                                      ///< initialised, parallel_for hook half set).
+  kErrorInvalidJob = 0x8000'0003u,    ///< Job fields inconsistent (unknown mode/method, model or
+                                      ///< workspace not initialised, parallel_for hook half set).
   kErrorVertexCount = 0x8000'0004u,   ///< PositionsView::count != asset fingerprint.vertex_count.
   kErrorStride = 0x8000'0005u,        ///< PositionsView::stride_bytes < 12 or not a multiple of 4.
-  kErrorOutOfMemory = 0x8000'0006u,   ///< Context::Init could not allocate (the only allocating call).
+  kErrorOutOfMemory = 0x8000'0006u,   ///< Model / Workspace / NarrowPhaseContext::Init could not allocate.
   kErrorNonFinitePositions = 0x8000'0007u,  ///< A deformed vertex position is NaN or infinite
                                             ///< (NarrowPhaseJob checks the positions it reads).
   kErrorJointCount = 0x8000'0008u,    ///< JointRefitJob::joint_count != the asset's Asset.joint_count.
   kErrorNonFiniteJoints = 0x8000'0009u,  ///< A joint matrix that some sphere follows holds a NaN or
                                          ///< an infinity (JointRefitJob checks them before writing).
+  kErrorWorkspaceModel = 0x8000'000Au,   ///< The Workspace was made for another Model (Workspace::Init
+                                         ///< records Model::id()): the job wrote nothing.
+  kErrorBufferTooSmall = 0x8000'000Bu,   ///< Caller memory smaller than RequiredBytes() (Model /
+                                         ///< Workspace::InitInPlace): nothing built.
 
   // ---- asset envelope (LoadAsset) ---------------------------------------------------------------
   kErrorAssetTooSmall = 0x8000'0101u,   ///< Fewer bytes than a FlatBuffer header (8) — truncated file.

@@ -1,0 +1,228 @@
+// spherechain runtime — Model (what every character of one asset shares) and Workspace (one character).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "spherechain/runtime/asset.h"
+#include "spherechain/runtime/status.h"
+
+namespace spherechain::runtime {
+
+/// Strided, read-only view of deformed vertex positions: vertex i is three floats (x, y, z) at
+/// `(const char*)data + i * stride_bytes`. Lets a game pass an interleaved vertex buffer unchanged.
+/// Space: the same model space and source units as the bind pose of the asset (or any rigid motion
+/// of it: world space works, spheres come out in that space). Borrowed for one job Run().
+struct PositionsView {
+  const void* data = nullptr;  ///< [Limit: 4-byte aligned, non-null] first vertex's x.
+  uint32_t count = 0;          ///< #V [Limit: == Model::vertex_count(), else kErrorVertexCount].
+  uint32_t stride_bytes = 12;  ///< [Limit: >= 12, multiple of 4, else kErrorStride] 12 = packed xyz.
+};
+
+/// Optional parallel-for hook: the SDK owns no threads. When `run` is set, a job calls
+/// `run(user, count, task, task_data)` once; the host must call `task(task_data, begin, end)` over
+/// disjoint ranges covering [0, count) (on any threads, in any order) and return when all finished.
+/// `task` never allocates and writes disjoint memory per index. Leave `run` null for a serial Run().
+/// (TBB: `tbb::parallel_for(tbb::blocked_range<uint32_t>(0, count), [&](auto& r) { task(task_data,
+/// r.begin(), r.end()); })` — see samples/many_characters and bench/runtime_bench.cpp.)
+struct ParallelFor {
+  using Task = void (*)(void* task_data, uint32_t begin, uint32_t end);
+  void (*run)(void* user, uint32_t count, Task task, void* task_data) = nullptr;  ///< [opt]
+  void* user = nullptr;  ///< [opt] passed back to `run`.
+};
+
+/// Read-only SoA view of spheres (#S each): centres (x, y, z) and radii r. Space/units: those of the
+/// positions last refitted (model space and source units of the asset; the bind pose after Init).
+/// Transient: valid until the next refit of the workspace / its Init / its destruction.
+struct SphereArrays {
+  const float* x = nullptr;
+  const float* y = nullptr;
+  const float* z = nullptr;
+  const float* r = nullptr;  ///< radius, > 0 for sane input.
+  uint32_t count = 0;        ///< #S
+};
+
+/// The per-asset arrays of a Model, SoA, for readers outside the runtime (the CUDA upload, tests,
+/// tools). Every pointer is owned by the Model (lifetime: until its destruction / next Init) and
+/// immutable; padded arrays may be read up to 8 entries past #S (zeros).
+struct ModelArrays {
+  const float *bind_x, *bind_y, *bind_z, *bind_r;  ///< #S: Asset.spheres (bind centres, radii) [source units]
+  const uint32_t* pivot_vertices;  ///< #S×12: vertex indices (< #V) of the 4 pivot triangles (Asset.pivot_vertices)
+  const float *local_x, *local_y, *local_z;     ///< #S + 8: PivotFrame.local_center (pivot-frame coordinates)
+  const float *offset_x, *offset_y, *offset_z;  ///< #S + 8: PivotFrame.centroid_offset [source units]
+  const float* radius_scale;                    ///< #S + 8: bind radius / PivotFrame.mean_distance (one division)
+  const uint32_t* chain_mask;     ///< #S + 1: bit c ⇔ sphere in Asset.chains[c]; [#S] = 0
+  const uint32_t* chain_offsets;  ///< #C + 1 into chain_spheres
+  const uint16_t* chain_spheres;  ///< Σ|chain|: each chain's spheres, ascending (Asset.chains)
+  const uint32_t* excl_offsets;   ///< #S + 1 into excl_neighbors (CSR by the smaller sphere a)
+  const uint16_t* excl_neighbors; ///< #excluded: partners b > a, ascending per a (Asset.excluded_pairs)
+  const uint16_t* sphere_joints;  ///< #S×4 or null: Asset.sphere_joints (schema v3, rigged bakes)
+  const float* sphere_joint_weights;  ///< #S×4 or null: Asset.sphere_joint_weights
+  uint32_t excluded_count;        ///< #excluded
+  uint32_t max_chain_length;      ///< longest chain [spheres]
+};
+
+/// What every character of one asset shares, built once per asset from its AssetView: the refit data
+/// in SoA (pivot vertices, pivot-frame coordinates, radius scales, bind spheres), the chain masks, the
+/// excluded pairs as per-sphere neighbour lists, the centre joint weights (schema v3), and the broad
+/// phase's static layout — spheres in blocks of 8 (grouped by body region, Asset.sphere_regions, else by
+/// chain mask; each group split at bind pose by a kd split), per pair of blocks and per method the lanes
+/// to test (excluded pairs, M1's pairs sharing no chain and padding masked out).
+/// Immutable after Init: any number of Workspaces (characters) and threads may use one Model at once.
+/// Ownership: one block of memory, the Model's own (Init) or the caller's (InitInPlace); after Init it
+/// no longer reads the asset bytes (jobs never touch the AssetView). Move-only; moving keeps id().
+class Model {
+ public:
+  Model() = default;
+  Model(const Model&) = delete;
+  Model& operator=(const Model&) = delete;
+  Model(Model&& o) noexcept;
+  Model& operator=(Model&& o) noexcept;
+  ~Model();
+
+  /// Bytes InitInPlace needs for `view` (the exact size of the Model's block), or 0 when `!view.valid()`.
+  /// Cost: O(#S · (#C log n + #groups)), no allocation; thread-safe.
+  static size_t RequiredBytes(const AssetView& view);
+
+  /// Builds the model of `view` in one allocation of RequiredBytes(view) bytes (the only allocation),
+  /// aligned to 64. Returns kOk; kErrorNullArgument (`!view.valid()`); kErrorOutOfMemory (allocation
+  /// failed, or the broad phase's candidate lanes exceed 2^32) — the model is left empty on failure.
+  /// Cost: O(#S² · log degree) time (the block-pair lane tables); memory: see RequiredBytes — ~110 B a
+  /// sphere + 2 × 9 B per pair of blocks of 8 spheres + 2 B per excluded pair (26 KB for MakeHuman's
+  /// 128 spheres). Not thread-safe on one object (nothing may use the model meanwhile).
+  Status Init(const AssetView& view);
+
+  /// The same in caller memory (meshoptimizer-style): `memory` [Limit: 16-byte aligned, else
+  /// kErrorAlignment] of `bytes` [Limit: >= RequiredBytes(view), else kErrorBufferTooSmall]; nothing is
+  /// allocated. The memory must outlive the model and stay untouched while it is in use; the model never
+  /// frees it. Returns kOk, kErrorNullArgument (invalid view or null memory), kErrorAlignment,
+  /// kErrorBufferTooSmall, kErrorOutOfMemory (candidate lanes exceed 2^32); the model is empty after a
+  /// failure (and the memory unspecified).
+  Status InitInPlace(const AssetView& view, void* memory, size_t bytes);
+
+  /// Frees the model's block (none when it lives in caller memory); the model is empty after.
+  void Release();
+
+  bool initialized() const { return sphere_count_ != 0; }  ///< true after a successful Init
+  /// A number unique to this build of the model in the process (never 0 once initialised; kept by a
+  /// move): what a Workspace records to refuse another model (kErrorWorkspaceModel).
+  uint64_t id() const { return id_; }
+  uint32_t sphere_count() const { return sphere_count_; }  ///< #S
+  uint32_t vertex_count() const { return vertex_count_; }  ///< #V the positions must have.
+  uint32_t chain_count() const { return chain_count_; }    ///< number of chains (≤ kMaxChains).
+  /// #J, the skinning matrices JointRefitJob takes (Asset.joint_count); 0 when the asset holds no centre
+  /// joint weights (v1/v2 or unrigged bake).
+  uint32_t joint_count() const { return joint_count_; }
+  /// The asset's contact margin (Asset.contact_margin, schema v2; 0 for v1 assets) [Units: source]:
+  /// what DetectJob grows every radius by unless the job overrides it.
+  float contact_margin() const { return contact_margin_; }
+  size_t bytes() const { return bytes_; }  ///< size of the model's block
+
+  /// The bind spheres (Asset.spheres), SoA; valid for the model's lifetime.
+  SphereArrays bind_spheres() const { return {a_.bind_x, a_.bind_y, a_.bind_z, a_.bind_r, sphere_count_}; }
+  /// All per-asset arrays (see ModelArrays); valid for the model's lifetime.
+  const ModelArrays& arrays() const { return a_; }
+  /// Bitmask of the chains sphere `s` belongs to (bit c = Asset.chains[c]). [Limit: s < #S]
+  uint32_t chain_mask(uint32_t s) const { return a_.chain_mask[s]; }
+  /// True if (a, b) is an excluded (adjacent) pair (Asset.excluded_pairs), either order. O(degree).
+  bool IsExcluded(uint32_t a, uint32_t b) const;
+  /// Exact number of non-excluded sphere pairs (a < b) that share at least one chain: the most
+  /// distinct pairs M1 can report (≤ DetectBound(view, kM1)).
+  uint32_t m1_candidate_pairs() const { return m1_candidates_; }
+  /// Exact number of non-excluded sphere pairs (a < b): the most pairs M2 can report.
+  uint32_t m2_candidate_pairs() const { return m2_candidates_; }
+
+  // ---- internals used by the jobs (the SDK's own translation units; not API) --------------------
+  struct Internal;
+  friend struct Internal;
+  friend class Workspace;
+
+ private:
+  Status Build(const AssetView& view, unsigned char* memory, size_t bytes);
+
+  unsigned char* storage_ = nullptr;  // the block (owned when owned_)
+  bool owned_ = false;
+  size_t bytes_ = 0;
+  uint64_t id_ = 0;
+  uint32_t sphere_count_ = 0, vertex_count_ = 0, chain_count_ = 0, joint_count_ = 0;
+  uint32_t m1_candidates_ = 0, m2_candidates_ = 0;
+  float contact_margin_ = 0.0f;
+  ModelArrays a_{};
+  bool use_avx_ = false;  // kernels: AVX (runtime dispatch) or SSE2 baseline
+  uint32_t m1_tests_ = 0;  // Σ_chains n(n−1)/2 (DetectStats::tests of M1)
+  // Broad-phase layout (DetectJob, both methods): B blocks of 8 slots.
+  uint32_t blocks_ = 0, box_pitch_ = 0, live_stride_ = 0;  // B; B rounded up to 8; ceil(B / 8)
+  uint32_t key_slots_ = 0;                // max over methods of Σ allowed lanes (Workspace's keys)
+  const uint32_t* order_ = nullptr;       // 8B: sphere id per slot (padding: #S, a NaN sphere)
+  const uint64_t* allowed_[2] = {};       // [M1, M2] B×B lane masks of block pairs J >= I
+  const uint8_t* live_[2] = {};           // [M1, M2] B × live_stride_: the pair has a lane
+  const uint32_t* key_begin_[2] = {};     // [M1, M2] B + 1: key slots of each row block
+};
+
+/// One character's state for one Model: its current spheres (SoA, #S + 8 each, NaN padding) and the
+/// per-frame scratch of DetectJob (spheres gathered in block order, block boxes, hit keys, per-row-block
+/// counters). Records the id() of the Model it was made for: a job given this workspace and another
+/// model answers kErrorWorkspaceModel and writes nothing.
+/// Ownership: one block of memory (~100 B per sphere + 8 B per candidate lane of the model: 22 KB for
+/// MakeHuman), its own (Init) or the caller's (InitInPlace). Move-only.
+/// Thread safety: one job at a time per workspace; different workspaces are independent, also when they
+/// share a model.
+class Workspace {
+ public:
+  Workspace() = default;
+  Workspace(const Workspace&) = delete;
+  Workspace& operator=(const Workspace&) = delete;
+  Workspace(Workspace&& o) noexcept;
+  Workspace& operator=(Workspace&& o) noexcept;
+  ~Workspace();
+
+  /// Bytes InitInPlace needs for `model`; 0 when the model is not initialised. O(1).
+  static size_t RequiredBytes(const Model& model);
+  /// Sizes the workspace for `model` (one allocation), records model.id() and sets the spheres to the
+  /// bind pose. Returns kOk; kErrorInvalidJob (model not initialised); kErrorOutOfMemory (workspace left
+  /// empty). Cost: O(#S + lanes) time.
+  Status Init(const Model& model);
+  /// The same in caller memory: `memory` [Limit: 16-byte aligned, else kErrorAlignment] of `bytes`
+  /// [Limit: >= RequiredBytes(model), else kErrorBufferTooSmall]; kErrorNullArgument for null memory.
+  /// Nothing allocated; the memory must outlive the workspace.
+  Status InitInPlace(const Model& model, void* memory, size_t bytes);
+  /// Frees the block (none in caller memory); the workspace is empty after.
+  void Release();
+
+  bool initialized() const { return sphere_count_ != 0; }  ///< true after a successful Init
+  uint64_t model_id() const { return model_id_; }          ///< Model::id() it was made for
+  bool made_for(const Model& model) const { return model_id_ != 0 && model_id_ == model.id(); }
+  uint32_t sphere_count() const { return sphere_count_; }  ///< #S
+
+  /// Current spheres (see SphereArrays for lifetime).
+  SphereArrays spheres() const { return {x_, y_, z_, r_, sphere_count_}; }
+  /// Writable spheres (#S each): lets a caller set them directly (tests, a GPU path copying back)
+  /// before a DetectJob. Same lifetime as spheres().
+  float* mutable_x() { return x_; }
+  float* mutable_y() { return y_; }
+  float* mutable_z() { return z_; }
+  float* mutable_r() { return r_; }
+  /// Resets the spheres to `model`'s bind pose. kErrorWorkspaceModel (another model: nothing written),
+  /// kErrorInvalidJob (not initialised), else kOk. O(#S).
+  Status ResetToBindPose(const Model& model);
+
+  struct Internal;
+  friend struct Internal;
+  friend struct Model::Internal;
+
+ private:
+  Status Build(const Model& model, unsigned char* memory);
+
+  unsigned char* storage_ = nullptr;
+  bool owned_ = false;
+  uint64_t model_id_ = 0;
+  uint32_t sphere_count_ = 0;
+  float *x_ = nullptr, *y_ = nullptr, *z_ = nullptr, *r_ = nullptr;      // #S + 8 each (NaN padding)
+  float *gx_ = nullptr, *gy_ = nullptr, *gz_ = nullptr, *gr_ = nullptr;  // 8B: spheres in slot order
+  float *tx_ = nullptr, *ty_ = nullptr, *tz_ = nullptr, *tr_ = nullptr;  // 8 × box pitch: lane-major
+  float* box_ = nullptr;          // 7 × (box pitch + 8): block boxes
+  uint64_t* keys_ = nullptr;      // Model::key_slots_ hit keys
+  uint32_t* row_hits_ = nullptr;  // 3 × B: keys, box tests, sphere tests per row block
+};
+
+}  // namespace spherechain::runtime

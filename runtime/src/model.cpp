@@ -1,0 +1,444 @@
+// Model and Workspace: the runtime's only allocations (one block each, or caller memory).
+#include "spherechain/runtime/model.h"
+
+#include <algorithm>
+#include <atomic>
+#include <bit>
+#include <cstring>
+#include <limits>
+#include <new>
+#include <utility>
+
+#include "internal.h"
+
+namespace spherechain::runtime {
+namespace {
+
+constexpr size_t kAlign = 64;      // every section of a block (and an owned block) starts on 64 bytes
+constexpr size_t kMinAlign = 16;   // caller memory [Limit]
+constexpr uint32_t kPad = 8;       // SoA rows are read in chunks of 8
+
+std::atomic<uint64_t> g_next_model_id{1};
+
+size_t AlignUp(size_t n) { return (n + kAlign - 1) & ~(kAlign - 1); }
+
+// Sections of a block, laid out in order, each 64-byte aligned.
+struct Carver {
+  size_t size = 0;
+  unsigned char* base = nullptr;  // null while measuring
+  template <typename T>
+  T* Take(size_t count) {
+    const size_t off = AlignUp(size);
+    size = off + count * sizeof(T);
+    return base ? reinterpret_cast<T*>(base + off) : nullptr;
+  }
+};
+
+// The chain mask of sphere s read from the asset (chains ascending: LoadAsset checked). O(#C log n).
+uint32_t AssetChainMask(const schema::Asset& a, uint32_t C, uint32_t s) {
+  uint32_t mask = 0;
+  for (uint32_t c = 0; c < C; ++c) {
+    const auto* list = a.chains()->Get(c)->spheres();
+    if (std::binary_search(list->begin(), list->end(), static_cast<uint16_t>(s))) mask |= 1u << c;
+  }
+  return mask;
+}
+
+// Broad-phase group of sphere s: its region (Asset.sphere_regions) when present, else its chain mask.
+uint32_t Group(const schema::Asset& a, uint32_t s, uint32_t chain_mask) {
+  return a.sphere_regions() ? a.sphere_regions()->Get(s) : chain_mask;
+}
+
+// Number of blocks of 8 of the layout: Σ over groups of ceil(n_g / 8). O(#S · (#C log n + #groups)).
+uint32_t CountBlocks(const AssetView& view) {
+  const schema::Asset& a = *view.asset;
+  const uint32_t S = view.sphere_count, C = view.chain_count;
+  auto group = [&](uint32_t s) { return Group(a, s, a.sphere_regions() ? 0u : AssetChainMask(a, C, s)); };
+  uint32_t blocks = 0;
+  for (uint32_t s = 0; s < S; ++s) {
+    const uint32_t g = group(s);
+    bool first = true;
+    for (uint32_t t = 0; t < s && first; ++t) first = group(t) != g;
+    if (!first) continue;
+    uint32_t n = 0;
+    for (uint32_t t = s; t < S; ++t) n += group(t) == g;
+    blocks += (n + 7) / 8;
+  }
+  return blocks;
+}
+
+// The model's sections, in block order. With `base` null only measures (returns the size).
+struct ModelSections {
+  ModelArrays a{};
+  float *bind[4] = {}, *local[3] = {}, *offset[3] = {}, *radius_scale = nullptr;
+  uint32_t *pivot_vertices = nullptr, *chain_mask = nullptr, *chain_offsets = nullptr, *excl_offsets = nullptr;
+  uint16_t *chain_spheres = nullptr, *excl_neighbors = nullptr, *joints = nullptr;
+  float* weights = nullptr;
+  uint32_t* order = nullptr;
+  uint64_t* allowed[2] = {};
+  uint8_t* live[2] = {};
+  uint32_t* key_begin[2] = {};
+  size_t size = 0;
+
+  ModelSections(const AssetView& view, uint32_t B, unsigned char* base) {
+    const schema::Asset& asset = *view.asset;
+    const uint32_t S = view.sphere_count, C = view.chain_count;
+    uint32_t chained = 0;
+    for (uint32_t c = 0; c < C; ++c) chained += asset.chains()->Get(c)->spheres()->size();
+    const uint32_t E = asset.excluded_pairs() ? asset.excluded_pairs()->size() : 0;
+    const bool joint_weights = asset.sphere_joints() && asset.sphere_joint_weights() && asset.joint_count() > 0;
+    const uint32_t live_stride = (B + 7) / 8;
+    Carver k{0, base};
+    for (auto& p : bind) p = k.Take<float>(S);
+    pivot_vertices = k.Take<uint32_t>(size_t{12} * S);
+    for (auto& p : local) p = k.Take<float>(S + kPad);
+    for (auto& p : offset) p = k.Take<float>(S + kPad);
+    radius_scale = k.Take<float>(S + kPad);
+    chain_mask = k.Take<uint32_t>(S + 1);
+    chain_offsets = k.Take<uint32_t>(C + 1);
+    chain_spheres = k.Take<uint16_t>(chained);
+    excl_offsets = k.Take<uint32_t>(S + 1);
+    excl_neighbors = k.Take<uint16_t>(E);
+    if (joint_weights) joints = k.Take<uint16_t>(size_t{4} * S), weights = k.Take<float>(size_t{4} * S);
+    order = k.Take<uint32_t>(size_t{8} * B);
+    for (int m = 0; m < 2; ++m) {
+      allowed[m] = k.Take<uint64_t>(size_t{B} * B);
+      live[m] = k.Take<uint8_t>(size_t{B} * live_stride);
+      key_begin[m] = k.Take<uint32_t>(B + 1);
+    }
+    size = AlignUp(k.size);
+    a = ModelArrays{bind[0], bind[1], bind[2], bind[3], pivot_vertices, local[0], local[1], local[2],
+                    offset[0], offset[1], offset[2], radius_scale, chain_mask, chain_offsets, chain_spheres,
+                    excl_offsets, excl_neighbors, joints, weights, E, 0};
+  }
+};
+
+}  // namespace
+
+// ---- Model -----------------------------------------------------------------------------------------
+
+Model::Model(Model&& o) noexcept { *this = std::move(o); }
+
+Model& Model::operator=(Model&& o) noexcept {
+  if (this != &o) {
+    Release();
+    std::memcpy(static_cast<void*>(this), static_cast<const void*>(&o), sizeof(Model));
+    o.storage_ = nullptr, o.owned_ = false;
+    o.Release();
+  }
+  return *this;
+}
+
+Model::~Model() { Release(); }
+
+void Model::Release() {
+  if (owned_ && storage_) ::operator delete(storage_, std::align_val_t{kAlign});
+  storage_ = nullptr, owned_ = false, bytes_ = 0, id_ = 0;
+  sphere_count_ = vertex_count_ = chain_count_ = joint_count_ = 0;
+  m1_candidates_ = m2_candidates_ = m1_tests_ = 0;
+  contact_margin_ = 0.0f;
+  a_ = ModelArrays{};
+  use_avx_ = false;
+  blocks_ = box_pitch_ = live_stride_ = key_slots_ = 0;
+  order_ = nullptr;
+  for (int m = 0; m < 2; ++m) allowed_[m] = nullptr, live_[m] = nullptr, key_begin_[m] = nullptr;
+}
+
+size_t Model::RequiredBytes(const AssetView& view) {
+  if (!view.valid()) return 0;
+  return ModelSections(view, CountBlocks(view), nullptr).size;
+}
+
+Status Model::Init(const AssetView& view) {
+  Release();
+  if (!view.valid()) return Status::kErrorNullArgument;
+  const size_t bytes = RequiredBytes(view);
+  auto* memory = static_cast<unsigned char*>(::operator new(bytes, std::align_val_t{kAlign}, std::nothrow));
+  if (!memory) return Status::kErrorOutOfMemory;
+  const Status s = Build(view, memory, bytes);
+  if (s != Status::kOk) {
+    ::operator delete(memory, std::align_val_t{kAlign});
+    return s;
+  }
+  owned_ = true;
+  return Status::kOk;
+}
+
+Status Model::InitInPlace(const AssetView& view, void* memory, size_t bytes) {
+  Release();
+  if (!view.valid() || !memory) return Status::kErrorNullArgument;
+  if (reinterpret_cast<uintptr_t>(memory) % kMinAlign != 0) return Status::kErrorAlignment;
+  if (bytes < RequiredBytes(view)) return Status::kErrorBufferTooSmall;
+  return Build(view, static_cast<unsigned char*>(memory), bytes);
+}
+
+// Fills the block: the SoA refit data, chain masks and lists, the excluded pairs as per-sphere sorted
+// partner lists, the joint weights, and the broad-phase layout. Sections start on 64 bytes from `memory`,
+// so a 16-byte aligned block keeps every array aligned for its type. No allocation.
+Status Model::Build(const AssetView& view, unsigned char* memory, size_t bytes) {
+  const schema::Asset& a = *view.asset;
+  const uint32_t S = view.sphere_count, C = view.chain_count;
+  const uint32_t B = CountBlocks(view);
+  ModelSections k(view, B, memory);
+  if (k.size > bytes) return Status::kErrorBufferTooSmall;
+  std::memset(memory, 0, k.size);
+
+  for (uint32_t s = 0; s < S; ++s) {
+    const schema::Sphere* sp = a.spheres()->Get(s);
+    k.bind[0][s] = sp->center().x();
+    k.bind[1][s] = sp->center().y();
+    k.bind[2][s] = sp->center().z();
+    k.bind[3][s] = sp->radius();
+    const schema::PivotFrame* f = a.pivot_frames()->Get(s);
+    k.local[0][s] = f->local_center().x();
+    k.local[1][s] = f->local_center().y();
+    k.local[2][s] = f->local_center().z();
+    k.offset[0][s] = f->centroid_offset().x();
+    k.offset[1][s] = f->centroid_offset().y();
+    k.offset[2][s] = f->centroid_offset().z();
+    k.radius_scale[s] = k.bind[3][s] / f->mean_distance();
+  }
+  std::copy(a.pivot_vertices()->begin(), a.pivot_vertices()->end(), k.pivot_vertices);
+
+  uint32_t m1_tests = 0, max_chain = 0;
+  for (uint32_t c = 0; c < C; ++c) {
+    const auto* list = a.chains()->Get(c)->spheres();
+    const uint32_t n = list->size();
+    m1_tests += n * (n > 0 ? n - 1 : 0) / 2;  // uint32 arithmetic, as DetectStats::tests always was
+    max_chain = std::max(max_chain, n);
+    k.chain_offsets[c + 1] = k.chain_offsets[c] + n;
+    uint16_t* out = k.chain_spheres + k.chain_offsets[c];
+    for (uint16_t s : *list) k.chain_mask[s] |= 1u << c, *out++ = s;
+  }
+  k.a.max_chain_length = max_chain;
+
+  // Excluded pairs as, per sphere a, the sorted list of its excluded partners b > a.
+  const auto* ex = a.excluded_pairs();
+  const uint32_t E = k.a.excluded_count;
+  for (uint32_t i = 0; i < E; ++i) ++k.excl_offsets[ex->Get(i)->a() + 1];
+  for (uint32_t s = 0; s < S; ++s) k.excl_offsets[s + 1] += k.excl_offsets[s];
+  for (uint32_t i = 0; i < E; ++i) k.excl_neighbors[i] = ex->Get(i)->b();  // sorted by (a, b) already
+
+  if (k.joints) {
+    std::copy(a.sphere_joints()->begin(), a.sphere_joints()->end(), k.joints);
+    std::copy(a.sphere_joint_weights()->begin(), a.sphere_joint_weights()->end(), k.weights);
+  }
+
+  // Broad-phase layout (kernels::BroadPhaseArgs): spheres grouped by body region (Asset.sphere_regions,
+  // R0..R4; without it, by chain mask), groups ascending, each split at bind pose into blocks of 8
+  // slots by a kd split — the left part gets 8·ceil(n/16) spheres along the longest axis of the
+  // part's centres (ties by id), so every block but a group's last is full — and padded to 8 with the
+  // id #S. (On MakeHuman, region groups test ~12 % fewer instructions than chain-mask classes, which
+  // leave more partial blocks; one group for all spheres tests more pairs.)
+  // Built in place: the ids sorted by (group, id) in the first #S slots, split, then each group moved
+  // (last first, so nothing is overwritten) to its 8-aligned place.
+  uint32_t* order = k.order;
+  auto group = [&](uint32_t s) { return Group(a, s, k.chain_mask[s]); };
+  for (uint32_t s = 0; s < S; ++s) order[s] = s;
+  std::sort(order, order + S, [&](uint32_t p, uint32_t q) { return group(p) < group(q) || (group(p) == group(q) && p < q); });
+  const float* bind[3] = {k.bind[0], k.bind[1], k.bind[2]};
+  auto split = [&](auto&& self, uint32_t* first, uint32_t n) -> void {
+    if (n <= 8) return;
+    float lo[3], hi[3];
+    for (int d = 0; d < 3; ++d) lo[d] = hi[d] = bind[d][first[0]];
+    for (uint32_t i = 1; i < n; ++i)
+      for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], bind[d][first[i]]), hi[d] = std::max(hi[d], bind[d][first[i]]);
+    int axis = 0;
+    for (int d = 1; d < 3; ++d)
+      if (hi[d] - lo[d] > hi[axis] - lo[axis]) axis = d;
+    const uint32_t left = 8 * ((n + 15) / 16);
+    const float* v = bind[axis];
+    std::nth_element(first, first + left, first + n, [&](uint32_t p, uint32_t q) { return v[p] < v[q] || (v[p] == v[q] && p < q); });
+    self(self, first, left);
+    self(self, first + left, n - left);
+  };
+  for (uint32_t g = 0; g < S;) {  // split each group where it lies
+    uint32_t e = g;
+    while (e < S && group(order[e]) == group(order[g])) ++e;
+    split(split, order + g, e - g);
+    g = e;
+  }
+  {  // spread: group boundaries from the end, each group to its padded start
+    uint32_t dst_end = 8 * B, e = S;
+    while (e > 0) {
+      uint32_t g = e;
+      const uint32_t gid = group(order[e - 1]);
+      while (g > 0 && group(order[g - 1]) == gid) --g;
+      const uint32_t n = e - g, padded = (n + 7) / 8 * 8, dst = dst_end - padded;
+      std::memmove(order + dst, order + g, sizeof(uint32_t) * n);
+      for (uint32_t i = dst + n; i < dst_end; ++i) order[i] = S;
+      dst_end = dst, e = g;
+    }
+  }
+  const uint32_t live_stride = (B + 7) / 8;
+  const uint32_t* excl_off = k.excl_offsets;
+  const uint16_t* excl_nb = k.excl_neighbors;
+  auto excluded = [&](uint32_t p, uint32_t q) {
+    if (p > q) std::swap(p, q);
+    return std::binary_search(excl_nb + excl_off[p], excl_nb + excl_off[p + 1], static_cast<uint16_t>(q));
+  };
+  uint64_t key_slots = 0;
+  for (int method = 0; method < 2; ++method) {  // 0 = M1, 1 = M2
+    uint64_t keys = 0;
+    for (uint32_t I = 0; I < B; ++I) {
+      if (keys > UINT32_MAX) return Status::kErrorOutOfMemory;
+      k.key_begin[method][I] = static_cast<uint32_t>(keys);
+      for (uint32_t J = I; J < B; ++J) {
+        uint64_t lanes = 0;
+        for (uint32_t row = 0; row < 8; ++row)
+          for (uint32_t l = 0; l < 8; ++l) {
+            const uint32_t p = order[8 * I + row], q = order[8 * J + l];
+            const bool ok = p < S && q < S && (I < J || l > row) && !excluded(p, q) &&
+                            (method == 1 || (k.chain_mask[p] & k.chain_mask[q]) != 0);
+            lanes |= uint64_t{ok} << (8 * row + l);
+          }
+        k.allowed[method][size_t{I} * B + J] = lanes;
+        if (lanes) k.live[method][size_t{I} * live_stride + (J - I) / 8] |= static_cast<uint8_t>(1u << ((J - I) % 8));
+        keys += static_cast<uint64_t>(std::popcount(lanes));
+      }
+    }
+    if (keys > UINT32_MAX) return Status::kErrorOutOfMemory;
+    k.key_begin[method][B] = static_cast<uint32_t>(keys);
+    key_slots = std::max(key_slots, keys);
+  }
+
+  storage_ = memory;
+  owned_ = false;
+  bytes_ = k.size;
+  id_ = g_next_model_id.fetch_add(1, std::memory_order_relaxed);
+  sphere_count_ = S;
+  vertex_count_ = view.vertex_count;
+  chain_count_ = C;
+  joint_count_ = k.joints ? a.joint_count() : 0;
+  contact_margin_ = a.contact_margin();
+  a_ = k.a;
+  use_avx_ = kernels::HasAvx();
+  m1_tests_ = m1_tests;
+  blocks_ = B, box_pitch_ = (B + 7) / 8 * 8, live_stride_ = live_stride;
+  key_slots_ = static_cast<uint32_t>(key_slots);
+  order_ = order;
+  for (int m = 0; m < 2; ++m) allowed_[m] = k.allowed[m], live_[m] = k.live[m], key_begin_[m] = k.key_begin[m];
+  const uint64_t all = uint64_t{S} * (S - 1) / 2;
+  m2_candidates_ = static_cast<uint32_t>(all - E);
+  m1_candidates_ = key_begin_[0][B];  // non-excluded pairs sharing a chain: M1's allowed lanes
+  return Status::kOk;
+}
+
+bool Model::IsExcluded(uint32_t a, uint32_t b) const {
+  if (a > b) std::swap(a, b);
+  if (b >= sphere_count_) return false;
+  for (uint32_t i = a_.excl_offsets[a], e = a_.excl_offsets[a + 1]; i < e; ++i)
+    if (a_.excl_neighbors[i] == b) return true;
+  return false;
+}
+
+// ---- Workspace -------------------------------------------------------------------------------------
+
+namespace {
+
+struct WorkspaceSections {
+  float *sphere[4] = {}, *gathered[4] = {}, *lanes[4] = {}, *box = nullptr;
+  uint64_t* keys = nullptr;
+  uint32_t* row_hits = nullptr;
+  size_t size = 0;
+  WorkspaceSections(uint32_t S, uint32_t B, uint32_t pitch, uint32_t key_slots, unsigned char* base) {
+    Carver k{0, base};
+    for (auto& p : sphere) p = k.Take<float>(S + kPad);
+    for (auto& p : gathered) p = k.Take<float>(size_t{8} * B);
+    for (auto& p : lanes) p = k.Take<float>(size_t{8} * pitch);
+    box = k.Take<float>(size_t{7} * (pitch + 8));
+    keys = k.Take<uint64_t>(key_slots);
+    row_hits = k.Take<uint32_t>(size_t{3} * B);
+    size = AlignUp(k.size);
+  }
+};
+
+}  // namespace
+
+Workspace::Workspace(Workspace&& o) noexcept { *this = std::move(o); }
+
+Workspace& Workspace::operator=(Workspace&& o) noexcept {
+  if (this != &o) {
+    Release();
+    std::memcpy(static_cast<void*>(this), static_cast<const void*>(&o), sizeof(Workspace));
+    o.storage_ = nullptr, o.owned_ = false;
+    o.Release();
+  }
+  return *this;
+}
+
+Workspace::~Workspace() { Release(); }
+
+void Workspace::Release() {
+  if (owned_ && storage_) ::operator delete(storage_, std::align_val_t{kAlign});
+  storage_ = nullptr, owned_ = false, model_id_ = 0, sphere_count_ = 0;
+  x_ = y_ = z_ = r_ = gx_ = gy_ = gz_ = gr_ = tx_ = ty_ = tz_ = tr_ = box_ = nullptr;
+  keys_ = nullptr;
+  row_hits_ = nullptr;
+}
+
+size_t Workspace::RequiredBytes(const Model& m) {
+  if (!m.initialized()) return 0;
+  return WorkspaceSections(m.sphere_count_, m.blocks_, m.box_pitch_, m.key_slots_, nullptr).size;
+}
+
+Status Workspace::Init(const Model& model) {
+  Release();
+  if (!model.initialized()) return Status::kErrorInvalidJob;
+  const size_t bytes = RequiredBytes(model);
+  auto* memory = static_cast<unsigned char*>(::operator new(bytes, std::align_val_t{kAlign}, std::nothrow));
+  if (!memory) return Status::kErrorOutOfMemory;
+  (void)Build(model, memory);
+  owned_ = true;
+  return Status::kOk;
+}
+
+Status Workspace::InitInPlace(const Model& model, void* memory, size_t bytes) {
+  Release();
+  if (!memory) return Status::kErrorNullArgument;
+  if (!model.initialized()) return Status::kErrorInvalidJob;
+  if (reinterpret_cast<uintptr_t>(memory) % kMinAlign != 0) return Status::kErrorAlignment;
+  if (bytes < RequiredBytes(model)) return Status::kErrorBufferTooSmall;
+  return Build(model, static_cast<unsigned char*>(memory));
+}
+
+Status Workspace::Build(const Model& m, unsigned char* memory) {
+  const uint32_t S = m.sphere_count_, B = m.blocks_, P = m.box_pitch_;
+  WorkspaceSections k(S, B, P, m.key_slots_, memory);
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  // Padding (id #S in the broad phase's slots): NaN, never overlaps, ignored by the block boxes.
+  for (float* p : k.sphere) std::fill(p, p + S + kPad, nan);
+  for (float* p : k.gathered) std::fill(p, p + size_t{8} * B, nan);
+  for (float* p : k.lanes) std::fill(p, p + size_t{8} * P, nan);
+  std::fill(k.box, k.box + size_t{7} * (P + 8), 0.0f);
+  for (uint32_t I = B; I < P + 8; ++I)  // empty boxes past the blocks (read, never kept)
+    for (int d = 0; d < 3; ++d) {
+      k.box[(2 * d) * (P + 8) + I] = inf;
+      k.box[(2 * d + 1) * (P + 8) + I] = -inf;
+    }
+  std::fill(k.keys, k.keys + m.key_slots_, uint64_t{0});
+  std::fill(k.row_hits, k.row_hits + size_t{3} * B, 0u);
+  storage_ = memory;
+  model_id_ = m.id_;
+  sphere_count_ = S;
+  x_ = k.sphere[0], y_ = k.sphere[1], z_ = k.sphere[2], r_ = k.sphere[3];
+  gx_ = k.gathered[0], gy_ = k.gathered[1], gz_ = k.gathered[2], gr_ = k.gathered[3];
+  tx_ = k.lanes[0], ty_ = k.lanes[1], tz_ = k.lanes[2], tr_ = k.lanes[3];
+  box_ = k.box;
+  keys_ = k.keys;
+  row_hits_ = k.row_hits;
+  return ResetToBindPose(m);
+}
+
+Status Workspace::ResetToBindPose(const Model& model) {
+  if (!initialized()) return Status::kErrorInvalidJob;
+  if (!made_for(model)) return Status::kErrorWorkspaceModel;
+  const ModelArrays& a = model.arrays();
+  std::copy(a.bind_x, a.bind_x + sphere_count_, x_);
+  std::copy(a.bind_y, a.bind_y + sphere_count_, y_);
+  std::copy(a.bind_z, a.bind_z + sphere_count_, z_);
+  std::copy(a.bind_r, a.bind_r + sphere_count_, r_);
+  return Status::kOk;
+}
+
+}  // namespace spherechain::runtime
