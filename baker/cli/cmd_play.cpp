@@ -110,9 +110,9 @@ class RefitTracking {
 /// Refit + detect on `positions`, timing each job as the minimum over `repeat` runs.
 class Player {
  public:
-  Player(const runtime::AssetView& view, runtime::Context* ctx, runtime::RefitMode mode, bool m1, bool m2,
+  Player(const runtime::AssetView& view, const runtime::Model* model, runtime::Workspace* ctx, runtime::RefitMode mode, bool m1, bool m2,
          uint32_t repeat, runtime::NarrowPhaseContext* narrow)
-      : view_(view), ctx_(ctx), mode_(mode), run_m1_(m1), run_m2_(m2), repeat_(std::max(1u, repeat)), narrow_(narrow) {
+      : view_(view), model_(model), ctx_(ctx), mode_(mode), run_m1_(m1), run_m2_(m2), repeat_(std::max(1u, repeat)), narrow_(narrow) {
     out_m1_.resize(runtime::DetectBound(view, runtime::DetectMethod::kM1));
     out_m2_.resize(runtime::DetectBound(view, runtime::DetectMethod::kM2));
     if (narrow_) contacts_.resize(1u << 16);
@@ -123,7 +123,8 @@ class Player {
   /// and the vertex refit (pivot frame) on `positions` is their reference (row->joint_error).
   bool Run(const float* positions, FrameRow* row, std::string* error, const float* joint_matrices = nullptr) {
     runtime::RefitJob refit;
-    refit.context = ctx_;
+    refit.model = model_;
+    refit.workspace = ctx_;
     refit.mode = mode_;
     refit.positions = {positions, view_.vertex_count, 12};
     if (joint_matrices) {
@@ -137,8 +138,8 @@ class Player {
       ref_.insert(ref_.end(), v.z, v.z + v.count);
       ref_.insert(ref_.end(), v.r, v.r + v.count);
       runtime::JointRefitJob joints;
-      joints.asset = &view_;
-      joints.context = ctx_;
+      joints.model = model_;
+      joints.workspace = ctx_;
       joints.joint_matrices = joint_matrices;
       joints.joint_count = view_.asset->joint_count();
       row->refit_us = Time([&] { return joints.Run(); }, error);
@@ -214,7 +215,8 @@ class Player {
   double Detect(runtime::DetectMethod method, std::vector<runtime::Collision>* out, uint32_t* count,
                 runtime::DetectStats* stats, std::string* error) {
     runtime::DetectJob job;
-    job.context = ctx_;
+    job.model = model_;
+    job.workspace = ctx_;
     job.method = method;
     job.output = out->data();
     job.capacity = static_cast<uint32_t>(out->size());
@@ -224,7 +226,8 @@ class Player {
   }
 
   runtime::AssetView view_;
-  runtime::Context* ctx_;
+  const runtime::Model* model_;
+  runtime::Workspace* ctx_;
   runtime::RefitMode mode_;
   bool run_m1_, run_m2_;
   uint32_t repeat_;
@@ -265,9 +268,10 @@ int RunPlay(const PlayArgs& a) {
   const uint32_t frames = anim.frames;
 
   // ---- runtime ------------------------------------------------------------------------------------
-  runtime::Context ctx;
-  if (runtime::Status s = ctx.Init(view); runtime::Failed(s))
-    return Fail(std::string("runtime Context::Init: ") + runtime::ToString(s));
+  runtime::Model model;
+  runtime::Workspace ctx;
+  if (runtime::Status s = model.Init(view); runtime::Failed(s) || runtime::Failed(s = ctx.Init(model)))
+    return Fail(std::string("runtime Model / Workspace::Init: ") + runtime::ToString(s));
   const bool m1 = a.method != "m2", m2 = a.method != "m1";
   const runtime::RefitMode mode = a.refit == "paper" ? runtime::RefitMode::kPaper : runtime::RefitMode::kPivotFrame;
   const bool joints = a.refit == "joints";
@@ -284,7 +288,7 @@ int RunPlay(const PlayArgs& a) {
       return Fail("'" + a.asset + "': narrow phase: " + runtime::ToString(s) +
                   (s == runtime::Status::kErrorMissingField ? " (baked before the narrow phase existed: re-bake it)" : ""));
   }
-  Player player(view, &ctx, mode, m1, m2, a.repeat, a.narrow_phase ? &narrow : nullptr);
+  Player player(view, &model, &ctx, mode, m1, m2, a.repeat, a.narrow_phase ? &narrow : nullptr);
 
   std::vector<float> positions(mesh.positions.size());
   baker::SkinningScratch scratch;

@@ -53,19 +53,23 @@ int RunValidate(const ValidateArgs& a) {
         if (fp.positions_hash != f->positions_hash())
           add("FP-POSITIONS", "warning", a.mesh, "bind positions differ from the baked mesh (moved vertices?)");
         // The bind pose must report no self-collision.
-        runtime::Context ctx;
-        runtime::Status s = ctx.Init(asset.view);
+        runtime::Model model;
+        runtime::Workspace ctx;
+        runtime::Status s = model.Init(asset.view);
+        if (runtime::Succeeded(s)) s = ctx.Init(model);
         std::vector<runtime::Collision> pairs(runtime::DetectBound(asset.view, runtime::DetectMethod::kM2));
         uint32_t count = 0;
         if (runtime::Succeeded(s)) {
           runtime::RefitJob refit;
-          refit.context = &ctx;
+          refit.model = &model;
+          refit.workspace = &ctx;
           refit.positions = {mesh->positions.data(), mesh->vertex_count(), 12};
           s = refit.Run();
         }
         if (runtime::Succeeded(s)) {
           runtime::DetectJob detect;
-          detect.context = &ctx;
+          detect.model = &model;
+          detect.workspace = &ctx;
           detect.method = runtime::DetectMethod::kM2;
           detect.output = pairs.data();
           detect.capacity = uint32_t(pairs.size());
