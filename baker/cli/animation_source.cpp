@@ -49,8 +49,10 @@ void AddAnimationOptions(CLI::App* sub, std::string* asset, std::string* rig, An
       ->required()
       ->check(CLI::ExistingFile);
   sub->add_option("--clip", anim->clip, "Clip to play (default: the first clip; none: the morph)");
-  sub->add_option("--morph", anim->morph,
-                  "Key pose files (.json), pose names in the poses folder, or folders; morph through them");
+  anim->morph_option = sub->add_option("--morph", anim->morph,
+                                       "Morph through key poses: pose files (.json), pose names in the poses folder, "
+                                       "or folders; bare --morph: the character's default poses (even when it has clips)")
+                           ->expected(0, CLI::detail::expected_max_vector_size);
   sub->add_option("--poses-dir", anim->poses_dir,
                   "Folder of default key poses (default: poses/<character> in the installed share/spherechain/, "
                   "else the source tree's data/, else data/poses/<character> upward from the current directory)");
@@ -58,91 +60,18 @@ void AddAnimationOptions(CLI::App* sub, std::string* asset, std::string* rig, An
   sub->add_option("--rig", *rig, "MakeHuman rig (.mhskel) for an OBJ; default: default.mhskel beside the OBJ");
 }
 
-std::string AnimationSource::Describe() const {
-  if (clip) return "clip '" + clip->name + "' (" + std::to_string(clip->duration_s) + " s)";
-  return "morph through " + std::to_string(poses.size()) + " key poses from " + poses_from;
-}
-
-baker::Status AnimationSource::Frame(const baker::Mesh& mesh, uint32_t f, baker::SkinningScratch* scratch,
-                                     std::vector<float>* out, std::string* label) const {
-  out->resize(mesh.positions.size());
-  char text[96];
-  if (clip) {
-    const float t = clip->duration_s * float(f) / float(frames);
-    std::snprintf(text, sizeof text, "t=%.3fs", t);
-    if (auto s = baker::SkinClip(mesh, *clip, t, scratch, out->data(), out->size()); !s.ok()) return s;
-  } else {
-    auto mf = baker::MorphFrameAt(f, frames, static_cast<uint32_t>(poses.size()));
-    if (!mf.ok()) return mf.error();
-    std::snprintf(text, sizeof text, "%s t=%.3f", poses[mf->key].name.c_str(), mf->t);
-    if (auto s = baker::SkinMorphFrame(mesh, poses, f, frames, scratch, out->data(), out->size()); !s.ok()) return s;
-  }
-  *label = text;
-  return baker::Ok{};
-}
-
 bool OpenAnimation(const baker::Mesh& mesh, const AnimationArgs& a, AnimationSource* out, std::string* error) {
-  *out = AnimationSource{};
-  if (!a.clip.empty() && !a.morph.empty()) return *error = "--clip and --morph exclude each other", false;
-  if (!mesh.skin)
-    return *error = "'" + a.mesh + "' has no skin: animating it needs a rigged character (glTF skin, assimp bones, "
-                    "or a MakeHuman .mhskel beside base.obj / --rig)",
-           false;
-  if (!a.clip.empty()) {
-    for (const auto& c : mesh.clips)
-      if (c.name == a.clip) out->clip = &c;
-    if (!out->clip) {
-      std::string names;
-      for (const auto& c : mesh.clips) names += (names.empty() ? "" : ", ") + ("'" + c.name + "'");
-      return *error = "no clip named '" + a.clip + "' in '" + a.mesh + "' (clips: " + (names.empty() ? "none" : names) +
-                      ")",
-             false;
-    }
-  } else if (a.morph.empty() && !mesh.clips.empty()) {
-    out->clip = &mesh.clips.front();
-  }
-  if (!out->clip) {
-    const std::string character = mesh.skin->source == "mhskel" ? "makehuman" : fs::path(a.mesh).stem().string();
-    const std::string dir = FindPosesDir(character, a.poses_dir);
-    if (a.morph.empty()) {
-      if (dir.empty())
-        return *error = "'" + a.mesh + "' has no clips and no default key poses (data/poses/" + character +
-                        " not found in the installed share/spherechain/, the source tree or upward from the current "
-                        "directory); pass --morph POSE.json... or "
-                        "--poses-dir DIR",
-               false;
-      auto loaded = baker::LoadPoseFolder(dir, *mesh.skin);
-      if (!loaded.ok()) return *error = loaded.error().message, false;
-      out->poses = std::move(loaded).value();
-      out->poses_from = dir;
-    } else {
-      for (const std::string& m : a.morph) {
-        std::string path = m;
-        if (!fs::exists(path) && !dir.empty() && fs::exists(fs::path(dir) / (m + ".json")))
-          path = (fs::path(dir) / (m + ".json")).string();
-        if (fs::is_directory(path)) {
-          auto loaded = baker::LoadPoseFolder(path, *mesh.skin);
-          if (!loaded.ok()) return *error = loaded.error().message, false;
-          for (auto& p : loaded.value()) out->poses.push_back(std::move(p));
-        } else {
-          auto p = baker::LoadPose(path, *mesh.skin);
-          if (!p.ok()) return *error = p.error().message, false;
-          out->poses.push_back(std::move(p).value());
-        }
-      }
-      out->poses_from = "--morph";
-    }
-  }
-  out->frames = a.frames;
-  if (a.frames == 0) return *error = "--frames must be > 0", false;
-  if (!out->clip && a.frames < 2 * out->poses.size())
-    return *error = "--frames " + std::to_string(a.frames) + " is too few for " + std::to_string(out->poses.size()) +
-                    " key poses (each needs a rest frame and its key frame: at least " +
-                    std::to_string(2 * out->poses.size()) + ")",
-           false;
-  if (out->clip) {
-    if (auto s = baker::ValidateClip(*mesh.skin, *out->clip); !s.ok()) return *error = s.error().message, false;
-  }
+  playback::AnimationRequest request;
+  request.mesh_name = a.mesh;
+  request.clip = a.clip;
+  for (const std::string& m : a.morph)
+    if (!m.empty()) request.morph.push_back(m);  // a bare --morph parses as one empty value
+  request.use_morph = a.morph_requested();
+  request.frames = a.frames;
+  request.poses_dir = FindPosesDir(playback::DefaultPoseCharacter(mesh, a.mesh), a.poses_dir);
+  auto opened = playback::OpenAnimation(mesh, request);
+  if (!opened.ok()) return *error = opened.error().message, false;
+  *out = std::move(opened).value();
   return true;
 }
 

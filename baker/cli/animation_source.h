@@ -8,8 +8,7 @@
 #include <vector>
 
 #include "asset_file.h"
-#include "spherechain/baker/animation.h"
-#include "spherechain/baker/morph.h"
+#include "spherechain/playback/animation_source.h"
 #include "spherechain/runtime/asset.h"
 
 namespace spherechain::cli {
@@ -21,6 +20,10 @@ struct AnimationArgs {
   std::vector<std::string> morph;  ///< --morph POSES... (files, names in the poses folder, folders)
   std::string poses_dir;           ///< --poses-dir
   uint32_t frames = 40;            ///< --frames
+  CLI::Option* morph_option = nullptr;  ///< set by AddAnimationOptions: `--morph` given (with or without poses)
+
+  /// True when --morph was given, also bare (the default key poses even when the mesh has clips).
+  bool morph_requested() const { return !morph.empty() || (morph_option && morph_option->count() > 0); }
 };
 
 /// Registers the options every animating command shares on `sub` — ASSET (positional, an existing
@@ -28,23 +31,11 @@ struct AnimationArgs {
 /// `rig` and `anim` (--mesh fills anim->mesh). The pointers must outlive the parse.
 void AddAnimationOptions(CLI::App* sub, std::string* asset, std::string* rig, AnimationArgs* anim);
 
-/// The chosen animation: a clip sampled uniformly, or the Bézier morph through key poses.
-struct AnimationSource {
-  const baker::Clip* clip = nullptr;  ///< points into the mesh's clips when playing a clip
-  std::vector<baker::Pose> poses;     ///< the morph's key poses otherwise
-  std::string poses_from;             ///< folder or "--morph"
-  uint32_t frames = 0;
+/// The chosen animation (playback::Animation: a clip sampled uniformly, or the Bézier morph through key poses).
+using AnimationSource = playback::Animation;
 
-  /// One line: "clip 'Walk' (2.0 s)" or "morph through 8 key poses from DIR".
-  std::string Describe() const;
-  /// Deforms frame `f` (< frames) of `mesh` into `out` (#V×3) and names it ("t=0.533s" or
-  /// "arms_crossed t=0.50"). Errors: those of the skinning.
-  baker::Status Frame(const baker::Mesh& mesh, uint32_t f, baker::SkinningScratch* scratch, std::vector<float>* out,
-                      std::string* label) const;
-};
-
-/// Picks the animation (unknown clip, missing poses, too few frames: false with `*error` saying what).
-/// `mesh` must have a skin.
+/// Picks the animation (playback::OpenAnimation, with the default poses folder found by FindPosesDir):
+/// unknown clip, missing poses, too few frames: false with `*error` saying what. `mesh` must have a skin.
 bool OpenAnimation(const baker::Mesh& mesh, const AnimationArgs& args, AnimationSource* out, std::string* error);
 
 /// Loads the asset (verified) and imports the character it was baked from (`rig`: MakeHuman .mhskel,

@@ -209,7 +209,7 @@ int RunEvaluate(const EvaluateArgs& a) {
       out_m2(runtime::DetectBound(view, runtime::DetectMethod::kM2));
   std::vector<runtime::TriangleContact> contacts(1u << 20);
   std::vector<float> positions;
-  baker::SkinningScratch scratch;
+  playback::SkinningScratch scratch;
   std::vector<FrameEval> rows(anim.frames);
   const bool tty = isatty(2);
   // M1 (m = 0) or M2 (m = 1) on the workspace's current spheres with contact margin `margin` (−1: the

@@ -22,7 +22,7 @@
 #include "animation_source.h"
 #include "asset_file.h"
 #include "commands.h"
-#include "spherechain/baker/animation.h"
+#include "spherechain/playback/animation.h"
 #include "spherechain/baker/import.h"
 #include "spherechain/baker/write.h"
 #include "spherechain/runtime/narrow_phase.h"
@@ -168,7 +168,7 @@ int RunView(const ViewArgs& a) {
   const uint32_t V = view.vertex_count, T = view.triangle_count, S = view.sphere_count, F = anim.frames;
   std::vector<std::vector<float>> frames(F);
   std::vector<std::string> labels(F);
-  baker::SkinningScratch scratch;
+  playback::SkinningScratch scratch;
   float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
   for (uint32_t f = 0; f < F; ++f) {
     if (auto s = anim.Frame(mesh, f, &scratch, &frames[f], &labels[f]); !s.ok()) return Fail(s.error());

@@ -7,7 +7,7 @@
 #include <cstring>
 #include <vector>
 
-#include "spherechain/baker/animation.h"
+#include "spherechain/playback/animation.h"
 #include "spherechain/baker/bake.h"
 #include "spherechain/baker/regions.h"
 #include "spherechain/runtime/runtime.h"
@@ -15,6 +15,7 @@
 
 using namespace spherechain;
 using namespace spherechain::baker;
+using namespace spherechain::playback;
 
 TEST_CASE("centre skin weights: the mean of the region's vertex weights, four largest, summing to 1") {
   // Four vertices, two triangles; rows: v0 {j0}, v1 {j0 .5, j1 .5}, v2 {j1}, v3 {j2}; five joints.

@@ -9,10 +9,10 @@
 #include <string>
 #include <vector>
 
-#include "spherechain/baker/animation.h"
+#include "spherechain/playback/animation.h"
 #include "spherechain/baker/bake.h"
 #include "spherechain/baker/contacts.h"
-#include "spherechain/baker/morph.h"
+#include "spherechain/playback/morph.h"
 #include "spherechain/runtime/narrow_phase.h"
 #include "spherechain/runtime/triangle_intersect.h"
 #include "test_data.h"
@@ -123,16 +123,16 @@ TEST_CASE("heavy: narrow phase on real frames: MakeHuman morph key poses equal t
   if (!test::Require(path) || !test::Require(poses_dir)) return;
   Baked b;
   BakeAndLoad(path, &b);
-  auto poses = baker::LoadPoseFolder(poses_dir, *b.bake.mesh.skin);
+  auto poses = playback::LoadPoseFolder(poses_dir, *b.bake.mesh.skin);
   REQUIRE(poses.ok());
   const uint32_t frames = 40, keys = static_cast<uint32_t>(poses->size());
   std::vector<float> pos(b.bake.mesh.positions.size());
-  baker::SkinningScratch scratch;
+  playback::SkinningScratch scratch;
   size_t total = 0;
   CheckFrame(&b, b.bake.mesh.positions, false, "MakeHuman bind", &total);
   for (uint32_t k = 0; k < keys; ++k) {
-    const uint32_t f = baker::MorphKeyFrame(k, frames, keys);
-    REQUIRE(baker::SkinMorphFrame(b.bake.mesh, poses.value(), f, frames, &scratch, pos.data(), pos.size()).ok());
+    const uint32_t f = playback::MorphKeyFrame(k, frames, keys);
+    REQUIRE(playback::SkinMorphFrame(b.bake.mesh, poses.value(), f, frames, &scratch, pos.data(), pos.size()).ok());
     CheckFrame(&b, pos, false, "MakeHuman frame " + std::to_string(f) + " (" + poses.value()[k].name + ")", &total);
   }
   CHECK(total > 0);  // the key poses do make contacts (arms crossed, knee to chest, ...)
@@ -147,11 +147,11 @@ TEST_CASE("heavy: narrow phase on real frames: CesiumMan walk and BCN_Epileptic 
     REQUIRE(!b.bake.mesh.clips.empty());
     const baker::Clip& clip = b.bake.mesh.clips.front();
     std::vector<float> pos(b.bake.mesh.positions.size());
-    baker::SkinningScratch scratch;
+    playback::SkinningScratch scratch;
     size_t total = 0;
     for (uint32_t f = 0; f < 40; f += 8) {
       const float t = clip.duration_s * float(f) / 40.0f;
-      REQUIRE(baker::SkinClip(b.bake.mesh, clip, t, &scratch, pos.data(), pos.size()).ok());
+      REQUIRE(playback::SkinClip(b.bake.mesh, clip, t, &scratch, pos.data(), pos.size()).ok());
       CheckFrame(&b, pos, true, path + " frame " + std::to_string(f), &total);
     }
   }

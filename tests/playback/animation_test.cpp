@@ -1,4 +1,4 @@
-// baker/animation + baker/morph: clip sampling, linear blend skinning, the paper's Bézier morph between
+// playback/animation + playback/morph: clip sampling, linear blend skinning, the paper's Bézier morph between
 // key poses (§5.1) and readable pose files.
 #include <doctest/doctest.h>
 
@@ -7,14 +7,14 @@
 #include <string>
 #include <vector>
 
-#include "spherechain/baker/animation.h"
 #include "spherechain/baker/import.h"
-#include "spherechain/baker/morph.h"
+#include "spherechain/playback/animation.h"
+#include "spherechain/playback/morph.h"
 #include "test_data.h"
 
 namespace {
 
-namespace sb = spherechain::baker;
+namespace sb = spherechain::playback;
 
 /// Largest |a_i − b_i|.
 float MaxDiff(const std::vector<float>& a, const std::vector<float>& b) {
@@ -69,7 +69,7 @@ std::vector<float> Skinned(const sb::Mesh& mesh, const std::vector<sb::Transform
 /// Imports `path` and checks that skinning at the rest pose (rest locals, and a clip with no channels)
 /// gives back Mesh::positions, and that every clip samples to finite positions of a sane size.
 void CheckRestPoseReproducesBind(const std::string& path, float tolerance_rel) {
-  auto r = sb::ImportMesh(path);
+  auto r = spherechain::baker::ImportMesh(path);
   REQUIRE_MESSAGE(r.ok(), (r.ok() ? "" : r.error().message));
   const sb::Mesh& mesh = r.value();
   REQUIRE(mesh.skin.has_value());
@@ -218,7 +218,7 @@ TEST_CASE("animation: MakeHuman morph hits each key pose exactly at its mid fram
   if (!spherechain::test::Require(obj)) return;
   const std::string poses_dir = spherechain::test::SourceFile("data/poses/makehuman");
   REQUIRE(spherechain::test::Require(poses_dir));
-  auto r = sb::ImportMesh(obj);
+  auto r = spherechain::baker::ImportMesh(obj);
   REQUIRE_MESSAGE(r.ok(), (r.ok() ? "" : r.error().message));
   const sb::Mesh& mesh = r.value();
   REQUIRE(mesh.skin.has_value());

@@ -1,4 +1,4 @@
-// spherechain baker — animation playback on the CPU: sample a Clip (or apply a Pose) to get every
+// spherechain playback — animation playback on the CPU: sample a Clip (or apply a Pose) to get every
 // node's local TRS, compose node globals, build the skinning matrices and deform Mesh::positions by
 // linear blend skinning into a caller buffer. This is the reference deformation the `play` command
 // and the tests feed to the runtime (a game uses its own skinning; the runtime only sees positions).
@@ -21,9 +21,9 @@
 #include <string>
 #include <vector>
 
-#include "spherechain/baker/types.h"
+#include "spherechain/playback/types.h"
 
-namespace spherechain::baker {
+namespace spherechain::playback {
 
 /// Unit quaternion (x, y, z, w).
 using Quat = std::array<float, 4>;
@@ -137,4 +137,4 @@ Status SkinPose(const Mesh& mesh, const Pose& pose, SkinningScratch* scratch, fl
 /// Index of the node named `name` in `skin.nodes`, or -1.
 int32_t FindNode(const Skin& skin, const std::string& name);
 
-}  // namespace spherechain::baker
+}  // namespace spherechain::playback

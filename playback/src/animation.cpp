@@ -1,10 +1,10 @@
-// spherechain baker — clip sampling, pose application, node globals, linear blend skinning.
-#include "spherechain/baker/animation.h"
+// spherechain playback — clip sampling, pose application, node globals, linear blend skinning.
+#include "spherechain/playback/animation.h"
 
 #include <algorithm>
 #include <cmath>
 
-namespace spherechain::baker {
+namespace spherechain::playback {
 
 namespace {
 
@@ -314,4 +314,4 @@ Status SkinPose(const Mesh& mesh, const Pose& pose, SkinningScratch* scratch, fl
   return SkinLocals(mesh, scratch->locals, scratch, out, out_floats);
 }
 
-}  // namespace spherechain::baker
+}  // namespace spherechain::playback

@@ -1,4 +1,4 @@
-// spherechain baker — the paper's morphing animation (§5.1: "Some poses are taken as basis of the
+// spherechain playback — the paper's morphing animation (§5.1: "Some poses are taken as basis of the
 // frames and a quadric Bézier interpolation is applied between such poses"; §6: 40 frames).
 //
 // Design: the animation visits the key poses one after the other; each visit is an excursion
@@ -30,10 +30,10 @@
 #include <string_view>
 #include <vector>
 
-#include "spherechain/baker/animation.h"
-#include "spherechain/baker/types.h"
+#include "spherechain/playback/animation.h"
+#include "spherechain/playback/types.h"
 
-namespace spherechain::baker {
+namespace spherechain::playback {
 
 /// Where a frame of the morph lies: which key pose's excursion and the Bézier parameter in it.
 struct MorphFrame {
@@ -79,4 +79,4 @@ Result<Pose> LoadPose(const std::string& path, const Skin& skin);
 /// kConfig (no pose files; the first file that fails to parse).
 Result<std::vector<Pose>> LoadPoseFolder(const std::string& folder, const Skin& skin);
 
-}  // namespace spherechain::baker
+}  // namespace spherechain::playback

@@ -1,5 +1,5 @@
-// spherechain baker — the paper's Bézier morph between key poses (§5.1, §6) and readable pose files.
-#include "spherechain/baker/morph.h"
+// spherechain playback — the paper's Bézier morph between key poses (§5.1, §6) and readable pose files.
+#include "spherechain/playback/morph.h"
 
 #include <algorithm>
 #include <cmath>
@@ -9,7 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
-namespace spherechain::baker {
+namespace spherechain::playback {
 
 namespace fs = std::filesystem;
 
@@ -174,4 +174,4 @@ Result<std::vector<Pose>> LoadPoseFolder(const std::string& folder, const Skin& 
   return poses;
 }
 
-}  // namespace spherechain::baker
+}  // namespace spherechain::playback

@@ -1,0 +1,31 @@
+# The playback library as a package: install this build tree (BUILD) into WORK/prefix, build
+# tests/package/playback_consumer against it with find_package(spherechain) and run it on the golden v3
+# asset (asset-only validation: no error) and on a truncated copy (SPHC-LOAD, exit 1).
+file(REMOVE_RECURSE ${WORK})
+function(run what)
+  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "${what} failed (${rc}):\n${out}${err}")
+  endif()
+  set(out "${out}" PARENT_SCOPE)
+endfunction()
+run("install" ${CMAKE_COMMAND} --install ${BUILD} --prefix ${WORK}/prefix)
+foreach(f lib/libspherechain_playback.a lib/libspherechain_baker.a include/spherechain/playback/play.h
+          include/spherechain/baker/types.h)
+  if(NOT EXISTS ${WORK}/prefix/${f})
+    message(FATAL_ERROR "not installed: ${f}")
+  endif()
+endforeach()
+run("configure the consumer" ${CMAKE_COMMAND} -S ${SRC}/tests/package/playback_consumer -B ${WORK}/consumer -G Ninja
+    -DCMAKE_PREFIX_PATH=${WORK}/prefix -DCMAKE_BUILD_TYPE=Release)
+run("build the consumer" ${CMAKE_COMMAND} --build ${WORK}/consumer)
+run("run the consumer" ${WORK}/consumer/playback_consumer ${ASSET})
+if(NOT out MATCHES "errors 0")
+  message(FATAL_ERROR "the consumer reported errors on the golden asset: ${out}")
+endif()
+file(WRITE ${WORK}/truncated.sphc "")  # an empty file: not loadable
+execute_process(COMMAND ${WORK}/consumer/playback_consumer ${WORK}/truncated.sphc RESULT_VARIABLE rc OUTPUT_VARIABLE out2)
+if(NOT rc EQUAL 1 OR NOT out2 MATCHES "SPHC-LOAD")
+  message(FATAL_ERROR "the consumer on an empty asset: exit ${rc}, expected 1 with SPHC-LOAD:\n${out2}")
+endif()
+message("playback consumer built against ${WORK}/prefix: ${out}")
