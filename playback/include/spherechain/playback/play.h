@@ -98,8 +98,10 @@ struct PlayReport {
 /// narrow phase on an asset without its data (kErrorMissingField: "re-bake it"); kInternal — a runtime
 /// job failed (the message names the job and its status); the skinning's errors; on_frame's errors.
 /// Cost: per frame one skinning (O(Σ influences)), (repeat ×) refit and detect runs, the tracking
-/// measure O(Σ surrounding-region vertices); allocates (report, scratch); no threads; not reentrant on
-/// shared options callbacks. Timings are wall-clock on the calling thread.
+/// measure O(Σ surrounding-region vertices); allocates (report, runtime Model/Workspace, scratch); owns
+/// no threads; thread-safe for distinct arguments (on_frame is called on the calling thread). Timings are
+/// wall-clock on the calling thread (a loaded machine inflates them; the minimum over `repeat` damps it).
+/// Ownership: the report owns everything it holds; `mesh`, `asset` and `animation` are borrowed for the call.
 Result<PlayReport> Play(const Mesh& mesh, const runtime::AssetView& asset, const Animation& animation,
                         const PlayOptions& options = {});
 
