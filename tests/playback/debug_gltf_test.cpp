@@ -12,6 +12,7 @@
 
 #include <tiny_gltf.h>
 
+#include "playback/rig.h"
 #include "spherechain/baker/bake.h"
 #include "spherechain/baker/import.h"
 #include "spherechain/playback/debug_gltf.h"
@@ -214,4 +215,43 @@ TEST_CASE("animated debug glTF of CesiumMan's walk (heavy)") {
   sc::playback::AnimationRequest r;
   r.frames = 24;
   CheckAnimatedExport(input, r, "animated_cesium_man_walk");
+}
+
+TEST_CASE("animated debug glTF of a synthetic rig: one animation, 3 channels a node, 2 a sphere, B's spheres lowered") {
+  sc::test::Rig r;
+  sc::test::MakeRig(&r);
+  sc::playback::AnimationRequest req;
+  req.mesh_name = "tubes";
+  req.frames = 4;
+  auto anim = sc::playback::OpenAnimation(r.mesh, req);
+  REQUIRE(anim.ok());
+  const std::string out = std::string(SPHERECHAIN_BINARY_DIR) + "/tests/animated_tubes.gltf";
+  sc::playback::AnimatedGltfStats stats;
+  auto s = sc::playback::ExportAnimatedGltf(r.mesh, r.view, anim.value(), out, sc::runtime::RefitMode::kPivotFrame, &stats);
+  REQUIRE_MESSAGE(s.ok(), (s.ok() ? "" : s.error().message));
+  CHECK(stats.channels == 3 * 3 + 2 * 16);
+  CHECK(stats.max_influences == 1);
+  tinygltf::Model m;
+  tinygltf::TinyGLTF loader;
+  std::string err, warn;
+  REQUIRE_MESSAGE(loader.LoadASCIIFromFile(&m, &err, &warn, out), err);
+  REQUIRE(m.animations.size() == 1);
+  CHECK(m.animations[0].name == "lower");
+  CHECK(m.animations[0].channels.size() == 3 * 3 + 2 * 16);
+  FloatReader rd{m};
+  // The last key of sphere 12's translation (tube B): 9 units below its bind centre at t = 0.75 s.
+  for (const auto& c : m.animations[0].channels) {
+    if (m.nodes[c.target_node].name != "sphere_12" || c.target_path != "translation") continue;
+    const auto& smp = m.animations[0].samplers[c.sampler];
+    CHECK(*rd.At(smp.input, 3) == doctest::Approx(0.75f));
+    CHECK(rd.At(smp.output, 3)[2] == doctest::Approx(r.data.spheres[12].center().z() - 9.0f).epsilon(1e-4));
+  }
+  // Errors: a mesh that does not match, a missing folder (nothing written).
+  sc::baker::Mesh shorter = r.mesh;
+  shorter.positions.resize(shorter.positions.size() - 3);
+  CHECK(!sc::playback::ExportAnimatedGltf(shorter, r.view, anim.value(), out).ok());
+  auto missing = sc::playback::ExportAnimatedGltf(r.mesh, r.view, anim.value(), "/nonexistent/dir/x.gltf");
+  REQUIRE(!missing.ok());
+  CHECK(missing.error().code == sc::baker::Error::Code::kIo);
+  std::filesystem::remove(out);
 }

@@ -7,60 +7,15 @@
 #include <cmath>
 #include <set>
 
-#include "runtime/asset_builder.h"
-#include "spherechain/baker/write.h"
+#include "playback/rig.h"
 #include "spherechain/playback/play.h"
 
 namespace sc = spherechain;
 
 namespace {
 
-struct Rig {
-  sc::test::AlignedBytes bytes;
-  sc::runtime::AssetView view;
-  sc::baker::Mesh mesh;
-  sc::test::AssetData data;
-};
-
-/// Tubes apart (B 10 units above A), B's vertices on joint 1, A's on joint 0; clip "lower": B's node
-/// translates from 0 to (0, 0, -12) over 1 s.
-void MakeRig(Rig* r) {
-  sc::test::Mesh m;
-  r->data = sc::test::TwoTubes(false, &m);
-  r->mesh.positions = m.positions;
-  r->mesh.indices = m.triangles;
-  sc::baker::Skin skin;
-  skin.source = "test";
-  skin.nodes.resize(3);
-  skin.nodes[0].name = "root";
-  skin.nodes[1].name = "tube_a";
-  skin.nodes[1].parent = 0;
-  skin.nodes[2].name = "tube_b";
-  skin.nodes[2].parent = 0;
-  skin.joints.resize(2);
-  skin.joints[0].node = 1;
-  skin.joints[1].node = 2;
-  const uint32_t V = m.vertex_count();
-  for (uint32_t v = 0; v < V; ++v) {
-    skin.weight_offsets.push_back(v);
-    skin.weight_joints.push_back(v < V / 2 ? 0 : 1);
-    skin.weights.push_back(1.0f);
-  }
-  skin.weight_offsets.push_back(V);
-  r->mesh.skin = skin;
-  sc::baker::Clip clip;
-  clip.name = "lower";
-  clip.duration_s = 1.0f;
-  sc::baker::Channel ch;
-  ch.node = 2;
-  ch.path = sc::baker::Channel::Path::kTranslation;
-  ch.times = {0.0f, 1.0f};
-  ch.values = {0, 0, 0, 0, 0, -12};
-  clip.channels.push_back(ch);
-  r->mesh.clips.push_back(clip);
-  r->bytes = sc::test::Serialize(r->data);
-  REQUIRE(sc::runtime::LoadAsset(r->bytes.data(), r->bytes.size, &r->view) == sc::runtime::Status::kOk);
-}
+using sc::test::Rig;
+using sc::test::MakeRig;
 
 sc::playback::Animation Open(const Rig& r, uint32_t frames) {
   sc::playback::AnimationRequest req;
