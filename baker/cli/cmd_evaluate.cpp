@@ -252,7 +252,7 @@ int RunEvaluate(const EvaluateArgs& a) {
     refit.positions = {positions.data(), V, 12};
     if (runtime::Status s = refit.Run(); runtime::Failed(s)) return Fail(std::string("refit: ") + runtime::ToString(s));
     if (a.coverage) {
-      const runtime::SphereArrays sp = ctx.spheres();
+      const runtime::SphereArrays sp = ws.spheres();
       std::vector<baker::Ball> balls(sp.count);
       for (uint32_t s = 0; s < sp.count; ++s) {
         balls[s].center = Eigen::Vector3d(sp.x[s], sp.y[s], sp.z[s]);
