@@ -10,7 +10,8 @@
 // pair; the other intersections (same sphere, excluded pair: skinning artefacts at joints) are counted
 // apart. Summary: the proxy's recall (region pairs and sphere pairs), its false alarms (a region pair
 // reported where no triangles of the two regions come within --margin), the narrow phase's recall and
-// precision (triangle pairs), and bind-pose coverage / protrusion of φ1, φ1', φ2.
+// precision (triangle pairs), bind-pose coverage / protrusion of φ1, φ1', φ2, and per frame the refit spheres'
+// coverage of the deformed mesh and how far they stick out of its skin.
 // --sweep-margin re-runs M1 and M2 on the same refit spheres with other contact margins (DetectJob::margin)
 // and prints recall and false alarms against the margin: the trade a user picks the bake's
 // contact_margin_rel from.
@@ -24,6 +25,7 @@
 #include <limits>
 #include <map>
 #include <set>
+#include <tuple>
 
 #include <nlohmann/json.hpp>
 
@@ -136,6 +138,10 @@ struct FrameEval {
   // gap ‖cA − cB‖ − rA − rB − 2·margin [Units: source] (> 0: apart even with the margin).
   std::map<SpherePairKey, float> missed_sphere_gaps;  // exact contact, M2 did not report the pair
   std::map<SpherePairKey, float> false_sphere_gaps;   // M2 reported, inside a false-alarm region pair
+  // The refit spheres against this frame's deformed mesh (coverage.h; only with coverage on): how well
+  // the refit keeps the bind fit's fill and how far the spheres stick out of the deformed skin.
+  bool has_refit_coverage = false;
+  baker::CoverageStats refit_coverage;
 };
 
 /// [{"a", "b", "gap_rel"}]: sphere pairs with their refit gap as a fraction of the body height.
@@ -245,6 +251,20 @@ int RunEvaluate(const EvaluateArgs& a) {
     refit.mode = mode;
     refit.positions = {positions.data(), V, 12};
     if (runtime::Status s = refit.Run(); runtime::Failed(s)) return Fail(std::string("refit: ") + runtime::ToString(s));
+    if (a.coverage) {
+      const runtime::SphereArrays sp = ws.spheres();
+      std::vector<baker::Ball> balls(sp.count);
+      for (uint32_t s = 0; s < sp.count; ++s) {
+        balls[s].center = Eigen::Vector3d(sp.x[s], sp.y[s], sp.z[s]);
+        balls[s].radius = sp.r[s];
+      }
+      baker::CoverageOptions opts;
+      opts.per_sphere = true;
+      auto c = baker::MeasureCoverage(positions, mesh.indices, balls, opts);
+      if (!c.ok()) return Fail(baker::Error{c.error().code, "frame " + std::to_string(f) + ": refit coverage: " + c.error().message});
+      row.refit_coverage = std::move(c.value());
+      row.has_refit_coverage = true;
+    }
     if (runtime::Status s = detect(0, -1.0f, &row.m1_regions, &row.m1_spheres); runtime::Failed(s))
       return Fail(std::string("detect: ") + runtime::ToString(s));
     if (runtime::Status s = detect(1, -1.0f, &row.m2_regions, &row.m2_spheres); runtime::Failed(s))
@@ -421,6 +441,59 @@ int RunEvaluate(const EvaluateArgs& a) {
   const double srecall_m1 = Ratio(double(sfound_m1), double(exact_spheres)), srecall_m2 = Ratio(double(sfound_m2), double(exact_spheres));
   const double n_recall = Ratio(double(narrow_true), double(gt)), n_precision = Ratio(double(narrow_true), double(narrow_total));
 
+  // The refit spheres across the animation: per-frame coverage / protrusion, and the spheres that stick
+  // out of the deformed skin by more than kStickOut of the height (the refit's errors, which cry wolf).
+  constexpr double kStickOut = 0.01;
+  nlohmann::json refit_summary;
+  std::string refit_line, stick_line;
+  {
+    std::vector<double> cov, prot, p95;
+    double out_max = 0;
+    std::map<uint32_t, std::pair<uint32_t, double>> stick;  // sphere -> (frames, max)
+    for (const FrameEval& r : rows) {
+      if (!r.has_refit_coverage) continue;
+      cov.push_back(r.refit_coverage.coverage);
+      prot.push_back(r.refit_coverage.protrusion);
+      p95.push_back(r.refit_coverage.outside_p95_rel);
+      out_max = std::max(out_max, r.refit_coverage.outside_max_rel);
+      for (uint32_t s = 0; s < r.refit_coverage.sphere_outside_max_rel.size(); ++s)
+        if (double o = r.refit_coverage.sphere_outside_max_rel[s]; o > kStickOut) {
+          auto& e = stick[s];
+          ++e.first;
+          e.second = std::max(e.second, o);
+        }
+    }
+    if (!cov.empty()) {
+      auto median = [](std::vector<double> v) { std::sort(v.begin(), v.end()); return v[v.size() / 2]; };
+      std::vector<std::pair<uint32_t, std::pair<uint32_t, double>>> worst_spheres(stick.begin(), stick.end());
+      std::sort(worst_spheres.begin(), worst_spheres.end(),
+                [](const auto& x, const auto& y) { return std::tie(y.second.first, y.second.second, x.first) < std::tie(x.second.first, x.second.second, y.first); });
+      nlohmann::json sj = nlohmann::json::array();
+      for (const auto& [sphere, e] : worst_spheres)
+        sj.push_back({{"sphere", sphere}, {"region", sphere_region(sphere)}, {"frames", e.first}, {"outside_max_rel", e.second}});
+      refit_summary = {{"coverage_median", median(cov)}, {"coverage_min", *std::min_element(cov.begin(), cov.end())},
+                       {"protrusion_median", median(prot)}, {"protrusion_max", *std::max_element(prot.begin(), prot.end())},
+                       {"outside_p95_rel_median", median(p95)}, {"outside_p95_rel_max", *std::max_element(p95.begin(), p95.end())},
+                       {"outside_max_rel", out_max}, {"stick_out_rel", kStickOut}, {"spheres_sticking_out", sj}};
+      char buf[512];
+      std::snprintf(buf, sizeof buf,
+                    "refit spheres on the deformed mesh: coverage median %.1f %% (min %.1f %%), protrusion median %.1f %% "
+                    "(max %.1f %%), outside p95 median %.2f %% (max %.2f %%), max %.2f %% of height\n",
+                    100 * median(cov), 100 * refit_summary["coverage_min"].get<double>(), 100 * median(prot),
+                    100 * refit_summary["protrusion_max"].get<double>(), 100 * median(p95),
+                    100 * refit_summary["outside_p95_rel_max"].get<double>(), 100 * out_max);
+      refit_line = buf;
+      std::snprintf(buf, sizeof buf, "spheres sticking out of the skin by > %.1f %% of height: %zu", 100 * kStickOut, worst_spheres.size());
+      stick_line = buf;
+      for (size_t i = 0; i < worst_spheres.size() && i < 6; ++i) {
+        std::snprintf(buf, sizeof buf, "%s sphere %u (region %d) in %u frames, up to %.2f %%", i ? "," : ";", worst_spheres[i].first,
+                      sphere_region(worst_spheres[i].first), worst_spheres[i].second.first, 100 * worst_spheres[i].second.second);
+        stick_line += buf;
+      }
+      stick_line += "\n";
+    }
+  }
+
   std::printf("evaluate: %s + %s — %s, %u frames, %u spheres, %u triangles, body height %.4g, margin %.4g (%.2f %%)\n",
               a.asset.c_str(), a.anim.mesh.c_str(), anim.Describe().c_str(), anim.frames, view.sphere_count, T, height, margin,
               100.0 * a.margin);
@@ -458,6 +531,9 @@ int RunEvaluate(const EvaluateArgs& a) {
                     100 * coverage_detail[name]["protrusion"].get<double>(),
                     100 * coverage_detail[name]["outside_p95_rel"].get<double>(),
                     100 * coverage_detail[name]["outside_max_rel"].get<double>());
+
+  std::fputs(refit_line.c_str(), stdout);
+  std::fputs(stick_line.c_str(), stdout);
 
   if (!sweep.empty()) {
     std::printf("\ncontact margin sweep (same refit spheres; the asset's margin is %.4g = %.2f %% of height):\n",
@@ -541,6 +617,14 @@ int RunEvaluate(const EvaluateArgs& a) {
                                 {"candidate_pairs", r.narrow.candidate_pairs}, {"triangle_tests", r.narrow.triangle_tests},
                                 {"us", r.narrow_us}}},
                     {"exact_ms", r.exact_ms}});
+      if (r.has_refit_coverage) {
+        nlohmann::json rc = CoverageJson(r.refit_coverage), out = nlohmann::json::array();
+        for (uint32_t s = 0; s < r.refit_coverage.sphere_outside_max_rel.size(); ++s)
+          if (r.refit_coverage.sphere_outside_max_rel[s] > kStickOut)
+            out.push_back({{"sphere", s}, {"outside_max_rel", r.refit_coverage.sphere_outside_max_rel[s]}});
+        rc["spheres_sticking_out"] = out;
+        fr.back()["refit_coverage"] = rc;
+      }
     }
     j["frames"] = fr;
     if (!sweep.empty()) {
@@ -573,6 +657,7 @@ int RunEvaluate(const EvaluateArgs& a) {
         {"coverage", coverage},
         {"protrusion", protrusion},
         {"bind_pose", coverage_detail}};
+    if (!refit_summary.is_null()) j["summary"]["refit"] = refit_summary;
     if (auto s = baker::WriteFileAtomic(a.json, j.dump(2) + "\n"); !s.ok()) return Fail(s.error());
     std::printf("wrote %s\n", a.json.c_str());
   }
@@ -608,7 +693,7 @@ void RegisterEvaluate(CLI::App& app, Commands* commands) {
   sub->add_option("--min-recall", args->min_recall,
                   "Exit 1 when the proxy's region-pair recall (the lower of M1 and M2) is below this, in [0, 1] "
                   "(for a game's CI)");
-  sub->add_flag("!--no-coverage", args->coverage, "Skip the bind-pose coverage / protrusion measurement");
+  sub->add_flag("!--no-coverage", args->coverage, "Skip the coverage / protrusion measurements (bind pose, and the refit spheres on every frame)");
   sub->add_option("--sweep-margin", args->sweep,
                   "Also run M1 and M2 with other contact margins (fractions of the body height, comma-separated; "
                   "alone: 0,0.001,...,0.015) and print recall and false alarms against the margin; JSON: margin_sweep")

@@ -54,6 +54,7 @@ Result<BakeConfig> ParseBakeConfig(const std::string& text, const std::string& w
                                               "disk_step", "disk_step_rel", "penetration_depth", "chains",
                                               "compare_segmentations", "fit", "max_spheres", "cover_voxel_rel",
                                               "min_radius_rel", "min_gain", "region_balance", "refine_sweeps", "dilation_rel",
+                                              "skin_spheres", "skin_tolerance_rel", "skin_min_vertices",
                                               "contact_margin_rel", "near_rel"};
   for (auto it = j.begin(); it != j.end(); ++it)
     if (!known.count(it.key())) return MakeError(Error::Code::kConfig, where + ": unknown key '" + it.key() + "'");
@@ -96,6 +97,9 @@ Result<BakeConfig> ParseBakeConfig(const std::string& text, const std::string& w
   if (s.ok()) s = ReadNumber(j, "region_balance", 0.0, 1.0, &c.fit.region_balance, where);
   if (s.ok()) s = ReadNumber(j, "refine_sweeps", 0, 64, &c.fit.refine_sweeps, where);
   if (s.ok()) s = ReadNumber(j, "dilation_rel", 0.0, 0.05, &c.fit.dilation_rel, where);
+  if (s.ok()) s = ReadNumber(j, "skin_spheres", 0, 4091, &c.fit.skin_spheres, where);
+  if (s.ok()) s = ReadNumber(j, "skin_tolerance_rel", 0.0, 0.2, &c.fit.skin_tolerance_rel, where);
+  if (s.ok()) s = ReadNumber(j, "skin_min_vertices", 1, 1000000, &c.fit.skin_min_vertices, where);
   if (s.ok()) s = ReadNumber(j, "contact_margin_rel", 0.0, 0.05, &c.contact_margin_rel, where);
   if (s.ok()) s = ReadNumber(j, "near_rel", 0.0, 0.2, &c.near_rel, where);
   if (s.ok()) s = ReadNumber(j, "spheres_per_level", 2, 2, &c.fit.spheres_per_level, where);
@@ -143,6 +147,9 @@ std::string CanonicalConfig(const BakeConfig& c) {
     j["refine_sweeps"] = c.fit.refine_sweeps;
     j["region_balance"] = c.fit.region_balance;
     j["dilation_rel"] = c.fit.dilation_rel;
+    j["skin_spheres"] = c.fit.skin_spheres;
+    j["skin_tolerance_rel"] = c.fit.skin_tolerance_rel;
+    j["skin_min_vertices"] = c.fit.skin_min_vertices;
   }
   j["contact_margin_rel"] = c.contact_margin_rel;
   j["near_rel"] = c.near_rel;

@@ -265,6 +265,7 @@ Result<CoverageStats> Measure(const std::vector<float>& positions, const std::ve
   st.voxel_size = g.h;
   st.body_height = height;
   for (int a = 0; a < 3; ++a) st.grid_dims[a] = g.n[a];
+  if (options.per_sphere) st.sphere_outside_max_rel.assign(spheres.size(), 0.0f);
   std::vector<uint32_t> outside;  // union voxels outside the body
   for (size_t i = 0; i < g.total; ++i) {
     const uint8_t s = state[i];
@@ -298,6 +299,12 @@ Result<CoverageStats> Measure(const std::vector<float>& positions, const std::ve
       // A row neighbour's closest point bounds the search well; otherwise the tree's own kd-tree hint.
       hint = (q > 0 && outside[q - 1] + 1 == i) ? tree.closest_point(c, hint) : tree.closest_point(c);
       dist[q] = static_cast<float>(std::sqrt(CGAL::squared_distance(c, hint)) / height);
+      if (options.per_sphere)
+        for (size_t s = 0; s < spheres.size(); ++s) {
+          const Eigen::Vector3d d = Eigen::Vector3d(c.x(), c.y(), c.z()) - spheres[s].center;
+          if (d.squaredNorm() <= spheres[s].radius * spheres[s].radius)
+            st.sphere_outside_max_rel[s] = std::max(st.sphere_outside_max_rel[s], dist[q]);
+        }
     }
     const size_t k95 = static_cast<size_t>(std::floor(0.95 * double(dist.size() - 1)));
     std::nth_element(dist.begin(), dist.begin() + k95, dist.end());

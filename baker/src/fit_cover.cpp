@@ -2,14 +2,19 @@
 // the voxels of the body's interior, radius the exact distance to the surface, chosen by lazy greedy
 // set cover of the interior (Coverage Axis, Dou et al. 2022; lazy evaluation, Minoux 1978) and then
 // moved voxel by voxel while the covered volume grows (coordinate ascent on the coverage objective of
-// variational sphere sets, Wang et al. 2006).
+// variational sphere sets, Wang et al. 2006); then a skin pass, greedy set cover of the limb vertices
+// the volume cover leaves beyond a tolerance (the surface-distance term of sphere-set fitting, e.g.
+// MorphIt 2025, spent where the body is thin: hands, feet).
 #include <algorithm>
 #include <cmath>
 #include <exception>
 #include <limits>
 #include <numeric>
 #include <queue>
+#include <unordered_map>
 #include <string>
+
+#include <Eigen/Eigenvalues>
 
 #include "geometry.h"
 #include "surface_tree.h"
@@ -136,6 +141,37 @@ std::pair<double, double> JunctionBand(const Mesh& mesh, const Segmentation& seg
   return {lo, hi};
 }
 
+// The plane that separates limb `reg` from the torso: least-squares plane through the vertices the
+// two share (the junction loop at the shoulder or hip), its normal pointing into the limb (towards
+// the mean of the limb's vertices). Returns false when they share fewer than 3 vertices or the loop
+// is too close to a line for a plane to be defined.
+bool JunctionPlane(const Mesh& mesh, const Segmentation& seg, Region reg, Vector3d* origin, Vector3d* normal) {
+  const uint32_t V = mesh.vertex_count();
+  const std::vector<uint8_t> mask = JunctionMask(mesh, seg, {reg});
+  Vector3d sum = Vector3d::Zero(), limb = Vector3d::Zero();
+  size_t n = 0, n_limb = 0;
+  for (uint32_t v = 0; v < V; ++v) {
+    if (mask[v] == 3) sum += fit_detail::Vertex(mesh, v), ++n;
+    if (mask[v] == 1) limb += fit_detail::Vertex(mesh, v), ++n_limb;
+  }
+  if (n < 3 || n_limb == 0) return false;
+  const Vector3d o = sum / double(n);
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (uint32_t v = 0; v < V; ++v)
+    if (mask[v] == 3) {
+      const Vector3d d = fit_detail::Vertex(mesh, v) - o;
+      cov += d * d.transpose();
+    }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
+  const Eigen::Vector3d ev = es.eigenvalues();  // ascending
+  if (!(ev[1] > 1e-3 * ev[2])) return false;   // collinear junction: no plane
+  Vector3d nrm = es.eigenvectors().col(0);
+  if (nrm.dot(limb / double(n_limb) - o) < 0.0) nrm = -nrm;
+  *origin = o;
+  *normal = nrm;
+  return true;
+}
+
 }  // namespace
 
 Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation& seg, const FitParams& params,
@@ -146,6 +182,8 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
     return MakeError(Error::Code::kFit, "fit cover: segmentation does not match the mesh's triangle count");
   if (params.max_spheres < kRegionCount || params.max_spheres > 4096)
     return MakeError(Error::Code::kFit, "fit cover: max_spheres must be in [5, 4096]");
+  if (params.skin_spheres < 0 || params.skin_min_vertices < 1 || !(params.skin_tolerance_rel >= 0.0 && params.skin_tolerance_rel <= 0.2))
+    return MakeError(Error::Code::kFit, "fit cover: skin_spheres must be >= 0, skin_min_vertices >= 1, skin_tolerance_rel in [0, 0.2]");
   if (!(params.cover_voxel_rel >= 1e-3 && params.cover_voxel_rel <= 0.1))
     return MakeError(Error::Code::kFit, "fit cover: cover_voxel_rel must be in [0.001, 0.1]");
 
@@ -199,6 +237,44 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
       F.volume[reg] += 1.0;
     }
   }
+  // No limb sphere is centred behind its limb's junction plane (in the chest under a shoulder's skin,
+  // in the pelvis under a hip's): the voxels there keep their region (a limb sphere may still reach
+  // them), but a centre there follows the limb's skin out of the torso when the limb moves.
+  std::vector<uint8_t> behind_junction(total, 0);
+  {
+    std::array<Vector3d, kRegionCount> origin, normal;
+    std::array<bool, kRegionCount> has_plane{};
+    for (int r = 0; r < kRegionCount; ++r)
+      if (r != int(Region::kTorso)) has_plane[r] = JunctionPlane(mesh, seg, Region(r), &origin[r], &normal[r]);
+    for (uint32_t v : iv.inside) {
+      const uint8_t reg = F.label[v];
+      if (reg < kRegionCount && has_plane[reg] && (iv.Centre(v) - origin[reg]).dot(normal[reg]) < 0.0)
+        behind_junction[v] = 1;
+    }
+  }
+  // Nor where the limb's skin does not enclose the centre: walking from the voxel along ±x, ±y, ±z to
+  // the last interior voxel, at least 4 of the 6 walks must end at the limb's own skin. A hip under a
+  // hanging arm's skin (nearest skin: the forearm lying against it) ends at the hip's and leg's skin
+  // on most walks; a voxel inside the arm reaches arm skin on all but the walk along the arm.
+  auto enclosed_by_own_skin = [&](size_t v) {
+    int64_t c[3];
+    F.Coords(v, &c[0], &c[1], &c[2]);
+    int own = 0;
+    for (int axis = 0; axis < 3; ++axis)
+      for (int dir : {-1, 1}) {
+        int64_t p[3] = {c[0], c[1], c[2]};
+        size_t last = v;
+        for (;;) {
+          p[axis] += dir;
+          if (p[axis] < 0 || p[axis] >= int64_t(F.n[axis])) break;
+          const size_t w = size_t(p[0]) + size_t(p[1]) * F.stride[1] + size_t(p[2]) * F.stride[2];
+          if (F.label[w] == kOutside) break;
+          last = w;
+        }
+        own += F.label[last] == F.label[v];
+      }
+    return own >= 4;
+  };
   std::array<bool, kRegionCount> has_triangles{};
   for (uint8_t r : seg.triangle_regions)
     if (r < kRegionCount) has_triangles[r] = true;
@@ -223,6 +299,7 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
   std::vector<uint32_t> cand, start;
   for (uint32_t v : iv.inside) {
     if (F.label[v] == kOutside || F.dist[v] < rmin) continue;
+    if (behind_junction[v] || (F.label[v] != uint8_t(Region::kTorso) && !enclosed_by_own_skin(v))) continue;
     cand.push_back(v);
     int64_t i, j, k;
     F.Coords(v, &i, &j, &k);
@@ -240,7 +317,8 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
     std::priority_queue<Entry> queue;
     for (uint32_t c : start) queue.emplace(F.Gain(c), c);
     std::array<int, kRegionCount> per_region{};
-    while (!queue.empty() && int(chosen.size()) < params.max_spheres) {
+    const int volume_budget = std::max(kRegionCount, params.max_spheres - params.skin_spheres);
+    while (!queue.empty() && int(chosen.size()) < volume_budget) {
       auto [gain, c] = queue.top();
       queue.pop();
       const double now = F.Gain(c);
@@ -302,8 +380,7 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
   // 6. Off the grid: each centre pushed away from its nearest surface point, half a voxel at a time
   //    while its inscribed radius grows (towards the medial axis: a voxel centre is up to half a voxel
   //    diagonal off it, which costs a thin limb a few % of its radius).
-  std::vector<std::pair<Vector3d, double>> balls;
-  for (uint32_t c : chosen) {
+  auto off_grid = [&](uint32_t c) {
     Vector3d x = iv.Centre(c);
     Point3 q(x.x(), x.y(), x.z());
     Point3 near = tree.closest_point(q);
@@ -318,7 +395,73 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
       if (!(ry > r)) break;
       x = y, near = ny, r = ry;
     }
-    balls.emplace_back(x, r);
+    return std::pair<Vector3d, double>(x, r);
+  };
+  std::vector<std::pair<Vector3d, double>> balls;
+  for (uint32_t c : chosen) balls.push_back(off_grid(c));
+
+  // 6b. Skin pass: the limb vertices farther than skin_tolerance_rel outside every sphere of their
+  //     region (a hand's fingers and palm, a foot: too little volume for the cover above) are covered
+  //     greedily, each time by the candidate ball of their region that brings the most of them within
+  //     tolerance (lazy greedy set cover of the surface), with the budget the volume cover left.
+  const double dilation = params.dilation_rel * height;
+  if (int skin_left = params.max_spheres - int(chosen.size()); params.skin_spheres > 0 && skin_left > 0) {
+    Context::Timer t(ctx, "fit.cover.skin");
+    const double tol = params.skin_tolerance_rel * height;
+    const uint32_t V = mesh.vertex_count();
+    std::vector<uint8_t> vreg(V, kOutside);
+    for (uint32_t t = 0; t < T; ++t)
+      for (int k = 0; k < 3; ++k) vreg[mesh.indices[3 * t + k]] = seg.triangle_regions[t];
+    std::vector<uint32_t> uncovered;
+    for (uint32_t v = 0; v < V; ++v) {
+      if (vreg[v] >= kRegionCount || vreg[v] == uint8_t(Region::kTorso)) continue;
+      const Vector3d p = fit_detail::Vertex(mesh, v);
+      double best = std::numeric_limits<double>::infinity();
+      for (size_t k = 0; k < chosen.size(); ++k)
+        if (F.label[chosen[k]] == vreg[v]) best = std::min(best, (p - balls[k].first).norm() - balls[k].second - dilation);
+      if (best > tol) uncovered.push_back(v);
+    }
+    // Which candidate balls bring which uncovered vertices within tolerance: candidates of the vertex's
+    // region in a cube of 3 % of the height around it (a thin part's ball is far smaller).
+    std::vector<uint8_t> is_cand(total, 0);
+    for (uint32_t c : cand) is_cand[c] = 1;
+    std::unordered_map<uint32_t, std::vector<uint32_t>> reach;
+    const int64_t K = int64_t(std::ceil(0.03 * height / F.h));
+    for (uint32_t u = 0; u < uncovered.size(); ++u) {
+      const Vector3d p = fit_detail::Vertex(mesh, uncovered[u]);
+      const Vector3d g = (p - F.origin) / F.h;
+      const int64_t ci = int64_t(std::floor(g.x())), cj = int64_t(std::floor(g.y())), ck = int64_t(std::floor(g.z()));
+      for (int64_t k = std::max<int64_t>(0, ck - K); k <= std::min<int64_t>(int64_t(F.n[2]) - 1, ck + K); ++k)
+        for (int64_t j = std::max<int64_t>(0, cj - K); j <= std::min<int64_t>(int64_t(F.n[1]) - 1, cj + K); ++j)
+          for (int64_t i = std::max<int64_t>(0, ci - K); i <= std::min<int64_t>(int64_t(F.n[0]) - 1, ci + K); ++i) {
+            const size_t v = size_t(i) + size_t(j) * F.stride[1] + size_t(k) * F.stride[2];
+            if (!is_cand[v] || F.label[v] != vreg[uncovered[u]]) continue;
+            if ((iv.Centre(v) - p).norm() <= double(F.dist[v]) * F.h + dilation + tol) reach[uint32_t(v)].push_back(u);
+          }
+    }
+    std::vector<uint8_t> done(uncovered.size(), 0);
+    using Entry = std::pair<size_t, uint32_t>;  // vertices brought in, candidate voxel (ties: larger index)
+    std::priority_queue<Entry> queue;
+    for (const auto& [v, list] : reach) queue.emplace(list.size(), v);
+    int added = 0;
+    while (!queue.empty() && added < skin_left) {
+      const uint32_t v = queue.top().second;
+      queue.pop();
+      size_t now = 0;
+      for (uint32_t u : reach[v]) now += !done[u];
+      if (!queue.empty() && now < queue.top().first) {
+        queue.emplace(now, v);  // stale: re-queue with its current count
+        continue;
+      }
+      if (now < size_t(params.skin_min_vertices)) break;
+      for (uint32_t u : reach[v]) done[u] = 1;
+      chosen.push_back(v);
+      balls.push_back(off_grid(v));
+      ++added;
+    }
+    if (ctx)
+      ctx->Info("fit cover: skin pass: " + std::to_string(uncovered.size()) + " limb vertices beyond " +
+                std::to_string(params.skin_tolerance_rel) + " of the height, " + std::to_string(added) + " spheres added");
   }
 
   // 7. Spheres, their order and labels.
@@ -340,7 +483,6 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
   const auto [arm_lo, arm_hi] = JunctionBand(mesh, seg, up, {Region::kLeftArm, Region::kRightArm});
   const auto [leg_lo, leg_hi] = JunctionBand(mesh, seg, up, {Region::kLeftLeg, Region::kRightLeg});
 
-  const double dilation = params.dilation_rel * height;
   std::vector<FittedSphere> out;
   for (int r = 0; r < kRegionCount; ++r) {
     std::vector<FittedSphere> group;

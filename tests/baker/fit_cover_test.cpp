@@ -124,6 +124,77 @@ TEST_CASE("heavy: fit cover: a flat (elliptic) torso — two spheres a level mis
   }
 }
 
+namespace {
+
+/// Appends `part` moved by `offset` to `m`, its triangles in region `region` of `seg`.
+void AppendPart(sb::Mesh* m, sb::Segmentation* seg, const sb::Mesh& part, const Vector3d& offset, sb::Region region) {
+  const uint32_t base = m->vertex_count();
+  for (uint32_t v = 0; v < part.vertex_count(); ++v)
+    for (int k = 0; k < 3; ++k) m->positions.push_back(part.positions[3 * v + k] + float(offset[k]));
+  for (uint32_t i : part.indices) m->indices.push_back(base + i);
+  seg->triangle_regions.insert(seg->triangle_regions.end(), part.triangle_count(), uint8_t(region));
+}
+
+/// Vertices of m[first, end) farther than `tol` outside every sphere of `region`.
+size_t Uncovered(const sb::Mesh& m, uint32_t first, const std::vector<sb::FittedSphere>& spheres, sb::Region region, double tol) {
+  size_t n = 0;
+  for (uint32_t v = first; v < m.vertex_count(); ++v) {
+    const Vector3d p(m.positions[3 * v], m.positions[3 * v + 1], m.positions[3 * v + 2]);
+    double best = 1e300;
+    for (const auto& s : spheres)
+      if (s.region == region) best = std::min(best, (p - s.center).norm() - s.radius);
+    n += best > tol;
+  }
+  return n;
+}
+
+}  // namespace
+
+TEST_CASE("heavy: fit cover: the skin pass covers a thin hand the volume cover leaves bare") {
+  // A torso (radius 1, 4 high), an arm beside it (radius 0.3, 3 long) and at its end a flat "hand"
+  // (an elliptic plate 0.8 wide, 0.1 thick, 0.8 long): 0.4 % of the body's volume, so the volume
+  // greedy gives it no sphere, while all its skin lies beyond the tolerance.
+  sb::Mesh m;
+  sb::Segmentation seg;
+  AppendPart(&m, &seg, ClosedTube(1.0, 1.0, 4.0, 48, 32), Vector3d::Zero(), sb::Region::kTorso);
+  AppendPart(&m, &seg, ClosedTube(0.3, 0.3, 3.0, 32, 24), Vector3d(2.5, 0.0, 0.0), sb::Region::kLeftArm);
+  const uint32_t hand_first = m.vertex_count();
+  AppendPart(&m, &seg, ClosedTube(0.4, 0.05, 0.8, 48, 16), Vector3d(2.5, 3.1, 0.0), sb::Region::kLeftArm);
+  m.up_axis = sb::UpAxis::kY;
+  const double height = 4.0, tol = 0.01 * height;
+
+  sb::FitParams off;
+  off.max_spheres = 160;
+  off.skin_spheres = 0;
+  auto bare = sb::FitCover(m, seg, off);
+  REQUIRE_MESSAGE(bare.ok(), (bare.ok() ? "" : bare.error().message));
+  sb::FitParams on = off;
+  on.skin_spheres = 140;
+  on.skin_min_vertices = 1;
+  auto skinned = sb::FitCover(m, seg, on);
+  REQUIRE_MESSAGE(skinned.ok(), (skinned.ok() ? "" : skinned.error().message));
+  const size_t hand_vertices = m.vertex_count() - hand_first;
+  const size_t u_bare = Uncovered(m, hand_first, bare.value(), sb::Region::kLeftArm, tol),
+               u_skin = Uncovered(m, hand_first, skinned.value(), sb::Region::kLeftArm, tol);
+  MESSAGE("hand: " << hand_vertices << " vertices, beyond tolerance without the skin pass " << u_bare << " ("
+                   << bare->size() << " spheres), with it " << u_skin << " (" << skinned->size() << " spheres)");
+  CHECK(u_bare == hand_vertices);  // the volume cover leaves the whole hand bare
+  // All of it but the plate's knife edge where the rim meets the end caps (thinner than a voxel: no
+  // inner ball of at least one voxel brings it within tolerance).
+  CHECK(u_skin * 5 <= hand_vertices);
+  CHECK(skinned->size() <= 160);
+  // The spheres added sit in the hand and inside it (no sphere sticks out of a flat side by more than
+  // the dilation).
+  size_t in_hand = 0;
+  for (const auto& s : skinned.value())
+    if (s.center.x() > 2.0 && s.center.y() > 3.05) {
+      ++in_hand;
+      CHECK(s.region == sb::Region::kLeftArm);
+      CHECK(std::abs(s.center.z()) + s.radius <= 0.05 + on.dilation_rel * height + 0.01);
+    }
+  CHECK(in_hand >= 2);
+}
+
 TEST_CASE("fit cover: bad parameters and a mesh without volume are clear errors") {
   const sb::Mesh m = ClosedTube(1, 1, 4, 32, 16);
   sb::FitParams p;
@@ -131,6 +202,14 @@ TEST_CASE("fit cover: bad parameters and a mesh without volume are clear errors"
   auto r = sb::FitCover(m, AllTorso(m), p);
   REQUIRE_FALSE(r.ok());
   CHECK(r.error().message.find("max_spheres") != std::string::npos);
+  for (auto bad : {+[](sb::FitParams* q) { q->skin_spheres = -1; }, +[](sb::FitParams* q) { q->skin_min_vertices = 0; },
+                   +[](sb::FitParams* q) { q->skin_tolerance_rel = std::nan(""); }}) {
+    sb::FitParams q;
+    bad(&q);
+    auto e = sb::FitCover(m, AllTorso(m), q);
+    REQUIRE_FALSE(e.ok());
+    CHECK(e.error().message.find("skin_") != std::string::npos);
+  }
   sb::Segmentation short_seg;
   short_seg.triangle_regions.assign(3, 4);
   CHECK_FALSE(sb::FitCover(m, short_seg, sb::FitParams{}).ok());

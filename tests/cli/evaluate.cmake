@@ -39,6 +39,17 @@ endif()
 if(NOT contacts GREATER 0)
   message(FATAL_ERROR "the MakeHuman morph should have contacts, got ${contacts}")
 endif()
+# The refit spheres measured against every deformed frame: a coverage near the bind fit's (a broken
+# refit that left the spheres at bind pose or scattered them would fall far below), and the list of
+# spheres sticking out of the skin.
+string(JSON refit_cov GET "${json}" summary refit coverage_median)
+string(JSON bind_cov GET "${json}" summary coverage phi1_adjusted)
+string(JSON stick TYPE "${json}" summary refit spheres_sticking_out)
+string(JSON f0_cov GET "${json}" frames 0 refit_coverage coverage)
+message(STATUS "refit coverage median ${refit_cov} (bind ${bind_cov}), frame 0 ${f0_cov}")
+if(refit_cov LESS 0.8 OR refit_cov GREATER 1 OR NOT stick STREQUAL "ARRAY" OR f0_cov LESS 0.8)
+  message(FATAL_ERROR "refit coverage across the animation: median ${refit_cov}, frame 0 ${f0_cov}, spheres_sticking_out ${stick}")
+endif()
 string(JSON ff TYPE "${json}" summary proxy false_alarm_frames)
 string(JSON fr LENGTH "${json}" frames)
 string(JSON e TYPE "${json}" frames 0 exact_region_pairs)

@@ -21,6 +21,7 @@ namespace spherechain::baker {
 /// Bake configuration. JSON form (every key optional):
 /// { "fit": "cover"|"paper", "max_spheres": 128, "cover_voxel_rel": 0.005, "min_radius_rel": 0.003,
 ///   "min_gain": 0.0002, "region_balance": 0.5, "refine_sweeps": 4, "dilation_rel": 0.003,
+///   "skin_spheres": 16, "skin_tolerance_rel": 0.01, "skin_min_vertices": 8,
 ///   "contact_margin_rel": 0.004,
 ///   "near_rel": 0.005,
 ///   "segmentation": "auto"|"rig"|"geometry"|"map", "region_map": "map.json", "rig": "x.mhskel",

@@ -21,6 +21,9 @@ struct CoverageOptions {
   /// Most voxels the grid may have; when voxel_rel would give more, the voxels are enlarged (uniformly,
   /// cube voxels kept) until the grid fits. Memory is ~1 byte a voxel. [Limit: >= 1]
   uint32_t max_voxels = 8'000'000;
+  /// Also fill CoverageStats::sphere_outside_max_rel (one entry per sphere). Cost: one membership test
+  /// per (protruding voxel, sphere whose box holds it).
+  bool per_sphere = false;
 };
 
 /// What MeasureCoverage found. Volumes are voxel estimates in source units³ (count × voxel_size³);
@@ -39,6 +42,10 @@ struct CoverageStats {
   /// 0 when no such voxel. [Units: relative to the body height]
   double outside_p95_rel = 0.0;
   double outside_max_rel = 0.0;  ///< see outside_p95_rel
+  /// With CoverageOptions::per_sphere, #spheres entries: the largest surface distance of the outside
+  /// voxels inside that sphere (how far it sticks out of the skin), 0 when none; else empty.
+  /// [Units: relative to the body height]
+  std::vector<float> sphere_outside_max_rel;
   uint32_t voxels_inside_body = 0;  ///< voxel centres classified inside the body
   uint32_t voxels_in_spheres = 0;   ///< voxel centres inside at least one sphere
   uint32_t voxels_both = 0;         ///< inside the body and inside at least one sphere

@@ -32,6 +32,15 @@ struct FitParams {
   double region_balance = 0.5;
   int refine_sweeps = 4;              ///< optimisation sweeps (0: greedy only) [Limit: 0..64]
   double dilation_rel = 0.003;        ///< radii grown past the surface / body height [Limit: 0..0.05]
+  /// Skin pass: spheres of the budget kept for the limb skin the volume cover leaves far from every
+  /// sphere (hands, feet, elbows: little volume, much contact). 0 turns it off. [Limit: 0..max_spheres−5]
+  int skin_spheres = 16;
+  /// A limb vertex is uncovered when it lies more than this × body height outside every sphere of its
+  /// region (radii with the dilation). [Limit: 0..0.2]
+  double skin_tolerance_rel = 0.01;
+  /// The skin pass stops when the best sphere would bring fewer uncovered vertices within tolerance.
+  /// [Limit: 1..1e6]
+  int skin_min_vertices = 8;
   // --- paper fit (FitTubular, FitTorso) ---
   int rays = 80;                    ///< N_r, rays of the torso disk [Limit: >= 8]
   int spheres_per_level = 2;        ///< N_s [Limit: 2]
