@@ -317,7 +317,10 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
     std::priority_queue<Entry> queue;
     for (uint32_t c : start) queue.emplace(F.Gain(c), c);
     std::array<int, kRegionCount> per_region{};
-    const int volume_budget = std::max(kRegionCount, params.max_spheres - params.skin_spheres);
+    // The skin pass covers limb skin only: a body without limbs keeps the whole budget for its volume.
+    bool has_limb = false;
+    for (int r = 0; r < kRegionCount; ++r) has_limb = has_limb || (r != int(Region::kTorso) && F.volume[r] > 0.0);
+    const int volume_budget = has_limb ? std::max(kRegionCount, params.max_spheres - params.skin_spheres) : params.max_spheres;
     while (!queue.empty() && int(chosen.size()) < volume_budget) {
       auto [gain, c] = queue.top();
       queue.pop();

@@ -33,7 +33,8 @@ struct FitParams {
   int refine_sweeps = 4;              ///< optimisation sweeps (0: greedy only) [Limit: 0..64]
   double dilation_rel = 0.003;        ///< radii grown past the surface / body height [Limit: 0..0.05]
   /// Skin pass: spheres of the budget kept for the limb skin the volume cover leaves far from every
-  /// sphere (hands, feet, elbows: little volume, much contact). 0 turns it off. [Limit: 0..max_spheres−5]
+  /// sphere (hands, feet, elbows: little volume, much contact); kept only when the body has limbs.
+  /// 0 turns it off. [Limit: 0..max_spheres−5]
   int skin_spheres = 16;
   /// A limb vertex is uncovered when it lies more than this × body height outside every sphere of its
   /// region (radii with the dilation). [Limit: 0..0.2]
