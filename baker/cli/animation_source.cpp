@@ -5,6 +5,7 @@
 
 #include "commands.h"
 #include "spherechain/baker/import.h"
+#include "spherechain/baker/vertex_contract.h"
 #include "spherechain/baker/write.h"
 
 namespace spherechain::cli {
@@ -80,6 +81,7 @@ bool OpenAssetAndMesh(const std::string& asset_path, const std::string& mesh_pat
   if (!LoadAssetFile(asset_path, asset, error)) return false;
   baker::ImportOptions opts;
   opts.rig_path = rig;
+  opts.vertices = baker::ContractForReimport(asset->view, mesh_path);  // the buffer the asset was baked from
   baker::Context log = MakeLoggingContext();
   auto imported = baker::ImportMesh(mesh_path, opts, &log);
   if (!imported.ok())
@@ -95,7 +97,7 @@ bool CheckFingerprint(const runtime::AssetView& view, const baker::Mesh& mesh, c
   const std::string pair = "mesh '" + mesh_path + "' does not match asset '" + asset_path + "': ";
   if (f.vertex_count != af->vertex_count()) {
     *error = pair + "the mesh has " + std::to_string(f.vertex_count) + " vertices, the asset was baked from " +
-             std::to_string(af->vertex_count());
+             std::to_string(af->vertex_count()) + " (" + baker::DescribeVertexMismatch(view, f.vertex_count) + ")";
     return false;
   }
   if (f.triangle_count != af->triangle_count()) {

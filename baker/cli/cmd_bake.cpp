@@ -13,7 +13,7 @@ namespace spherechain::cli {
 namespace {
 
 struct BakeArgs {
-  std::string input, output, report, config, rig, segmentation, region_map, ray_csv, png;
+  std::string input, output, report, config, rig, segmentation, region_map, ray_csv, png, vertices;
   double disk_step = 0.0;
 };
 
@@ -29,6 +29,9 @@ void PrintSummary(const baker::BakeResult& r, const baker::Context& ctx) {
   }
   std::printf("%-10s %10u %8zu   (unassigned triangles: %u)\n", "total", r.mesh.triangle_count(), r.fit.spheres.size(),
               r.unassigned_triangles);
+  std::printf("vertices: %u (contract %s", r.mesh.vertex_count(), r.mesh.vertex_contract.c_str());
+  if (r.mesh.source_vertex_count) std::printf("; source %u, joined %u", r.mesh.source_vertex_count, r.mesh.joined_vertex_count);
+  std::printf(")\n");
   std::printf("\nchains:");
   for (const auto& c : r.chains) std::printf(" %s=%zu", c.name.c_str(), c.spheres.size());
   std::printf("   excluded pairs: %zu\n", r.excluded.size());
@@ -63,6 +66,8 @@ int RunBake(const BakeArgs& a) {
     config = std::move(c).value();
   }
   if (!a.rig.empty()) config.import.rig_path = a.rig;
+  if (a.vertices == "joined") config.import.vertices = baker::VertexContract::kJoined;
+  if (a.vertices == "source") config.import.vertices = baker::VertexContract::kSource;
   if (!a.region_map.empty()) config.region_map = a.region_map;
   if (a.disk_step > 0) config.fit.disk_step = a.disk_step;
   if (a.segmentation == "rig") config.segmentation = baker::SegmentMethod::kRig;
@@ -118,6 +123,11 @@ void RegisterBake(CLI::App& app, Commands* commands) {
   sub->add_option("--rig", args->rig, "MakeHuman rig (.mhskel) for an OBJ; default: default.mhskel beside the OBJ");
   sub->add_option("--segmentation", args->segmentation, "auto (rig when rigged, else geometry), rig, geometry, map")
       ->check(CLI::IsMember({"auto", "rig", "geometry", "map"}));
+  sub->add_option("--vertices", args->vertices,
+                  "Vertex contract for assimp formats (.x .fbx .dae ...): joined (default; what engines' importers "
+                  "give: aiProcess_JoinIdenticalVertices) or source (the importer's own buffer); recorded in the "
+                  "asset. glTF/OBJ: no-op with a warning (their buffer is the engine's)")
+      ->check(CLI::IsMember({"joined", "source"}));
   sub->add_option("--region-map", args->region_map, "JSON region map {\"triangle_regions\": [...]} (implies map)");
   sub->add_option("--disk-step", args->disk_step, "Torso disk step delta in source units (default: relative to height)");
   sub->add_option("--ray-csv", args->ray_csv, "CSV of the paper's per-ray comparison for the torso spheres");

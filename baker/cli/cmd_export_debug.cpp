@@ -7,6 +7,7 @@
 #include "animation_source.h"
 #include "asset_file.h"
 #include "commands.h"
+#include "spherechain/baker/vertex_contract.h"
 #include "spherechain/baker/debug_export.h"
 #include "spherechain/baker/import.h"
 #include "spherechain/playback/debug_gltf.h"
@@ -32,6 +33,7 @@ int RunExport(const ExportArgs& a) {
     baker::ImportOptions opts;
     opts.rig_path = a.rig;
     opts.read_clips = false;
+    opts.vertices = baker::ContractForReimport(asset.view, a.anim.mesh);
     baker::Context ctx = MakeLoggingContext();
     auto imported = baker::ImportMesh(a.anim.mesh, opts, &ctx);
     if (!imported.ok()) return Fail(imported.error());

@@ -22,6 +22,10 @@ nlohmann::json Describe(const runtime::AssetView& v) {
   j["generator"] = a.generator() ? a.generator()->str() : "";
   j["vertices"] = v.vertex_count;
   j["triangles"] = v.triangle_count;
+  // The vertex contract (import.h VertexContract; "unrecorded": baked before the field).
+  j["vertex_contract"] = a.vertex_contract() ? a.vertex_contract()->str() : "unrecorded";
+  if (a.source_vertex_count() || a.joined_vertex_count())
+    j["vertices_by_contract"] = {{"source", a.source_vertex_count()}, {"joined", a.joined_vertex_count()}};
   j["spheres"] = v.sphere_count;
   j["units"] = a.units() ? a.units()->str() : "";
   j["unit_scale_m"] = a.unit_scale_m();

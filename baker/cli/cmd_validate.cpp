@@ -13,12 +13,15 @@ namespace spherechain::cli {
 namespace {
 
 struct ValidateArgs {
-  std::string asset, mesh, json, rig;
+  std::string asset, mesh, json, rig, vertices;
 };
 
 int RunValidate(const ValidateArgs& a) {
   baker::Context log = MakeLoggingContext();
-  const std::vector<playback::Finding> findings = playback::ValidateAssetFile(a.asset, a.mesh, a.rig, &log);
+  const baker::VertexContract vertices = a.vertices == "joined"   ? baker::VertexContract::kJoined
+                                        : a.vertices == "source" ? baker::VertexContract::kSource
+                                                                 : baker::VertexContract::kAuto;
+  const std::vector<playback::Finding> findings = playback::ValidateAssetFile(a.asset, a.mesh, a.rig, &log, vertices);
   const size_t errors = playback::CountErrors(findings);
   for (const playback::Finding& f : findings)
     std::printf("%-7s %-15s %s: %s\n", playback::ToString(f.severity), f.code.c_str(), f.location.ToString().c_str(),
@@ -53,6 +56,10 @@ void RegisterValidate(CLI::App& app, Commands* commands) {
   sub->add_option("asset", args->asset, "Asset (.sphc)")->required();
   sub->add_option("--mesh", args->mesh, "The character file it should belong to (fingerprint, bind pose)");
   sub->add_option("--rig", args->rig, "MakeHuman rig (.mhskel), as for bake");
+  sub->add_option("--vertices", args->vertices,
+                  "Vertex contract to read an assimp-format --mesh with, i.e. the buffer your game feeds: joined or "
+                  "source (default: the one the asset records)")
+      ->check(CLI::IsMember({"joined", "source"}));
   sub->add_option("--json", args->json, "Write the findings as JSON (code, severity, location, where{file, sphere, other_sphere, chain, field}, message)");
   commands->handlers.emplace_back(sub, [args] { return RunValidate(*args); });
 }

@@ -55,7 +55,7 @@ Result<BakeConfig> ParseBakeConfig(const std::string& text, const std::string& w
                                               "compare_segmentations", "fit", "max_spheres", "cover_voxel_rel",
                                               "min_radius_rel", "min_gain", "region_balance", "refine_sweeps", "dilation_rel",
                                               "skin_spheres", "skin_tolerance_rel", "skin_min_vertices",
-                                              "contact_margin_rel", "near_rel"};
+                                              "contact_margin_rel", "near_rel", "vertices"};
   for (auto it = j.begin(); it != j.end(); ++it)
     if (!known.count(it.key())) return MakeError(Error::Code::kConfig, where + ": unknown key '" + it.key() + "'");
 
@@ -77,6 +77,12 @@ Result<BakeConfig> ParseBakeConfig(const std::string& text, const std::string& w
   }
   if (j.contains("region_map")) c.region_map = j["region_map"];
   if (j.contains("rig")) c.import.rig_path = j["rig"];
+  if (j.contains("vertices")) {  // import.h VertexContract
+    const std::string v = j["vertices"].is_string() ? j["vertices"].get<std::string>() : std::string();
+    if (v == "joined") c.import.vertices = VertexContract::kJoined;
+    else if (v == "source") c.import.vertices = VertexContract::kSource;
+    else return MakeError(Error::Code::kConfig, where + ": 'vertices' must be \"joined\" or \"source\"");
+  }
   if (j.contains("compare_segmentations")) {
     if (!j["compare_segmentations"].is_boolean())
       return MakeError(Error::Code::kConfig, where + ": 'compare_segmentations' must be true or false");
@@ -139,6 +145,7 @@ std::string CanonicalConfig(const BakeConfig& c) {
   json j;  // nlohmann::json objects are key-sorted: stable
   j["segmentation"] = c.region_map.empty() ? MethodName(c.segmentation) : "map";
   j["fit"] = FitMethodName(c.fit.method);
+  if (c.import.vertices != VertexContract::kAuto) j["vertices"] = ToString(c.import.vertices);
   if (c.fit.method == FitMethod::kCover) {
     j["max_spheres"] = c.fit.max_spheres;
     j["cover_voxel_rel"] = c.fit.cover_voxel_rel;
@@ -328,6 +335,9 @@ json MakeBakeReport(const BakeResult& r, const BakeConfig& config, const Context
   j["input"] = mesh.source_path;
   j["format"] = mesh.source_format;
   j["vertices"] = mesh.vertex_count();
+  j["vertex_contract"] = mesh.vertex_contract;
+  if (mesh.source_vertex_count || mesh.joined_vertex_count)
+    j["vertices_by_contract"] = {{"source", mesh.source_vertex_count}, {"joined", mesh.joined_vertex_count}};
   j["triangles"] = mesh.triangle_count();
   j["spheres"] = spheres.size();
   j["units"] = mesh.units;

@@ -150,6 +150,15 @@ MeshIssues InspectMesh(const Mesh& mesh) {
   return issues;
 }
 
+const char* ToString(VertexContract c) {
+  switch (c) {
+    case VertexContract::kJoined: return "joined";
+    case VertexContract::kSource: return "source";
+    case VertexContract::kAuto: break;
+  }
+  return "auto";
+}
+
 Result<Mesh> ImportMesh(const std::string& path, const ImportOptions& options, Context* ctx) {
   Context::Timer timer(ctx, "import");
   try {
@@ -180,6 +189,10 @@ Result<Mesh> ImportMesh(const std::string& path, const ImportOptions& options, C
       mesh = detail::ImportAssimp(path, options, ctx);
     }
     if (!mesh.ok()) return mesh;
+    if (mesh->vertex_contract == "file" && options.vertices != VertexContract::kAuto && ctx)
+      ctx->Warn("import: " + path + ": --vertices " + ToString(options.vertices) +
+                " applies to assimp formats only; a ." + ext +
+                " file's vertex buffer is already the one engines upload (read as is)");
     mesh->source_path = path;
     if (mesh->source_format.empty()) mesh->source_format = ext;
     if (mesh->positions.size() / 3 > kMaxInputVertices)

@@ -1,7 +1,8 @@
 // spherechain baker — import of every non-glTF, non-OBJ format through assimp.
 //
-// Post-processing: aiProcess_Triangulate only (it keeps each mesh's vertex array and order; nothing
-// welds, splits or sorts). Order (import.h): nodes depth-first from the root, children in file order;
+// Post-processing: aiProcess_Triangulate, then with the joined vertex contract (the default, import.h
+// VertexContract) aiProcess_JoinIdenticalVertices — the buffer a game importing the file with those
+// flags gets; with the source contract nothing welds, splits or sorts. Order (import.h): nodes depth-first from the root, children in file order;
 // for each node its meshes in node order (a mesh referenced by several nodes appears once per
 // instance). Positions are the assembled bind pose (node global × vertex). Skin::nodes is the whole
 // node hierarchy, parents-first, with rest local TRS decomposed from aiNode::mTransformation.
@@ -101,6 +102,21 @@ class ConfinedIOSystem : public Assimp::DefaultIOSystem {
   std::vector<std::string> refused_;
 };
 
+/// #V of the concatenated mesh: every mesh instance of every node (a mesh referenced by several nodes
+/// counts once per instance), as ImportAssimp concatenates them.
+uint64_t InstancedVertexCount(const aiScene* scene) {
+  uint64_t n = 0;
+  std::vector<const aiNode*> stack{scene->mRootNode};
+  while (!stack.empty()) {
+    const aiNode* an = stack.back();
+    stack.pop_back();
+    for (unsigned k = 0; k < an->mNumMeshes; ++k)
+      if (an->mMeshes[k] < scene->mNumMeshes) n += scene->mMeshes[an->mMeshes[k]]->mNumVertices;
+    for (unsigned c = 0; c < an->mNumChildren; ++c) stack.push_back(an->mChildren[c]);
+  }
+  return n;
+}
+
 }  // namespace
 
 bool InsideFolder(const std::string& folder, const std::string& file) {
@@ -143,9 +159,21 @@ Result<Mesh> ImportAssimp(const std::string& path, const ImportOptions& options,
   if (!refused.empty() && ctx) ctx->Warn("import: " + path + ": refused to read " + refused);
   if (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE)
     return FileError(Error::Code::kFormat, path, "assimp read an incomplete scene");
+  // The vertex contract (import.h VertexContract): #V is counted before the join and after it, so the
+  // asset can tell a game which contract a mismatching buffer looks like.
+  const bool join = options.vertices != VertexContract::kSource;
+  const uint64_t source_vertices = InstancedVertexCount(scene);
+  if (join) {
+    scene = importer.ApplyPostProcessing(aiProcess_JoinIdenticalVertices);
+    if (!scene || !scene->mRootNode)
+      return FileError(Error::Code::kFormat, path,
+                       std::string("assimp cannot join identical vertices: ") + importer.GetErrorString());
+  }
 
   Mesh mesh;
   mesh.source_format = ext;
+  mesh.vertex_contract = join ? "joined" : "source";
+  mesh.source_vertex_count = static_cast<uint32_t>(std::min<uint64_t>(source_vertices, UINT32_MAX));
   mesh.up_axis = UpAxis::kY;  // assimp's convention; overridden below when the file says otherwise
   if (scene->mMetaData) {
     int32_t up = -1, sign = 1;
@@ -343,6 +371,13 @@ Result<Mesh> ImportAssimp(const std::string& path, const ImportOptions& options,
         if (!ch.times.empty()) clip.duration_s = std::max(clip.duration_s, ch.times.back());
       mesh.clips.push_back(std::move(clip));
     }
+  }
+  if (join) {
+    mesh.joined_vertex_count = mesh.vertex_count();
+  } else {  // the clips are read: joining the scene now only counts what the joined contract gives
+    scene = importer.ApplyPostProcessing(aiProcess_JoinIdenticalVertices);
+    mesh.joined_vertex_count =
+        scene ? static_cast<uint32_t>(std::min<uint64_t>(InstancedVertexCount(scene), UINT32_MAX)) : 0;
   }
   return mesh;
 }

@@ -139,6 +139,7 @@ std::vector<uint8_t> BuildAsset(const AssetInputs& in) {
                                   float(in.coverage->outside_p95_rel), float(in.coverage->outside_max_rel),
                                   in.coverage_voxel_rel);
   auto units = b.CreateString(mesh.units);
+  auto vertex_contract = b.CreateString(mesh.vertex_contract);
   flatbuffers::Offset<flatbuffers::Vector<uint16_t>> sphere_joints_v;
   flatbuffers::Offset<flatbuffers::Vector<float>> sphere_weights_v;
   if (in.centre_weights) {
@@ -157,6 +158,9 @@ std::vector<uint8_t> BuildAsset(const AssetInputs& in) {
     ab.add_sphere_joints(sphere_joints_v);
     ab.add_sphere_joint_weights(sphere_weights_v);
   }
+  ab.add_vertex_contract(vertex_contract);
+  ab.add_source_vertex_count(mesh.source_vertex_count);
+  ab.add_joined_vertex_count(mesh.joined_vertex_count);
   ab.add_fingerprint(fingerprint);
   ab.add_parts(parts_v);
   ab.add_units(units);

@@ -6,6 +6,7 @@
 #include <memory>
 
 #include "spherechain/baker/import.h"
+#include "spherechain/baker/vertex_contract.h"
 #include "spherechain/baker/write.h"
 #include "spherechain/runtime/runtime.h"
 
@@ -135,7 +136,10 @@ void CheckMesh(const runtime::AssetView& view, const baker::Mesh& mesh, const Va
     out->push_back(Make("FP-COUNTS", Severity::kError, At(names.mesh, -1, -1, "fingerprint"),
                         "mesh has " + std::to_string(fp.vertex_count) + " vertices / " +
                             std::to_string(fp.triangle_count) + " triangles, the asset was baked from " +
-                            std::to_string(f->vertex_count()) + " / " + std::to_string(f->triangle_count())));
+                            std::to_string(f->vertex_count()) + " / " + std::to_string(f->triangle_count()) +
+                            (fp.vertex_count != f->vertex_count()
+                                 ? " (" + baker::DescribeVertexMismatch(view, fp.vertex_count) + ")"
+                                 : std::string())));
     return;
   }
   if (fp.indices_hash != f->indices_hash())
@@ -224,7 +228,8 @@ std::vector<Finding> ValidateAssetBytes(const uint8_t* bytes, size_t size, const
 }
 
 std::vector<Finding> ValidateAssetFile(const std::string& asset_path, const std::string& mesh_path,
-                                       const std::string& rig_path, baker::Context* log) {
+                                       const std::string& rig_path, baker::Context* log,
+                                       baker::VertexContract vertices) {
   ValidateNames names{asset_path, mesh_path};
   auto bytes = baker::ReadFileBytes(asset_path, runtime::kMaxAssetBytes);
   if (!bytes.ok()) return {Make("SPHC-LOAD", Severity::kError, At(asset_path), bytes.error().message)};
@@ -235,6 +240,14 @@ std::vector<Finding> ValidateAssetFile(const std::string& asset_path, const std:
   baker::ImportOptions opts;
   opts.rig_path = rig_path;
   opts.read_clips = false;
+  opts.vertices = vertices;
+  if (vertices == baker::VertexContract::kAuto) {  // the asset's own contract
+    runtime::AssetView view;
+    std::unique_ptr<uint64_t[]> storage(new uint64_t[(bytes->size() + 7) / 8 + 1]);
+    std::memcpy(storage.get(), bytes->data(), bytes->size());
+    if (runtime::Succeeded(runtime::LoadAsset(reinterpret_cast<const uint8_t*>(storage.get()), bytes->size(), &view)))
+      opts.vertices = baker::ContractForReimport(view, mesh_path);
+  }
   auto mesh = baker::ImportMesh(mesh_path, opts, log);
   if (!mesh.ok()) {
     out.push_back(Make("MESH-IMPORT", Severity::kError, At(mesh_path), mesh.error().message));

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "spherechain/baker/import.h"
+#include "spherechain/baker/vertex_contract.h"
 #include "spherechain/runtime/runtime.h"
 
 namespace runtime = spherechain::runtime;
@@ -51,7 +52,9 @@ int main(int argc, char** argv) {
 
   // 2. Each character's vertex buffer: the bind pose with its left arm swung by its own angle (a game
   //    hands over what its skinning produced).
-  auto mesh = baker::ImportMesh(argv[2]);
+  baker::ImportOptions import;
+  import.vertices = baker::ContractForReimport(asset, argv[2]);  // the vertex buffer the asset was baked from
+  auto mesh = baker::ImportMesh(argv[2], import);
   if (!mesh.ok()) return std::fprintf(stderr, "error: %s\n", mesh.error().message.c_str()), 1;
   const uint32_t V = asset.vertex_count;
   if (mesh->positions.size() != size_t{V} * 3)

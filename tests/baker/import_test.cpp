@@ -217,7 +217,12 @@ TEST_CASE("import: BCN_Epileptic.X joins three meshes into one standing body wit
   CHECK(m.up_axis == UpAxis::kY);
   CHECK(e[up] > 1.5f * e[(up + 1) % 3]);
   CHECK(e[up] > 1.5f * e[(up + 2) % 3]);
-  CHECK(m.vertex_count() == 15378);  // assimp's .x reader: one vertex per face corner
+  // assimp's .x reader gives one vertex per face corner (--vertices source: 15,378); the default joined
+  // contract reads what a game's aiProcess_JoinIdenticalVertices gives (vertex_contract_test.cpp).
+  CHECK(m.vertex_contract == "joined");
+  CHECK(m.source_vertex_count == 15378);
+  CHECK(m.vertex_count() == m.joined_vertex_count);
+  CHECK(m.vertex_count() < 15378);
   CHECK(m.triangle_count() == 5126);
   REQUIRE(m.skin.has_value());
   CHECK(m.skin->nodes.size() == 58);

@@ -35,7 +35,23 @@ struct MeshIssues {
 /// Counts the MeshIssues of a mesh that passed ValidateMesh. O(#T log #T), allocates.
 MeshIssues InspectMesh(const Mesh& mesh);
 
+/// Which vertex buffer an assimp-format character is read as (README "Vertex contract"); the asset's
+/// indices refer to it and records it (Asset.vertex_contract), and the runtime must be fed that buffer.
+/// - kJoined: what engines' importers give — assimp with aiProcess_Triangulate |
+///   aiProcess_JoinIdenticalVertices (vertices whose every attribute assimp read — position, normal,
+///   UVs, colours, bone weights — is identical become one; triangle order kept). The default.
+/// - kSource: assimp with aiProcess_Triangulate only: the importer's own buffer (for `.x`, one vertex
+///   per face corner).
+/// - kAuto: kJoined for assimp formats; for glTF / OBJ the file's own buffer (nothing else applies).
+/// glTF and OBJ buffers are already the engine's: kJoined / kSource are a no-op there (a warning through
+/// the Context says so) and the mesh records "file".
+enum class VertexContract : uint8_t { kAuto, kJoined, kSource };
+/// "auto", "joined", "source".
+const char* ToString(VertexContract c);
+
 struct ImportOptions {
+  /// Vertex contract for assimp formats (see VertexContract). [opt] default kAuto = joined.
+  VertexContract vertices = VertexContract::kAuto;
   /// [opt] MakeHuman rig: a `.mhskel` path. Empty: for a MakeHuman `base.obj`, `default.mhskel` and
   /// `default_weights.mhw` beside the OBJ are used when present.
   std::string rig_path;
@@ -52,8 +68,11 @@ struct ImportOptions {
 /// - `.gltf` / `.glb`: tinygltf. Primitives of every mesh node in the default scene, visited
 ///   depth-first in node order, concatenated in (node, primitive) order; node global transforms are
 ///   applied so the bind pose is assembled. Skin joints, inverse binds, JOINTS_0/WEIGHTS_0 and clips.
-/// - every other extension: assimp, with no post-process that welds or reorders vertices
-///   (triangulation only); meshes concatenated in depth-first node order, then mesh order in the node.
+/// - every other extension: assimp, triangulated, and with `options.vertices` joined (the default)
+///   aiProcess_JoinIdenticalVertices, nothing else that welds or reorders; meshes concatenated in
+///   depth-first node order, then mesh order in the node. Mesh::source_vertex_count and
+///   joined_vertex_count hold #V under both contracts (one read, the join applied after counting).
+///   Cost: the join is O(#V log #V) in assimp.
 /// - MakeHuman `base.obj`: only group `obj_group` ("body"); its vertices are the OBJ's vertices in file
 ///   order restricted to those the group references (for base.obj: the first 13,380, order kept).
 ///   The rig (mhskel + mhw) becomes Mesh::skin.
@@ -64,6 +83,10 @@ struct ImportOptions {
 /// Errors: kIo (missing / unreadable), kFormat (unsupported, too large or corrupt), kInvalidMesh (no
 /// triangles, too many vertices / triangles, NaN/Inf coordinates, index out of range). Nothing is written.
 Result<Mesh> ImportMesh(const std::string& path, const ImportOptions& options = {}, Context* ctx = nullptr);
+
+/// True when ImportMesh reads `path` through assimp (a supported extension other than glTF, GLB, OBJ):
+/// the files the vertex contract applies to. By extension only; the file is not opened.
+bool ReadThroughAssimp(const std::string& path);
 
 /// Checks a mesh the way every importer does: at least one triangle, finite coordinates, indices in
 /// range. Returns kInvalidMesh with the first offending vertex / triangle named.

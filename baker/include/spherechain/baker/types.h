@@ -186,6 +186,13 @@ struct Mesh {
   UpAxis up_axis = UpAxis::kY;
   std::optional<Skin> skin;
   std::vector<Clip> clips;
+  /// The vertex contract the importer applied (import.h VertexContract): "joined" or "source" for the
+  /// assimp formats, "file" for glTF / OBJ (the file's own buffer, which is what engines upload).
+  std::string vertex_contract = "file";
+  /// assimp formats: #V under each contract (the same file read both ways); 0 for the other formats.
+  /// Lets a mismatch message say which contract a game's buffer looks like (Asset.*_vertex_count).
+  uint32_t source_vertex_count = 0;
+  uint32_t joined_vertex_count = 0;
 
   uint32_t vertex_count() const { return static_cast<uint32_t>(positions.size() / 3); }
   uint32_t triangle_count() const { return static_cast<uint32_t>(indices.size() / 3); }

@@ -10,7 +10,8 @@
 //   SPHERE-NO-REGION warning a sphere whose surrounding region (§5.1) is empty: the narrow phase can
 //                            never confirm a contact of it
 //   MESH-IMPORT     error    the mesh file could not be imported
-//   FP-COUNTS       error    mesh vertex/triangle counts differ from the asset's fingerprint
+//   FP-COUNTS       error    mesh vertex/triangle counts differ from the asset's fingerprint (a vertex
+//                            count says which vertex contract, joined or source, the buffer looks like)
 //   FP-INDICES      error    same counts, different triangle indices (re-bake)
 //   FP-POSITIONS    warning  same counts and indices, different bind positions (moved vertices)
 //   RUNTIME         error    the runtime refused the bind-pose refit/detect (status in the message)
@@ -24,6 +25,7 @@
 #include <string>
 #include <vector>
 
+#include "spherechain/baker/import.h"
 #include "spherechain/baker/types.h"
 #include "spherechain/runtime/asset.h"
 
@@ -83,9 +85,12 @@ std::vector<Finding> ValidateAssetBytes(const uint8_t* bytes, size_t size, const
 /// What `spherechain validate` does: reads `asset_path` (SPHC-LOAD with the reader's message when it
 /// cannot), and with a non-empty `mesh_path` imports it (`rig_path`: MakeHuman .mhskel, empty =
 /// default; MESH-IMPORT on failure, no clips read) and validates against it. `log` [opt] receives the
-/// importer's log lines.
+/// importer's log lines. `vertices` [opt]: the vertex contract to import an assimp-format mesh with
+/// (the buffer the game feeds); kAuto = the one the asset records (baker vertex_contract.h
+/// ContractForReimport). A buffer of the other contract is an FP-COUNTS error saying so.
 std::vector<Finding> ValidateAssetFile(const std::string& asset_path, const std::string& mesh_path = {},
-                                       const std::string& rig_path = {}, baker::Context* log = nullptr);
+                                       const std::string& rig_path = {}, baker::Context* log = nullptr,
+                                       baker::VertexContract vertices = baker::VertexContract::kAuto);
 
 /// Number of findings of severity kError (the asset is valid when 0).
 size_t CountErrors(const std::vector<Finding>& findings);

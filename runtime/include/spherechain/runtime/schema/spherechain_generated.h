@@ -722,7 +722,10 @@ struct Asset FLATBUFFERS_FINAL_CLASS : private flatbuffers::Table {
     VT_COVERAGE = 58,
     VT_JOINT_COUNT = 60,
     VT_SPHERE_JOINTS = 62,
-    VT_SPHERE_JOINT_WEIGHTS = 64
+    VT_SPHERE_JOINT_WEIGHTS = 64,
+    VT_VERTEX_CONTRACT = 66,
+    VT_SOURCE_VERTEX_COUNT = 68,
+    VT_JOINED_VERTEX_COUNT = 70
   };
   uint32_t schema_version() const {
     return GetField<uint32_t>(VT_SCHEMA_VERSION, 0);
@@ -817,6 +820,15 @@ struct Asset FLATBUFFERS_FINAL_CLASS : private flatbuffers::Table {
   const flatbuffers::Vector<float> *sphere_joint_weights() const {
     return GetPointer<const flatbuffers::Vector<float> *>(VT_SPHERE_JOINT_WEIGHTS);
   }
+  const flatbuffers::String *vertex_contract() const {
+    return GetPointer<const flatbuffers::String *>(VT_VERTEX_CONTRACT);
+  }
+  uint32_t source_vertex_count() const {
+    return GetField<uint32_t>(VT_SOURCE_VERTEX_COUNT, 0);
+  }
+  uint32_t joined_vertex_count() const {
+    return GetField<uint32_t>(VT_JOINED_VERTEX_COUNT, 0);
+  }
   bool Verify(flatbuffers::Verifier &verifier) const {
     return VerifyTableStart(verifier) &&
            VerifyField<uint32_t>(verifier, VT_SCHEMA_VERSION, 4) &&
@@ -878,6 +890,10 @@ struct Asset FLATBUFFERS_FINAL_CLASS : private flatbuffers::Table {
            verifier.VerifyVector(sphere_joints()) &&
            VerifyOffset(verifier, VT_SPHERE_JOINT_WEIGHTS) &&
            verifier.VerifyVector(sphere_joint_weights()) &&
+           VerifyOffset(verifier, VT_VERTEX_CONTRACT) &&
+           verifier.VerifyString(vertex_contract()) &&
+           VerifyField<uint32_t>(verifier, VT_SOURCE_VERTEX_COUNT, 4) &&
+           VerifyField<uint32_t>(verifier, VT_JOINED_VERTEX_COUNT, 4) &&
            verifier.EndTable();
   }
 };
@@ -979,6 +995,15 @@ struct AssetBuilder {
   void add_sphere_joint_weights(flatbuffers::Offset<flatbuffers::Vector<float>> sphere_joint_weights) {
     fbb_.AddOffset(Asset::VT_SPHERE_JOINT_WEIGHTS, sphere_joint_weights);
   }
+  void add_vertex_contract(flatbuffers::Offset<flatbuffers::String> vertex_contract) {
+    fbb_.AddOffset(Asset::VT_VERTEX_CONTRACT, vertex_contract);
+  }
+  void add_source_vertex_count(uint32_t source_vertex_count) {
+    fbb_.AddElement<uint32_t>(Asset::VT_SOURCE_VERTEX_COUNT, source_vertex_count, 0);
+  }
+  void add_joined_vertex_count(uint32_t joined_vertex_count) {
+    fbb_.AddElement<uint32_t>(Asset::VT_JOINED_VERTEX_COUNT, joined_vertex_count, 0);
+  }
   explicit AssetBuilder(flatbuffers::FlatBufferBuilder &_fbb)
         : fbb_(_fbb) {
     start_ = fbb_.StartTable();
@@ -1022,8 +1047,14 @@ inline flatbuffers::Offset<Asset> CreateAsset(
     flatbuffers::Offset<spherechain::schema::Coverage> coverage = 0,
     uint32_t joint_count = 0,
     flatbuffers::Offset<flatbuffers::Vector<uint16_t>> sphere_joints = 0,
-    flatbuffers::Offset<flatbuffers::Vector<float>> sphere_joint_weights = 0) {
+    flatbuffers::Offset<flatbuffers::Vector<float>> sphere_joint_weights = 0,
+    flatbuffers::Offset<flatbuffers::String> vertex_contract = 0,
+    uint32_t source_vertex_count = 0,
+    uint32_t joined_vertex_count = 0) {
   AssetBuilder builder_(_fbb);
+  builder_.add_joined_vertex_count(joined_vertex_count);
+  builder_.add_source_vertex_count(source_vertex_count);
+  builder_.add_vertex_contract(vertex_contract);
   builder_.add_sphere_joint_weights(sphere_joint_weights);
   builder_.add_sphere_joints(sphere_joints);
   builder_.add_joint_count(joint_count);
@@ -1090,7 +1121,10 @@ inline flatbuffers::Offset<Asset> CreateAssetDirect(
     flatbuffers::Offset<spherechain::schema::Coverage> coverage = 0,
     uint32_t joint_count = 0,
     const std::vector<uint16_t> *sphere_joints = nullptr,
-    const std::vector<float> *sphere_joint_weights = nullptr) {
+    const std::vector<float> *sphere_joint_weights = nullptr,
+    const char *vertex_contract = nullptr,
+    uint32_t source_vertex_count = 0,
+    uint32_t joined_vertex_count = 0) {
   auto generator__ = generator ? _fbb.CreateString(generator) : 0;
   auto parts__ = parts ? _fbb.CreateVector<flatbuffers::Offset<spherechain::schema::MeshPart>>(*parts) : 0;
   auto units__ = units ? _fbb.CreateString(units) : 0;
@@ -1113,6 +1147,7 @@ inline flatbuffers::Offset<Asset> CreateAssetDirect(
   auto fit_method__ = fit_method ? _fbb.CreateString(fit_method) : 0;
   auto sphere_joints__ = sphere_joints ? _fbb.CreateVector<uint16_t>(*sphere_joints) : 0;
   auto sphere_joint_weights__ = sphere_joint_weights ? _fbb.CreateVector<float>(*sphere_joint_weights) : 0;
+  auto vertex_contract__ = vertex_contract ? _fbb.CreateString(vertex_contract) : 0;
   return spherechain::schema::CreateAsset(
       _fbb,
       schema_version,
@@ -1145,7 +1180,10 @@ inline flatbuffers::Offset<Asset> CreateAssetDirect(
       coverage,
       joint_count,
       sphere_joints__,
-      sphere_joint_weights__);
+      sphere_joint_weights__,
+      vertex_contract__,
+      source_vertex_count,
+      joined_vertex_count);
 }
 
 /// Bind-pose coverage of the body by the spheres (baker coverage.h MeasureCoverage).
