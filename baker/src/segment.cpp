@@ -61,7 +61,11 @@ WeldedGraph BuildWeldedGraph(const Mesh& mesh) {
   const uint32_t nt = mesh.triangle_count();
   WeldedGraph g;
   g.rep.resize(nv);
-  // Weld on a quantised position (1e-6 of the bounding-box diagonal).
+  // Weld every pair of vertices within eps = 1e-6 of the bounding-box diagonal (Chebyshev distance),
+  // transitively: a grid of eps cells, each vertex compared with the vertices of its 27 neighbouring
+  // cells, clusters by union-find, the lowest index the representative. (A plain quantised key would
+  // split two copies of one seam position that straddle a cell boundary: mirrored halves whose seam
+  // copies differ in the last bits, parts placed by separate node transforms.)
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = Eigen::Vector3d::Constant(-1e300);
   for (uint32_t v = 0; v < nv; ++v) {
     lo = lo.cwiseMin(Position(mesh, v));
@@ -73,14 +77,36 @@ WeldedGraph BuildWeldedGraph(const Mesh& mesh) {
       return std::hash<int64_t>()(k[0] * 73856093LL ^ k[1] * 19349663LL ^ k[2] * 83492791LL);
     }
   };
-  std::unordered_map<std::array<int64_t, 3>, uint32_t, KeyHash> first;
-  first.reserve(nv);
+  std::unordered_map<std::array<int64_t, 3>, std::vector<uint32_t>, KeyHash> cells;
+  cells.reserve(nv);
+  std::vector<uint32_t> parent(nv);
+  std::iota(parent.begin(), parent.end(), 0u);
+  auto find = [&](uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
   for (uint32_t v = 0; v < nv; ++v) {
     const Eigen::Vector3d p = Position(mesh, v);
-    const std::array<int64_t, 3> key{std::llround(p.x() / eps), std::llround(p.y() / eps), std::llround(p.z() / eps)};
-    auto [it, inserted] = first.emplace(key, v);
-    g.rep[v] = it->second;
+    bool duplicate = false;  // an equal position is stored already: cells hold distinct positions only
+    const std::array<int64_t, 3> key{static_cast<int64_t>(std::floor(p.x() / eps)),
+                                     static_cast<int64_t>(std::floor(p.y() / eps)),
+                                     static_cast<int64_t>(std::floor(p.z() / eps))};
+    for (int64_t dx = -1; dx <= 1; ++dx)
+      for (int64_t dy = -1; dy <= 1; ++dy)
+        for (int64_t dz = -1; dz <= 1; ++dz) {
+          auto it = cells.find({key[0] + dx, key[1] + dy, key[2] + dz});
+          if (it == cells.end()) continue;
+          for (uint32_t u : it->second) {
+            const double d = (Position(mesh, u) - p).cwiseAbs().maxCoeff();
+            if (d > eps) continue;
+            duplicate = duplicate || d == 0.0;
+            const uint32_t a = find(u), b = find(v);
+            if (a != b) parent[std::max(a, b)] = std::min(a, b);
+          }
+        }
+    if (!duplicate) cells[key].push_back(v);
   }
+  for (uint32_t v = 0; v < nv; ++v) g.rep[v] = find(v);  // the root is the cluster's lowest index
   // CSR adjacency over representatives.
   std::vector<std::pair<uint32_t, uint32_t>> edges;
   edges.reserve(6 * size_t(nt));

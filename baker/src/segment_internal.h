@@ -28,8 +28,11 @@ Eigen::Vector3d UpVector(UpAxis axis);
 Status CheckMeshForSegmentation(const Mesh& mesh);
 
 /// Vertex adjacency for *analysis only*: vertices at the same position (UV / normal seams, split glTF
-/// primitives) are welded to one representative (the lowest index), edges come from the triangles.
-/// Nothing in the mesh is changed. Cost O(#V log #V + #T).
+/// primitives, mirrored halves, triangle soups such as `.x` read with --vertices source) are welded to
+/// one representative (the lowest index): positions within 1e-6 of the bounding-box diagonal of each
+/// other (per coordinate), transitively; edges come from the triangles. So parts meeting at coincident
+/// positions are one body for segmentation. Nothing in the mesh is changed (the asset keeps the
+/// source's indices). Cost O(#V + #T) expected (hash grid), O(#T log #T) for the edges.
 struct WeldedGraph {
   std::vector<uint32_t> rep;      ///< #V: representative vertex of each vertex (rep[rep[v]] == rep[v])
   std::vector<uint32_t> offsets;  ///< #V+1 CSR over representatives (rows of non-representatives empty)

@@ -550,3 +550,166 @@ TEST_CASE("segment: region map, wrong length and bad values are config errors") 
   REQUIRE(by_vertex.ok());
   CHECK(std::all_of(by_vertex->triangle_regions.begin(), by_vertex->triangle_regions.end(), [](uint8_t r) { return r == 4; }));
 }
+
+// ---------------------------------------------------------------------------------------------------
+// Welded segmentation (issue 11): parts meeting at coincident positions are one body.
+
+namespace {
+
+/// `mesh` cut at the plane x = `centre` into two halves, the way a modeller's mirrored halves or an
+/// exporter's per-material parts arrive: each triangle goes to the half of its centroid; the vertices of
+/// the left half come first, then those of the right half, so every vertex used by both halves (the
+/// seam) appears twice. Triangle order is kept, skin rows are copied. With `straddle`, the two copies of
+/// each seam vertex are moved apart by 0.4 of the segmentation's weld tolerance (1e-6 of the bounding-box
+/// diagonal) across a multiple of half that tolerance — positions a quantised weld key would split — and
+/// `*nudged_original` gets the left copy's positions (the same body without the cut).
+sc::Mesh SplitAtMidPlane(const sc::Mesh& mesh, double centre, bool straddle, sc::Mesh* nudged_original,
+                         uint32_t* seam_count) {
+  const uint32_t nv = mesh.vertex_count(), nt = mesh.triangle_count();
+  std::vector<uint8_t> used(size_t(nv) * 2, 0);
+  std::vector<uint8_t> side(nt);
+  for (uint32_t t = 0; t < nt; ++t) {
+    double x = 0;
+    for (int k = 0; k < 3; ++k) x += mesh.positions[3 * size_t(mesh.indices[3 * t + k])] / 3.0;
+    side[t] = x >= centre;
+    for (int k = 0; k < 3; ++k) used[2 * size_t(mesh.indices[3 * t + k]) + side[t]] = 1;
+  }
+  std::vector<uint32_t> remap(size_t(nv) * 2, UINT32_MAX);
+  sc::Mesh out;
+  out.up_axis = mesh.up_axis;
+  out.source_format = mesh.source_format;
+  std::vector<uint32_t> origin;
+  for (int s = 0; s < 2; ++s)
+    for (uint32_t v = 0; v < nv; ++v)
+      if (used[2 * size_t(v) + s]) {
+        remap[2 * size_t(v) + s] = uint32_t(origin.size());
+        origin.push_back(v);
+      }
+  for (uint32_t v : origin)
+    for (int d = 0; d < 3; ++d) out.positions.push_back(mesh.positions[3 * size_t(v) + d]);
+  for (uint32_t t = 0; t < nt; ++t)
+    for (int k = 0; k < 3; ++k) out.indices.push_back(remap[2 * size_t(mesh.indices[3 * t + k]) + side[t]]);
+  *nudged_original = mesh;
+  *seam_count = 0;
+  double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+  for (uint32_t v = 0; v < nv; ++v)
+    for (int d = 0; d < 3; ++d)
+      lo[d] = std::min(lo[d], double(mesh.positions[3 * v + d])), hi[d] = std::max(hi[d], double(mesh.positions[3 * v + d]));
+  const double eps = 1e-6 * std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                                      (hi[2] - lo[2]) * (hi[2] - lo[2]));
+  for (uint32_t v = 0; v < nv; ++v) {
+    if (!used[2 * size_t(v)] || !used[2 * size_t(v) + 1]) continue;
+    ++*seam_count;
+    if (!straddle) continue;
+    const double k = std::floor(mesh.positions[3 * size_t(v)] / eps);
+    const float left = float((k + 0.3) * eps), right = float((k + 0.7) * eps);
+    out.positions[3 * size_t(remap[2 * size_t(v)])] = left;
+    out.positions[3 * size_t(remap[2 * size_t(v) + 1])] = right;
+    nudged_original->positions[3 * size_t(v)] = left;
+  }
+  if (mesh.skin) {
+    sc::Skin skin = *mesh.skin;
+    skin.weight_offsets = {0};
+    skin.weight_joints.clear();
+    skin.weights.clear();
+    for (uint32_t v : origin) {
+      for (uint32_t w = mesh.skin->weight_offsets[v]; w < mesh.skin->weight_offsets[v + 1]; ++w) {
+        skin.weight_joints.push_back(mesh.skin->weight_joints[w]);
+        skin.weights.push_back(mesh.skin->weights[w]);
+      }
+      skin.weight_offsets.push_back(uint32_t(skin.weights.size()));
+    }
+    out.skin = std::move(skin);
+  }
+  return out;
+}
+
+size_t Differences(const sc::Segmentation& a, const sc::Segmentation& b) {
+  size_t n = 0;
+  for (size_t t = 0; t < a.triangle_regions.size(); ++t) n += a.triangle_regions[t] != b.triangle_regions.at(t);
+  return n;
+}
+
+/// Known answer: the halves segment exactly like the body they were cut from (same region per triangle).
+void CheckHalvesLikeWhole(const sc::Mesh& mesh, double centre, sc::SegmentMethod method, const std::string& what) {
+  for (bool straddle : {false, true}) {
+    CAPTURE(what);
+    CAPTURE(straddle);
+    sc::Mesh whole;
+    uint32_t seam = 0;
+    const sc::Mesh halves = SplitAtMidPlane(mesh, centre, straddle, &whole, &seam);
+    MESSAGE(what << (straddle ? " (seam copies straddling a weld cell)" : " (seam copies bitwise equal)") << ": "
+                 << whole.vertex_count() << " vertices -> " << halves.vertex_count() << " (" << seam
+                 << " seam vertices twice)");
+    CHECK(seam > 20);
+    CHECK(halves.vertex_count() == whole.vertex_count() + seam);
+    auto a = sc::Segment(whole, method);
+    REQUIRE_MESSAGE(a.ok(), (a.ok() ? "" : a.error().message));
+    auto b = sc::Segment(halves, method);
+    REQUIRE_MESSAGE(b.ok(), (b.ok() ? "" : b.error().message));
+    MESSAGE("whole:  " << Describe(a.value()) << "\nhalves: " << Describe(b.value()));
+    CHECK(b->method == a->method);
+    CHECK(Differences(a.value(), b.value()) == 0);
+    if (straddle) continue;  // PieceCounts joins bitwise-equal positions only
+    const auto pieces = PieceCounts(halves, b.value());
+    for (int r = 0; r < 4; ++r) CHECK_MESSAGE(pieces[r] == 1, "region " << r << ": " << pieces[r] << " pieces");
+  }
+}
+
+}  // namespace
+
+TEST_CASE("segment: a synthetic body cut into two halves at the mid-plane segments like the whole (welded)") {
+  const SyntheticBody body = MakeSyntheticBody(false);
+  CheckHalvesLikeWhole(body.mesh, 0.0, sc::SegmentMethod::kGeometry, "synthetic A-pose");
+}
+
+TEST_CASE("segment (heavy): MakeHuman cut into mirrored halves segments like the whole, by rig and by geometry") {
+  if (!Require(SharedData("makehuman/base.obj")) || !Require(SharedData("makehuman/default_weights.mhw"))) return;
+  const sc::Mesh mesh = LoadMakeHumanBody(true);
+  CheckHalvesLikeWhole(mesh, 0.0, sc::SegmentMethod::kRig, "MakeHuman rig");
+  CheckHalvesLikeWhole(mesh, 0.0, sc::SegmentMethod::kGeometry, "MakeHuman geometry");
+}
+
+TEST_CASE("segment (heavy): every X file of assimp-testmodels segments the same read as a triangle soup (--vertices source) and joined") {
+  const std::string dir = spherechain::test::AssimpModel("X");
+  if (!Require(dir)) return;
+  std::vector<std::string> files;
+  for (const auto& e : std::filesystem::directory_iterator(dir)) {
+    std::string ext = e.path().extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    if (ext == ".x") files.push_back(e.path().string());
+  }
+  std::sort(files.begin(), files.end());
+  CHECK(files.size() >= 5);
+  int bodies = 0;
+  for (const std::string& f : files) {
+    CAPTURE(f);
+    sc::ImportOptions source_opts, joined_opts;
+    source_opts.vertices = sc::VertexContract::kSource;
+    joined_opts.vertices = sc::VertexContract::kJoined;
+    auto source = sc::ImportMesh(f, source_opts);
+    auto joined = sc::ImportMesh(f, joined_opts);
+    REQUIRE(source.ok() == joined.ok());
+    if (!source.ok()) {
+      MESSAGE(f << ": not imported either way: " << source.error().message);
+      continue;
+    }
+    CHECK(source->triangle_count() == joined->triangle_count());
+    for (sc::SegmentMethod m : {sc::SegmentMethod::kAuto, sc::SegmentMethod::kGeometry}) {
+      auto a = sc::Segment(source.value(), m);
+      auto b = sc::Segment(joined.value(), m);
+      REQUIRE(a.ok() == b.ok());
+      if (!a.ok()) {
+        CHECK(a.error().message == b.error().message);
+        MESSAGE(f << ": refused either way: " << a.error().message);
+        continue;
+      }
+      ++bodies;
+      MESSAGE(f << " (" << source->vertex_count() << " / " << joined->vertex_count() << " vertices): "
+                << Describe(a.value()) << " | joined " << Describe(b.value()));
+      CHECK(a->method == b->method);
+      CHECK(Differences(a.value(), b.value()) == 0);
+    }
+  }
+  CHECK(bodies >= 2);  // BCN_Epileptic by rig and by geometry at least
+}
