@@ -244,7 +244,7 @@ using TrianglePair = std::pair<uint32_t, uint32_t>;  // source triangle indices,
 
 // What one asset's narrow phase sees, for the bench-side replica and the CGAL classification.
 struct NarrowAsset {
-  const sc::NarrowPhaseContext* context;
+  const sc::NarrowPhaseModel* context;  // the per-asset data: weld ids, owners, exclusions
   const uint32_t* triangles;  // Asset.triangles, #T×3
   uint32_t triangle_count;
   bool Adjacent(uint32_t s, uint32_t t) const {  // a welded corner in common
@@ -388,9 +388,10 @@ CgalClasses Classify(const NarrowAsset& m, const CgalPeer& peer,
 
 // Prints the "narrow phase" section; false when a cross-check failed.
 bool NarrowPhase(const Workload& w, const sc::AssetView& view, int runs, int cgal_frames, bool per_frame) {
-  sc::NarrowPhaseContext np;
-  if (sc::Status s = np.Init(view); s != sc::Status::kOk) {
-    std::printf("\nnarrow phase: skipped (NarrowPhaseContext::Init: %s%s)\n", sc::ToString(s),
+  sc::NarrowPhaseModel np;
+  sc::NarrowPhaseWorkspace np_ws;
+  if (sc::Status s = np.Init(view); s != sc::Status::kOk || (s = np_ws.Init(np)) != sc::Status::kOk) {
+    std::printf("\nnarrow phase: skipped (NarrowPhaseModel / NarrowPhaseWorkspace::Init: %s%s)\n", sc::ToString(s),
                 s == sc::Status::kErrorMissingField ? "; the asset has no triangles / weld_ids: re-bake it" : "");
     return true;
   }
@@ -401,7 +402,8 @@ bool NarrowPhase(const Workload& w, const sc::AssetView& view, int runs, int cga
   uint32_t count = 0;
   sc::NarrowPhaseStats st;
   sc::NarrowPhaseJob job;
-  job.context = &np;
+  job.model = &np;
+  job.workspace = &np_ws;
   job.exclusions = sc::Exclusions::kAsset;
   job.output = out.data();
   job.capacity = static_cast<uint32_t>(out.size());

@@ -186,8 +186,9 @@ int RunEvaluate(const EvaluateArgs& a) {
   runtime::Workspace ws;
   if (runtime::Status s = model.Init(view); runtime::Failed(s) || runtime::Failed(s = ws.Init(model)))
     return Fail("'" + a.asset + "': runtime Model / Workspace::Init: " + runtime::ToString(s));
-  runtime::NarrowPhaseContext narrow;
-  if (runtime::Status s = narrow.Init(view); runtime::Failed(s))
+  runtime::NarrowPhaseModel narrow;
+  runtime::NarrowPhaseWorkspace narrow_ws;
+  if (runtime::Status s = narrow.Init(view); runtime::Failed(s) || runtime::Failed(s = narrow_ws.Init(narrow)))
     return Fail("'" + a.asset + "': narrow phase: " + runtime::ToString(s) +
                 (s == runtime::Status::kErrorMissingField ? " (baked before the narrow phase existed: re-bake it)" : ""));
 
@@ -272,7 +273,8 @@ int RunEvaluate(const EvaluateArgs& a) {
     // Narrow phase.
     uint32_t n_contacts = 0;
     runtime::NarrowPhaseJob job;
-    job.context = &narrow;
+    job.model = &narrow;
+    job.workspace = &narrow_ws;
     job.positions = refit.positions;
     job.output = contacts.data();
     job.capacity = static_cast<uint32_t>(contacts.size());

@@ -157,8 +157,9 @@ int RunView(const ViewArgs& a) {
   runtime::Workspace ws;
   if (runtime::Status s = model.Init(view); runtime::Failed(s) || runtime::Failed(s = ws.Init(model)))
     return Fail(std::string("runtime Model / Workspace::Init: ") + runtime::ToString(s));
-  runtime::NarrowPhaseContext narrow;
-  if (runtime::Status s = narrow.Init(view); runtime::Failed(s))
+  runtime::NarrowPhaseModel narrow;
+  runtime::NarrowPhaseWorkspace narrow_ws;
+  if (runtime::Status s = narrow.Init(view); runtime::Failed(s) || runtime::Failed(s = narrow_ws.Init(narrow)))
     return Fail("'" + a.asset + "': narrow phase: " + runtime::ToString(s) +
                 (s == runtime::Status::kErrorMissingField ? " (baked before the narrow phase existed: re-bake it)" : ""));
   const runtime::DetectMethod method = a.method == "m1" ? runtime::DetectMethod::kM1 : runtime::DetectMethod::kM2;
@@ -214,7 +215,8 @@ int RunView(const ViewArgs& a) {
     uint32_t contact_count = 0;
     runtime::NarrowPhaseStats stats;
     runtime::NarrowPhaseJob job;
-    job.context = &narrow;
+    job.model = &narrow;
+    job.workspace = &narrow_ws;
     job.positions = positions;
     job.count = &contact_count;
     job.stats = &stats;

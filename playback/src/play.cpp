@@ -64,8 +64,8 @@ Error RuntimeError(runtime::Status s) { return MakeError(Error::Code::kInternal,
 class Player {
  public:
   Player(const runtime::AssetView& view, const runtime::Model* model, runtime::Workspace* ws, const PlayOptions& o,
-         runtime::NarrowPhaseContext* narrow)
-      : view_(view), model_(model), ws_(ws), o_(o), repeat_(std::max(1u, o.repeat)), narrow_(narrow) {
+         const runtime::NarrowPhaseModel* narrow, runtime::NarrowPhaseWorkspace* narrow_ws)
+      : view_(view), model_(model), ws_(ws), o_(o), repeat_(std::max(1u, o.repeat)), narrow_(narrow), narrow_ws_(narrow_ws) {
     mode_ = o.refit == PlayRefit::kPaper ? runtime::RefitMode::kPaper : runtime::RefitMode::kPivotFrame;
     out_m1_.resize(runtime::DetectBound(view, runtime::DetectMethod::kM1));
     out_m2_.resize(runtime::DetectBound(view, runtime::DetectMethod::kM2));
@@ -120,7 +120,8 @@ class Player {
     const auto* sr = view_.asset->sphere_regions();
     if (narrow_) {
       runtime::NarrowPhaseJob job;
-      job.context = narrow_;
+      job.model = narrow_;
+      job.workspace = narrow_ws_;
       job.positions = refit.positions;
       job.output = contacts_.data();
       job.capacity = static_cast<uint32_t>(contacts_.size());
@@ -189,7 +190,8 @@ class Player {
   uint32_t repeat_;
   std::vector<runtime::Collision> out_m1_, out_m2_;
   uint32_t count_m1_ = 0, count_m2_ = 0;
-  runtime::NarrowPhaseContext* narrow_ = nullptr;
+  const runtime::NarrowPhaseModel* narrow_ = nullptr;
+  runtime::NarrowPhaseWorkspace* narrow_ws_ = nullptr;
   std::vector<runtime::TriangleContact> contacts_;
   uint32_t count_contacts_ = 0;
   std::vector<float> ref_;  // the vertex refit's spheres (x, y, z, r blocks) under kJoints
@@ -294,14 +296,15 @@ Result<PlayReport> Play(const Mesh& mesh, const runtime::AssetView& view, const 
     return MakeError(Error::Code::kInternal, std::string("runtime Model::Init: ") + runtime::ToString(s));
   if (runtime::Status s = workspace.Init(model); runtime::Failed(s))
     return MakeError(Error::Code::kInternal, std::string("runtime Workspace::Init: ") + runtime::ToString(s));
-  runtime::NarrowPhaseContext narrow;
+  runtime::NarrowPhaseModel narrow;
+  runtime::NarrowPhaseWorkspace narrow_ws;
   if (o.narrow_phase) {
-    if (runtime::Status s = narrow.Init(view); runtime::Failed(s))
+    if (runtime::Status s = narrow.Init(view); runtime::Failed(s) || runtime::Failed(s = narrow_ws.Init(narrow)))
       return MakeError(Error::Code::kConfig,
                        std::string("narrow phase: ") + runtime::ToString(s) +
                            (s == runtime::Status::kErrorMissingField ? " (baked before the narrow phase existed: re-bake it)" : ""));
   }
-  Player player(view, &model, &workspace, o, o.narrow_phase ? &narrow : nullptr);
+  Player player(view, &model, &workspace, o, o.narrow_phase ? &narrow : nullptr, o.narrow_phase ? &narrow_ws : nullptr);
 
   PlayReport report;
   report.animation = anim.Describe();

@@ -1,6 +1,7 @@
 #include "spherechain/runtime/narrow_phase.h"
 
 #include <algorithm>
+#include <atomic>
 #include <bit>
 #include <cstring>
 #include <limits>
@@ -19,13 +20,14 @@ namespace spherechain::runtime {
 namespace {
 
 constexpr uint16_t kNoSphere = 0xFFFF;
-constexpr uint32_t kNotCulled = 0xFFFFFFFFu;  // NarrowPhaseContext::kept_: region not culled this frame
-constexpr uint32_t kUnprepared = 0xFFFFFFFFu;  // NarrowPhaseContext::prepared_at_: not yet met by a test this frame
-constexpr uint32_t kDegenerate = 0xFFFFFFFEu;  // NarrowPhaseContext::prepared_at_: met, zero area
+constexpr uint32_t kNotCulled = 0xFFFFFFFFu;  // NarrowPhaseWorkspace::kept_: region not culled this frame
+constexpr uint32_t kUnprepared = 0xFFFFFFFFu;  // NarrowPhaseWorkspace::prepared_at_: not yet met by a test this frame
+constexpr uint32_t kDegenerate = 0xFFFFFFFEu;  // NarrowPhaseWorkspace::prepared_at_: met, zero area
 constexpr float kInf = std::numeric_limits<float>::infinity();
 constexpr uint32_t kPrefetch = 32;  // RegionBoxes: vertices read ahead
 constexpr uint32_t kSentinels = 4;  // after each culled list: the sweep reads four boxes a step
 constexpr uint32_t kChunk = 8;      // kept triangles per chunk box (CullRegion, Cull)
+std::atomic<uint64_t> g_next_narrow_model_id{1};  // NarrowPhaseModel::id()
 
 // Four floats (x, y, z, w) and lane masks: SSE2 on x86-64 (its baseline), scalar elsewhere. Every mask
 // is read through `& 7` or `& 15` as the caller needs: w lanes of vertex loads are never trusted.
@@ -125,25 +127,30 @@ inline bool BoxesOverlap(const float* a, const float* b) {
 
 }  // namespace
 
-struct NarrowPhaseContext::Internal {
-  using Culled = NarrowPhaseContext::Culled;
+struct NarrowPhaseInternal {
+  using Culled = NarrowPhaseWorkspace::Culled;
+  /// One Run's view: the per-asset data (read only) and the character's scratch.
+  struct Frame {
+    const NarrowPhaseModel& m;
+    NarrowPhaseWorkspace& w;
+  };
 
   /// Region boxes of every sphere; false when a position of a region is not finite.
-  static bool RegionBoxes(NarrowPhaseContext& c, const char* base, size_t stride) {
-    const uint32_t last = c.vertex_count_ - 1;
+  static bool RegionBoxes(Frame& c, const char* base, size_t stride) {
+    const uint32_t last = c.m.vertex_count_ - 1;
     M4 nan = NoLanes();  // min/max skip a NaN: flagged apart; ±Inf reach the box
     bool finite = true;
-    for (uint32_t s = 0; s < c.sphere_count_; ++s) {
-      float* box = &c.box_[8 * size_t{s}];
-      const uint32_t begin = c.vert_offsets_[s], end = c.vert_offsets_[s + 1];
+    for (uint32_t s = 0; s < c.m.sphere_count_; ++s) {
+      float* box = &c.w.box_[8 * size_t{s}];
+      const uint32_t begin = c.m.vert_offsets_[s], end = c.m.vert_offsets_[s + 1];
       if (begin == end) {  // empty region: an inverted box that overlaps nothing
         Store4(box, Set1(1.0f));
         Store4(box + 4, Set1(-1.0f));
-        for (int k = 0; k < 6; ++k) c.box_soa_[k * c.box_pitch_ + s] = k < 3 ? 1.0f : -1.0f;
+        for (int k = 0; k < 6; ++k) c.w.box_soa_[k * c.m.box_pitch_ + s] = k < 3 ? 1.0f : -1.0f;
         continue;
       }
       F4 lo0 = Set1(kInf), hi0 = Set1(-kInf), lo1 = lo0, hi1 = hi0;  // two chains: min/max latency
-      const uint32_t* ids = c.vert_ids_.data();
+      const uint32_t* ids = c.m.vert_ids_.data();
       const uint32_t stop = end - (ids[end - 1] == last);  // ids ascending: only the last can be #V−1
       uint32_t i = begin;
       for (; i + 2 <= stop; i += 2) {
@@ -162,34 +169,34 @@ struct NarrowPhaseContext::Internal {
       box[3] = box[7] = 0.0f;
       for (int k = 0; k < 8; ++k) finite &= box[k] - box[k] == 0.0f;  // ±Inf
       for (int k = 0; k < 3; ++k)
-        c.box_soa_[k * c.box_pitch_ + s] = box[k], c.box_soa_[(3 + k) * c.box_pitch_ + s] = box[4 + k];
+        c.w.box_soa_[k * c.m.box_pitch_ + s] = box[k], c.w.box_soa_[(3 + k) * c.m.box_pitch_ + s] = box[4 + k];
     }
     return finite && (Bits(nan) & 7) == 0;
   }
 
   /// Every candidate sphere pair (a, b), a < b, in output order: region boxes overlap, not excluded.
   template <class Fn>
-  static void ForEachCandidate(const NarrowPhaseContext& c, const NarrowPhaseJob& job, Fn&& fn) {
+  static void ForEachCandidate(const Frame& c, const NarrowPhaseJob& job, Fn&& fn) {
     const bool skip_excluded = job.exclusions == Exclusions::kAsset;
     if (job.sphere_pairs) {
       for (uint32_t i = 0; i < job.sphere_pair_count; ++i) {
         const uint32_t a = job.sphere_pairs[i].a, b = job.sphere_pairs[i].b;
-        if (!BoxesOverlap(&c.box_[8 * size_t{a}], &c.box_[8 * size_t{b}])) continue;
-        if (skip_excluded && c.IsExcluded(a, b)) continue;
+        if (!BoxesOverlap(&c.w.box_[8 * size_t{a}], &c.w.box_[8 * size_t{b}])) continue;
+        if (skip_excluded && c.m.IsExcluded(a, b)) continue;
         fn(a, b);
       }
       return;
     }
     // Every pair: a's box against four boxes b at a time (SoA copies; inverted boxes pad the end).
-    const uint32_t S = c.sphere_count_;
-    const size_t P = c.box_pitch_;
-    const float* soa = c.box_soa_.data();
+    const uint32_t S = c.m.sphere_count_;
+    const size_t P = c.m.box_pitch_;
+    const float* soa = c.w.box_soa_.data();
     for (uint32_t a = 0; a < S; ++a) {
-      const float* ba = &c.box_[8 * size_t{a}];
+      const float* ba = &c.w.box_[8 * size_t{a}];
       const F4 alo_x = Set1(ba[0]), alo_y = Set1(ba[1]), alo_z = Set1(ba[2]);
       const F4 ahi_x = Set1(ba[4]), ahi_y = Set1(ba[5]), ahi_z = Set1(ba[6]);
-      const uint16_t* ex = c.excl_partners_.data() + c.excl_offsets_[a];
-      const uint16_t* ex_end = c.excl_partners_.data() + c.excl_offsets_[a + 1];
+      const uint16_t* ex = c.m.excl_partners_.data() + c.m.excl_offsets_[a];
+      const uint16_t* ex_end = c.m.excl_partners_.data() + c.m.excl_offsets_[a + 1];
       for (uint32_t b0 = a + 1; b0 < S; b0 += 4) {
         uint32_t hit = Bits(And(And(And(Le(Load4(soa + b0), ahi_x), Le(alo_x, Load4(soa + 3 * P + b0))),
                                     And(Le(Load4(soa + P + b0), ahi_y), Le(alo_y, Load4(soa + 4 * P + b0)))),
@@ -207,9 +214,9 @@ struct NarrowPhaseContext::Internal {
   }
 
   /// Grows the clip of sphere s by its region box ∩ the box `other` (which overlaps it).
-  static void GrowClip(NarrowPhaseContext& c, uint32_t s, const float* other) {
-    const float* own = &c.box_[8 * size_t{s}];
-    float* clip = &c.clip_[8 * size_t{s}];
+  static void GrowClip(Frame& c, uint32_t s, const float* other) {
+    const float* own = &c.w.box_[8 * size_t{s}];
+    float* clip = &c.w.clip_[8 * size_t{s}];
     for (int k = 0; k < 3; ++k) {
       clip[k] = std::min(clip[k], std::max(own[k], other[k]));
       clip[4 + k] = std::max(clip[4 + k], std::min(own[4 + k], other[4 + k]));
@@ -224,22 +231,22 @@ struct NarrowPhaseContext::Internal {
   /// Written from the region's pool offset: slots and boxes (8 floats), inverted boxes padding the last
   /// chunk of kChunk; each chunk's box (the box of its boxes) as six rows from the region's chunk offset,
   /// inverted chunks padding to a multiple of four.
-  static void CullRegion(NarrowPhaseContext& c, uint32_t s, const char* base, size_t stride) {
-    const F4 clo = Load4(&c.clip_[8 * size_t{s}]), chi = Load4(&c.clip_[8 * size_t{s} + 4]);
-    const uint32_t vbegin = c.vert_offsets_[s], vend = c.vert_offsets_[s + 1], last = c.vertex_count_ - 1;
-    uint8_t* code = c.outcode_.data();
-    float* corner = c.corner_.data();
+  static void CullRegion(Frame& c, uint32_t s, const char* base, size_t stride) {
+    const F4 clo = Load4(&c.w.clip_[8 * size_t{s}]), chi = Load4(&c.w.clip_[8 * size_t{s} + 4]);
+    const uint32_t vbegin = c.m.vert_offsets_[s], vend = c.m.vert_offsets_[s + 1], last = c.m.vertex_count_ - 1;
+    uint8_t* code = c.w.outcode_.data();
+    float* corner = c.w.corner_.data();
     for (uint32_t i = vbegin; i < vend; ++i) {
-      const F4 p = LoadVertex(base, stride, c.vert_ids_[i], last);
+      const F4 p = LoadVertex(base, stride, c.m.vert_ids_[i], last);
       Store4(corner + 4 * size_t{i - vbegin}, p);
       code[i - vbegin] = static_cast<uint8_t>((Bits(Lt(p, clo)) & 7) | (Bits(Lt(chi, p)) & 7) << 3);
     }
-    const uint32_t first = c.region_offsets_[s], end = c.region_offsets_[s + 1];
-    std::fill(&c.prepared_at_[first], &c.prepared_at_[first] + (end - first), kUnprepared);  // degeneracy: unknown
-    const uint32_t* local = c.region_local_.data();
-    const uint32_t pool = c.pool_offsets_[s];
-    uint32_t* slots = &c.kept_slot_[pool];
-    float* boxes = &c.kept_box_[8 * size_t{pool}];
+    const uint32_t first = c.m.region_offsets_[s], end = c.m.region_offsets_[s + 1];
+    std::fill(&c.w.prepared_at_[first], &c.w.prepared_at_[first] + (end - first), kUnprepared);  // degeneracy: unknown
+    const uint32_t* local = c.m.region_local_.data();
+    const uint32_t pool = c.m.pool_offsets_[s];
+    uint32_t* slots = &c.w.kept_slot_[pool];
+    float* boxes = &c.w.kept_box_[8 * size_t{pool}];
     uint32_t n = 0;
     for (uint32_t k = first; k < end; ++k) {  // branch-free: written always, counted when kept
       const uint32_t* l = local + 3 * size_t{k};
@@ -270,12 +277,12 @@ struct NarrowPhaseContext::Internal {
     }
     for (uint32_t q = chunks; q < (chunks + 3) / 4 * 4; ++q)
       for (int d = 0; d < 3; ++d) chunk_row[d][q] = kInf, chunk_row[3 + d][q] = -kInf;
-    c.kept_[s] = n;
+    c.w.kept_[s] = n;
   }
 
   /// The six rows (min x, y, z, max x, y, z) of sphere s's chunk boxes.
-  static void ChunkRows(NarrowPhaseContext& c, uint32_t s, float* row[6]) {
-    for (int d = 0; d < 6; ++d) row[d] = &c.chunk_box_[d * c.chunk_pitch_ + c.chunk_offsets_[s]];
+  static void ChunkRows(Frame& c, uint32_t s, float* row[6]) {
+    for (int d = 0; d < 6; ++d) row[d] = &c.w.chunk_box_[d * c.m.chunk_pitch_ + c.m.chunk_offsets_[s]];
   }
 
   /// Lanes (bits 0..3) of the four chunk boxes at `at` of six rows (min x, y, z, max x, y, z) that meet
@@ -297,10 +304,10 @@ struct NarrowPhaseContext::Internal {
   /// meeting `box`. Chunks whose box misses `box` are skipped four at a time. Returns the number meeting
   /// `box`; *listed: the number listed.
   template <bool kInner>
-  static uint32_t Filter(NarrowPhaseContext& c, uint32_t s, const float* box, const float* inner, Culled* list,
+  static uint32_t Filter(Frame& c, uint32_t s, const float* box, const float* inner, Culled* list,
                          uint32_t* listed) {
-    const uint32_t pool = c.pool_offsets_[s], m = c.kept_[s];
-    const float* boxes = &c.kept_box_[8 * size_t{pool}];
+    const uint32_t pool = c.m.pool_offsets_[s], m = c.w.kept_[s];
+    const float* boxes = &c.w.kept_box_[8 * size_t{pool}];
     float* chunk_row[6];
     ChunkRows(c, s, chunk_row);
     const F4 lo[3] = {Set1(box[0]), Set1(box[1]), Set1(box[2])};
@@ -329,8 +336,8 @@ struct NarrowPhaseContext::Internal {
   }
 
   /// The box (8 floats) of the boxes of the n listed triangles of sphere s; inverted when n is 0.
-  static void ListBox(const NarrowPhaseContext& c, uint32_t s, const Culled& list, uint32_t n, float* out) {
-    const float* boxes = &c.kept_box_[8 * size_t{c.pool_offsets_[s]}];
+  static void ListBox(const Frame& c, uint32_t s, const Culled& list, uint32_t n, float* out) {
+    const float* boxes = &c.w.kept_box_[8 * size_t{c.m.pool_offsets_[s]}];
     F4 lo = Set1(kInf), hi = Set1(-kInf);
     for (uint32_t k = 0; k < n; ++k) {
       const float* b = boxes + 8 * size_t{list.kept[k]};
@@ -342,8 +349,8 @@ struct NarrowPhaseContext::Internal {
 
   /// Drops from the n listed triangles of sphere s those whose box misses `box`; ranks kept. Returns
   /// the number left.
-  static uint32_t Tighten(const NarrowPhaseContext& c, uint32_t s, const float* box, Culled* list, uint32_t n) {
-    const float* boxes = &c.kept_box_[8 * size_t{c.pool_offsets_[s]}];
+  static uint32_t Tighten(const Frame& c, uint32_t s, const float* box, Culled* list, uint32_t n) {
+    const float* boxes = &c.w.kept_box_[8 * size_t{c.m.pool_offsets_[s]}];
     const F4 lo = Load4(box), hi = Load4(box + 4);
     uint32_t* kept = list->kept.data();
     uint32_t* rank = list->rank.data();
@@ -363,9 +370,9 @@ struct NarrowPhaseContext::Internal {
   /// start, float rounding being monotone), each key written at its bucket's place, then an insertion
   /// pass that only moves keys within their bucket (linear for spread minima, the exact order whatever
   /// they are), then the records gathered in key order.
-  static void Sort(const NarrowPhaseContext& c, uint32_t s, int axis, Culled* list, uint32_t n) {
-    const uint32_t pool = c.pool_offsets_[s];
-    const float* boxes = &c.kept_box_[8 * size_t{pool}];
+  static void Sort(const Frame& c, uint32_t s, int axis, Culled* list, uint32_t n) {
+    const uint32_t pool = c.m.pool_offsets_[s];
+    const float* boxes = &c.w.kept_box_[8 * size_t{pool}];
     const uint32_t* kept = list->kept.data();
     const uint32_t* rank = list->rank.data();
     float* start = list->start.data();
@@ -412,7 +419,7 @@ struct NarrowPhaseContext::Internal {
         const uint32_t k = static_cast<uint32_t>(key[r + t]), i = kept[k];
         b[t] = boxes + 8 * size_t{i};
         key[r + t] = (key[r + t] & 0xFFFFFFFF00000000u) | rank[k];  // the sweep's order: (start, rank)
-        slot[r + t] = c.kept_slot_[pool + i];
+        slot[r + t] = c.w.kept_slot_[pool + i];
       }
       F4 l0 = Load4(b[0]), l1 = Load4(b[1]), l2 = Load4(b[2]), l3 = Load4(b[3]);
       F4 h0 = Load4(b[0] + 4), h1 = Load4(b[1] + 4), h2 = Load4(b[2] + 4), h3 = Load4(b[3] + 4);
@@ -425,54 +432,54 @@ struct NarrowPhaseContext::Internal {
       const uint32_t k = static_cast<uint32_t>(key[r]), i = kept[k];
       const float* b = boxes + 8 * size_t{i};
       key[r] = (key[r] & 0xFFFFFFFF00000000u) | rank[k];
-      slot[r] = c.kept_slot_[pool + i];
+      slot[r] = c.w.kept_slot_[pool + i];
       for (int d = 0; d < 3; ++d) lo[d][r] = b[d], hi[d][r] = b[4 + d];
     }
   }
 
   /// The exact test of two box-overlapping triangles of different spheres (adjacency, degeneracy,
   /// predicate): position ia of a's sorted list, ib of b's.
-  static void Test(NarrowPhaseContext& c, uint32_t ia, uint32_t ib, uint32_t a, uint32_t b, const char* base,
+  static void Test(Frame& c, uint32_t ia, uint32_t ib, uint32_t a, uint32_t b, const char* base,
                    size_t stride, const NarrowPhaseJob& job, NarrowPhaseStats& st) {
-    const uint32_t ka = c.list_a_.slot[ia], kb = c.list_b_.slot[ib];
-    const uint32_t* wa = &c.region_w_[3 * size_t{ka}];
-    const uint32_t* wb = &c.region_w_[3 * size_t{kb}];
+    const uint32_t ka = c.w.list_a_.slot[ia], kb = c.w.list_b_.slot[ib];
+    const uint32_t* wa = &c.m.region_w_[3 * size_t{ka}];
+    const uint32_t* wb = &c.m.region_w_[3 * size_t{kb}];
     if ((wa[0] == wb[0]) | (wa[0] == wb[1]) | (wa[0] == wb[2]) | (wa[1] == wb[0]) | (wa[1] == wb[1]) |
         (wa[1] == wb[2]) | (wa[2] == wb[0]) | (wa[2] == wb[1]) | (wa[2] == wb[2])) {  // one branch
       ++st.adjacent_skipped;
       return;
     }
-    uint32_t at[2] = {c.prepared_at_[ka], c.prepared_at_[kb]};
+    uint32_t at[2] = {c.w.prepared_at_[ka], c.w.prepared_at_[kb]};
     if ((at[0] | at[1]) >= kDegenerate) {  // not both prepared already (the usual case once a pair is under way)
       for (int side = 0; side < 2; ++side) {
         const uint32_t k = side ? kb : ka;
         if (at[side] == kUnprepared) {  // prepared (degeneracy decided) once a frame, for triangles that reach a test
-          const uint32_t* v = &c.region_v_[3 * size_t{k}];
+          const uint32_t* v = &c.m.region_v_[3 * size_t{k}];
           const bool usable = PrepareTriangle(Vertex(base, stride, v[0]), Vertex(base, stride, v[1]),
-                                              Vertex(base, stride, v[2]), &c.prepared_[c.prepared_count_]);
+                                              Vertex(base, stride, v[2]), &c.w.prepared_[c.w.prepared_count_]);
           // Positions are finite (RegionBoxes): not usable ⇔ degenerate.
-          c.prepared_at_[k] = at[side] = usable ? c.prepared_count_++ : kDegenerate;
+          c.w.prepared_at_[k] = at[side] = usable ? c.w.prepared_count_++ : kDegenerate;
           st.degenerate_triangles += !usable;
         }
         if (at[side] == kDegenerate) return;
       }
     }
     ++st.triangle_tests;
-    if (!TrianglesIntersect(c.prepared_[at[0]], c.prepared_[at[1]])) return;
+    if (!TrianglesIntersect(c.w.prepared_[at[0]], c.w.prepared_[at[1]])) return;
     if (st.contacts < job.capacity)
-      job.output[st.contacts] = {c.region_tri_[ka], c.region_tri_[kb], static_cast<uint16_t>(a), static_cast<uint16_t>(b)};
+      job.output[st.contacts] = {c.m.region_tri_[ka], c.m.region_tri_[kb], static_cast<uint16_t>(a), static_cast<uint16_t>(b)};
     ++st.contacts;
   }
 
   /// Test() on the buffered hits, in order; the triangle data of the hits a few ahead fetched early.
-  static void Tests(NarrowPhaseContext& c, const uint64_t* hits, uint32_t n, uint32_t a, uint32_t b,
+  static void Tests(Frame& c, const uint64_t* hits, uint32_t n, uint32_t a, uint32_t b,
                     const char* base, size_t stride, const NarrowPhaseJob& job, NarrowPhaseStats& st) {
     constexpr uint32_t kAhead = 4;  // a hint, never a fault
     for (uint32_t h = 0; h < n; ++h) {
       if (h + kAhead < n) {
         // Unprepared (or degenerate) triangles have no data yet: the hint then lands past the pool's end.
-        Prefetch(&c.prepared_[std::min(c.prepared_at_[c.list_a_.slot[static_cast<uint32_t>(hits[h + kAhead] >> 32)]], c.prepared_count_)]);
-        Prefetch(&c.prepared_[std::min(c.prepared_at_[c.list_b_.slot[static_cast<uint32_t>(hits[h + kAhead])]], c.prepared_count_)]);
+        Prefetch(&c.w.prepared_[std::min(c.w.prepared_at_[c.w.list_a_.slot[static_cast<uint32_t>(hits[h + kAhead] >> 32)]], c.w.prepared_count_)]);
+        Prefetch(&c.w.prepared_[std::min(c.w.prepared_at_[c.w.list_b_.slot[static_cast<uint32_t>(hits[h + kAhead])]], c.w.prepared_count_)]);
       }
       Test(c, static_cast<uint32_t>(hits[h] >> 32), static_cast<uint32_t>(hits[h]), a, b, base, stride, job, st);
     }
@@ -480,29 +487,29 @@ struct NarrowPhaseContext::Internal {
 
   /// Every contact of candidate (a, b), a < b: both regions culled to the other's box, then a
   /// sort-and-sweep of the two lists along the longest axis of the boxes' overlap.
-  static void Pair(NarrowPhaseContext& c, uint32_t a, uint32_t b, const char* base, size_t stride,
+  static void Pair(Frame& c, uint32_t a, uint32_t b, const char* base, size_t stride,
                    const NarrowPhaseJob& job, NarrowPhaseStats* out_stats) {
     NarrowPhaseStats st = *out_stats;  // counters in registers, written back once
-    const float* ba = &c.box_[8 * size_t{a}];
-    const float* bb = &c.box_[8 * size_t{b}];
+    const float* ba = &c.w.box_[8 * size_t{a}];
+    const float* bb = &c.w.box_[8 * size_t{b}];
     int axis = 0;
     float extent = -1.0f;
     for (int k = 0; k < 3; ++k) {
       const float e = std::min(ba[4 + k], bb[4 + k]) - std::max(ba[k], bb[k]);
       if (e > extent) extent = e, axis = k;
     }
-    Culled& la = c.list_a_;
-    Culled& lb = c.list_b_;
+    Culled& la = c.w.list_a_;
+    Culled& lb = c.w.list_b_;
     // The triangles of a whose box meets b's region box, and those of b meeting a's (counted: the
     // culled triangles); of those of b only the ones meeting a's listed boxes' box are listed, then of
     // a's only those meeting b's listed boxes' box. The dropped ones meet no box of the other list, so
     // the sweep below meets the same triangle pairs in the same order as on the full lists: ranks (the
     // order in the full lists) break ties of the minima.
-    if (c.kept_[a] == kNotCulled) CullRegion(c, a, base, stride);
+    if (c.w.kept_[a] == kNotCulled) CullRegion(c, a, base, stride);
     uint32_t listed_a = 0, listed_b = 0, nb = 0;
     uint32_t na = Filter<false>(c, a, bb, nullptr, &la, &listed_a);
     if (na) {
-      if (c.kept_[b] == kNotCulled) CullRegion(c, b, base, stride);
+      if (c.w.kept_[b] == kNotCulled) CullRegion(c, b, base, stride);
       float box_a[8], box_b[8];
       ListBox(c, a, la, na, box_a);
       nb = Filter<true>(c, b, ba, box_a, &lb, &listed_b);
@@ -528,11 +535,11 @@ struct NarrowPhaseContext::Internal {
         {lb.lo[axis].data(), lb.hi[axis].data(), lb.lo[u].data(), lb.hi[u].data(), lb.lo[v].data(), lb.hi[v].data()}};
     const uint64_t* key_a = la.key.data();
     const uint64_t* key_b = lb.key.data();
-    uint64_t* records = c.records_.data();
-    const uint32_t records_full = static_cast<uint32_t>(c.records_.size()) - 1;
+    uint64_t* records = c.w.records_.data();
+    const uint32_t records_full = static_cast<uint32_t>(c.w.records_.size()) - 1;
     uint32_t n_records = 0;
     auto flush = [&] {  // records → hits → tests
-      uint64_t* hits = c.hits_.data();
+      uint64_t* hits = c.w.hits_.data();
       uint32_t n_hits = 0;
       for (uint32_t r = 0; r < n_records; ++r) {
         const uint64_t rec = records[r];
@@ -575,8 +582,8 @@ struct NarrowPhaseContext::Internal {
   }
 };
 
-Status NarrowPhaseContext::Init(const AssetView& view) {
-  *this = NarrowPhaseContext{};
+Status NarrowPhaseModel::Init(const AssetView& view) {
+  *this = NarrowPhaseModel{};
   if (!view.valid()) return Status::kErrorNullArgument;
   const schema::Asset& a = *view.asset;
   const auto* tris = a.triangles();
@@ -626,19 +633,10 @@ Status NarrowPhaseContext::Init(const AssetView& view) {
       excl_partners_.resize(ex->size());
       for (uint32_t i = 0; i < ex->size(); ++i) excl_partners_[i] = ex->Get(i)->b();  // sorted by (a, b)
     }
-    uint32_t largest = 0;
-    for (uint32_t s = 0; s < S; ++s) largest = std::max(largest, region_offsets_[s + 1] - region_offsets_[s]);
-    box_.assign(8 * size_t{S}, 0.0f);
+    for (uint32_t s = 0; s < S; ++s)
+      largest_region_ = std::max(largest_region_, region_offsets_[s + 1] - region_offsets_[s]);
+    largest_region_vertices_ = largest_verts;
     box_pitch_ = S + 4;
-    box_soa_.assign(6 * box_pitch_, 0.0f);
-    for (uint32_t s = S; s < box_pitch_; ++s)  // padding: inverted boxes
-      for (int k = 0; k < 6; ++k) box_soa_[k * box_pitch_ + s] = k < 3 ? kInf : -kInf;
-    clip_.assign(8 * size_t{S}, 0.0f);
-    kept_.assign(S, kNotCulled);
-    prepared_at_.assign(region_tri_.size(), kUnprepared);
-    prepared_.assign(region_tri_.size() + 1, PreparedTriangle{});  // + 1: a prefetch target past the used ones
-    outcode_.assign(largest_verts, 0);
-    corner_.assign(4 * size_t{largest_verts}, 0.0f);
     pool_offsets_.assign(1, 0);
     chunk_offsets_.assign(1, 0);
     for (uint32_t s = 0; s < S; ++s) {
@@ -646,11 +644,39 @@ Status NarrowPhaseContext::Init(const AssetView& view) {
       pool_offsets_.push_back(pool_offsets_[s] + chunks * kChunk);
       chunk_offsets_.push_back(chunk_offsets_[s] + (chunks + 3) / 4 * 4);
     }
-    const size_t pool = pool_offsets_[S];
     chunk_pitch_ = chunk_offsets_[S];
+    sphere_count_ = S;
+    vertex_count_ = V;
+    triangle_count_ = T;
+    id_ = g_next_narrow_model_id.fetch_add(1, std::memory_order_relaxed);
+  } SPHERECHAIN_CATCH_BAD_ALLOC {
+    *this = NarrowPhaseModel{};
+    return Status::kErrorOutOfMemory;
+  }
+  return Status::kOk;
+}
+
+Status NarrowPhaseWorkspace::Init(const NarrowPhaseModel& model) {
+  *this = NarrowPhaseWorkspace{};
+  if (!model.initialized()) return Status::kErrorInvalidJob;
+  SPHERECHAIN_TRY {
+    const uint32_t S = model.sphere_count_;
+    const uint32_t largest = model.largest_region_, largest_verts = model.largest_region_vertices_;
+    const size_t box_pitch = model.box_pitch_;
+    box_.assign(8 * size_t{S}, 0.0f);
+    box_soa_.assign(6 * box_pitch, 0.0f);
+    for (uint32_t s = S; s < box_pitch; ++s)  // padding: inverted boxes
+      for (int k = 0; k < 6; ++k) box_soa_[k * box_pitch + s] = k < 3 ? kInf : -kInf;
+    clip_.assign(8 * size_t{S}, 0.0f);
+    kept_.assign(S, kNotCulled);
+    prepared_at_.assign(model.region_tri_.size(), kUnprepared);
+    prepared_.assign(model.region_tri_.size() + 1, PreparedTriangle{});  // + 1: a prefetch target past the used ones
+    outcode_.assign(largest_verts, 0);
+    corner_.assign(4 * size_t{largest_verts}, 0.0f);
+    const size_t pool = model.pool_offsets_[S];
     kept_slot_.assign(pool, 0);
     kept_box_.assign(8 * pool, 0.0f);
-    chunk_box_.assign(6 * chunk_pitch_, 0.0f);
+    chunk_box_.assign(6 * size_t{model.chunk_pitch_}, 0.0f);
     records_.assign(64, 0);
     hits_.assign(4 * records_.size(), 0);
     candidates_.assign(std::min(size_t{S} * (S - 1) / 2, 16 * size_t{S} + 64), 0);
@@ -664,17 +690,15 @@ Status NarrowPhaseContext::Init(const AssetView& view) {
       l->slot.assign(largest + kSentinels, 0);
       for (int k = 0; k < 3; ++k) l->lo[k].assign(largest + kSentinels, 0.0f), l->hi[k].assign(largest + kSentinels, 0.0f);
     }
-    sphere_count_ = S;
-    vertex_count_ = V;
-    triangle_count_ = T;
+    model_id_ = model.id_;
   } SPHERECHAIN_CATCH_BAD_ALLOC {
-    *this = NarrowPhaseContext{};
+    *this = NarrowPhaseWorkspace{};
     return Status::kErrorOutOfMemory;
   }
   return Status::kOk;
 }
 
-bool NarrowPhaseContext::IsExcluded(uint32_t a, uint32_t b) const {
+bool NarrowPhaseModel::IsExcluded(uint32_t a, uint32_t b) const {
   if (a > b) std::swap(a, b);
   if (b >= sphere_count_) return false;
   const uint16_t* begin = excl_partners_.data() + excl_offsets_[a];
@@ -683,51 +707,52 @@ bool NarrowPhaseContext::IsExcluded(uint32_t a, uint32_t b) const {
 }
 
 Status NarrowPhaseJob::Check() const {
-  if (!context || !count || !positions.data) return Status::kErrorNullArgument;
+  if (!model || !workspace || !count || !positions.data) return Status::kErrorNullArgument;
   if (!output && capacity > 0) return Status::kErrorNullArgument;
   if (!sphere_pairs && sphere_pair_count > 0) return Status::kErrorNullArgument;
-  if (!context->initialized()) return Status::kErrorInvalidJob;
+  if (!model->initialized() || !workspace->initialized()) return Status::kErrorInvalidJob;
+  if (!workspace->made_for(*model)) return Status::kErrorWorkspaceModel;
   if (exclusions != Exclusions::kAsset && exclusions != Exclusions::kNone) return Status::kErrorInvalidJob;
   if (reinterpret_cast<uintptr_t>(positions.data) % 4 != 0) return Status::kErrorAlignment;
   if (positions.stride_bytes < 12 || positions.stride_bytes % 4 != 0) return Status::kErrorStride;
-  if (positions.count != context->vertex_count()) return Status::kErrorVertexCount;
+  if (positions.count != model->vertex_count()) return Status::kErrorVertexCount;
   for (uint32_t i = 0; i < sphere_pair_count; ++i)
-    if (sphere_pairs[i].a >= sphere_pairs[i].b || sphere_pairs[i].b >= context->sphere_count())
+    if (sphere_pairs[i].a >= sphere_pairs[i].b || sphere_pairs[i].b >= model->sphere_count())
       return Status::kErrorIndexOutOfRange;
   return Status::kOk;
 }
 
 Status NarrowPhaseJob::Run() const {
   if (Status s = Check(); s != Status::kOk) return s;
-  NarrowPhaseContext& c = *context;
+  NarrowPhaseInternal::Frame c{*model, *workspace};
   NarrowPhaseStats st;
   *count = 0;
   if (stats) *stats = st;
   const char* base = static_cast<const char*>(positions.data);
   const size_t stride = positions.stride_bytes;
-  if (!NarrowPhaseContext::Internal::RegionBoxes(c, base, stride)) return Status::kErrorNonFinitePositions;
-  std::fill(c.kept_.begin(), c.kept_.end(), kNotCulled);               // regions: culled on first use
-  c.prepared_count_ = 0;
+  if (!NarrowPhaseInternal::RegionBoxes(c, base, stride)) return Status::kErrorNonFinitePositions;
+  std::fill(c.w.kept_.begin(), c.w.kept_.end(), kNotCulled);               // regions: culled on first use
+  c.w.prepared_count_ = 0;
   // Pass 1: each sphere's clip, the box of its candidate partners' boxes ∩ its own (inverted: none);
   // the candidates kept for pass 2 while they fit (else enumerated again).
-  for (size_t i = 0; i < c.clip_.size(); ++i) c.clip_[i] = i % 8 < 4 ? kInf : -kInf;
+  for (size_t i = 0; i < c.w.clip_.size(); ++i) c.w.clip_[i] = i % 8 < 4 ? kInf : -kInf;
   uint32_t n_cand = 0;
-  const uint32_t cand_capacity = static_cast<uint32_t>(c.candidates_.size());
-  NarrowPhaseContext::Internal::ForEachCandidate(c, *this, [&](uint32_t a, uint32_t b) {
-    NarrowPhaseContext::Internal::GrowClip(c, a, &c.box_[8 * size_t{b}]);
-    NarrowPhaseContext::Internal::GrowClip(c, b, &c.box_[8 * size_t{a}]);
-    if (n_cand < cand_capacity) c.candidates_[n_cand] = a << 16 | b;
+  const uint32_t cand_capacity = static_cast<uint32_t>(c.w.candidates_.size());
+  NarrowPhaseInternal::ForEachCandidate(c, *this, [&](uint32_t a, uint32_t b) {
+    NarrowPhaseInternal::GrowClip(c, a, &c.w.box_[8 * size_t{b}]);
+    NarrowPhaseInternal::GrowClip(c, b, &c.w.box_[8 * size_t{a}]);
+    if (n_cand < cand_capacity) c.w.candidates_[n_cand] = a << 16 | b;
     ++n_cand;
   });
   // Pass 2: the same candidates, in output order.
   auto pair = [&](uint32_t a, uint32_t b) {
     ++st.candidate_pairs;
-    NarrowPhaseContext::Internal::Pair(c, a, b, base, stride, *this, &st);
+    NarrowPhaseInternal::Pair(c, a, b, base, stride, *this, &st);
   };
   if (n_cand <= cand_capacity) {
-    for (uint32_t i = 0; i < n_cand; ++i) pair(c.candidates_[i] >> 16, c.candidates_[i] & 0xFFFFu);
+    for (uint32_t i = 0; i < n_cand; ++i) pair(c.w.candidates_[i] >> 16, c.w.candidates_[i] & 0xFFFFu);
   } else {
-    NarrowPhaseContext::Internal::ForEachCandidate(c, *this, pair);
+    NarrowPhaseInternal::ForEachCandidate(c, *this, pair);
   }
   *count = std::min(st.contacts, capacity);
   if (stats) *stats = st;

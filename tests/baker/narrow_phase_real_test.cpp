@@ -25,7 +25,8 @@ struct Baked {
   baker::BakeResult bake;
   std::vector<uint64_t> storage;
   runtime::AssetView view;
-  runtime::NarrowPhaseContext narrow;
+  runtime::NarrowPhaseModel narrow;
+  runtime::NarrowPhaseWorkspace narrow_ws;
   std::vector<uint32_t> weld;
 };
 
@@ -38,6 +39,7 @@ bool BakeAndLoad(const std::string& path, Baked* b) {
   std::memcpy(b->storage.data(), b->bake.asset.data(), b->bake.asset.size());
   REQUIRE(runtime::LoadAsset(b->storage.data(), b->bake.asset.size(), &b->view) == runtime::Status::kOk);
   REQUIRE(b->narrow.Init(b->view) == runtime::Status::kOk);
+  REQUIRE(b->narrow_ws.Init(b->narrow) == runtime::Status::kOk);
   b->weld = baker::ComputeWeldIds(b->bake.mesh.positions);
   for (uint32_t v = 0; v < b->view.vertex_count; ++v) REQUIRE(b->narrow.weld_id(v) == b->weld[v]);
   return true;
@@ -49,7 +51,8 @@ PairSet NarrowContacts(Baked* b, const std::vector<float>& pos, runtime::NarrowP
   std::vector<runtime::TriangleContact> out(1u << 20);
   uint32_t n = 0;
   runtime::NarrowPhaseJob job;
-  job.context = &b->narrow;
+  job.model = &b->narrow;
+  job.workspace = &b->narrow_ws;
   job.positions = {pos.data(), b->view.vertex_count, 12};
   job.output = out.data();
   job.capacity = static_cast<uint32_t>(out.size());

@@ -67,13 +67,24 @@ struct Run {
   std::vector<rt::TriangleContact> contacts;
 };
 
-Run RunJob(rt::NarrowPhaseContext* ctx, const std::vector<float>& pos, rt::Exclusions ex, uint32_t capacity = 100000,
+// One character's narrow phase: the per-asset model and its workspace.
+struct Narrow {
+  rt::NarrowPhaseModel model;
+  rt::NarrowPhaseWorkspace ws;
+  rt::Status Init(const rt::AssetView& view) {
+    rt::Status s = model.Init(view);
+    return s == rt::Status::kOk ? ws.Init(model) : s;
+  }
+};
+
+Run RunJob(Narrow* ctx, const std::vector<float>& pos, rt::Exclusions ex, uint32_t capacity = 100000,
            const std::vector<rt::Collision>& only = {}) {
   Run r;
   r.contacts.resize(capacity);
   uint32_t n = 0;
   rt::NarrowPhaseJob job;
-  job.context = ctx;
+  job.model = &ctx->model;
+  job.workspace = &ctx->ws;
   job.positions = {pos.data(), static_cast<uint32_t>(pos.size() / 3), 12};
   job.exclusions = ex;
   job.output = r.contacts.data();
@@ -116,7 +127,7 @@ TEST_CASE("narrow phase: two crossing tubes touch where they cross, and equal br
   st::Mesh mesh;
   const st::AssetData d = st::TwoTubes(true, &mesh);
   Loaded l = Load(d);
-  rt::NarrowPhaseContext ctx;
+  Narrow ctx;
   REQUIRE(ctx.Init(l.view) == rt::Status::kOk);
   const Run r = RunJob(&ctx, mesh.positions, rt::Exclusions::kAsset);
   REQUIRE(r.status == rt::Status::kOk);
@@ -147,7 +158,7 @@ TEST_CASE("narrow phase: tubes apart have no candidate pair between them and no 
   st::Mesh mesh;
   const st::AssetData d = st::TwoTubes(false, &mesh);
   Loaded l = Load(d);
-  rt::NarrowPhaseContext ctx;
+  Narrow ctx;
   REQUIRE(ctx.Init(l.view) == rt::Status::kOk);
   const Run r = RunJob(&ctx, mesh.positions, rt::Exclusions::kNone);
   CHECK(r.status == rt::Status::kOk);
@@ -168,7 +179,7 @@ TEST_CASE("narrow phase: a tube folded on itself touches just after the fold, eq
   tube.spacing = 0.6f;
   const st::AssetData d = st::MakeTubes({tube}, {}, &mesh);
   Loaded l = Load(d);
-  rt::NarrowPhaseContext ctx;
+  Narrow ctx;
   REQUIRE(ctx.Init(l.view) == rt::Status::kOk);
   // Straight: nothing.
   CHECK(RunJob(&ctx, mesh.positions, rt::Exclusions::kNone).contacts.empty());
@@ -225,7 +236,7 @@ TEST_CASE("narrow phase: weld ids give a triangle soup its adjacency") {
   }
   {
     Loaded l = Load(d);
-    rt::NarrowPhaseContext ctx;
+    Narrow ctx;
     REQUIRE(ctx.Init(l.view) == rt::Status::kOk);
     const Run r = RunJob(&ctx, soup, rt::Exclusions::kNone);
     CHECK(r.contacts.empty());
@@ -234,7 +245,7 @@ TEST_CASE("narrow phase: weld ids give a triangle soup its adjacency") {
   // Unwelded (identity ids): every ring's edges now make contacts between consecutive spheres.
   for (uint32_t v = 0; v < d.vertex_count; ++v) d.weld_ids[v] = v;
   Loaded l = Load(d);
-  rt::NarrowPhaseContext ctx;
+  Narrow ctx;
   REQUIRE(ctx.Init(l.view) == rt::Status::kOk);
   const Run r = RunJob(&ctx, soup, rt::Exclusions::kNone);
   CHECK(r.contacts.size() > 0);
@@ -246,7 +257,7 @@ TEST_CASE("narrow phase: a short buffer gives kOkTruncated, the first records an
   st::Mesh mesh;
   const st::AssetData d = st::TwoTubes(true, &mesh);
   Loaded l = Load(d);
-  rt::NarrowPhaseContext ctx;
+  Narrow ctx;
   REQUIRE(ctx.Init(l.view) == rt::Status::kOk);
   const Run full = RunJob(&ctx, mesh.positions, rt::Exclusions::kAsset);
   REQUIRE(full.contacts.size() > 2);
@@ -267,18 +278,46 @@ TEST_CASE("narrow phase: bad input gets its status and no output") {
   st::Mesh mesh;
   st::AssetData d = st::TwoTubes(true, &mesh);
   Loaded l = Load(d);
-  rt::NarrowPhaseContext ctx;
+  rt::NarrowPhaseModel ctx;
+  rt::NarrowPhaseWorkspace ws;
   rt::TriangleContact out[4];
   uint32_t n = 77;
   rt::NarrowPhaseJob job;
-  job.context = &ctx;
+  job.model = &ctx;
+  job.workspace = &ws;
   job.positions = {mesh.positions.data(), mesh.vertex_count(), 12};
   job.output = out;
   job.capacity = 4;
   job.count = &n;
   CHECK(job.Check() == rt::Status::kErrorInvalidJob);  // not initialised
+  CHECK(ws.Init(ctx) == rt::Status::kErrorInvalidJob);  // a workspace needs an initialised model
+  CHECK(!ws.initialized());
   REQUIRE(ctx.Init(l.view) == rt::Status::kOk);
+  CHECK(job.Check() == rt::Status::kErrorInvalidJob);  // the workspace is not initialised yet
+  REQUIRE(ws.Init(ctx) == rt::Status::kOk);
+  CHECK(ws.made_for(ctx));
   CHECK(job.Validate());
+  job.workspace = nullptr;
+  CHECK(job.Run() == rt::Status::kErrorNullArgument);
+  job.workspace = &ws;
+  job.model = nullptr;
+  CHECK(job.Run() == rt::Status::kErrorNullArgument);
+  // A workspace made for another model (another build of the same asset) is refused, nothing written.
+  rt::NarrowPhaseModel other;
+  REQUIRE(other.Init(l.view) == rt::Status::kOk);
+  CHECK(other.id() != ctx.id());
+  job.model = &other;
+  CHECK(job.Run() == rt::Status::kErrorWorkspaceModel);
+  job.model = &ctx;
+  // Moving keeps the id (the workspace still fits) and leaves the source uninitialised.
+  rt::NarrowPhaseModel moved = std::move(other);
+  CHECK(!other.initialized());
+  CHECK(moved.initialized());
+  rt::NarrowPhaseWorkspace moved_ws;
+  REQUIRE(moved_ws.Init(moved) == rt::Status::kOk);
+  rt::NarrowPhaseWorkspace ws2 = std::move(moved_ws);
+  CHECK(!moved_ws.initialized());
+  CHECK(ws2.made_for(moved));
   job.positions.count = mesh.vertex_count() - 1;
   CHECK(job.Run() == rt::Status::kErrorVertexCount);
   job.positions.count = mesh.vertex_count();
@@ -303,7 +342,7 @@ TEST_CASE("narrow phase: bad input gets its status and no output") {
   // An asset without the narrow-phase arrays (baked before them) is refused at Init.
   d.triangles.clear();
   Loaded old = Load(d);
-  rt::NarrowPhaseContext ctx_old;
+  rt::NarrowPhaseModel ctx_old;
   CHECK(ctx_old.Init(old.view) == rt::Status::kErrorMissingField);
   CHECK(!ctx_old.initialized());
   // Corrupt narrow-phase arrays are refused by LoadAsset.

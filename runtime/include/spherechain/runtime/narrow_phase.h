@@ -63,32 +63,38 @@ struct NarrowPhaseStats {
   uint32_t contacts = 0;              ///< intersecting triangle pairs; > capacity ⇔ truncated
 };
 
-/// What the narrow phase needs of one asset: the index buffer and weld ids (Asset.triangles,
-/// Asset.weld_ids), the surrounding regions in sphere order, each region's vertex list, the excluded
-/// pairs; plus per-frame scratch (region boxes, triangle boxes, candidate pairs, culled lists).
-/// Ownership: owns its memory; after Init it no longer reads the asset bytes.
-/// Thread safety: one job at a time per context (Run writes the scratch); contexts are independent.
 struct NarrowPhaseJob;
+struct NarrowPhaseInternal;  // the job's stages (narrow_phase.cpp; not API)
 
-struct NarrowPhaseJob;
-
-class NarrowPhaseContext {
+/// What the narrow phase needs of one asset, shared by every character (the narrow phase's Model,
+/// built beside the runtime::Model from the same AssetView): the index buffer's surrounding-region
+/// triangles in sphere order with their corners and weld ids (Asset.triangles, Asset.weld_ids,
+/// Asset.surrounding_*), each region's distinct vertices, the excluded pairs (Asset.excluded_pairs), and
+/// the sizes of the per-character scratch (NarrowPhaseWorkspace).
+/// Immutable after Init: any number of NarrowPhaseWorkspaces (characters) and threads may use one at
+/// once. Ownership: owns its memory (std::vector, allocated by Init only); after Init it no longer reads
+/// the asset bytes. Move-only; moving keeps id() and leaves the source uninitialised.
+class NarrowPhaseModel {
  public:
-  NarrowPhaseContext() = default;
-  NarrowPhaseContext(const NarrowPhaseContext&) = delete;
-  NarrowPhaseContext& operator=(const NarrowPhaseContext&) = delete;
-  NarrowPhaseContext(NarrowPhaseContext&&) noexcept = default;
-  NarrowPhaseContext& operator=(NarrowPhaseContext&&) noexcept = default;
+  NarrowPhaseModel() = default;
+  NarrowPhaseModel(const NarrowPhaseModel&) = delete;
+  NarrowPhaseModel& operator=(const NarrowPhaseModel&) = delete;
+  NarrowPhaseModel(NarrowPhaseModel&&) noexcept = default;
+  NarrowPhaseModel& operator=(NarrowPhaseModel&&) noexcept = default;
 
-  /// Sizes and fills the context for `view`. The only allocating call (catches std::bad_alloc).
+  /// Builds the per-asset data of `view`. The only allocating call (catches std::bad_alloc).
   /// Returns kOk; kErrorNullArgument when `!view.valid()`; kErrorMissingField when the asset has no
-  /// `triangles` or `weld_ids` (baked before the narrow phase existed: re-bake); kErrorOutOfMemory
-  /// (context left empty). Cost: O(#T + #V + #S) time; memory ~150 B per triangle + 5 B per
-  /// (sphere, region vertex) + ~100 B per sphere + ~150 B per triangle and 17 B per vertex of the
-  /// largest region.
+  /// `triangles` or `weld_ids` (baked before the narrow phase existed: re-bake); kErrorOutOfMemory. The
+  /// model is empty (not initialised) after a failure. Cost: O(#T + #V + #S log) time; memory ~40 B per
+  /// triangle + 4 B per vertex + 4 B per (sphere, region vertex) + ~20 B per sphere.
+  /// Not thread-safe on one object (nothing may use the model meanwhile).
   Status Init(const AssetView& view);
 
-  bool initialized() const { return sphere_count_ != 0; }
+  /// True after a successful Init (false when moved from).
+  bool initialized() const { return sphere_count_ != 0 && !vert_offsets_.empty(); }
+  /// A number unique to this build of the model in the process (never 0 once initialised; kept by a
+  /// move): what a NarrowPhaseWorkspace records to refuse another model (kErrorWorkspaceModel).
+  uint64_t id() const { return id_; }
   uint32_t sphere_count() const { return sphere_count_; }      ///< #S
   uint32_t vertex_count() const { return vertex_count_; }      ///< #V the positions must have
   uint32_t triangle_count() const { return triangle_count_; }  ///< #T
@@ -98,18 +104,20 @@ class NarrowPhaseContext {
   uint32_t unassigned_triangles() const { return unassigned_; }
   /// True if (a, b) is an excluded pair of the asset, either order. O(log degree).
   bool IsExcluded(uint32_t a, uint32_t b) const;
-  /// Owning sphere of source triangle `t` (< #T), or 0xFFFF when unassigned.
+  /// Owning sphere of source triangle `t` [Limit: < #T], or 0xFFFF when unassigned.
   uint16_t triangle_sphere(uint32_t t) const { return tri_sphere_[t]; }
-  /// Weld id of vertex `v` (< #V): see Asset.weld_ids.
+  /// Weld id of vertex `v` [Limit: < #V]: see Asset.weld_ids.
   uint32_t weld_id(uint32_t v) const { return weld_[v]; }
 
-  struct Internal;
-  friend struct Internal;
+  friend class NarrowPhaseWorkspace;
   friend struct NarrowPhaseJob;
+  friend struct NarrowPhaseInternal;
 
  private:
+  uint64_t id_ = 0;
   uint32_t sphere_count_ = 0, vertex_count_ = 0, triangle_count_ = 0;
   uint32_t index_degenerate_ = 0, unassigned_ = 0;
+  uint32_t largest_region_ = 0, largest_region_vertices_ = 0;  // triangles / distinct vertices (scratch sizes)
   std::vector<uint32_t> weld_;                 // #V
   std::vector<uint16_t> tri_sphere_;           // #T source triangle → owning sphere (0xFFFF none)
   // Surrounding regions in sphere order (CSR, region_offsets_ #S+1): source triangle id, its three
@@ -119,32 +127,47 @@ class NarrowPhaseContext {
   std::vector<uint32_t> region_local_;             // per slot: its corners' indices in the region's vertex list
   std::vector<uint32_t> excl_offsets_;             // CSR #S+1: excluded partners b > a of each a
   std::vector<uint16_t> excl_partners_;
-  // Per-frame scratch. Boxes are 8 floats: min xyz, 0, max xyz, 0 (four-wide loads).
-  std::vector<float> box_;                     // #S×8 region boxes
-  std::vector<float> box_soa_;                 // the same, 6 rows (min x, y, z, max x, y, z) of box_pitch_
-  size_t box_pitch_ = 0;                       // #S + 4: inverted boxes after the last
-  std::vector<float> clip_;                    // #S×8: box of the candidate partners' boxes ∩ its own (or inverted)
-  std::vector<uint32_t> kept_;                 // #S: triangles of the region kept by its clip, or kNotCulled
-  std::vector<uint32_t> prepared_at_;          // per region-order triangle: its index in prepared_, or unprepared
-                                               // or degenerate (reset with its region's cull: only those reach a test)
-  std::vector<PreparedTriangle> prepared_;     // the triangles prepared this frame, in the order tests met them
-  uint32_t prepared_count_ = 0;                // (a pool the size of the regions, its used part small and hot)
-  std::vector<uint8_t> outcode_;               // per vertex of the largest region: cull outcodes
-  std::vector<float> corner_;                  // per vertex of the largest region: its position, 4 floats
-  // Per region, from its pool offset (pool_offsets_, #S+1: its triangle count rounded up to a chunk of
-  // 8): its triangles kept by its clip, in slot order: their slot, and their box (8 floats), inverted
-  // boxes padding the last chunk.
+  size_t box_pitch_ = 0;                       // #S + 4: the SoA region boxes' rows (inverted boxes after the last)
+  // Per region, its pool offset (pool_offsets_, #S+1: its triangle count rounded up to a chunk of 8) into
+  // the workspace's kept triangles, and its chunk offset (chunk_offsets_, #S+1: its chunk count rounded
+  // up to 4) into the workspace's chunk boxes (six rows of chunk_pitch_).
   std::vector<uint32_t> pool_offsets_;
-  std::vector<uint32_t> kept_slot_;
-  std::vector<float> kept_box_;
-  // The box of each chunk of 8 kept boxes, six rows of chunk_pitch_ from the region's chunk offset
-  // (chunk_offsets_, #S+1: its chunk count rounded up to 4), inverted boxes padding.
   std::vector<uint32_t> chunk_offsets_;
-  std::vector<float> chunk_box_;
   size_t chunk_pitch_ = 0;
-  std::vector<uint64_t> records_;              // sweep steps with a hit: element << 32 | side << 31 | box << 4 | lanes
-  std::vector<uint64_t> hits_;                 // records → exact tests: position in a's list << 32 | in b's
-  std::vector<uint32_t> candidates_;           // candidate pairs a << 16 | b, up to min(#S(#S−1)/2, 16·#S + 64)
+};
+
+/// One character's scratch for the narrow phase of one NarrowPhaseModel (the narrow phase's Workspace):
+/// region boxes, clips, the culled and kept triangles with their boxes, prepared triangles, candidate
+/// pairs, sweep lists — rewritten by every Run (nothing in it outlives a Run; the job's outputs are the
+/// caller's). Records the id() of the model it was made for: a job given this workspace and another
+/// model answers kErrorWorkspaceModel and writes nothing.
+/// Ownership: owns its memory (std::vector, allocated by Init only): ~110 B per region triangle (a
+/// prepared triangle 64 B, a box 32 B, indices) + ~90 B per sphere + ~150 B per triangle and 17 B per
+/// vertex of the largest region (≈ 2.9 MB for MakeHuman's 26,756 triangles by that count). Move-only;
+/// moving leaves the source uninitialised.
+/// Thread safety: one job at a time per workspace; different workspaces are independent, also when they
+/// share a model.
+class NarrowPhaseWorkspace {
+ public:
+  NarrowPhaseWorkspace() = default;
+  NarrowPhaseWorkspace(const NarrowPhaseWorkspace&) = delete;
+  NarrowPhaseWorkspace& operator=(const NarrowPhaseWorkspace&) = delete;
+  NarrowPhaseWorkspace(NarrowPhaseWorkspace&&) noexcept = default;
+  NarrowPhaseWorkspace& operator=(NarrowPhaseWorkspace&&) noexcept = default;
+
+  /// Sizes the scratch for `model` and records model.id(). The only allocating call (catches
+  /// std::bad_alloc). Returns kOk; kErrorInvalidJob (model not initialised); kErrorOutOfMemory (left
+  /// empty). Cost: O(#T + #S) time.
+  Status Init(const NarrowPhaseModel& model);
+
+  /// True after a successful Init (false when moved from).
+  bool initialized() const { return model_id_ != 0 && !box_.empty(); }
+  uint64_t model_id() const { return model_id_; }  ///< NarrowPhaseModel::id() it was made for
+  bool made_for(const NarrowPhaseModel& model) const { return model_id_ != 0 && model_id_ == model.id(); }
+
+  friend struct NarrowPhaseJob;
+  friend struct NarrowPhaseInternal;
+
   struct Culled {                     // culled triangles of one side of a candidate pair
     std::vector<uint64_t> key;        // sweep order: ordered bits of the box minimum on the axis << 32 | n
     std::vector<uint32_t> kept;       // per n (cull order): index into the region's kept triangles
@@ -155,6 +178,30 @@ class NarrowPhaseContext {
     std::vector<uint32_t> slot;       // sweep order: region-order slot; 4 more (read, unused)
     std::vector<float> lo[3], hi[3];  // sweep order: box per axis; 4 sentinels (lo +inf, hi −inf) after
   };
+
+ private:
+  uint64_t model_id_ = 0;
+  // Boxes are 8 floats: min xyz, 0, max xyz, 0 (four-wide loads).
+  std::vector<float> box_;                     // #S×8 region boxes
+  std::vector<float> box_soa_;                 // the same, 6 rows (min x, y, z, max x, y, z) of the model's box pitch
+  std::vector<float> clip_;                    // #S×8: box of the candidate partners' boxes ∩ its own (or inverted)
+  std::vector<uint32_t> kept_;                 // #S: triangles of the region kept by its clip, or kNotCulled
+  std::vector<uint32_t> prepared_at_;          // per region-order triangle: its index in prepared_, or unprepared
+                                               // or degenerate (reset with its region's cull: only those reach a test)
+  std::vector<PreparedTriangle> prepared_;     // the triangles prepared this frame, in the order tests met them
+  uint32_t prepared_count_ = 0;                // (a pool the size of the regions, its used part small and hot)
+  std::vector<uint8_t> outcode_;               // per vertex of the largest region: cull outcodes
+  std::vector<float> corner_;                  // per vertex of the largest region: its position, 4 floats
+  // Per region, from its pool offset (the model's): its triangles kept by its clip, in slot order: their
+  // slot, and their box (8 floats), inverted boxes padding the last chunk.
+  std::vector<uint32_t> kept_slot_;
+  std::vector<float> kept_box_;
+  // The box of each chunk of 8 kept boxes, six rows of the model's chunk pitch from the region's chunk
+  // offset, inverted boxes padding.
+  std::vector<float> chunk_box_;
+  std::vector<uint64_t> records_;              // sweep steps with a hit: element << 32 | side << 31 | box << 4 | lanes
+  std::vector<uint64_t> hits_;                 // records → exact tests: position in a's list << 32 | in b's
+  std::vector<uint32_t> candidates_;           // candidate pairs a << 16 | b, up to min(#S(#S−1)/2, 16·#S + 64)
   Culled list_a_, list_b_;
 };
 
@@ -171,9 +218,12 @@ class NarrowPhaseContext {
 /// reaches an exact test is prepared once a frame (~20 ns), the test is ~8 ns when the float filter
 /// separates the planes (~70 % of them), ~40 ns when the planes cross (float-filtered interval test),
 /// exact evaluation only near degeneracy.
-/// MakeHuman morph: see README "Exact self-contacts". No allocation, no exceptions; serial.
+/// MakeHuman morph: see README "Exact self-contacts". No allocation, no exceptions; serial. Thread
+/// safety: the model is only read; the workspace is written (one job per workspace at a time), so
+/// characters sharing a NarrowPhaseModel run in parallel, each with its own NarrowPhaseWorkspace.
 struct NarrowPhaseJob {
-  NarrowPhaseContext* context = nullptr;  ///< initialised; scratch written: one job per context at a time
+  const NarrowPhaseModel* model = nullptr;  ///< initialised (NarrowPhaseModel::Init); only read
+  NarrowPhaseWorkspace* workspace = nullptr;  ///< made for `model` (NarrowPhaseWorkspace::Init); scratch written
   PositionsView positions;                ///< deformed vertex positions, same as RefitJob's
   Exclusions exclusions = Exclusions::kAsset;
   /// [opt] restrict the candidates to these sphere pairs (e.g. a DetectJob's output — then only the
@@ -188,9 +238,9 @@ struct NarrowPhaseJob {
 
   /// True when Run() would not fail on arguments (does not read the positions).
   bool Validate() const { return Check() == Status::kOk; }
-  /// kErrorNullArgument (context, count or positions.data null; output null with capacity > 0;
-  /// sphere_pairs null with sphere_pair_count > 0), kErrorInvalidJob (context not initialised, unknown
-  /// exclusions), kErrorAlignment (positions not 4-byte aligned), kErrorStride, kErrorVertexCount,
+  /// kErrorNullArgument (model, workspace, count or positions.data null; output null with capacity > 0;
+  /// sphere_pairs null with sphere_pair_count > 0), kErrorInvalidJob (model or workspace not
+  /// initialised, unknown exclusions), kErrorWorkspaceModel (the workspace was made for another model), kErrorAlignment (positions not 4-byte aligned), kErrorStride, kErrorVertexCount,
   /// kErrorIndexOutOfRange (a sphere_pairs record with a >= b or b >= #S), else kOk.
   Status Check() const;
   /// Returns Check()'s error (outputs untouched); kErrorNonFinitePositions when a vertex of a

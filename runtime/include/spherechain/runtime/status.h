@@ -24,14 +24,15 @@ enum class [[nodiscard]] Status : uint32_t {
                                       ///< workspace not initialised, parallel_for hook half set).
   kErrorVertexCount = 0x8000'0004u,   ///< PositionsView::count != asset fingerprint.vertex_count.
   kErrorStride = 0x8000'0005u,        ///< PositionsView::stride_bytes < 12 or not a multiple of 4.
-  kErrorOutOfMemory = 0x8000'0006u,   ///< Model / Workspace / NarrowPhaseContext::Init could not allocate.
+  kErrorOutOfMemory = 0x8000'0006u,   ///< Model / Workspace / NarrowPhaseModel / NarrowPhaseWorkspace::Init could not allocate.
   kErrorNonFinitePositions = 0x8000'0007u,  ///< A deformed vertex position is NaN or infinite
                                             ///< (NarrowPhaseJob checks the positions it reads).
   kErrorJointCount = 0x8000'0008u,    ///< JointRefitJob::joint_count != the asset's Asset.joint_count.
   kErrorNonFiniteJoints = 0x8000'0009u,  ///< A joint matrix that some sphere follows holds a NaN or
                                          ///< an infinity (JointRefitJob checks them before writing).
   kErrorWorkspaceModel = 0x8000'000Au,   ///< The Workspace was made for another Model (Workspace::Init
-                                         ///< records Model::id()): the job wrote nothing.
+                                         ///< records Model::id(); NarrowPhaseWorkspace likewise
+                                         ///< NarrowPhaseModel::id()): the job wrote nothing.
   kErrorBufferTooSmall = 0x8000'000Bu,   ///< Caller memory smaller than RequiredBytes() (Model /
                                          ///< Workspace::InitInPlace): nothing built.
 
