@@ -14,34 +14,26 @@ namespace {
 float JobMargin(const DetectJob& job) { return job.margin < 0.0f ? job.model->contact_margin() : job.margin; }
 
 struct DetectTaskData {
-  const Model* model;
-  Workspace* ws;
-  bool m1;
+  const kernels::BroadPhaseArgs* args;
+  uint32_t* row_hits;
+  bool avx;
 };
 
+// Row blocks [begin, end): their hit keys into their own slots of the keys and their counters into
+// row_hits (disjoint per row block, so tasks may run in any order on any thread).
+void DetectRows(const DetectTaskData& d, uint32_t begin, uint32_t end) {
+  for (uint32_t I = begin; I < end; ++I) {
+    uint32_t* counters = d.row_hits + size_t{3} * I;
+    counters[0] = d.avx ? kernels::BlockRowAvx(*d.args, I, &counters[1], &counters[2])
+                        : kernels::BlockRowSse(*d.args, I, &counters[1], &counters[2]);
+  }
+}
+
 void DetectRowTask(void* data, uint32_t begin, uint32_t end) {
-  const DetectTaskData& d = *static_cast<DetectTaskData*>(data);
-  for (uint32_t I = begin; I < end; ++I) Model::Internal::DetectRowBlock(*d.model, *d.ws, d.m1, I);
+  DetectRows(*static_cast<DetectTaskData*>(data), begin, end);
 }
 
 }  // namespace
-
-// One row block of the broad phase (kernels::BlockRow): its hit keys into its own slots of the
-// workspace's keys and its counters into row_hits (disjoint per row block, so tasks may run in any
-// order on any thread).
-void Model::Internal::DetectRowBlock(const Model& c, Workspace& w, bool m1, uint32_t I) {
-  const int method = m1 ? 0 : 1;
-  const size_t pitch = c.box_pitch_ + 8;
-  float* box = w.box_;
-  const kernels::BroadPhaseArgs args{w.gx_, w.gy_, w.gz_, w.gr_,
-                                     box, box + pitch, box + 2 * pitch, box + 3 * pitch, box + 4 * pitch,
-                                     box + 5 * pitch, box + 6 * pitch, c.order_, c.a_.chain_mask,
-                                     c.allowed_[method], c.live_[method], c.blocks_, c.live_stride_, m1,
-                                     w.keys_, c.key_begin_[method]};
-  uint32_t* counters = w.row_hits_ + size_t{3} * I;
-  counters[0] = c.use_avx_ ? kernels::BlockRowAvx(args, I, &counters[1], &counters[2])
-                           : kernels::BlockRowSse(args, I, &counters[1], &counters[2]);
-}
 
 // Both methods: gather the spheres (radii grown by the margin) in the layout's slot order, plain and
 // lane-major; block boxes; per row block the cull and the 8×8 tests (parallel_for: one task index per
@@ -56,15 +48,28 @@ Status Model::Internal::Detect(const DetectJob& job) {
   const float m = JobMargin(job);
   const uint32_t B = c.blocks_, P = c.box_pitch_;
   const float *x = w.x_, *y = w.y_, *z = w.z_, *r = w.r_;
-  float *gx = w.gx_, *gy = w.gy_, *gz = w.gz_, *gr = w.gr_;
-  float *tx = w.tx_, *ty = w.ty_, *tz = w.tz_, *tr = w.tr_;
-  for (uint32_t I = 0; I < B; ++I)  // padding slots read id #S: NaN
-    for (uint32_t l = 0, g = 8 * I, t = I; l < 8; ++l, ++g, t += P) {
-      const uint32_t s = c.order_[g];
-      const float sx = x[s], sy = y[s], sz = z[s], sr = r[s] + m;
-      gx[g] = sx, gy[g] = sy, gz[g] = sz, gr[g] = sr;
-      tx[t] = sx, ty[t] = sy, tz[t] = sz, tr[t] = sr;
-    }
+  {  // disjoint arrays of the workspace (restrict: no reloads between the stores)
+    const float* __restrict sx = x;
+    const float* __restrict sy = y;
+    const float* __restrict sz = z;
+    const float* __restrict sr = r;
+    const uint32_t* __restrict order = c.order_;
+    float* __restrict gx = w.gx_;
+    float* __restrict gy = w.gy_;
+    float* __restrict gz = w.gz_;
+    float* __restrict gr = w.gr_;
+    float* __restrict tx = w.tx_;
+    float* __restrict ty = w.ty_;
+    float* __restrict tz = w.tz_;
+    float* __restrict tr = w.tr_;
+    for (uint32_t I = 0; I < B; ++I)  // padding slots read id #S: NaN
+      for (uint32_t l = 0, g = 8 * I, t = I; l < 8; ++l, ++g, t += P) {
+        const uint32_t s = order[g];
+        const float px = sx[s], py = sy[s], pz = sz[s], pr = sr[s] + m;
+        gx[g] = px, gy[g] = py, gz[g] = pz, gr[g] = pr;
+        tx[t] = px, ty[t] = py, tz[t] = pz, tr[t] = pr;
+      }
+  }
   {
     const size_t pitch = P + 8;
     float* box = w.box_;
@@ -76,11 +81,19 @@ Status Model::Internal::Detect(const DetectJob& job) {
     else
       kernels::BlockBoxesSse(args);
   }
-  if (job.parallel_for.run) {
-    DetectTaskData data{&c, &w, m1};
-    job.parallel_for.run(job.parallel_for.user, B, &DetectRowTask, &data);
-  } else {
-    for (uint32_t I = 0; I < B; ++I) DetectRowBlock(c, w, m1, I);
+  {  // the broad phase, one row block at a time (kernels::BlockRow); one task index per row block
+    const size_t pitch = P + 8;
+    float* box = w.box_;
+    const kernels::BroadPhaseArgs args{w.gx_, w.gy_, w.gz_, w.gr_,
+                                       box, box + pitch, box + 2 * pitch, box + 3 * pitch, box + 4 * pitch,
+                                       box + 5 * pitch, box + 6 * pitch, c.order_, c.a_.chain_mask,
+                                       c.allowed_[method], c.live_[method], c.blocks_, c.live_stride_, m1,
+                                       w.keys_, c.key_begin_[method]};
+    DetectTaskData data{&args, w.row_hits_, c.use_avx_};
+    if (job.parallel_for.run)
+      job.parallel_for.run(job.parallel_for.user, B, &DetectRowTask, &data);
+    else
+      DetectRows(data, 0, B);
   }
   uint64_t* keys = w.keys_;
   uint32_t distinct = 0, box_tests = 0, sphere_tests = 0;

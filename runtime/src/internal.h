@@ -12,7 +12,6 @@ namespace spherechain::runtime {
 
 struct Model::Internal {
   static void Refit(const RefitJob& job, uint32_t begin, uint32_t end);
-  static void DetectRowBlock(const Model& model, Workspace& ws, bool m1, uint32_t row_block);
   static Status Detect(const DetectJob& job);
   /// Shared argument checks of the jobs: kErrorNullArgument (either null), kErrorInvalidJob (either not
   /// initialised), kErrorWorkspaceModel (the workspace was made for another model), else kOk.
@@ -31,10 +30,13 @@ struct Model::Internal {
 namespace kernels {
 
 /// Refit of spheres [begin, end) (see RefitJob, refit.h). Per-sphere arrays are readable up to a
-/// multiple of 8 past `end` (padded); outputs are written for [begin, end) only.
+/// multiple of 8 past `end` (padded); outputs are written for [begin, end) only. The x86 kernels read
+/// each pivot vertex as four floats (x, y, z and the next float of the buffer, unused) except the
+/// buffer's last vertex (`last_vertex`), which may end the buffer.
 struct RefitArgs {
   const char* base;               // positions (strided)
   size_t stride;                  // bytes
+  uint32_t last_vertex;           // #V − 1
   const uint32_t* pivot_vertices; // #S×12
   const float *local_x, *local_y, *local_z, *offset_x, *offset_y, *offset_z, *radius_scale;
   float *x, *y, *z, *r;
@@ -47,7 +49,8 @@ struct RefitArgs {
 /// every block J >= I that the method's static table keeps (`live`: some allowed lane); a block pair
 /// survives when the distance between the boxes of the two blocks' centres is below the sum of their
 /// largest |radius| — computed with the sphere test's own float operations, so that it never drops a
-/// pair the sphere test would report (see kernels.inl) — and then its 8×8 sphere tests run, masked by
+/// pair the sphere test would report (see kernels.inl) — then each row sphere of I is tested the same
+/// way against J's box, and the surviving rows run their 8 sphere tests, masked by
 /// `allowed` (row r's lanes in byte r: not padding, j > i on the diagonal block, not excluded, and for
 /// M1 sharing a chain). Each hit writes (first common chain, M1 only) << 32 | min(a,b) << 16 | max(a,b)
 /// at keys[key_begin[I] ...]. Returns the number of keys; counters go to *box_tests / *sphere_tests.
@@ -79,7 +82,7 @@ void BlockBoxesSse(const BlockBoxArgs& a);
 void BlockBoxesAvx(const BlockBoxArgs& a);
 uint32_t BlockRowSse(const BroadPhaseArgs& a, uint32_t I, uint32_t* box_tests, uint32_t* sphere_tests);
 uint32_t BlockRowAvx(const BroadPhaseArgs& a, uint32_t I, uint32_t* box_tests, uint32_t* sphere_tests);
-bool HasAvx();  // the CPU and OS support AVX (false on a non-x86 build)
+bool HasAvx();  // the CPU and OS support AVX and POPCNT (false on a non-x86 build)
 
 }  // namespace kernels
 }  // namespace spherechain::runtime

@@ -21,25 +21,26 @@ Status JointRefitJob::Check() const {
 
 Status JointRefitJob::Run() const {
   if (Status s = Check(); s != Status::kOk) return s;
-  // Every matrix finite before anything is written: a float is NaN or ±inf exactly when its exponent
-  // bits are all ones; OR-accumulate that test over all 12·#J floats (SSE2: ~0.05 µs for 163 joints).
+  // Every matrix finite before anything is written: x · 0 is ±0 for a finite x and NaN for a NaN or
+  // ±inf, and a sum of ±0 stays ±0 while a NaN stays NaN — so Σ x · 0 over all 12·#J floats is NaN
+  // exactly when one of them is not finite (SSE2, four accumulators: one multiply and one add per four
+  // floats, ~1,350 instructions for MakeHuman's 163 joints where the exponent test took ~2,700).
   {
     const uint32_t n = joint_count * kJointMatrixFloats;  // a multiple of 4
 #if defined(__SSE2__) || defined(_M_X64)
-    const __m128i exponent = _mm_set1_epi32(0x7f800000);
-    __m128i bad0 = _mm_setzero_si128(), bad1 = _mm_setzero_si128();
+    const __m128 zero = _mm_setzero_ps();
+    __m128 a0 = zero, a1 = zero, a2 = zero, a3 = zero;
+    const float* p = joint_matrices;
     uint32_t i = 0;
-    for (; i + 8 <= n; i += 8) {
-      const __m128i a0 = _mm_and_si128(_mm_castps_si128(_mm_loadu_ps(joint_matrices + i)), exponent);
-      const __m128i a1 = _mm_and_si128(_mm_castps_si128(_mm_loadu_ps(joint_matrices + i + 4)), exponent);
-      bad0 = _mm_or_si128(bad0, _mm_cmpeq_epi32(a0, exponent));
-      bad1 = _mm_or_si128(bad1, _mm_cmpeq_epi32(a1, exponent));
+    for (; i + 16 <= n; i += 16) {
+      a0 = _mm_add_ps(a0, _mm_mul_ps(_mm_loadu_ps(p + i), zero));
+      a1 = _mm_add_ps(a1, _mm_mul_ps(_mm_loadu_ps(p + i + 4), zero));
+      a2 = _mm_add_ps(a2, _mm_mul_ps(_mm_loadu_ps(p + i + 8), zero));
+      a3 = _mm_add_ps(a3, _mm_mul_ps(_mm_loadu_ps(p + i + 12), zero));
     }
-    for (; i < n; i += 4) {
-      const __m128i a0 = _mm_and_si128(_mm_castps_si128(_mm_loadu_ps(joint_matrices + i)), exponent);
-      bad0 = _mm_or_si128(bad0, _mm_cmpeq_epi32(a0, exponent));
-    }
-    if (_mm_movemask_epi8(_mm_or_si128(bad0, bad1)) != 0) return Status::kErrorNonFiniteJoints;
+    for (; i < n; i += 4) a0 = _mm_add_ps(a0, _mm_mul_ps(_mm_loadu_ps(p + i), zero));
+    const __m128 sum = _mm_add_ps(_mm_add_ps(a0, a1), _mm_add_ps(a2, a3));
+    if (_mm_movemask_ps(_mm_cmpunord_ps(sum, sum)) != 0) return Status::kErrorNonFiniteJoints;
 #else
     for (uint32_t i = 0; i < n; ++i)
       if (!std::isfinite(joint_matrices[i])) return Status::kErrorNonFiniteJoints;

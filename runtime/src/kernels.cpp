@@ -41,6 +41,10 @@ struct Ops {  // formulas.inl's lane interface
   static V Blend(M m, V a, V b) { return _mm_or_ps(_mm_and_ps(m, a), _mm_andnot_ps(m, b)); }
 };
 #include "spherechain/runtime/formulas.inl"
+#include "kernels_x86.inl"
+inline void PivotCentroids(const RefitArgs& a, uint32_t s0, uint32_t n, V px[4], V py[4], V pz[4]) {
+  PivotCentroids4(a, s0, n, s0, px, py, pz);  // pad lanes: lane 0's sphere
+}
 inline uint32_t Overlap4(V xi, V yi, V zi, V ri, const float* x, const float* y, const float* z, const float* r) {
   return static_cast<uint32_t>(_mm_movemask_ps(OverlapLanes<Ops>(xi, yi, zi, ri, Load(x), Load(y), Load(z), Load(r))));
 }
@@ -52,9 +56,9 @@ inline uint32_t Overlap8(V xi, V yi, V zi, V ri, const float* x, const float* y,
 
 namespace avx {
 #pragma GCC push_options
-#pragma GCC target("avx")
+#pragma GCC target("avx,popcnt")  // every AVX CPU has POPCNT (HasAvx checks both)
 #ifdef __clang__
-#pragma clang attribute push(__attribute__((target("avx"))), apply_to = function)
+#pragma clang attribute push(__attribute__((target("avx,popcnt"))), apply_to = function)
 #endif
 using V = __m256;
 using M = __m256;
@@ -81,6 +85,17 @@ struct Ops {  // formulas.inl's lane interface
   static V Blend(M m, V a, V b) { return _mm256_blendv_ps(b, a, m); }
 };
 #include "spherechain/runtime/formulas.inl"
+#include "kernels_x86.inl"
+inline void PivotCentroids(const RefitArgs& a, uint32_t s0, uint32_t n, V px[4], V py[4], V pz[4]) {
+  __m128 lx[4], ly[4], lz[4], hx[4], hy[4], hz[4];
+  PivotCentroids4(a, s0, n, s0, lx, ly, lz);  // pad lanes: lane 0's sphere
+  PivotCentroids4(a, s0 + 4, n > 4 ? n - 4 : 0, s0, hx, hy, hz);
+  for (int k = 0; k < 4; ++k) {
+    px[k] = _mm256_insertf128_ps(_mm256_castps128_ps256(lx[k]), hx[k], 1);
+    py[k] = _mm256_insertf128_ps(_mm256_castps128_ps256(ly[k]), hy[k], 1);
+    pz[k] = _mm256_insertf128_ps(_mm256_castps128_ps256(lz[k]), hz[k], 1);
+  }
+}
 inline uint32_t Overlap8(V xi, V yi, V zi, V ri, const float* x, const float* y, const float* z, const float* r) {
   return static_cast<uint32_t>(_mm256_movemask_ps(OverlapLanes<Ops>(xi, yi, zi, ri, Load(x), Load(y), Load(z), Load(r))));
 }
@@ -99,7 +114,7 @@ uint32_t BlockRowSse(const BroadPhaseArgs& a, uint32_t I, uint32_t* b, uint32_t*
 uint32_t BlockRowAvx(const BroadPhaseArgs& a, uint32_t I, uint32_t* b, uint32_t* s) { return avx::BlockRow(a, I, b, s); }
 bool HasAvx() {
   __builtin_cpu_init();
-  return __builtin_cpu_supports("avx");
+  return __builtin_cpu_supports("avx") && __builtin_cpu_supports("popcnt");
 }
 
 #else  // scalar: one lane at a time, the same formulas
@@ -127,6 +142,17 @@ inline uint32_t Overlap8(V xi, V yi, V zi, V ri, const float* x, const float* y,
   return bits;
 }
 using formulas::RefitLanes;
+inline void PivotCentroids(const RefitArgs& a, uint32_t s, uint32_t, V px[4], V py[4], V pz[4]) {
+  const uint32_t* idx = a.pivot_vertices + size_t{12} * s;
+  for (int k = 0; k < 4; ++k) {
+    const float* va = reinterpret_cast<const float*>(a.base + idx[3 * k] * a.stride);
+    const float* vb = reinterpret_cast<const float*>(a.base + idx[3 * k + 1] * a.stride);
+    const float* vc = reinterpret_cast<const float*>(a.base + idx[3 * k + 2] * a.stride);
+    px[k] = formulas::CentroidCoord(va[0], vb[0], vc[0]);
+    py[k] = formulas::CentroidCoord(va[1], vb[1], vc[1]);
+    pz[k] = formulas::CentroidCoord(va[2], vb[2], vc[2]);
+  }
+}
 #include "kernels.inl"
 }  // namespace scalar
 

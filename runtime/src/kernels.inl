@@ -7,28 +7,16 @@
 // they are formulas.inl's (the same text the scalar path and CUDA compile), so the results are
 // bit-identical across variants (tests/runtime/formulas_test.cpp checks every lane).
 
-// Refit of spheres [begin, end), kW at a time: scalar centroids of the 12 pivot vertices into
-// per-lane arrays (formulas::CentroidCoord), then RefitLanes — the frame, the centre and the radius
-// in vector registers, degenerate pivots falling back to kPaper per lane.
+// Refit of spheres [begin, end), kW at a time: the centroids of the 12 pivot vertices of each lane's
+// sphere (formulas::CentroidCoord per coordinate; PivotCentroids, per instruction set) in SoA registers,
+// then RefitLanes — the frame, the centre and the radius in vector registers, degenerate pivots falling
+// back to kPaper per lane.
 void Refit(const RefitArgs& a, uint32_t begin, uint32_t end) {
-  alignas(64) float p[4][3][kW];
   alignas(64) float out[4][kW];
   for (uint32_t s0 = begin; s0 < end; s0 += kW) {
     const uint32_t n = end - s0 < kW ? end - s0 : kW;
-    for (uint32_t l = 0; l < kW; ++l) {
-      const uint32_t* idx = a.pivot_vertices + size_t{12} * (s0 + (l < n ? l : 0));  // pad lanes: copy lane 0
-      for (int k = 0; k < 4; ++k) {
-        // Positions are floats, 4-byte aligned (RefitJob::Check); TriangleCentroid: (a + b + c) · (1/3).
-        const float* va = reinterpret_cast<const float*>(a.base + idx[3 * k] * a.stride);
-        const float* vb = reinterpret_cast<const float*>(a.base + idx[3 * k + 1] * a.stride);
-        const float* vc = reinterpret_cast<const float*>(a.base + idx[3 * k + 2] * a.stride);
-        p[k][0][l] = formulas::CentroidCoord(va[0], vb[0], vc[0]);
-        p[k][1][l] = formulas::CentroidCoord(va[1], vb[1], vc[1]);
-        p[k][2][l] = formulas::CentroidCoord(va[2], vb[2], vc[2]);
-      }
-    }
     V px[4], py[4], pz[4];
-    for (int k = 0; k < 4; ++k) px[k] = Load(p[k][0]), py[k] = Load(p[k][1]), pz[k] = Load(p[k][2]);
+    PivotCentroids(a, s0, n, px, py, pz);  // pad lanes (l >= n): lane 0's sphere again
     V c[4];
     RefitLanes<Ops>(px, py, pz, Load(a.local_x + s0), Load(a.local_y + s0), Load(a.local_z + s0),
                     Load(a.offset_x + s0), Load(a.offset_y + s0), Load(a.offset_z + s0), Load(a.radius_scale + s0),
@@ -82,6 +70,11 @@ uint32_t BlockRow(const BroadPhaseArgs& a, uint32_t I, uint32_t* box_tests, uint
   const uint64_t* allowed = a.allowed + size_t{I} * a.blocks;
   uint64_t* keys = a.keys + a.key_begin[I];
   uint32_t hits = 0, boxes = 0, spheres = 0;
+  V ix[8 / kW], iy[8 / kW], iz[8 / kW], ir[8 / kW];  // the row block's spheres, |grown radius|
+  for (uint32_t k = 0; k < 8; k += kW) {
+    const uint32_t i = 8 * I + k;
+    ix[k / kW] = Load(x + i), iy[k / kW] = Load(y + i), iz[k / kW] = Load(z + i), ir[k / kW] = Abs(Load(r + i));
+  }
   for (uint32_t c = 0, J0 = I; J0 < a.blocks; ++c, J0 += 8) {
     uint32_t near = live[c];
     if (!near) continue;
@@ -102,7 +95,22 @@ uint32_t BlockRow(const BroadPhaseArgs& a, uint32_t I, uint32_t* box_tests, uint
       const uint64_t allow = allowed[J];
       spheres += static_cast<uint32_t>(std::popcount(allow));
       const uint32_t col = 8 * J;
-      for (uint32_t row = 0; row < 8; ++row) {
+      // Per row sphere, the block test against J's box (the sphere's centre a box of one point, its
+      // |grown radius| the bound): only rows that can reach J's box run their 8 sphere tests. Same float
+      // operations as the block test, so the same proof: never a pair the sphere test reports lost.
+      // (The same cull of J's columns against I's box cost more than it saved on MakeHuman: not done.)
+      const V lxj = Set1(a.lx[J]), hxj = Set1(a.hx[J]), lyj = Set1(a.ly[J]), hyj = Set1(a.hy[J]);
+      const V lzj = Set1(a.lz[J]), hzj = Set1(a.hz[J]), brj = Set1(a.br[J]);
+      uint32_t rows = 0;
+      for (uint32_t k = 0; k < 8; k += kW) {
+        const V gx = Max(lxj - ix[k / kW], Max(ix[k / kW] - hxj, zero));
+        const V gy = Max(lyj - iy[k / kW], Max(iy[k / kW] - hyj, zero));
+        const V gz = Max(lzj - iz[k / kW], Max(iz[k / kW] - hzj, zero));
+        const V rr = brj + ir[k / kW];
+        rows |= LtMask(gx * gx + gy * gy + gz * gz, rr * rr) << k;
+      }
+      for (; rows; rows &= rows - 1) {
+        const uint32_t row = static_cast<uint32_t>(std::countr_zero(rows));
         const uint32_t lanes = static_cast<uint32_t>(allow >> (8 * row)) & 0xffu;
         if (!lanes) continue;
         const uint32_t i = 8 * I + row;

@@ -24,6 +24,7 @@ void Model::Internal::Refit(const RefitJob& job, uint32_t begin, uint32_t end) {
   Workspace& w = *job.workspace;
   const ModelArrays& a = m.a_;
   const kernels::RefitArgs args{static_cast<const char*>(job.positions.data), job.positions.stride_bytes,
+                                job.positions.count - 1,
                                 a.pivot_vertices, a.local_x, a.local_y, a.local_z,
                                 a.offset_x, a.offset_y, a.offset_z, a.radius_scale,
                                 w.x_, w.y_, w.z_, w.r_, job.mode == RefitMode::kPivotFrame};

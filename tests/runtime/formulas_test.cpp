@@ -92,7 +92,9 @@ TEST_CASE("SIMD refit lanes equal the scalar formulas bit for bit (SSE2, AVX)") 
         CAPTURE(frame_mode);
         CAPTURE(isa);
         std::vector<float> x(S + 8, -7.0f), y = x, z = x, r = x;
-        const kernels::RefitArgs args{reinterpret_cast<const char*>(c.positions.data()), 12, c.pivot_vertices.data(),
+        // The last sphere's last pivot vertex ends the buffer (exactly sized: ASan sees an over-read).
+        const kernels::RefitArgs args{reinterpret_cast<const char*>(c.positions.data()), 12, 12 * S - 1,
+                                      c.pivot_vertices.data(),
                                       c.local[0].data(), c.local[1].data(), c.local[2].data(), c.offset[0].data(),
                                       c.offset[1].data(), c.offset[2].data(), c.radius_scale.data(), x.data(),
                                       y.data(), z.data(), r.data(), frame_mode};
