@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "spherechain/baker/import.h"
+#include "spherechain/baker/plausibility.h"
 #include "spherechain/baker/segment.h"
 #include "test_data.h"
 
@@ -712,4 +713,141 @@ TEST_CASE("segment (heavy): every X file of assimp-testmodels segments the same 
     }
   }
   CHECK(bodies >= 2);  // BCN_Epileptic by rig and by geometry at least
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Plausibility checks (plausibility.h, issue 11 "no silent wrong bake"): the synthetic body's own
+// segmentation passes; each constructed wrong one fails with its code.
+
+namespace {
+
+bool Has(const std::vector<sc::PlausibilityFinding>& f, const std::string& code) {
+  for (const auto& x : f)
+    if (x.code == code) return true;
+  return false;
+}
+
+std::string Codes(const std::vector<sc::PlausibilityFinding>& f) {
+  std::string s;
+  for (const auto& x : f) s += x.code + " (" + x.message + ") ";
+  return s.empty() ? "none" : s;
+}
+
+/// The construction's segmentation: every triangle in the region of its capsule.
+sc::Segmentation TruthOf(const SyntheticBody& body) {
+  sc::Segmentation s;
+  s.method = "map";
+  for (int p : body.part_of_triangle) s.triangle_regions.push_back(uint8_t(body.parts[size_t(p)].region));
+  return s;
+}
+
+}  // namespace
+
+TEST_CASE("plausibility: the synthetic body's true segmentation passes every check") {
+  for (bool t_pose : {false, true}) {
+    const SyntheticBody body = MakeSyntheticBody(t_pose);
+    const sc::Segmentation truth = TruthOf(body);
+    sc::CoverageStats cov;
+    cov.protrusion = 0.05;
+    sc::SegmentationAgreement agree;
+    agree.triangle_fraction = 0.9;
+    const auto f = sc::CheckPlausibility(body.mesh, truth, &cov, &agree);
+    CHECK_MESSAGE(f.empty(), (t_pose ? "T-pose: " : "A-pose: ") << Codes(f));
+    auto geo = sc::SegmentByGeometry(body.mesh);
+    REQUIRE(geo.ok());
+    CHECK_MESSAGE(sc::CheckPlausibility(body.mesh, geo.value(), nullptr, nullptr).empty(),
+                  Codes(sc::CheckPlausibility(body.mesh, geo.value(), nullptr, nullptr)));
+  }
+}
+
+TEST_CASE("plausibility: constructed wrong segmentations fail with their code") {
+  const SyntheticBody body = MakeSyntheticBody(false);
+  const sc::Segmentation truth = TruthOf(body);
+  const uint8_t kLeftArm = uint8_t(sc::Region::kLeftArm), kTorso = uint8_t(sc::Region::kTorso);
+  auto part_region = [&](uint32_t t) { return body.parts[size_t(body.part_of_triangle[t])].region; };
+
+  SUBCASE("PLAUS-LIMB-PIECES: the middle of the left arm given to the torso") {
+    sc::Segmentation s = truth;
+    for (uint32_t t = 0; t < s.triangle_regions.size(); ++t)
+      if (s.triangle_regions[t] == kLeftArm && body.along_part[t] > 0.35 && body.along_part[t] < 0.65) s.triangle_regions[t] = kTorso;
+    const auto f = sc::CheckPlausibility(body.mesh, s, nullptr, nullptr);
+    CHECK_MESSAGE(Has(f, "PLAUS-LIMB-PIECES"), Codes(f));
+  }
+  SUBCASE("PLAUS-LIMB-DETACHED: the left arm's upper half labelled right arm") {
+    sc::Segmentation s = truth;
+    for (uint32_t t = 0; t < s.triangle_regions.size(); ++t)
+      if (s.triangle_regions[t] == kLeftArm && body.along_part[t] < 0.5) s.triangle_regions[t] = uint8_t(sc::Region::kRightArm);
+    const auto f = sc::CheckPlausibility(body.mesh, s, nullptr, nullptr);
+    CHECK_MESSAGE(Has(f, "PLAUS-LIMB-DETACHED"), Codes(f));
+  }
+  SUBCASE("PLAUS-LIMB-BALANCE: only the left hand left in the left arm") {
+    sc::Segmentation s = truth;
+    for (uint32_t t = 0; t < s.triangle_regions.size(); ++t)
+      if (s.triangle_regions[t] == kLeftArm && body.along_part[t] < 0.85) s.triangle_regions[t] = kTorso;
+    const auto f = sc::CheckPlausibility(body.mesh, s, nullptr, nullptr);
+    CHECK_MESSAGE(Has(f, "PLAUS-LIMB-BALANCE"), Codes(f));
+    CHECK(!Has(f, "PLAUS-LIMB-PIECES"));
+  }
+  SUBCASE("PLAUS-HEAD-IN-LIMB: the head and neck put into the left arm (the issue's 45-degree character)") {
+    sc::Segmentation s = truth;
+    double top = -1e300;
+    for (uint32_t v = 0; v < body.mesh.vertex_count(); ++v) top = std::max(top, double(body.mesh.positions[3 * v + 1]));
+    for (uint32_t t = 0; t < s.triangle_regions.size(); ++t) {
+      double y = 0;
+      for (int k = 0; k < 3; ++k) y += body.mesh.positions[3 * body.mesh.indices[3 * t + k] + 1] / 3.0;
+      if (part_region(t) == sc::Region::kTorso && y > top - 0.25) s.triangle_regions[t] = kLeftArm;
+    }
+    const auto f = sc::CheckPlausibility(body.mesh, s, nullptr, nullptr);
+    CHECK_MESSAGE(Has(f, "PLAUS-HEAD-IN-LIMB"), Codes(f));
+  }
+  SUBCASE("PLAUS-TRUNK-AXIS: the body lying along X with Y still up") {
+    sc::Mesh lying = body.mesh;
+    for (uint32_t v = 0; v < lying.vertex_count(); ++v) {
+      const float x = lying.positions[3 * v], y = lying.positions[3 * v + 1];
+      lying.positions[3 * v] = y;  // -90 degrees about Z: the head points +X
+      lying.positions[3 * v + 1] = -x;
+    }
+    const auto f = sc::CheckPlausibility(lying, truth, nullptr, nullptr);
+    CHECK_MESSAGE(Has(f, "PLAUS-TRUNK-AXIS"), Codes(f));
+  }
+  SUBCASE("PLAUS-OUTSIDE and PLAUS-SEG-AGREE: bounds on the given measures") {
+    sc::CoverageStats cov;
+    cov.protrusion = 0.5;
+    sc::SegmentationAgreement agree;
+    agree.triangle_fraction = 0.3;
+    const auto f = sc::CheckPlausibility(body.mesh, truth, &cov, &agree);
+    CHECK(Has(f, "PLAUS-OUTSIDE"));
+    CHECK(Has(f, "PLAUS-SEG-AGREE"));
+    CHECK(f.size() == 2);
+    cov.protrusion = 0.34;
+    agree.triangle_fraction = 0.61;
+    CHECK(sc::CheckPlausibility(body.mesh, truth, &cov, &agree).empty());
+  }
+}
+
+TEST_CASE("plausibility (heavy): the real humans pass by rig, a non-human X file segmented by geometry does not") {
+  struct Case {
+    std::string path;
+    sc::SegmentMethod method;
+    bool plausible;
+  };
+  const std::vector<Case> cases = {
+      {SharedData("gltf/CesiumMan.gltf"), sc::SegmentMethod::kRig, true},
+      {spherechain::test::AssimpModel("X/BCN_Epileptic.X"), sc::SegmentMethod::kRig, true},
+      {spherechain::test::AssimpModel("Collada/human.zae"), sc::SegmentMethod::kGeometry, true},
+      {spherechain::test::AssimpModel("IQM/mrfixit.iqm"), sc::SegmentMethod::kGeometry, true},
+      // A spaceship-like trueSpace scene the geometric method takes for a body: legs of 108 and 414 triangles.
+      {spherechain::test::AssimpModel("X/fromtruespace_bin32.x"), sc::SegmentMethod::kGeometry, false},
+  };
+  for (const Case& c : cases) {
+    CAPTURE(c.path);
+    if (!Require(c.path)) continue;
+    auto mesh = sc::ImportMesh(c.path);
+    REQUIRE_MESSAGE(mesh.ok(), (mesh.ok() ? "" : mesh.error().message));
+    auto seg = sc::Segment(mesh.value(), c.method);
+    REQUIRE_MESSAGE(seg.ok(), (seg.ok() ? "" : seg.error().message));
+    const auto f = sc::CheckPlausibility(mesh.value(), seg.value(), nullptr, nullptr);
+    MESSAGE(c.path << " (" << seg->method << "): " << Codes(f));
+    CHECK(f.empty() == c.plausible);
+  }
 }
