@@ -219,7 +219,7 @@ Result<BakeResult> Bake(const std::string& input_path, const BakeConfig& config,
     else
       r.excluded = BindExcludedPairs(spheres, (config.near_rel + 2.0 * config.contact_margin_rel) * r.fit.body_height,
                                      &r.exclusion_reasons,
-                                     &r.cross_region_bind_overlaps);
+                                     &r.cross_region_bind_overlaps, mesh.up_axis);
   }
   {
     Context::Timer t(ctx, "surrounding_regions");
@@ -394,10 +394,11 @@ json MakeBakeReport(const BakeResult& r, const BakeConfig& config, const Context
     j["exclusions"] = {{"rule", "paper: sequence neighbours up to 2 apart, torso levels up to 2 apart, bind overlap, "
                                 "limb-torso junction within half the radii"}};
   else
-    j["exclusions"] = {{"rule", "bind geometry: limb sequence neighbours, bind overlap, within near_rel + 2 contact_margin_rel of the "
-                                "height, limb-torso pairs within 1.25 (rA + rB) + that"},
+    j["exclusions"] = {{"rule", "bind geometry: limb sequence neighbours, limb or torso spheres side by side, bind overlap, "
+                                "within near_rel + 2 contact_margin_rel of the height, limb-torso pairs within 1.25 (rA + rB) + that"},
                        {"limb_neighbour", r.exclusion_reasons.limb_neighbour},
                        {"limb_side_by_side", r.exclusion_reasons.limb_side_by_side},
+                       {"torso_side_by_side", r.exclusion_reasons.torso_side_by_side},
                        {"bind_overlap", r.exclusion_reasons.bind_overlap},
                        {"bind_near", r.exclusion_reasons.bind_near},
                        {"junction", r.exclusion_reasons.junction}};

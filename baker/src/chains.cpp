@@ -1,6 +1,7 @@
 #include "spherechain/baker/chains.h"
 
 #include <algorithm>
+#include <cmath>
 #include <set>
 
 namespace spherechain::baker {
@@ -105,9 +106,12 @@ std::vector<SpherePair> ExcludedPairs(const std::vector<FittedSphere>& spheres,
 
 std::vector<SpherePair> BindExcludedPairs(const std::vector<FittedSphere>& spheres, double near,
                                           ExclusionReasons* reasons,
-                                          std::vector<SpherePair>* cross_region_bind_overlaps) {
+                                          std::vector<SpherePair>* cross_region_bind_overlaps, UpAxis up_axis) {
   std::vector<SpherePair> pairs;
   ExclusionReasons why;
+  const Eigen::Vector3d up = up_axis == UpAxis::kZ   ? Eigen::Vector3d::UnitZ()
+                             : up_axis == UpAxis::kX ? Eigen::Vector3d::UnitX()
+                                                     : Eigen::Vector3d::UnitY();
   const size_t n = spheres.size();
   for (size_t a = 0; a < n; ++a) {
     for (size_t b = a + 1; b < n; ++b) {
@@ -120,6 +124,9 @@ std::vector<SpherePair> BindExcludedPairs(const std::vector<FittedSphere>& spher
         ++why.limb_neighbour;
       } else if (same_region && IsTubular(A.region) && std::abs(A.root_distance - B.root_distance) < rr) {
         ++why.limb_side_by_side;  // one cross-section of the tube: no fold brings their skins together
+      } else if (same_region && A.region == Region::kTorso &&
+                 std::abs(A.center.dot(up) - B.center.dot(up)) < std::max(A.radius, B.radius)) {
+        ++why.torso_side_by_side;  // one level of the torso: a bending spine folds levels, not a level
       } else if (d < rr) {
         ++why.bind_overlap;
         const bool limb_torso = (A.region == Region::kTorso) != (B.region == Region::kTorso);

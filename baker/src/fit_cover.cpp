@@ -310,18 +310,15 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
   // 4. Lazy greedy set cover: the sphere that adds the largest share of its region's volume, until
   //    max_spheres or the best adds less than min_gain. Every region gets its first sphere before any
   //    region its second (a thin limb is never left without one).
+  //    The same lazy greedy serves 6c (the budget the skin pass leaves): `greedy(budget)` adds spheres
+  //    from `start` until `chosen` holds `budget` or the best adds less than min_gain.
   std::vector<uint32_t> chosen;
-  {
-    Context::Timer t(ctx, "fit.cover.greedy");
+  std::array<int, kRegionCount> per_region{};
+  auto greedy = [&](int budget) {
     using Entry = std::pair<double, uint32_t>;  // gain, candidate voxel (ties: the larger index — fixed)
     std::priority_queue<Entry> queue;
     for (uint32_t c : start) queue.emplace(F.Gain(c), c);
-    std::array<int, kRegionCount> per_region{};
-    // The skin pass covers limb skin only: a body without limbs keeps the whole budget for its volume.
-    bool has_limb = false;
-    for (int r = 0; r < kRegionCount; ++r) has_limb = has_limb || (r != int(Region::kTorso) && F.volume[r] > 0.0);
-    const int volume_budget = has_limb ? std::max(kRegionCount, params.max_spheres - params.skin_spheres) : params.max_spheres;
-    while (!queue.empty() && int(chosen.size()) < volume_budget) {
+    while (!queue.empty() && int(chosen.size()) < budget) {
       auto [gain, c] = queue.top();
       queue.pop();
       const double now = F.Gain(c);
@@ -341,18 +338,27 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
       chosen.push_back(c);
       ++per_region[F.label[c]];
     }
+  };
+  // The skin pass covers limb skin only: a body without limbs keeps the whole budget for its volume.
+  bool has_limb = false;
+  for (int r = 0; r < kRegionCount; ++r) has_limb = has_limb || (r != int(Region::kTorso) && F.volume[r] > 0.0);
+  const int volume_budget = has_limb ? std::max(kRegionCount, params.max_spheres - params.skin_spheres) : params.max_spheres;
+  {
+    Context::Timer t(ctx, "fit.cover.greedy");
+    greedy(volume_budget);
     for (int r = 0; r < kRegionCount; ++r)
       if (per_region[r] == 0 && has_triangles[r])
         return MakeError(Error::Code::kFit, std::string("fit cover: no sphere fits region ") + RegionSymbol(Region(r)) +
                                                 " (thinner than min_radius_rel, or max_spheres too small)");
   }
+  const size_t volume_spheres = chosen.size();
+  std::vector<uint8_t> is_cand(total, 0);  // 5 and 6b
+  for (uint32_t c : cand) is_cand[c] = 1;
 
   // 5. Optimisation: move each sphere to the neighbouring voxel (26-neighbourhood, same region, a
   //    candidate) whose ball adds the most, while the covered volume grows.
   {
     Context::Timer t(ctx, "fit.cover.refine");
-    std::vector<uint8_t> is_cand(total, 0);
-    for (uint32_t c : cand) is_cand[c] = 1;
     for (int sweep = 0; sweep < params.refine_sweeps; ++sweep) {
       size_t moved = 0;
       for (uint32_t& c : chosen) {
@@ -426,8 +432,6 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
     }
     // Which candidate balls bring which uncovered vertices within tolerance: candidates of the vertex's
     // region in a cube of 3 % of the height around it (a thin part's ball is far smaller).
-    std::vector<uint8_t> is_cand(total, 0);
-    for (uint32_t c : cand) is_cand[c] = 1;
     std::unordered_map<uint32_t, std::vector<uint32_t>> reach;
     const int64_t K = int64_t(std::ceil(0.03 * height / F.h));
     for (uint32_t u = 0; u < uncovered.size(); ++u) {
@@ -465,6 +469,14 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
     if (ctx)
       ctx->Info("fit cover: skin pass: " + std::to_string(uncovered.size()) + " limb vertices beyond " +
                 std::to_string(params.skin_tolerance_rel) + " of the height, " + std::to_string(added) + " spheres added");
+  }
+  // 6c. The budget the skin pass left goes back to the volume cover, the skin spheres counting as cover
+  //     (CesiumMan's hands needed 6 of the 16 held back: 10 more spheres for its torso and limbs).
+  if (const size_t before = chosen.size(); volume_budget < params.max_spheres && int(before) < params.max_spheres) {
+    Context::Timer t(ctx, "fit.cover.greedy");
+    for (size_t k = volume_spheres; k < before; ++k) F.Apply(chosen[k], +1);
+    greedy(params.max_spheres);
+    for (size_t k = before; k < chosen.size(); ++k) balls.push_back(off_grid(chosen[k]));
   }
 
   // 7. Spheres, their order and labels.

@@ -195,6 +195,25 @@ TEST_CASE("heavy: fit cover: the skin pass covers a thin hand the volume cover l
   CHECK(in_hand >= 2);
 }
 
+TEST_CASE("fit cover: the budget the skin pass leaves goes back to the volume cover") {
+  // A torso and an arm, smooth tubes: with skin_min_vertices out of reach the skin pass adds nothing,
+  // and the 16 spheres held back for it fill the volume instead: all 48 of the budget are spent (32
+  // without the return).
+  sb::Mesh m;
+  sb::Segmentation seg;
+  AppendPart(&m, &seg, ClosedTube(1.0, 1.0, 4.0, 48, 32), Vector3d::Zero(), sb::Region::kTorso);
+  AppendPart(&m, &seg, ClosedTube(0.3, 0.3, 3.0, 32, 24), Vector3d(2.5, 0.0, 0.0), sb::Region::kLeftArm);
+  m.up_axis = sb::UpAxis::kY;
+  sb::FitParams p;
+  p.max_spheres = 48;
+  p.skin_spheres = 16;
+  p.skin_min_vertices = 1000000;
+  p.min_gain = 0.0;
+  auto full = sb::FitCover(m, seg, p);
+  REQUIRE_MESSAGE(full.ok(), (full.ok() ? "" : full.error().message));
+  CHECK(full->size() == 48);
+}
+
 TEST_CASE("fit cover: bad parameters and a mesh without volume are clear errors") {
   const sb::Mesh m = ClosedTube(1, 1, 4, 32, 16);
   sb::FitParams p;
@@ -272,6 +291,37 @@ TEST_CASE("exclusions from bind geometry on a bent limb: neighbours and near pai
   sp[k].root_distance = sp[2].root_distance + 2.5;
   const auto ex4 = sb::BindExcludedPairs(sp, 0.05);
   CHECK(std::find(ex4.begin(), ex4.end(), sb::SpherePair{2, k}) == ex4.end());
+}
+
+TEST_CASE("exclusions from bind geometry: torso spheres side by side on one level, not across levels") {
+  // Up is z. Two torso spheres of radius 1 and 0.6 whose heights differ by 0.9 (< the larger radius),
+  // 2.5 apart sideways (beyond rA + rB + near = 1.65): one level, excluded as side by side. A third
+  // 2.0 above the first (> its radius), 1.6 apart sideways: two levels, tested.
+  std::vector<sb::FittedSphere> sp(3);
+  for (auto& s : sp) s.region = sb::Region::kTorso;
+  sp[0].center = Vector3d(0, 0, 0), sp[0].radius = 1.0;
+  sp[1].center = Vector3d(2.5, 0, 0.9), sp[1].radius = 0.6;
+  sp[2].center = Vector3d(0, 1.6, 2.0), sp[2].radius = 0.2;
+  sb::ExclusionReasons why;
+  const auto ex = sb::BindExcludedPairs(sp, 0.05, &why, nullptr, sb::UpAxis::kZ);
+  auto has = [&](const std::vector<sb::SpherePair>& e, uint16_t a, uint16_t b) {
+    return std::find(e.begin(), e.end(), sb::SpherePair{a, b}) != e.end();
+  };
+  CHECK(has(ex, 0, 1));
+  CHECK(why.torso_side_by_side == 1);
+  CHECK_FALSE(has(ex, 0, 2));  // 2.0 apart in height, larger radius 1: two levels
+  CHECK_FALSE(has(ex, 1, 2));  // 1.1 apart in height, larger radius 0.6
+  // Heights are taken along the given up axis: with y up the three lie at 0, 0 and 1.6.
+  sb::ExclusionReasons why_y;
+  const auto ex_y = sb::BindExcludedPairs(sp, 0.05, &why_y, nullptr, sb::UpAxis::kY);
+  CHECK(has(ex_y, 0, 1));  // heights 0 and 0 along y
+  CHECK_FALSE(has(ex_y, 0, 2));
+  // Limb spheres at one height are not torso levels: two arms' spheres side by side stay tested.
+  sp[0].region = sb::Region::kLeftArm, sp[1].region = sb::Region::kRightArm;
+  sb::ExclusionReasons why_limbs;
+  const auto ex_limbs = sb::BindExcludedPairs(sp, 0.05, &why_limbs, nullptr, sb::UpAxis::kZ);
+  CHECK_FALSE(has(ex_limbs, 0, 1));
+  CHECK(why_limbs.torso_side_by_side == 0);
 }
 
 TEST_CASE("heavy: bake MakeHuman with the cover fit — coverage, protrusion, schema v2 asset and its contact margin") {
