@@ -209,6 +209,7 @@ TEST_CASE("fit cover: the budget the skin pass leaves goes back to the volume co
   p.skin_spheres = 16;
   p.skin_min_vertices = 1000000;
   p.min_gain = 0.0;
+  p.cover_voxel_rel = 0.02;  // 26,000 interior voxels: seconds, also under ASan
   auto full = sb::FitCover(m, seg, p);
   REQUIRE_MESSAGE(full.ok(), (full.ok() ? "" : full.error().message));
   CHECK(full->size() == 48);
