@@ -4,6 +4,8 @@
 #include <cmath>
 #include <set>
 
+#include "geometry.h"
+
 namespace spherechain::baker {
 
 std::vector<ChainDef> DefaultChainDefs() {
@@ -109,9 +111,7 @@ std::vector<SpherePair> BindExcludedPairs(const std::vector<FittedSphere>& spher
                                           std::vector<SpherePair>* cross_region_bind_overlaps, UpAxis up_axis) {
   std::vector<SpherePair> pairs;
   ExclusionReasons why;
-  const Eigen::Vector3d up = up_axis == UpAxis::kZ   ? Eigen::Vector3d::UnitZ()
-                             : up_axis == UpAxis::kX ? Eigen::Vector3d::UnitX()
-                                                     : Eigen::Vector3d::UnitY();
+  const Eigen::Vector3d up = fit_detail::UpVector(up_axis);
   const size_t n = spheres.size();
   for (size_t a = 0; a < n; ++a) {
     for (size_t b = a + 1; b < n; ++b) {
