@@ -15,6 +15,9 @@
 #include <string>
 
 #include <Eigen/Eigenvalues>
+#if SPHERECHAIN_BAKER_TBB
+#include <tbb/parallel_for.h>
+#endif
 
 #include "geometry.h"
 #include "surface_tree.h"
@@ -218,24 +221,40 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
   if (tris.empty()) return MakeError(Error::Code::kFit, "fit cover: every triangle is degenerate");
   Tree tree(tris.begin(), tris.end());
   {
+    // Fixed chunks of consecutive interior voxels, each started without a hint and then hinted by the
+    // previous voxel's closest point: the chunks, not the threads, decide the hints, so the labels (a
+    // tie between two triangles may go either way with another hint) are the same on any thread count.
     Context::Timer t(ctx, "fit.cover.distance");
+    tree.build();
     tree.accelerate_distance_queries();
-    Point3 hint;
-    size_t prev = SIZE_MAX;
-    for (uint32_t v : iv.inside) {
-      const Vector3d c = iv.Centre(v);
-      const Point3 q(c.x(), c.y(), c.z());
-      const auto hit = prev + 1 == v ? tree.closest_point_and_primitive(q, std::make_pair(hint, tris.cbegin()))
-                                     : tree.closest_point_and_primitive(q);
-      hint = hit.first;
-      prev = v;
-      const uint32_t tri = tri_ids[size_t(hit.second - tris.cbegin())];
-      const uint8_t reg = seg.triangle_regions[tri];
-      if (reg >= kRegionCount) continue;
-      F.label[v] = reg;
-      F.dist[v] = float(std::sqrt(CGAL::squared_distance(q, hit.first)) / F.h);
-      F.volume[reg] += 1.0;
-    }
+    constexpr size_t kChunk = 4096;
+    const size_t chunks = (iv.inside.size() + kChunk - 1) / kChunk;
+    auto query_chunk = [&](size_t c) {
+      const size_t end = std::min(iv.inside.size(), (c + 1) * kChunk);
+      Point3 hint;
+      size_t prev = SIZE_MAX;
+      for (size_t i = c * kChunk; i < end; ++i) {
+        const uint32_t v = iv.inside[i];
+        const Vector3d p = iv.Centre(v);
+        const Point3 q(p.x(), p.y(), p.z());
+        const auto hit = prev + 1 == v ? tree.closest_point_and_primitive(q, std::make_pair(hint, tris.cbegin()))
+                                       : tree.closest_point_and_primitive(q);
+        hint = hit.first;
+        prev = v;
+        const uint8_t reg = seg.triangle_regions[tri_ids[size_t(hit.second - tris.cbegin())]];
+        if (reg >= kRegionCount) continue;
+        F.label[v] = reg;
+        F.dist[v] = float(std::sqrt(CGAL::squared_distance(q, hit.first)) / F.h);
+      }
+    };
+    if (chunks > 0) query_chunk(0);  // the first query builds the search structures lazily: not in parallel
+#if SPHERECHAIN_BAKER_TBB
+    tbb::parallel_for(size_t(1), chunks, query_chunk);
+#else
+    for (size_t c = 1; c < chunks; ++c) query_chunk(c);
+#endif
+    for (uint32_t v : iv.inside)
+      if (F.label[v] < kRegionCount) F.volume[F.label[v]] += 1.0;
   }
   // No limb sphere is centred behind its limb's junction plane (in the chest under a shoulder's skin,
   // in the pelvis under a hip's): the voxels there keep their region (a limb sphere may still reach

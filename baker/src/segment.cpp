@@ -7,11 +7,12 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <fstream>
 #include <numeric>
 #include <sstream>
-#include <unordered_map>
+#include <tuple>
 
 #include "segment_internal.h"
 
@@ -62,8 +63,8 @@ WeldedGraph BuildWeldedGraph(const Mesh& mesh) {
   WeldedGraph g;
   g.rep.resize(nv);
   // Weld every pair of vertices within eps = 1e-6 of the bounding-box diagonal (Chebyshev distance),
-  // transitively: a grid of eps cells, each vertex compared with the vertices of its 27 neighbouring
-  // cells, clusters by union-find, the lowest index the representative. (A plain quantised key would
+  // transitively: each vertex compared with the vertices of the grid cells its eps box touches,
+  // clusters by union-find, the lowest index the representative. (A plain quantised key would
   // split two copies of one seam position that straddle a cell boundary: mirrored halves whose seam
   // copies differ in the last bits, parts placed by separate node transforms.)
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = Eigen::Vector3d::Constant(-1e300);
@@ -72,47 +73,72 @@ WeldedGraph BuildWeldedGraph(const Mesh& mesh) {
     hi = hi.cwiseMax(Position(mesh, v));
   }
   const double eps = std::max(1e-12, 1e-6 * (nv ? (hi - lo).norm() : 1.0));
-  struct KeyHash {
-    size_t operator()(const std::array<int64_t, 3>& k) const {
-      return std::hash<int64_t>()(k[0] * 73856093LL ^ k[1] * 19349663LL ^ k[2] * 83492791LL);
-    }
+  // Cells of 64 eps, sorted (no hash map of lists): the eps box around a vertex almost always lies in
+  // its own cell, so a vertex looks at one run of the sorted order, rarely at up to 8.
+  const double cell = 64.0 * eps;
+  auto key_of = [&](double x) { return static_cast<int64_t>(std::floor(x / cell)); };
+  struct Entry {
+    std::array<int64_t, 3> key;
+    std::array<float, 3> p;
+    uint32_t v;
   };
-  std::unordered_map<std::array<int64_t, 3>, std::vector<uint32_t>, KeyHash> cells;
-  cells.reserve(nv);
+  std::vector<Entry> sorted(nv);
+  for (uint32_t v = 0; v < nv; ++v) {
+    const float* q = &mesh.positions[3 * size_t(v)];
+    sorted[v] = {{key_of(q[0]), key_of(q[1]), key_of(q[2])}, {q[0], q[1], q[2]}, v};
+  }
+  // Within a cell equal positions are adjacent (then by index): each run of one position is welded at
+  // once, and only its first entry is compared with other positions.
+  std::sort(sorted.begin(), sorted.end(), [](const Entry& x, const Entry& y) {
+    return std::tie(x.key, x.p, x.v) < std::tie(y.key, y.p, y.v);
+  });
   std::vector<uint32_t> parent(nv);
   std::iota(parent.begin(), parent.end(), 0u);
   auto find = [&](uint32_t x) {
     while (parent[x] != x) x = parent[x] = parent[parent[x]];
     return x;
   };
-  for (uint32_t v = 0; v < nv; ++v) {
-    const Eigen::Vector3d p = Position(mesh, v);
-    bool duplicate = false;  // an equal position is stored already: cells hold distinct positions only
-    const std::array<int64_t, 3> key{static_cast<int64_t>(std::floor(p.x() / eps)),
-                                     static_cast<int64_t>(std::floor(p.y() / eps)),
-                                     static_cast<int64_t>(std::floor(p.z() / eps))};
-    for (int64_t dx = -1; dx <= 1; ++dx)
-      for (int64_t dy = -1; dy <= 1; ++dy)
-        for (int64_t dz = -1; dz <= 1; ++dz) {
-          auto it = cells.find({key[0] + dx, key[1] + dy, key[2] + dz});
-          if (it == cells.end()) continue;
-          for (uint32_t u : it->second) {
-            const double d = (Position(mesh, u) - p).cwiseAbs().maxCoeff();
-            if (d > eps) continue;
-            duplicate = duplicate || d == 0.0;
-            const uint32_t a = find(u), b = find(v);
-            if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  auto unite = [&](uint32_t x, uint32_t y) {
+    const uint32_t a = find(x), b = find(y);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  };
+  std::vector<size_t> distinct;  // indices into `sorted` of the first entry of each position
+  distinct.reserve(nv);
+  for (size_t i = 0; i < sorted.size(); ++i) {
+    if (i > 0 && sorted[i].key == sorted[i - 1].key && sorted[i].p == sorted[i - 1].p) {
+      unite(sorted[i - 1].v, sorted[i].v);
+      continue;
+    }
+    distinct.push_back(i);
+  }
+  auto cell_begin = [&](const std::array<int64_t, 3>& k) {
+    return std::lower_bound(distinct.begin(), distinct.end(), k,
+                            [&](size_t i, const std::array<int64_t, 3>& key) { return sorted[i].key < key; });
+  };
+  for (size_t i : distinct) {
+    const Entry& e = sorted[i];
+    int64_t lo_key[3], hi_key[3];
+    for (int a = 0; a < 3; ++a) lo_key[a] = key_of(double(e.p[a]) - eps), hi_key[a] = key_of(double(e.p[a]) + eps);
+    for (int64_t kx = lo_key[0]; kx <= hi_key[0]; ++kx)
+      for (int64_t ky = lo_key[1]; ky <= hi_key[1]; ++ky)
+        for (int64_t kz = lo_key[2]; kz <= hi_key[2]; ++kz) {
+          const std::array<int64_t, 3> k{kx, ky, kz};
+          if (k < e.key) continue;  // each pair of cells once: from the lower cell
+          for (auto it = k == e.key ? std::upper_bound(distinct.begin(), distinct.end(), i) : cell_begin(k);
+               it != distinct.end() && sorted[*it].key == k; ++it) {
+            const Entry& f = sorted[*it];
+            double d = 0.0;
+            for (int a = 0; a < 3; ++a) d = std::max(d, std::abs(double(f.p[a]) - double(e.p[a])));
+            if (d <= eps) unite(e.v, f.v);
           }
         }
-    if (!duplicate) cells[key].push_back(v);
   }
   for (uint32_t v = 0; v < nv; ++v) g.rep[v] = find(v);  // the root is the cluster's lowest index
-  // CSR adjacency over representatives.
-  std::vector<std::pair<uint32_t, uint32_t>> edges;
-  edges.reserve(6 * size_t(nt));
+  // CSR adjacency over representatives: rows filled by counting, then each row sorted and deduplicated.
   g.used.assign(nv, 0);
   g.area.assign(nv, 0.0);
   const std::vector<double> tri_area = TriangleAreas(mesh);
+  std::vector<uint32_t> fill(size_t(nv) + 1, 0);
   for (uint32_t t = 0; t < nt; ++t) {
     for (int k = 0; k < 3; ++k) {
       const uint32_t a = g.rep[mesh.indices[3 * t + k]];
@@ -120,17 +146,30 @@ WeldedGraph BuildWeldedGraph(const Mesh& mesh) {
       g.used[a] = 1;
       g.area[a] += tri_area[t] / 3.0;
       if (a == b) continue;
-      edges.emplace_back(a, b);
-      edges.emplace_back(b, a);
+      ++fill[a + 1];
+      ++fill[b + 1];
     }
   }
-  std::sort(edges.begin(), edges.end());
-  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+  for (uint32_t v = 0; v < nv; ++v) fill[v + 1] += fill[v];
+  std::vector<uint32_t> raw(fill[nv]);
+  std::vector<uint32_t> next(fill.begin(), fill.end() - 1);
+  for (uint32_t t = 0; t < nt; ++t)
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = g.rep[mesh.indices[3 * t + k]];
+      const uint32_t b = g.rep[mesh.indices[3 * t + (k + 1) % 3]];
+      if (a == b) continue;
+      raw[next[a]++] = b;
+      raw[next[b]++] = a;
+    }
   g.offsets.assign(size_t(nv) + 1, 0);
-  for (const auto& e : edges) ++g.offsets[e.first + 1];
-  for (uint32_t v = 0; v < nv; ++v) g.offsets[v + 1] += g.offsets[v];
-  g.adj.resize(edges.size());
-  for (size_t i = 0; i < edges.size(); ++i) g.adj[i] = edges[i].second;  // edges sorted: rows in order
+  g.adj.clear();
+  g.adj.reserve(raw.size() / 2);
+  for (uint32_t v = 0; v < nv; ++v) {
+    const auto first = raw.begin() + fill[v], last = raw.begin() + fill[v + 1];
+    std::sort(first, last);
+    g.adj.insert(g.adj.end(), first, std::unique(first, last));
+    g.offsets[v + 1] = uint32_t(g.adj.size());
+  }
   return g;
 }
 

@@ -32,7 +32,8 @@ Status CheckMeshForSegmentation(const Mesh& mesh);
 /// one representative (the lowest index): positions within 1e-6 of the bounding-box diagonal of each
 /// other (per coordinate), transitively; edges come from the triangles. So parts meeting at coincident
 /// positions are one body for segmentation. Nothing in the mesh is changed (the asset keeps the
-/// source's indices). Cost O(#V + #T) expected (hash grid), O(#T log #T) for the edges.
+/// source's indices). Cost O(#V log #V) (sorted grid of 64 eps cells), O(#T) for the edges plus sorting each
+/// vertex's short row.
 struct WeldedGraph {
   std::vector<uint32_t> rep;      ///< #V: representative vertex of each vertex (rep[rep[v]] == rep[v])
   std::vector<uint32_t> offsets;  ///< #V+1 CSR over representatives (rows of non-representatives empty)
