@@ -6,6 +6,7 @@
 // the volume cover leaves beyond a tolerance (the surface-distance term of sphere-set fitting, e.g.
 // MorphIt 2025, spent where the body is thin: hands, feet).
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <exception>
 #include <limits>
@@ -32,6 +33,17 @@ using surface_detail::Tree;
 using Eigen::Vector3d;
 
 constexpr uint8_t kOutside = 0xFF;
+
+// fn(i) for i in [first, last), on all cores with TBB (each i independent; what fn writes for i is the
+// same whichever thread runs it), one after another without.
+template <class Fn>
+void ParallelFor(size_t first, size_t last, Fn&& fn) {
+#if SPHERECHAIN_BAKER_TBB
+  tbb::parallel_for(first, last, fn);
+#else
+  for (size_t i = first; i < last; ++i) fn(i);
+#endif
+}
 
 // The interior as a dense grid: region label (kOutside outside), distance to the surface, and how many
 // chosen spheres of the voxel's own region cover it.
@@ -248,11 +260,7 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
       }
     };
     if (chunks > 0) query_chunk(0);  // the first query builds the search structures lazily: not in parallel
-#if SPHERECHAIN_BAKER_TBB
-    tbb::parallel_for(size_t(1), chunks, query_chunk);
-#else
-    for (size_t c = 1; c < chunks; ++c) query_chunk(c);
-#endif
+    ParallelFor(1, chunks, query_chunk);
     for (uint32_t v : iv.inside)
       if (F.label[v] < kRegionCount) F.volume[F.label[v]] += 1.0;
   }
@@ -335,8 +343,10 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
   std::array<int, kRegionCount> per_region{};
   auto greedy = [&](int budget) {
     using Entry = std::pair<double, uint32_t>;  // gain, candidate voxel (ties: the larger index — fixed)
+    std::vector<double> first_gain(start.size());  // every start's gain at once, on all cores
+    ParallelFor(0, start.size(), [&](size_t i) { first_gain[i] = F.Gain(start[i]); });
     std::priority_queue<Entry> queue;
-    for (uint32_t c : start) queue.emplace(F.Gain(c), c);
+    for (size_t i = 0; i < start.size(); ++i) queue.emplace(first_gain[i], start[i]);
     while (!queue.empty() && int(chosen.size()) < budget) {
       auto [gain, c] = queue.top();
       queue.pop();
@@ -383,8 +393,11 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
       for (uint32_t& c : chosen) {
         F.Apply(c, -1);
         const uint8_t reg = F.label[c];
-        double best = F.Gain(c);
-        uint32_t best_c = c;
+        // The gains of c and of its 26 neighbours, computed on all cores, then compared in a fixed order.
+        std::array<uint32_t, 27> site;
+        std::array<double, 27> gain;
+        size_t sites = 0;
+        site[sites++] = c;
         int64_t ci, cj, ck;
         F.Coords(c, &ci, &cj, &ck);
         for (int dk = -1; dk <= 1; ++dk)
@@ -393,10 +406,13 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
               const int64_t i = ci + di, j = cj + dj, k = ck + dk;
               if ((di | dj | dk) == 0 || i < 0 || j < 0 || k < 0 || i >= F.n[0] || j >= F.n[1] || k >= F.n[2]) continue;
               const size_t v = size_t(i) + size_t(j) * F.stride[1] + size_t(k) * F.stride[2];
-              if (!is_cand[v] || F.label[v] != reg) continue;
-              const double g = F.Gain(v);
-              if (g > best + 1e-12) best = g, best_c = uint32_t(v);
+              if (is_cand[v] && F.label[v] == reg) site[sites++] = uint32_t(v);
             }
+        ParallelFor(0, sites, [&](size_t i) { gain[i] = F.Gain(site[i]); });
+        double best = gain[0];
+        uint32_t best_c = c;
+        for (size_t i = 1; i < sites; ++i)
+          if (gain[i] > best + 1e-12) best = gain[i], best_c = site[i];
         moved += best_c != c;
         c = best_c;
         F.Apply(c, +1);
