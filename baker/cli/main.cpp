@@ -1,5 +1,6 @@
 // spherechain — the command-line tool: bake, inspect, export-debug, play, validate, evaluate.
 #include <CLI/CLI.hpp>
+#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
 #include "commands.h"
@@ -19,6 +20,9 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   }
+  // Messages (info, warnings, errors) on stderr, as the README promises: stdout carries only what a
+  // command produces (tables, summaries, JSON), so a pipeline can redirect one without the other.
+  spdlog::set_default_logger(spdlog::stderr_color_mt("spherechain"));
   spdlog::set_pattern("%^%l%$: %v");
   spdlog::set_level(verbose ? spdlog::level::debug : quiet ? spdlog::level::warn : spdlog::level::info);
   return spherechain::cli::Dispatch(commands);
