@@ -174,7 +174,10 @@ Result<Mesh> ImportAssimp(const std::string& path, const ImportOptions& options,
   mesh.source_format = ext;
   mesh.vertex_contract = join ? "joined" : "source";
   mesh.source_vertex_count = static_cast<uint32_t>(std::min<uint64_t>(source_vertices, UINT32_MAX));
-  mesh.up_axis = UpAxis::kY;  // assimp's convention; overridden below when the file says otherwise
+  // assimp's convention is +Y up; overridden below when the file says otherwise. Blender's world is +Z
+  // up and assimp's Blender reader keeps its coordinates (no "UpAxis" metadata): a standing body in a
+  // .blend file stands along +Z (assimp-testmodels' BLEND/HUMAN.blend).
+  mesh.up_axis = ext == "blend" ? UpAxis::kZ : UpAxis::kY;
   if (scene->mMetaData) {
     int32_t up = -1, sign = 1;
     if (scene->mMetaData->Get("UpAxis", up)) {

@@ -3,6 +3,7 @@
 // of assimp's file access to the input's folder.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -45,9 +46,23 @@ TEST_CASE("import formats: every character format of assimp-testmodels imports, 
   }
 }
 
-// "heavy": two real bakes (the ASan half of CI skips it; it runs once, in the normal suite).
-TEST_CASE("import formats (heavy): the two humans bake, the creatures and the cube are refused with the reason") {
-  for (const char* rel : {"Collada/human.zae", "IQM/mrfixit.iqm"}) {
+TEST_CASE("import formats: a Blender file stands along +Z (Blender's world axis, which assimp keeps)") {
+  const std::string path = test::AssimpModel("BLEND/HUMAN.blend");
+  if (!test::Require(path)) return;
+  auto r = ImportMesh(path);
+  REQUIRE_MESSAGE(r.ok(), (r.ok() ? "" : r.error().message));
+  CHECK(r->up_axis == UpAxis::kZ);
+  // Known answer: the body's extent along z (its height) is the largest, about 2.3 times its width.
+  float lo[3] = {1e30f, 1e30f, 1e30f}, hi[3] = {-1e30f, -1e30f, -1e30f};
+  for (size_t i = 0; i < r->positions.size(); ++i)
+    lo[i % 3] = std::min(lo[i % 3], r->positions[i]), hi[i % 3] = std::max(hi[i % 3], r->positions[i]);
+  CHECK(hi[2] - lo[2] > 2.0f * (hi[0] - lo[0]));
+  CHECK(hi[2] - lo[2] > 5.0f * (hi[1] - lo[1]));
+}
+
+// "heavy": three real bakes (the ASan half of CI skips it; it runs once, in the normal suite).
+TEST_CASE("import formats (heavy): the three humans bake, the creatures and the cube are refused with the reason") {
+  for (const char* rel : {"Collada/human.zae", "IQM/mrfixit.iqm", "BLEND/HUMAN.blend"}) {
     CAPTURE(rel);
     const std::string path = test::AssimpModel(rel);
     if (!test::Require(path)) continue;
