@@ -15,6 +15,7 @@ namespace {
 struct BakeArgs {
   std::string input, output, report, config, rig, segmentation, region_map, ray_csv, png, vertices;
   double disk_step = 0.0;
+  bool force = false;
 };
 
 void PrintSummary(const baker::BakeResult& r, const baker::Context& ctx) {
@@ -41,6 +42,13 @@ void PrintSummary(const baker::BakeResult& r, const baker::Context& ctx) {
                 100.0 * r.agreement->triangle_fraction, 100.0 * r.agreement->area_fraction);
   else
     std::printf("segmentation: %s\n", r.segmentation.method.c_str());
+  if (r.plausibility.empty()) {
+    std::printf("plausibility: every check passed\n");
+  } else {
+    std::printf("plausibility: %zu check(s) FAILED, written anyway (--force; recorded in the asset, validate "
+                "reports them as errors):\n", r.plausibility.size());
+    for (const auto& f : r.plausibility) std::printf("  %s: %s\n", f.code.c_str(), f.message.c_str());
+  }
   std::printf("\naccuracy F = r - |c - v| over surrounding-region vertices\n");
   std::printf("%-14s %10s %10s %10s %10s\n", "method", "mean|F|", "RMS", "min", "max");
   auto row = [](const char* n, const baker::AccuracyStats& s) {
@@ -70,6 +78,7 @@ int RunBake(const BakeArgs& a) {
   if (a.vertices == "source") config.import.vertices = baker::VertexContract::kSource;
   if (!a.region_map.empty()) config.region_map = a.region_map;
   if (a.disk_step > 0) config.fit.disk_step = a.disk_step;
+  config.force = a.force;
   if (a.segmentation == "rig") config.segmentation = baker::SegmentMethod::kRig;
   else if (a.segmentation == "geometry") config.segmentation = baker::SegmentMethod::kGeometry;
   else if (a.segmentation == "map" && config.region_map.empty()) return Fail("--segmentation map needs --region-map");
@@ -128,6 +137,12 @@ void RegisterBake(CLI::App& app, Commands* commands) {
                   "give: aiProcess_JoinIdenticalVertices) or source (the importer's own buffer); recorded in the "
                   "asset. glTF/OBJ: no-op with a warning (their buffer is the engine's)")
       ->check(CLI::IsMember({"joined", "source"}));
+  sub->add_flag("--force", args->force,
+                "Write the asset even when a plausibility check fails (a limb in pieces or detached from the "
+                "torso, left/right imbalance, the head in a limb, a lying trunk, spheres outside the body, rig "
+                "and geometry segmentations disagreeing). Without it such a bake exits 1 naming each failed "
+                "check (PLAUS-... code, what and where) and writes nothing; with it the findings are printed, "
+                "go to the report as errors and into the asset, where `validate` reports them as errors");
   sub->add_option("--region-map", args->region_map, "JSON region map {\"triangle_regions\": [...]} (implies map)");
   sub->add_option("--disk-step", args->disk_step, "Torso disk step delta in source units (default: relative to height)");
   sub->add_option("--ray-csv", args->ray_csv, "CSV of the paper's per-ray comparison for the torso spheres");

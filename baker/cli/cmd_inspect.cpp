@@ -81,6 +81,12 @@ nlohmann::json Describe(const runtime::AssetView& v) {
                      {"outside_p95_rel", c->outside_p95_rel()},
                      {"outside_max_rel", c->outside_max_rel()},
                      {"voxel_rel", c->voxel_rel()}};
+  // Plausibility checks the bake failed and was forced past (bake --force; validate reports them as errors).
+  nlohmann::json forced = nlohmann::json::array();
+  if (const auto* f = a.forced_findings())
+    for (const auto* x : *f)
+      forced.push_back({{"code", x->code() ? x->code()->str() : ""}, {"message", x->message() ? x->message()->str() : ""}});
+  j["forced_findings"] = forced;
   return j;
 }
 
@@ -129,6 +135,11 @@ int RunInspect(const InspectArgs& args) {
                 100 * c["voxel_rel"].get<double>());
   } else {
     std::printf("bind pose coverage: not recorded (schema v1 asset or paper fit; `spherechain evaluate` measures it)\n");
+  }
+  if (!j["forced_findings"].empty()) {
+    std::printf("FORCED: baked with --force although %zu plausibility check(s) failed:\n", j["forced_findings"].size());
+    for (const auto& f : j["forced_findings"])
+      std::printf("  %s: %s\n", f["code"].get<std::string>().c_str(), f["message"].get<std::string>().c_str());
   }
   return 0;
 }

@@ -174,6 +174,20 @@ std::string CanonicalConfig(const BakeConfig& c) {
 // ---------------------------------------------------------------------------------------------------
 // Bake
 
+namespace {
+
+/// The refusal of a body that failed plausibility checks: every finding, code first.
+Error Refuse(const Mesh& mesh, const std::vector<PlausibilityFinding>& findings) {
+  std::string why;
+  for (const PlausibilityFinding& f : findings) why += (why.empty() ? "" : "; ") + f.code + ": " + f.message;
+  return MakeError(Error::Code::kImplausible,
+                   mesh.source_path + ": the bake looks wrong, refused (nothing written): " + why +
+                       ". Check the segmentation (--segmentation, --region-map, --rig); --force writes the asset "
+                       "anyway with these findings recorded in it");
+}
+
+}  // namespace
+
 Result<BakeResult> Bake(const std::string& input_path, const BakeConfig& config, Context* ctx) {
   BakeResult r;
   {
@@ -201,6 +215,15 @@ Result<BakeResult> Bake(const std::string& input_path, const BakeConfig& config,
     } else {
       r.other_segmentation_error = seg2.error().message;
     }
+  }
+  {
+    // "No silent wrong bake" (issue 11): the segmentation must look like a body before anything is fitted
+    // to it (a refused body costs no fit). SEG-AGREE uses the rig/geometry agreement measured above —
+    // rigged bodies only: a body with one segmentation source has nothing to compare with.
+    Context::Timer t(ctx, "plausibility");
+    r.plausibility = CheckPlausibility(mesh, r.segmentation, nullptr, r.agreement ? &*r.agreement : nullptr,
+                                       config.plausibility);
+    if (!r.plausibility.empty() && !config.force) return Refuse(mesh, r.plausibility);
   }
   {
     auto fit = FitSpheres(mesh, r.segmentation, config.fit, ctx);
@@ -271,6 +294,15 @@ Result<BakeResult> Bake(const std::string& input_path, const BakeConfig& config,
     if (cov.ok()) r.coverage = cov.value();
     else if (ctx) ctx->Warn("coverage not measured: " + cov.error().message);
   }
+  if (r.coverage) {
+    // PLAUS-OUTSIDE: the spheres' volume outside the body (the other checks ran after segmentation).
+    const size_t before = r.plausibility.size();
+    CheckProtrusion(*r.coverage, config.plausibility, &r.plausibility);
+    if (r.plausibility.size() > before && !config.force) return Refuse(mesh, r.plausibility);
+  }
+  if (ctx)
+    for (const PlausibilityFinding& f : r.plausibility)
+      ctx->Warn("plausibility check failed, written anyway (--force): " + f.code + ": " + f.message);
   if (mesh.skin) {
     // The joint refit's centre weights (schema v3): a rig without usable rows is a warning, not an error.
     uint32_t unweighted = 0;
@@ -303,6 +335,7 @@ Result<BakeResult> Bake(const std::string& input_path, const BakeConfig& config,
     in.contact_margin = config.contact_margin_rel * r.fit.body_height;
     if (r.coverage) in.coverage = &*r.coverage;
     in.coverage_voxel_rel = r.coverage_options.voxel_rel;
+    in.forced_findings = &r.plausibility;
     r.asset = BuildAsset(in);
   }
   return r;
@@ -449,6 +482,12 @@ json MakeBakeReport(const BakeResult& r, const BakeConfig& config, const Context
                                        "largest kept and renormalised; radius = bind radius"}};
   }
   j["sphere_table"] = per;
+  json plaus = json::array();
+  for (const PlausibilityFinding& f : r.plausibility)
+    plaus.push_back({{"code", f.code}, {"severity", "error"}, {"message", f.message}});
+  // Every check passed, or (forced) the failed ones: a refused bake writes no report.
+  j["plausibility"] = {{"passed", r.plausibility.empty()}, {"forced", config.force && !r.plausibility.empty()},
+                       {"errors", plaus}};
   j["params"] = json::parse(CanonicalConfig(config));
   json timings = json::object();
   double sum = 0;

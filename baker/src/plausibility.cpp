@@ -61,6 +61,14 @@ std::string Fixed(double v, int digits = 2) {
 
 }  // namespace
 
+void CheckProtrusion(const CoverageStats& coverage, const PlausibilityLimits& limits,
+                     std::vector<PlausibilityFinding>* out) {
+  if (coverage.protrusion > limits.max_protrusion)
+    out->push_back({"PLAUS-OUTSIDE", Fixed(100.0 * coverage.protrusion, 1) +
+                                         " % of the spheres' volume is outside the body (bound " +
+                                         Fixed(100.0 * limits.max_protrusion, 0) + " %)"});
+}
+
 std::vector<PlausibilityFinding> CheckPlausibility(const Mesh& mesh, const Segmentation& seg,
                                                    const CoverageStats* coverage,
                                                    const SegmentationAgreement* agreement,
@@ -162,9 +170,7 @@ std::vector<PlausibilityFinding> CheckPlausibility(const Mesh& mesh, const Segme
                                   Fixed(limits.trunk_tilt_deg, 0) + "): a horizontal trunk is not a standing body");
   }
 
-  if (coverage && coverage->protrusion > limits.max_protrusion)
-    add("PLAUS-OUTSIDE", Fixed(100.0 * coverage->protrusion, 1) + " % of the spheres' volume is outside the body (bound " +
-                             Fixed(100.0 * limits.max_protrusion, 0) + " %)");
+  if (coverage) CheckProtrusion(*coverage, limits, &out);
   if (agreement && agreement->triangle_fraction < limits.min_agreement)
     add("PLAUS-SEG-AGREE", "rig and geometry segmentations agree on " + Fixed(100.0 * agreement->triangle_fraction, 1) +
                                " % of the triangles (bound " + Fixed(100.0 * limits.min_agreement, 0) + " %)");

@@ -33,6 +33,7 @@ const char* ToString(Error::Code code) {
     case Error::Code::kFit: return "fit";
     case Error::Code::kConfig: return "config";
     case Error::Code::kInternal: return "internal";
+    case Error::Code::kImplausible: return "implausible";
   }
   return "unknown";
 }

@@ -147,6 +147,15 @@ std::vector<uint8_t> BuildAsset(const AssetInputs& in) {
     sphere_weights_v = b.CreateVector(in.centre_weights->weights);
   }
 
+  flatbuffers::Offset<flatbuffers::Vector<flatbuffers::Offset<fb::BakeFinding>>> forced_v;
+  const bool forced = in.forced_findings && !in.forced_findings->empty();
+  if (forced) {
+    std::vector<flatbuffers::Offset<fb::BakeFinding>> list;
+    for (const PlausibilityFinding& f : *in.forced_findings)
+      list.push_back(fb::CreateBakeFinding(b, b.CreateString(f.code), b.CreateString(f.message)));
+    forced_v = b.CreateVector(list);
+  }
+
   fb::AssetBuilder ab(b);
   ab.add_schema_version(spherechain::runtime::kSchemaVersion);
   ab.add_generator(generator);
@@ -161,6 +170,7 @@ std::vector<uint8_t> BuildAsset(const AssetInputs& in) {
   ab.add_vertex_contract(vertex_contract);
   ab.add_source_vertex_count(mesh.source_vertex_count);
   ab.add_joined_vertex_count(mesh.joined_vertex_count);
+  if (forced) ab.add_forced_findings(forced_v);
   ab.add_fingerprint(fingerprint);
   ab.add_parts(parts_v);
   ab.add_units(units);

@@ -107,8 +107,16 @@ FindingLocation LocateRejection(const uint8_t* bytes, runtime::Status status, co
   return where;
 }
 
-/// The asset's own consistency beyond what LoadAsset refuses: spheres M1 or the narrow phase cannot see.
+/// The asset's own consistency beyond what LoadAsset refuses: plausibility checks its bake failed and
+/// was forced past (Asset.forced_findings), then spheres M1 or the narrow phase cannot see.
 void CheckAsset(const runtime::AssetView& view, const std::string& file, std::vector<Finding>* out) {
+  if (const auto* forced = view.asset->forced_findings())
+    for (const schema::BakeFinding* f : *forced) {
+      const std::string code = f->code() && f->code()->size() ? f->code()->str() : std::string("PLAUS-UNKNOWN");
+      out->push_back(Make(code, Severity::kError, At(file, -1, -1, "forced_findings"),
+                          "baked with --force although a plausibility check failed: " +
+                              (f->message() ? f->message()->str() : std::string()) + " (fix the segmentation and re-bake)"));
+    }
   const uint32_t S = view.sphere_count;
   std::vector<uint8_t> in_chain(S, 0);
   if (const auto* chains = view.asset->chains())
@@ -236,7 +244,7 @@ std::vector<Finding> ValidateAssetFile(const std::string& asset_path, const std:
   if (mesh_path.empty()) return ValidateAssetBytes(bytes->data(), bytes->size(), nullptr, names);
   // The asset first: an unloadable asset is reported without importing the mesh.
   std::vector<Finding> out = ValidateAssetBytes(bytes->data(), bytes->size(), nullptr, names);
-  if (CountErrors(out)) return out;
+  if (!out.empty() && out.front().code == "SPHC-LOAD") return out;
   baker::ImportOptions opts;
   opts.rig_path = rig_path;
   opts.read_clips = false;

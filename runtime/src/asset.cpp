@@ -175,7 +175,7 @@ Status LoadAsset(const void* bytes, size_t size, AssetView* out) {
   if (version < kMinSchemaVersion) return Status::kErrorVersionTooOld;
   if (version > kSchemaVersion) return Status::kErrorVersionTooNew;
 
-  fb::Verifier verifier(buf, size, /*max_depth=*/8, /*max_tables=*/16 + 1024 + 65536, /*check_alignment=*/true);
+  fb::Verifier verifier(buf, size, /*max_depth=*/8, /*max_tables=*/16 + 1024 + 65536 + 256, /*check_alignment=*/true);
   if (!schema::VerifyAssetBuffer(verifier)) return Status::kErrorCorrupt;
 
   AssetView view;

@@ -8,6 +8,7 @@
 #include <fstream>
 
 #include "spherechain/baker/bake.h"
+#include "spherechain/playback/validate.h"
 #include "spherechain/runtime/asset.h"
 #include "test_data.h"
 
@@ -102,6 +103,15 @@ TEST_CASE("bake: two bakes of one input are byte-identical") {
   REQUIRE_MESSAGE(a.ok(), (a.ok() ? "" : a.error().message));
   REQUIRE(b.ok());
   CHECK(a->asset == b->asset);
+  // Plausible: no findings, and the asset leaves Asset.forced_findings out.
+  CHECK(a->plausibility.empty());
+  {
+    std::vector<uint64_t> storage((a->asset.size() + 7) / 8);
+    std::memcpy(storage.data(), a->asset.data(), a->asset.size());
+    runtime::AssetView view;
+    REQUIRE(runtime::Succeeded(runtime::LoadAsset(storage.data(), a->asset.size(), &view)));
+    CHECK(view.asset->forced_findings() == nullptr);
+  }
   CHECK(a->mesh.vertex_count() == 3273);
   CHECK(a->mesh.triangle_count() == 4672);
   CheckRoundTrip(a.value());
@@ -175,4 +185,70 @@ TEST_CASE("bake: atomic write leaves the old file intact when the folder is miss
   size_t files = 0;
   for ([[maybe_unused]] const auto& e : fs::directory_iterator(dir)) ++files;
   CHECK(files == 1);  // no temporary left behind
+}
+
+// "No silent wrong bake" (issue 11): six separate boxes whose region map gives each limb box its limb
+// (tests/data/implausible) — no limb touches the torso, so PLAUS-LIMB-DETACHED four times.
+TEST_CASE("bake: an implausible body is refused, and with force written with its findings") {
+  auto loaded = LoadBakeConfig(test::SourceFile("tests/data/implausible/fast.json"));  // coarse voxels: 0.1 s
+  REQUIRE_MESSAGE(loaded.ok(), (loaded.ok() ? "" : loaded.error().message));
+  BakeConfig config = loaded.value();
+  config.region_map = test::SourceFile("tests/data/implausible/limbs_detached.json");
+  const std::string input = test::SourceFile("tests/data/implausible/boxes.obj");
+
+  auto refused = Bake(input, config);
+  REQUIRE_FALSE(refused.ok());
+  CHECK(refused.error().code == Error::Code::kImplausible);
+  const std::string& why = refused.error().message;
+  for (const char* part : {"boxes.obj", "refused", "PLAUS-LIMB-DETACHED: left_arm shares no vertex with the torso",
+                           "right_arm", "left_leg", "right_leg", "--force"})
+    CHECK_MESSAGE(why.find(part) != std::string::npos, "missing '" << part << "' in: " << why);
+
+  config.force = true;
+  Context ctx;
+  std::vector<std::string> warnings;
+  ctx.sink = [&](Context::Level level, const std::string& m) {
+    if (level == Context::Level::kWarn) warnings.push_back(m);
+  };
+  auto forced = Bake(input, config, &ctx);
+  REQUIRE_MESSAGE(forced.ok(), (forced.ok() ? "" : forced.error().message));
+  REQUIRE(forced->plausibility.size() == 4);
+  for (const PlausibilityFinding& f : forced->plausibility) CHECK(f.code == "PLAUS-LIMB-DETACHED");
+  CHECK(forced->plausibility[0].message.find("left_arm") != std::string::npos);
+  size_t logged = 0;
+  for (const std::string& w : warnings) logged += w.find("PLAUS-LIMB-DETACHED") != std::string::npos;
+  CHECK(logged == 4);
+  CheckRoundTrip(forced.value());
+
+  // The asset carries the findings (Asset.forced_findings) ...
+  std::vector<uint64_t> storage((forced->asset.size() + 7) / 8);
+  std::memcpy(storage.data(), forced->asset.data(), forced->asset.size());
+  runtime::AssetView view;
+  REQUIRE(runtime::Succeeded(runtime::LoadAsset(storage.data(), forced->asset.size(), &view)));
+  const auto* stored = view.asset->forced_findings();
+  REQUIRE(stored != nullptr);
+  REQUIRE(stored->size() == 4);
+  for (uint32_t i = 0; i < stored->size(); ++i) {
+    CHECK(stored->Get(i)->code()->str() == forced->plausibility[i].code);
+    CHECK(stored->Get(i)->message()->str() == forced->plausibility[i].message);
+  }
+  // ... which validation reports as errors with their code,
+  const auto findings = playback::ValidateAsset(view, &forced->mesh);
+  size_t plaus = 0;
+  for (const playback::Finding& f : findings)
+    if (f.code == "PLAUS-LIMB-DETACHED") {
+      ++plaus;
+      CHECK(f.severity == playback::Severity::kError);
+      CHECK(f.location.field == "forced_findings");
+    }
+  CHECK(plaus == 4);
+  CHECK(playback::CountErrors(findings) >= 4);
+  // ... and the report lists them as errors.
+  const auto report = MakeBakeReport(forced.value(), config, ctx);
+  CHECK(report["plausibility"]["passed"] == false);
+  CHECK(report["plausibility"]["forced"] == true);
+  REQUIRE(report["plausibility"]["errors"].size() == 4);
+  CHECK(report["plausibility"]["errors"][0]["code"] == "PLAUS-LIMB-DETACHED");
+  CHECK(report["plausibility"]["errors"][0]["severity"] == "error");
+  CHECK(report["timings_ms"].contains("plausibility"));
 }

@@ -12,6 +12,7 @@
 #include "spherechain/baker/coverage.h"
 #include "spherechain/baker/fit.h"
 #include "spherechain/baker/import.h"
+#include "spherechain/baker/plausibility.h"
 #include "spherechain/baker/regions.h"
 #include "spherechain/baker/segment.h"
 #include "spherechain/baker/write.h"
@@ -41,6 +42,13 @@ struct BakeConfig {
   /// height of each other at bind pose are adjacent (chains.h BindExcludedPairs) — so nothing the
   /// margin reaches at bind pose is ever reported.
   double near_rel = 0.005;
+  /// Write the asset even when a plausibility check fails (plausibility.h, issue 11 "no silent wrong
+  /// bake"): the findings then go to BakeResult::plausibility, the report (errors with their codes) and
+  /// the asset (schema Asset.forced_findings, which `spherechain validate` reports as errors). CLI
+  /// `bake --force`. Not a configuration key and not in the configuration hash: it changes nothing the
+  /// bake computes.
+  bool force = false;
+  PlausibilityLimits plausibility;  ///< bounds of the checks (plausibility.h defaults; not a JSON key)
 };
 
 /// Parses a JSON configuration file. Errors: kIo, kConfig (unknown key, wrong type, value out of range —
@@ -79,16 +87,27 @@ struct BakeResult {
   std::vector<uint8_t> asset;                          ///< the .sphc bytes
   uint32_t unassigned_triangles = 0;
   MeshIssues mesh_issues;                              ///< degenerate triangles, non-manifold edges (kept)
+  /// Failed plausibility checks, in the order they ran: empty unless BakeConfig::force let a failing
+  /// body through (then also in the asset, Asset.forced_findings).
+  std::vector<PlausibilityFinding> plausibility;
 };
 
-/// Runs import → segment → fit → φ2 + accuracy → chains → surrounding regions → pivots → asset.
-/// Nothing is written to disk. Stage timings go to ctx->timings_ms. Errors: those of each stage.
+/// Runs import → segment → plausibility checks → fit → chains → surrounding regions → pivots → φ2 +
+/// accuracy → coverage → PLAUS-OUTSIDE → asset (plausibility.h: CheckPlausibility on the chosen
+/// segmentation and, for a rigged body, the rig/geometry agreement the bake measures anyway, before the
+/// fit; CheckProtrusion once the coverage is measured). Nothing is written to disk. Stage timings go to
+/// ctx->timings_ms ("plausibility" for the checks). Errors: those of each stage; kImplausible when a
+/// check fails and config.force is not set — "INPUT: the bake looks wrong, refused (nothing written):
+/// CODE: what and where; CODE: ...", every failed check of that point named. With config.force the bake
+/// succeeds, the findings are in BakeResult::plausibility and the asset, and each is logged as a warning
+/// on `ctx`.
 Result<BakeResult> Bake(const std::string& input_path, const BakeConfig& config, Context* ctx = nullptr);
 
 /// The JSON bake report: vertices, triangles, spheres, regions{name: {triangles, spheres}}, chains[{name,
 /// spheres}], unassigned_triangles, mesh_issues{degenerate_triangles, non_manifold_edges},
 /// accuracy{phi1, phi1_adjusted, phi2: {mean_abs_F, rms_F, min_F,
-/// max_F}}, per-sphere table, segmentation (method, agreement), timings_ms.
+/// max_F}}, per-sphere table, segmentation (method, agreement), plausibility{passed, forced, errors[{code,
+/// severity "error", message}]} (errors non-empty only in a forced bake), timings_ms.
 nlohmann::json MakeBakeReport(const BakeResult& result, const BakeConfig& config, const Context& ctx);
 
 /// The paper's per-ray comparison (§6) for the torso spheres as CSV: for each torso sphere and each

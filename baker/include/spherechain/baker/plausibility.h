@@ -1,6 +1,7 @@
 // spherechain baker — "no silent wrong bake" (issue 11): plausibility checks on a segmentation and its
 // fitted spheres, each finding with a stable code. Bake() refuses a body that fails one unless
-// BakeConfig::force is set (then the asset is written and the report carries the findings as errors).
+// BakeConfig::force is set (then the asset is written and the report and the asset, Asset.forced_findings,
+// carry the findings as errors).
 #pragma once
 
 #include <string>
@@ -46,5 +47,11 @@ std::vector<PlausibilityFinding> CheckPlausibility(const Mesh& mesh, const Segme
                                                    const CoverageStats* coverage,
                                                    const SegmentationAgreement* agreement,
                                                    const PlausibilityLimits& limits = {});
+
+/// PLAUS-OUTSIDE alone (the check CheckPlausibility runs when given `coverage`): appends the finding to
+/// `out` when coverage.protrusion > limits.max_protrusion. Bake() runs the other checks right after
+/// segmentation — a refused body costs no fit — and this one once the spheres' coverage is measured.
+void CheckProtrusion(const CoverageStats& coverage, const PlausibilityLimits& limits,
+                     std::vector<PlausibilityFinding>* out);
 
 }  // namespace spherechain::baker

@@ -44,6 +44,7 @@ struct Error {
     kFit,           ///< sphere fitting failed
     kConfig,        ///< bad bake configuration
     kInternal,      ///< a library threw; message holds its text
+    kImplausible,   ///< a plausibility check failed (plausibility.h): the bake looks wrong; nothing written
   };
   Code code = Code::kInternal;
   std::string message;

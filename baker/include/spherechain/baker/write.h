@@ -8,6 +8,7 @@
 #include "spherechain/baker/chains.h"
 #include "spherechain/baker/coverage.h"
 #include "spherechain/baker/fit.h"
+#include "spherechain/baker/plausibility.h"
 #include "spherechain/baker/regions.h"
 #include "spherechain/baker/segment.h"
 #include "spherechain/baker/types.h"
@@ -55,6 +56,9 @@ struct AssetInputs {
   double contact_margin = 0.0;                      ///< Asset.contact_margin [Units: source]
   const CoverageStats* coverage = nullptr;          ///< [opt] Asset.coverage
   float coverage_voxel_rel = 0.0f;                  ///< the voxel edge it was measured with / height
+  /// [opt] Asset.forced_findings: plausibility checks the bake failed and was forced past (bake --force).
+  /// Null or empty: the field is left out (the asset is byte-identical to one baked before the field).
+  const std::vector<PlausibilityFinding>* forced_findings = nullptr;
 };
 
 /// Serialises the asset. Deterministic: the same inputs give the same bytes (no timestamps, no

@@ -6,6 +6,10 @@
 //   SPHC-LOAD       error    the bytes are not a loadable asset (unreadable file, runtime::LoadAsset's
 //                            status); for a semantic rejection the location names the offending sphere,
 //                            chain or field where it can be found
+//   PLAUS-*         error    the bake failed this plausibility check and was written with --force
+//                            (Asset.forced_findings; the code is the check's, baker plausibility.h:
+//                            PLAUS-LIMB-PIECES, -LIMB-DETACHED, -LIMB-BALANCE, -HEAD-IN-LIMB,
+//                            -TRUNK-AXIS, -OUTSIDE, -SEG-AGREE); location field "forced_findings"
 //   SPHERE-NO-CHAIN warning  a sphere in no chain: M1 (§5.2) never tests it (M2 does)
 //   SPHERE-NO-REGION warning a sphere whose surrounding region (§5.1) is empty: the narrow phase can
 //                            never confirm a contact of it
@@ -65,7 +69,7 @@ struct ValidateNames {
 /// Validates a loaded, verified asset (`view` from runtime::LoadAsset; [Limit: view.valid()], else one
 /// SPHC-LOAD finding) and, when `mesh` is given [opt], that it belongs to that mesh (fingerprint) and
 /// that its bind pose (mesh->positions, refit then M2 detect at the asset's contact margin) reports no
-/// sphere pair. Findings in a fixed order: the asset's own (by sphere, then chain), then the mesh's,
+/// sphere pair. Findings in a fixed order: the asset's own (forced bake findings, then by sphere, then chain), then the mesh's,
 /// then bind collisions in the runtime's documented pair order; empty = valid, no warnings.
 /// Ownership: reads `view` and `mesh` during the call only. Cost: O(#S + #chains·#S + Σ region sizes)
 /// plus, with a mesh, one fingerprint hash (O(#V + #T)), one runtime Model + Workspace Init and one refit/detect

@@ -63,7 +63,7 @@ struct AssetView {
 ///     kSchemaVersion — read before the
 ///     full verification so an asset from another SDK version gets the clear message);
 ///  2. flatbuffers::Verifier (alignment checked, max depth 8 — the schema nests 3 deep — and max
-///     tables 16 + 1024 chains + 65536 mesh parts): kErrorCorrupt;
+///     tables 16 + 1024 chains + 65536 mesh parts + 256 forced bake findings): kErrorCorrupt;
 ///  3. semantics: kErrorMissingField, kErrorNoSpheres, kErrorTooManySpheres, kErrorTooManyChains,
 ///     kErrorCountMismatch (#S in spheres, pivot_frames, 4·#S pivot_triangles, 12·#S pivot_vertices,
 ///     #S+1 surrounding_offsets, optional spheres_phi1/phi2/sphere_regions/sphere_labels; #T in

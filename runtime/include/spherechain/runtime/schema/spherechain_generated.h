@@ -45,6 +45,9 @@ struct AccuracyBuilder;
 struct Asset;
 struct AssetBuilder;
 
+struct BakeFinding;
+struct BakeFindingBuilder;
+
 struct Coverage;
 struct CoverageBuilder;
 
@@ -725,7 +728,8 @@ struct Asset FLATBUFFERS_FINAL_CLASS : private flatbuffers::Table {
     VT_SPHERE_JOINT_WEIGHTS = 64,
     VT_VERTEX_CONTRACT = 66,
     VT_SOURCE_VERTEX_COUNT = 68,
-    VT_JOINED_VERTEX_COUNT = 70
+    VT_JOINED_VERTEX_COUNT = 70,
+    VT_FORCED_FINDINGS = 72
   };
   uint32_t schema_version() const {
     return GetField<uint32_t>(VT_SCHEMA_VERSION, 0);
@@ -829,6 +833,12 @@ struct Asset FLATBUFFERS_FINAL_CLASS : private flatbuffers::Table {
   uint32_t joined_vertex_count() const {
     return GetField<uint32_t>(VT_JOINED_VERTEX_COUNT, 0);
   }
+  /// The plausibility checks (baker plausibility.h) this bake failed and was written anyway
+  /// (`spherechain bake --force`), in the order the checks ran; `spherechain validate` reports each as
+  /// an error with its code. Absent or empty: every check passed.
+  const flatbuffers::Vector<flatbuffers::Offset<spherechain::schema::BakeFinding>> *forced_findings() const {
+    return GetPointer<const flatbuffers::Vector<flatbuffers::Offset<spherechain::schema::BakeFinding>> *>(VT_FORCED_FINDINGS);
+  }
   bool Verify(flatbuffers::Verifier &verifier) const {
     return VerifyTableStart(verifier) &&
            VerifyField<uint32_t>(verifier, VT_SCHEMA_VERSION, 4) &&
@@ -894,6 +904,9 @@ struct Asset FLATBUFFERS_FINAL_CLASS : private flatbuffers::Table {
            verifier.VerifyString(vertex_contract()) &&
            VerifyField<uint32_t>(verifier, VT_SOURCE_VERTEX_COUNT, 4) &&
            VerifyField<uint32_t>(verifier, VT_JOINED_VERTEX_COUNT, 4) &&
+           VerifyOffset(verifier, VT_FORCED_FINDINGS) &&
+           verifier.VerifyVector(forced_findings()) &&
+           verifier.VerifyVectorOfTables(forced_findings()) &&
            verifier.EndTable();
   }
 };
@@ -1004,6 +1017,9 @@ struct AssetBuilder {
   void add_joined_vertex_count(uint32_t joined_vertex_count) {
     fbb_.AddElement<uint32_t>(Asset::VT_JOINED_VERTEX_COUNT, joined_vertex_count, 0);
   }
+  void add_forced_findings(flatbuffers::Offset<flatbuffers::Vector<flatbuffers::Offset<spherechain::schema::BakeFinding>>> forced_findings) {
+    fbb_.AddOffset(Asset::VT_FORCED_FINDINGS, forced_findings);
+  }
   explicit AssetBuilder(flatbuffers::FlatBufferBuilder &_fbb)
         : fbb_(_fbb) {
     start_ = fbb_.StartTable();
@@ -1050,8 +1066,10 @@ inline flatbuffers::Offset<Asset> CreateAsset(
     flatbuffers::Offset<flatbuffers::Vector<float>> sphere_joint_weights = 0,
     flatbuffers::Offset<flatbuffers::String> vertex_contract = 0,
     uint32_t source_vertex_count = 0,
-    uint32_t joined_vertex_count = 0) {
+    uint32_t joined_vertex_count = 0,
+    flatbuffers::Offset<flatbuffers::Vector<flatbuffers::Offset<spherechain::schema::BakeFinding>>> forced_findings = 0) {
   AssetBuilder builder_(_fbb);
+  builder_.add_forced_findings(forced_findings);
   builder_.add_joined_vertex_count(joined_vertex_count);
   builder_.add_source_vertex_count(source_vertex_count);
   builder_.add_vertex_contract(vertex_contract);
@@ -1124,7 +1142,8 @@ inline flatbuffers::Offset<Asset> CreateAssetDirect(
     const std::vector<float> *sphere_joint_weights = nullptr,
     const char *vertex_contract = nullptr,
     uint32_t source_vertex_count = 0,
-    uint32_t joined_vertex_count = 0) {
+    uint32_t joined_vertex_count = 0,
+    const std::vector<flatbuffers::Offset<spherechain::schema::BakeFinding>> *forced_findings = nullptr) {
   auto generator__ = generator ? _fbb.CreateString(generator) : 0;
   auto parts__ = parts ? _fbb.CreateVector<flatbuffers::Offset<spherechain::schema::MeshPart>>(*parts) : 0;
   auto units__ = units ? _fbb.CreateString(units) : 0;
@@ -1148,6 +1167,7 @@ inline flatbuffers::Offset<Asset> CreateAssetDirect(
   auto sphere_joints__ = sphere_joints ? _fbb.CreateVector<uint16_t>(*sphere_joints) : 0;
   auto sphere_joint_weights__ = sphere_joint_weights ? _fbb.CreateVector<float>(*sphere_joint_weights) : 0;
   auto vertex_contract__ = vertex_contract ? _fbb.CreateString(vertex_contract) : 0;
+  auto forced_findings__ = forced_findings ? _fbb.CreateVector<flatbuffers::Offset<spherechain::schema::BakeFinding>>(*forced_findings) : 0;
   return spherechain::schema::CreateAsset(
       _fbb,
       schema_version,
@@ -1183,7 +1203,74 @@ inline flatbuffers::Offset<Asset> CreateAssetDirect(
       sphere_joint_weights__,
       vertex_contract__,
       source_vertex_count,
-      joined_vertex_count);
+      joined_vertex_count,
+      forced_findings__);
+}
+
+/// One failed bake check kept in a forced asset (Asset.forced_findings).
+struct BakeFinding FLATBUFFERS_FINAL_CLASS : private flatbuffers::Table {
+  typedef BakeFindingBuilder Builder;
+  enum FlatBuffersVTableOffset FLATBUFFERS_VTABLE_UNDERLYING_TYPE {
+    VT_CODE = 4,
+    VT_MESSAGE = 6
+  };
+  const flatbuffers::String *code() const {
+    return GetPointer<const flatbuffers::String *>(VT_CODE);
+  }
+  const flatbuffers::String *message() const {
+    return GetPointer<const flatbuffers::String *>(VT_MESSAGE);
+  }
+  bool Verify(flatbuffers::Verifier &verifier) const {
+    return VerifyTableStart(verifier) &&
+           VerifyOffset(verifier, VT_CODE) &&
+           verifier.VerifyString(code()) &&
+           VerifyOffset(verifier, VT_MESSAGE) &&
+           verifier.VerifyString(message()) &&
+           verifier.EndTable();
+  }
+};
+
+struct BakeFindingBuilder {
+  typedef BakeFinding Table;
+  flatbuffers::FlatBufferBuilder &fbb_;
+  flatbuffers::uoffset_t start_;
+  void add_code(flatbuffers::Offset<flatbuffers::String> code) {
+    fbb_.AddOffset(BakeFinding::VT_CODE, code);
+  }
+  void add_message(flatbuffers::Offset<flatbuffers::String> message) {
+    fbb_.AddOffset(BakeFinding::VT_MESSAGE, message);
+  }
+  explicit BakeFindingBuilder(flatbuffers::FlatBufferBuilder &_fbb)
+        : fbb_(_fbb) {
+    start_ = fbb_.StartTable();
+  }
+  flatbuffers::Offset<BakeFinding> Finish() {
+    const auto end = fbb_.EndTable(start_);
+    auto o = flatbuffers::Offset<BakeFinding>(end);
+    return o;
+  }
+};
+
+inline flatbuffers::Offset<BakeFinding> CreateBakeFinding(
+    flatbuffers::FlatBufferBuilder &_fbb,
+    flatbuffers::Offset<flatbuffers::String> code = 0,
+    flatbuffers::Offset<flatbuffers::String> message = 0) {
+  BakeFindingBuilder builder_(_fbb);
+  builder_.add_message(message);
+  builder_.add_code(code);
+  return builder_.Finish();
+}
+
+inline flatbuffers::Offset<BakeFinding> CreateBakeFindingDirect(
+    flatbuffers::FlatBufferBuilder &_fbb,
+    const char *code = nullptr,
+    const char *message = nullptr) {
+  auto code__ = code ? _fbb.CreateString(code) : 0;
+  auto message__ = message ? _fbb.CreateString(message) : 0;
+  return spherechain::schema::CreateBakeFinding(
+      _fbb,
+      code__,
+      message__);
 }
 
 /// Bind-pose coverage of the body by the spheres (baker coverage.h MeasureCoverage).
