@@ -13,6 +13,7 @@
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 
+#include "parallel.h"
 #include "surface_tree.h"
 
 namespace spherechain::baker {
@@ -147,6 +148,19 @@ void CastAxis(int axis, const Grid& g, const std::vector<float>& pos, const std:
   }
 }
 
+// The three axes' votes (CastAxis), cast on all cores into one array each and then added: votes are
+// counts, so the sum is the same as casting one axis after another.
+void CastAxes(const Grid& g, const std::vector<float>& pos, const std::vector<uint32_t>& idx,
+              std::vector<uint8_t>& state) {
+  std::array<std::vector<uint8_t>, 3> votes;
+  detail::ParallelFor(0, 3, [&](size_t axis) {
+    votes[axis].assign(state.size(), 0);
+    CastAxis(int(axis), g, pos, idx, votes[axis]);
+  });
+  for (size_t i = 0; i < state.size(); ++i)
+    state[i] = static_cast<uint8_t>(state[i] + votes[0][i] + votes[1][i] + votes[2][i]);
+}
+
 // Marks every voxel whose centre is within a sphere.
 void MarkSpheres(const Grid& g, const std::vector<Ball>& spheres, std::vector<uint8_t>& state) {
   for (const Ball& s : spheres) {
@@ -258,7 +272,7 @@ Result<CoverageStats> Measure(const std::vector<float>& positions, const std::ve
 
   const Grid g = MakeGrid(lo, hi, height, options);
   std::vector<uint8_t> state(g.total, 0);
-  for (int axis = 0; axis < 3; ++axis) CastAxis(axis, g, positions, indices, state);
+  CastAxes(g, positions, indices, state);
   MarkSpheres(g, spheres, state);
 
   CoverageStats st;
@@ -291,21 +305,32 @@ Result<CoverageStats> Measure(const std::vector<float>& positions, const std::ve
     Tree tree(tris.begin(), tris.end());
     tree.accelerate_distance_queries();
     std::vector<float> dist(outside.size());
-    Point3 hint;
-    for (size_t q = 0; q < outside.size(); ++q) {
-      const size_t i = outside[q];
+    auto centre = [&](size_t i) {
       const size_t ix = i % g.n[0], iy = (i / g.n[0]) % g.n[1], iz = i / g.stride[2];
-      const Point3 c(g.Centre(0, int64_t(ix)), g.Centre(1, int64_t(iy)), g.Centre(2, int64_t(iz)));
-      // A row neighbour's closest point bounds the search well; otherwise the tree's own kd-tree hint.
-      hint = (q > 0 && outside[q - 1] + 1 == i) ? tree.closest_point(c, hint) : tree.closest_point(c);
-      dist[q] = static_cast<float>(std::sqrt(CGAL::squared_distance(c, hint)) / height);
-      if (options.per_sphere)
+      return Point3(g.Centre(0, int64_t(ix)), g.Centre(1, int64_t(iy)), g.Centre(2, int64_t(iz)));
+    };
+    // Fixed chunks on all cores; in a chunk a row neighbour's closest point bounds the search well,
+    // otherwise the tree's own kd-tree hint (the distance is exact either way).
+    constexpr size_t kChunk = 1024;
+    (void)tree.closest_point(centre(outside[0]));  // builds the search structures: not in parallel
+    detail::ParallelFor(0, (outside.size() + kChunk - 1) / kChunk, [&](size_t chunk) {
+      Point3 hint;
+      for (size_t q = chunk * kChunk; q < std::min(outside.size(), (chunk + 1) * kChunk); ++q) {
+        const Point3 c = centre(outside[q]);
+        hint = (q > chunk * kChunk && outside[q - 1] + 1 == outside[q]) ? tree.closest_point(c, hint)
+                                                                        : tree.closest_point(c);
+        dist[q] = static_cast<float>(std::sqrt(CGAL::squared_distance(c, hint)) / height);
+      }
+    });
+    if (options.per_sphere)
+      for (size_t q = 0; q < outside.size(); ++q) {
+        const Point3 c = centre(outside[q]);
         for (size_t s = 0; s < spheres.size(); ++s) {
           const Eigen::Vector3d d = Eigen::Vector3d(c.x(), c.y(), c.z()) - spheres[s].center;
           if (d.squaredNorm() <= spheres[s].radius * spheres[s].radius)
             st.sphere_outside_max_rel[s] = std::max(st.sphere_outside_max_rel[s], dist[q]);
         }
-    }
+      }
     const size_t k95 = static_cast<size_t>(std::floor(0.95 * double(dist.size() - 1)));
     std::nth_element(dist.begin(), dist.begin() + k95, dist.end());
     st.outside_p95_rel = dist[k95];
@@ -338,7 +363,7 @@ Result<InteriorVoxels> VoxelizeInterior(const std::vector<float>& positions, con
     if (!(height > 0.0)) return Invalid("the mesh has zero extent (all vertices coincide)");
     const Grid g = MakeGrid(lo, hi, height, options);
     std::vector<uint8_t> state(g.total, 0);
-    for (int axis = 0; axis < 3; ++axis) CastAxis(axis, g, positions, indices, state);
+    CastAxes(g, positions, indices, state);
     InteriorVoxels out;
     out.origin = Eigen::Vector3d(g.origin[0], g.origin[1], g.origin[2]);
     out.voxel_size = g.h;

@@ -16,11 +16,9 @@
 #include <string>
 
 #include <Eigen/Eigenvalues>
-#if SPHERECHAIN_BAKER_TBB
-#include <tbb/parallel_for.h>
-#endif
 
 #include "geometry.h"
+#include "parallel.h"
 #include "surface_tree.h"
 #include "spherechain/baker/coverage.h"
 #include "spherechain/baker/fit.h"
@@ -34,16 +32,7 @@ using Eigen::Vector3d;
 
 constexpr uint8_t kOutside = 0xFF;
 
-// fn(i) for i in [first, last), on all cores with TBB (each i independent; what fn writes for i is the
-// same whichever thread runs it), one after another without.
-template <class Fn>
-void ParallelFor(size_t first, size_t last, Fn&& fn) {
-#if SPHERECHAIN_BAKER_TBB
-  tbb::parallel_for(first, last, fn);
-#else
-  for (size_t i = first; i < last; ++i) fn(i);
-#endif
-}
+using detail::ParallelFor;
 
 // The interior as a dense grid: region label (kOutside outside), distance to the surface, and how many
 // chosen spheres of the voxel's own region cover it.
