@@ -72,7 +72,9 @@ struct ImportOptions {
 ///   aiProcess_JoinIdenticalVertices, nothing else that welds or reorders; meshes concatenated in
 ///   depth-first node order, then mesh order in the node. Mesh::source_vertex_count and
 ///   joined_vertex_count hold #V under both contracts (one read, the join applied after counting).
-///   Cost: the join is O(#V log #V) in assimp.
+///   Cost: the join is O(#V log #V) in assimp. Mesh::up_axis: +Y (assimp's convention) unless the
+///   file declares another (assimp's "UpAxis" scene metadata, e.g. FBX); a `.blend` is +Z (Blender's
+///   world axis, which assimp's Blender reader keeps).
 /// - MakeHuman `base.obj`: only group `obj_group` ("body"); its vertices are the OBJ's vertices in file
 ///   order restricted to those the group references (for base.obj: the first 13,380, order kept).
 ///   The rig (mhskel + mhw) becomes Mesh::skin.
