@@ -1,6 +1,8 @@
 # The playback library as a package: install this build tree (BUILD) into WORK/prefix, build
 # tests/package/playback_consumer against it with find_package(spherechain) and run it on the golden v3
-# asset (asset-only validation: no error) and on a truncated copy (SPHC-LOAD, exit 1).
+# asset (asset-only validation: no error), on the same asset with its glTF mesh (GLTF, when present: the
+# consumer imports it through the installed baker — a glTF import in a find_package consumer used to bind
+# to libdraco's older tinygltf and crash), and on a truncated copy (SPHC-LOAD, exit 1).
 file(REMOVE_RECURSE ${WORK})
 function(run what)
   execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
@@ -22,6 +24,14 @@ run("build the consumer" ${CMAKE_COMMAND} --build ${WORK}/consumer)
 run("run the consumer" ${WORK}/consumer/playback_consumer ${ASSET})
 if(NOT out MATCHES "errors 0")
   message(FATAL_ERROR "the consumer reported errors on the golden asset: ${out}")
+endif()
+if(GLTF AND EXISTS "${GLTF}")
+  run("run the consumer with the glTF mesh" ${WORK}/consumer/playback_consumer ${ASSET} ${GLTF})
+  if(NOT out MATCHES "errors 0")
+    message(FATAL_ERROR "the consumer reported errors on the golden asset with ${GLTF}: ${out}")
+  endif()
+else()
+  message("SKIPPED: the glTF import through the package (no ${GLTF}: ../shared/data absent)")
 endif()
 file(WRITE ${WORK}/truncated.sphc "")  # an empty file: not loadable
 execute_process(COMMAND ${WORK}/consumer/playback_consumer ${WORK}/truncated.sphc RESULT_VARIABLE rc OUTPUT_VARIABLE out2)
