@@ -64,6 +64,11 @@ void ComputeVertexRegions(const Mesh& mesh, Segmentation& seg);
 /// leg/thigh/knee/calf/shin/foot/ankle/toe/heel and a *sided* hip → leg; anything else → torso.
 std::optional<Region> RegionOfBone(std::string_view bone_name);
 
+/// The extremity a bone skins (SplitExtremities' rig rule): a sided arm bone named like a hand
+/// (hand, wrist, finger, thumb, index, middle, ring, pinky, metacarpal, palm), a sided leg bone named
+/// like a foot (foot, toe, ankle, heel, ball); kNone otherwise (the head is found by geometry).
+Extremity ExtremityOfBone(std::string_view bone_name);
+
 /// "R0 left_arm 1234 tri, R1 ..." summary for notes and logs.
 std::string RegionCounts(const std::vector<uint8_t>& triangle_regions);
 

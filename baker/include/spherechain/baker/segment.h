@@ -1,6 +1,7 @@
 // spherechain baker — segmentation into the paper's five regions (§3, Figure 1).
 #pragma once
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -35,6 +36,42 @@ Result<Segmentation> SegmentByMap(const Mesh& mesh, const std::string& map_path,
 
 /// kAuto: rig when the mesh has a skin whose bones are recognised, else geometry.
 Result<Segmentation> Segment(const Mesh& mesh, SegmentMethod method, Context* ctx = nullptr);
+
+/// Head, hands and feet: the parts the paper keeps inside the torso, the arms and the legs (its stated
+/// limitation), which `regions: extended` gives spheres and chains of their own.
+enum class Extremity : uint8_t { kNone = 0, kHead = 1, kLeftHand = 2, kRightHand = 3, kLeftFoot = 4, kRightFoot = 5 };
+inline constexpr int kExtremityCount = 5;
+/// "head", "left_hand", "right_hand", "left_foot", "right_foot"; "none" otherwise.
+const char* ExtremityName(Extremity e);
+
+/// How SplitExtremities finds each part: by bone names where the rig has them (kAuto falls back to
+/// geometry per kind of part), by geometry only, or by the rig only (parts it cannot name stay whole).
+enum class ExtremityMethod : uint8_t { kAuto, kRig, kGeometry };
+
+struct ExtremitySplit {
+  std::vector<uint8_t> triangle_parts;  ///< #T, Extremity per triangle (kNone: stays in its region)
+  /// Per Extremity value (index 1..5): "rig", "geometry", or empty when the part was not found.
+  std::array<std::string, kExtremityCount + 1> method;
+  std::string notes;  ///< cut positions and triangle counts, for the report
+};
+
+/// Cuts head, hands and feet out of a five-region segmentation `seg` (bind pose, standing along
+/// Mesh::up_axis; `seg` must match the mesh, #T). A hand / foot is only ever cut from its own arm /
+/// leg, the head from the torso.
+/// - rig (kAuto, kRig; hands and feet): triangles whose corners' skin weights are more than half on
+///   bones named like the part (hand, wrist, finger, thumb, metacarpal, palm / foot, toe, ankle, heel,
+///   ball: segment_internal.h ExtremityOfBone), when both sides have such bones;
+/// - geometry (kAuto, kGeometry; the head always): the narrowest cross-section — area-weighted RMS
+///   radius of the welded vertices, binned (12–48 bins, ~6 vertices a bin) — where the part joins the
+///   rest: the wrist along the arm's geodesic distance from its junction with the torso (55–92 % of
+///   the way to the fingertips), the ankle along the up axis (the leg's lowest 3–30 %), the neck along
+///   the up axis (5–60 % of the way from the top of the arms' junction to the top of the body). The
+///   part must widen past the cut (by 1.2× for a palm, 1.3× for a foot or a head), else it is not
+///   there (CesiumMan's mitten arms have no hands). A triangle is beyond the cut when two corners are.
+/// Errors: kSegmentation when `seg` does not match the mesh. A part that cannot be found is left in
+/// its region (ExtremitySplit::method empty; `notes` says why). Cost O(#V log #V + #T); allocates.
+Result<ExtremitySplit> SplitExtremities(const Mesh& mesh, const Segmentation& seg,
+                                        ExtremityMethod method = ExtremityMethod::kAuto, Context* ctx = nullptr);
 
 /// Fraction of triangles (area-weighted) on which two segmentations agree, overall and per region
 /// (IoU per region). Both must have the same triangle count.
