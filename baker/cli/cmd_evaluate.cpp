@@ -1,5 +1,5 @@
 // spherechain evaluate ASSET --mesh INPUT [--clip NAME | --morph POSES...] [--frames N] [--margin REL]
-//                      [--refit paper|frame] [--json OUT] [--png OUT] [--min-recall R] [--no-coverage]
+//                      [--refit paper|frame|joints] [--json OUT] [--png OUT] [--min-recall R] [--no-coverage]
 //                      [--sweep-margin[=M1,M2,...]]
 //
 // Measures the proxy against the truth. Every frame of the animation `play` would run: the deformed
@@ -211,6 +211,16 @@ int RunEvaluate(const EvaluateArgs& a) {
   for (uint32_t v = 0; v < V; ++v) lo = std::min(lo, double(mesh.positions[3 * v + up])), hi = std::max(hi, double(mesh.positions[3 * v + up]));
   const double height = hi - lo, margin = a.margin * height;
   const runtime::RefitMode mode = a.refit == "paper" ? runtime::RefitMode::kPaper : runtime::RefitMode::kPivotFrame;
+  // --refit joints: the spheres a GPU-skinned game gets (JointRefitJob: linear blend skinning of the
+  // centres by the frame's skinning matrices), judged against the same truth.
+  const bool joint_refit = a.refit == "joints";
+  if (joint_refit && !view.asset->sphere_joints())
+    return Fail("'" + a.asset + "' has no joint weights (schema v" + std::to_string(view.asset->schema_version()) +
+                ", or baked from a mesh without a skin): --refit joints needs an asset baked from a rigged character");
+  if (joint_refit && (!mesh.skin || view.asset->joint_count() != mesh.skin->joints.size()))
+    return Fail("'" + a.asset + "' was baked for " + std::to_string(view.asset->joint_count()) + " joints, '" +
+                a.anim.mesh + "' has " + std::to_string(mesh.skin ? mesh.skin->joints.size() : 0));
+  std::vector<float> joint_matrices;
 
   std::vector<runtime::Collision> out_m1(runtime::DetectBound(view, runtime::DetectMethod::kM1)),
       out_m2(runtime::DetectBound(view, runtime::DetectMethod::kM2));
@@ -251,7 +261,20 @@ int RunEvaluate(const EvaluateArgs& a) {
     refit.workspace = &ws;
     refit.mode = mode;
     refit.positions = {positions.data(), V, 12};
-    if (runtime::Status s = refit.Run(); runtime::Failed(s)) return Fail(std::string("refit: ") + runtime::ToString(s));
+    if (joint_refit) {
+      joint_matrices.resize(scratch.matrices.size() * runtime::kJointMatrixFloats);
+      for (size_t j = 0; j < scratch.matrices.size(); ++j)
+        runtime::JointMatrixFromColumnMajor(scratch.matrices[j].data(), joint_matrices.data() + j * runtime::kJointMatrixFloats);
+      runtime::JointRefitJob joints;
+      joints.model = &model;
+      joints.workspace = &ws;
+      joints.joint_matrices = joint_matrices.data();
+      joints.joint_count = uint32_t(scratch.matrices.size());
+      if (runtime::Status s = joints.Run(); runtime::Failed(s))
+        return Fail(std::string("joint refit: ") + runtime::ToString(s));
+    } else if (runtime::Status s = refit.Run(); runtime::Failed(s)) {
+      return Fail(std::string("refit: ") + runtime::ToString(s));
+    }
     if (a.coverage) {
       const runtime::SphereArrays sp = ws.spheres();
       std::vector<baker::Ball> balls(sp.count);
@@ -687,7 +710,10 @@ void RegisterEvaluate(CLI::App& app, Commands* commands) {
   sub->add_option("--margin", args->margin,
                   "A reported region pair is a false alarm when no triangles of the two regions come within this "
                   "distance, as a fraction of the body height (default 0.01)");
-  sub->add_option("--refit", args->refit, "Refit: paper or frame (default)")->check(CLI::IsMember({"paper", "frame"}));
+  sub->add_option("--refit", args->refit,
+                  "Refit: paper, frame (default; both from the deformed vertices) or joints (JointRefitJob: the centres "
+                  "skinned by the frame's joint matrices, what a GPU-skinned game runs; needs a rigged input)")
+      ->check(CLI::IsMember({"paper", "frame", "joints"}));
   sub->add_option("--json", args->json, "Write per-frame results and the summary as JSON");
   sub->add_option("--png", args->png,
                   "Write a picture of the frame with the most missed contacts: contact triangles red (missed) / amber "

@@ -88,6 +88,24 @@ foreach(i 0 1 2)
   endif()
 endforeach()
 
+# --refit joints: the proxy a GPU-skinned game gets (centres skinned by the frame's joint matrices) against
+# the same truth. Spheres left at the bind pose (a joint refit that did nothing) would miss the crossed arms
+# of frames 1-3 entirely (10 frames: two a key pose, the first key at frame 1).
+execute_process(COMMAND ${CLI} -q evaluate ${ASSET} --mesh ${MESH} --frames 10 --no-coverage --refit joints
+                        --json ${WORK}/joints.json
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "evaluate --refit joints failed (${rc}):\n${out}${err}")
+endif()
+file(READ ${WORK}/joints.json jj)
+string(JSON refit_kind GET "${jj}" refit)
+string(JSON j_recall GET "${jj}" summary proxy recall_m2)
+string(JSON j_contacts GET "${jj}" summary contacts)
+message(STATUS "--refit joints on 10 frames: ${j_contacts} contacts, region-pair recall M2 ${j_recall}")
+if(NOT refit_kind STREQUAL "joints" OR NOT j_contacts GREATER 0 OR j_recall LESS 0.5)
+  message(FATAL_ERROR "--refit joints: refit '${refit_kind}', ${j_contacts} contacts, recall ${j_recall} (expected joints, > 0, >= 0.5)")
+endif()
+
 # --min-recall 1.0: exit 1 with the reason when the proxy misses anything on these 16 frames, else 0.
 execute_process(COMMAND ${CLI} -q evaluate ${ASSET} --mesh ${MESH} --frames 16 --no-coverage --min-recall 1.0
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
