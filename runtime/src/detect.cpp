@@ -1,5 +1,5 @@
 // DetectJob: sphere overlap tests, M1 (per chain) and M2 (all spheres), paper §5.2, behind a broad
-// phase over blocks of 8 spheres (kernels.inl BlockRow).
+// phase over blocks of 8 spheres (kernels::Table::block_rows: kernels.inl, kernels_avx512.inl).
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -15,30 +15,30 @@ float JobMargin(const DetectJob& job) { return job.margin < 0.0f ? job.model->co
 
 struct DetectTaskData {
   const kernels::BroadPhaseArgs* args;
+  uint64_t* keys;
+  const uint32_t* key_begin;
   uint32_t* row_hits;
-  bool avx;
+  uint32_t (*block_rows)(const kernels::BroadPhaseArgs& a, uint32_t begin, uint32_t end, uint64_t* keys,
+                         uint32_t* box_tests, uint32_t* sphere_tests);
 };
 
-// Row blocks [begin, end): their hit keys into their own slots of the keys and their counters into
-// row_hits (disjoint per row block, so tasks may run in any order on any thread).
-void DetectRows(const DetectTaskData& d, uint32_t begin, uint32_t end) {
+// parallel_for task: row blocks [begin, end), each its hit keys into its own slots of the keys
+// (key_begin) and its counters into row_hits (disjoint per row block, so tasks may run in any order on
+// any thread).
+void DetectRowTask(void* data, uint32_t begin, uint32_t end) {
+  const DetectTaskData& d = *static_cast<DetectTaskData*>(data);
   for (uint32_t I = begin; I < end; ++I) {
     uint32_t* counters = d.row_hits + size_t{3} * I;
-    counters[0] = d.avx ? kernels::BlockRowAvx(*d.args, I, &counters[1], &counters[2])
-                        : kernels::BlockRowSse(*d.args, I, &counters[1], &counters[2]);
+    counters[0] = d.block_rows(*d.args, I, I + 1, d.keys + d.key_begin[I], &counters[1], &counters[2]);
   }
-}
-
-void DetectRowTask(void* data, uint32_t begin, uint32_t end) {
-  DetectRows(*static_cast<DetectTaskData*>(data), begin, end);
 }
 
 }  // namespace
 
 // Both methods: gather the spheres (radii grown by the margin) in the layout's slot order, plain and
-// lane-major; block boxes; per row block the cull and the 8×8 tests (parallel_for: one task index per
-// row block); then the per-row-block key runs are compacted and sorted. Keys are (first common chain,
-// M1 only) << 32 | a << 16 | b, so the sorted keys are exactly the documented order; the depths and
+// lane-major; block boxes; the block-pair culls and the 8×8 tests of the kept pairs (parallel_for: one
+// task index per row block, then the per-row-block key runs compacted); then the keys are sorted. Keys
+// are (first common chain, M1 only) << 32 | a << 16 | b, so the sorted keys are exactly the documented order; the depths and
 // the counters are computed as before the broad phase, with the same operations (bit-identical).
 Status Model::Internal::Detect(const DetectJob& job) {
   const Model& c = *job.model;
@@ -48,7 +48,16 @@ Status Model::Internal::Detect(const DetectJob& job) {
   const float m = JobMargin(job);
   const uint32_t B = c.blocks_, P = c.box_pitch_;
   const float *x = w.x_, *y = w.y_, *z = w.z_, *r = w.r_;
-  {  // disjoint arrays of the workspace (restrict: no reloads between the stores)
+  const kernels::Table& kernel = kernels::Kernels(static_cast<kernels::Isa>(c.isa_));
+  // The gather and the block boxes: AVX-512 permutes the spheres out of registers and reduces the boxes
+  // from the gathered slots (kernels::GatherArgs, up to 256 spheres); else one slot at a time, through
+  // restrict pointers (disjoint arrays: no reloads between the stores), plus a transposed copy from which
+  // BlockBoxes reduces each block's 8 lanes vertically.
+  const size_t pitch = P + 8;
+  float* box = w.box_;
+  if (!kernel.gather_boxes({x, y, z, r, c.sphere_count_, c.order_, B, m, w.gx_, w.gy_, w.gz_, w.gr_, box,
+                            box + pitch, box + 2 * pitch, box + 3 * pitch, box + 4 * pitch, box + 5 * pitch,
+                            box + 6 * pitch})) {
     const float* __restrict sx = x;
     const float* __restrict sy = y;
     const float* __restrict sz = z;
@@ -69,40 +78,31 @@ Status Model::Internal::Detect(const DetectJob& job) {
         gx[g] = px, gy[g] = py, gz[g] = pz, gr[g] = pr;
         tx[t] = px, ty[t] = py, tz[t] = pz, tr[t] = pr;
       }
+    kernel.block_boxes({w.tx_, w.ty_, w.tz_, w.tr_, P, box, box + pitch, box + 2 * pitch, box + 3 * pitch,
+                        box + 4 * pitch, box + 5 * pitch, box + 6 * pitch});
   }
+  // The broad phase (kernels::BroadPhaseArgs): serial, all row blocks in one call, keys contiguous; with
+  // parallel_for, one task index per row block into its own key slots, the runs compacted after.
+  uint64_t* keys = w.keys_;
+  uint32_t distinct = 0, box_tests = 0, sphere_tests = 0;
   {
-    const size_t pitch = P + 8;
-    float* box = w.box_;
-    const kernels::BlockBoxArgs args{w.tx_, w.ty_, w.tz_, w.tr_, P,
-                                     box, box + pitch, box + 2 * pitch, box + 3 * pitch, box + 4 * pitch,
-                                     box + 5 * pitch, box + 6 * pitch};
-    if (c.use_avx_)
-      kernels::BlockBoxesAvx(args);
-    else
-      kernels::BlockBoxesSse(args);
-  }
-  {  // the broad phase, one row block at a time (kernels::BlockRow); one task index per row block
-    const size_t pitch = P + 8;
-    float* box = w.box_;
     const kernels::BroadPhaseArgs args{w.gx_, w.gy_, w.gz_, w.gr_,
                                        box, box + pitch, box + 2 * pitch, box + 3 * pitch, box + 4 * pitch,
                                        box + 5 * pitch, box + 6 * pitch, c.order_, c.a_.chain_mask,
-                                       c.allowed_[method], c.live_[method], c.blocks_, c.live_stride_, m1,
-                                       w.keys_, c.key_begin_[method]};
-    DetectTaskData data{&args, w.row_hits_, c.use_avx_};
-    if (job.parallel_for.run)
+                                       c.allowed_[method], c.live_[method], c.blocks_, c.live_stride_, m1};
+    if (job.parallel_for.run) {
+      DetectTaskData data{&args, keys, c.key_begin_[method], w.row_hits_, kernel.block_rows};
       job.parallel_for.run(job.parallel_for.user, B, &DetectRowTask, &data);
-    else
-      DetectRows(data, 0, B);
-  }
-  uint64_t* keys = w.keys_;
-  uint32_t distinct = 0, box_tests = 0, sphere_tests = 0;
-  for (uint32_t I = 0; I < B; ++I) {  // compact the per-row-block key runs
-    const uint32_t slot = c.key_begin_[method][I], n = w.row_hits_[size_t{3} * I];
-    if (n && slot != distinct) std::memmove(keys + distinct, keys + slot, sizeof(uint64_t) * n);
-    distinct += n;
-    box_tests += w.row_hits_[size_t{3} * I + 1];
-    sphere_tests += w.row_hits_[size_t{3} * I + 2];
+      for (uint32_t I = 0; I < B; ++I) {  // compact the per-row-block key runs
+        const uint32_t slot = c.key_begin_[method][I], n = w.row_hits_[size_t{3} * I];
+        if (n && slot != distinct) std::memmove(keys + distinct, keys + slot, sizeof(uint64_t) * n);
+        distinct += n;
+        box_tests += w.row_hits_[size_t{3} * I + 1];
+        sphere_tests += w.row_hits_[size_t{3} * I + 2];
+      }
+    } else {
+      distinct = kernel.block_rows(args, 0, B, keys, &box_tests, &sphere_tests);
+    }
   }
   if (distinct <= 32) {  // a handful of hits per frame: insertion sort
     for (uint32_t i = 1; i < distinct; ++i) {

@@ -13,6 +13,9 @@ namespace spherechain::runtime {
 struct Model::Internal {
   static void Refit(const RefitJob& job, uint32_t begin, uint32_t end);
   static Status Detect(const DetectJob& job);
+  /// JointRefitJob::Run after its argument checks: kErrorNonFiniteJoints (nothing written) or the blend
+  /// over the model's joint records and kOk.
+  static Status JointRefit(const JointRefitJob& job);
   /// Shared argument checks of the jobs: kErrorNullArgument (either null), kErrorInvalidJob (either not
   /// initialised), kErrorWorkspaceModel (the workspace was made for another model), else kOk.
   static Status CheckPair(const Model* model, const Workspace* ws) {
@@ -23,11 +26,26 @@ struct Model::Internal {
   }
 };
 
-/// Kernels over plain arrays, compiled twice (kernels.cpp): SSE2 (any x86-64) and AVX, picked per
-/// model at Init (`__builtin_cpu_supports`); a scalar build elsewhere. Same operations in the same
-/// order — the formulas themselves are spherechain/runtime/formulas.inl, included once per instruction
-/// set — no FMA: every variant gives bit-identical results (tests/runtime/formulas_test.cpp).
+/// Kernels over plain arrays, compiled three times (kernels.cpp): SSE2 (any x86-64), AVX and AVX-512
+/// (function-level targets), one set picked per model at Init (`Best()`: the CPU's and OS's support,
+/// `__builtin_cpu_supports`); a scalar build elsewhere. Same operations in the same order — the formulas
+/// themselves are spherechain/runtime/formulas.inl, included once per instruction set — no FMA: every
+/// variant gives bit-identical results (tests/runtime/formulas_test.cpp, kernels_test.cpp).
 namespace kernels {
+
+/// Instruction sets of the kernels, in order: a CPU that runs one runs the ones before it.
+enum class Isa : uint8_t {
+  kSse2 = 0,    ///< baseline x86-64 (and the scalar build on other targets)
+  kAvx = 1,     ///< AVX + POPCNT: 8 lanes
+  kAvx512 = 2,  ///< AVX-512 F/VL/DQ/BW + POPCNT: 16 lanes, mask registers, two-source permutes
+};
+inline constexpr int kIsaCount = 3;
+const char* ToString(Isa isa);  ///< "sse2", "avx", "avx512"
+/// True when this CPU (and OS: the register state is saved) runs `isa`'s kernels; kSse2 always.
+bool Supported(Isa isa);
+/// The best supported set, capped by the environment variable SPHERECHAIN_ISA (sse2, avx or avx512: for
+/// benchmarks and tests of the lower paths; an unknown value is ignored). Read once (thread-safe).
+Isa Best();
 
 /// Refit of spheres [begin, end) (see RefitJob, refit.h). Per-sphere arrays are readable up to a
 /// multiple of 8 past `end` (padded); outputs are written for [begin, end) only. The x86 kernels read
@@ -49,11 +67,12 @@ struct RefitArgs {
 /// every block J >= I that the method's static table keeps (`live`: some allowed lane); a block pair
 /// survives when the distance between the boxes of the two blocks' centres is below the sum of their
 /// largest |radius| — computed with the sphere test's own float operations, so that it never drops a
-/// pair the sphere test would report (see kernels.inl) — then each row sphere of I is tested the same
-/// way against J's box, and the surviving rows run their 8 sphere tests, masked by
-/// `allowed` (row r's lanes in byte r: not padding, j > i on the diagonal block, not excluded, and for
+/// pair the sphere test would report (see kernels.inl) — then the sphere tests of the pair run, masked
+/// by `allowed` (row r's lanes in byte r: not padding, j > i on the diagonal block, not excluded, and for
 /// M1 sharing a chain). Each hit writes (first common chain, M1 only) << 32 | min(a,b) << 16 | max(a,b)
-/// at keys[key_begin[I] ...]. Returns the number of keys; counters go to *box_tests / *sphere_tests.
+/// (row blocks [begin, end) of a call: the keys written contiguously at `keys`, in no particular order —
+/// the job sorts them). Returns the number of keys; the counters of the rows go to *box_tests (live block
+/// pairs) / *sphere_tests (allowed lanes of the kept pairs).
 struct BroadPhaseArgs {
   const float *x, *y, *z, *r;             // G = 8·B gathered spheres, block order
   const float *lx, *hx, *ly, *hy, *lz, *hz, *br;  // per block (B + 8, padding blocks empty): box of
@@ -64,8 +83,6 @@ struct BroadPhaseArgs {
   const uint8_t* live;                    // B × live_stride: bit k of byte c ⇔ allowed[I][I+8c+k] != 0
   uint32_t blocks, live_stride;
   bool m1;                                // keys carry the first common chain
-  uint64_t* keys;
-  const uint32_t* key_begin;              // B: first key slot of each row block
 };
 
 /// Block boxes of the transposed gathered spheres: t* hold lane l of block I at [l · pitch + I]
@@ -76,13 +93,51 @@ struct BlockBoxArgs {
   float *lx, *hx, *ly, *hy, *lz, *hz, *br;
 };
 
-void RefitSse(const RefitArgs& a, uint32_t begin, uint32_t end);
-void RefitAvx(const RefitArgs& a, uint32_t begin, uint32_t end);
-void BlockBoxesSse(const BlockBoxArgs& a);
-void BlockBoxesAvx(const BlockBoxArgs& a);
-uint32_t BlockRowSse(const BroadPhaseArgs& a, uint32_t I, uint32_t* box_tests, uint32_t* sphere_tests);
-uint32_t BlockRowAvx(const BroadPhaseArgs& a, uint32_t I, uint32_t* box_tests, uint32_t* sphere_tests);
-bool HasAvx();  // the CPU and OS support AVX and POPCNT (false on a non-x86 build)
+/// The detection's gather and block boxes in one pass (the AVX-512 kernel; the others return false and the
+/// job gathers one slot at a time, into a transposed copy as well, for BlockBoxes): for every slot g <
+/// 8·blocks, g* [g] = sphere src[g] of x, y, z, and r + margin (src[g] == #S: padding, NaN); then per
+/// block the box of its centres and its largest |grown radius|, NaN lanes ignored (BlockBoxArgs' values:
+/// the same bounds up to the sign of a zero bound, which no block-pair test can tell apart — its gaps
+/// are squared). [Limit: #S <= kMaxGatherSpheres, else false and nothing written]
+struct GatherArgs {
+  const float *x, *y, *z, *r;     // #S + 8 each
+  uint32_t sphere_count;          // #S
+  const uint32_t* src;            // 8·blocks: sphere id per slot
+  uint32_t blocks;
+  float margin;
+  float *gx, *gy, *gz, *gr;       // 8·blocks
+  float *lx, *hx, *ly, *hy, *lz, *hz, *br;  // blocks rounded up to 8
+};
+inline constexpr uint32_t kMaxGatherSpheres = 256;
+
+/// JointRefitJob's blend and transform over the model's joint records (Model::Init: one record a
+/// sphere, grouped by the number of influences it uses, 1..4 — the leading nonzero weights after the
+/// first). Record k (of group n: group_end[n−2] <= k < group_end[n−1], group_end[−1] = 0) writes sphere
+/// sphere[k]'s centre: M = ((w0·M_j0 + w1·M_j1) + w2·M_j2) + w3·M_j3 over its first n influences (3×4,
+/// row-major, 12 floats at matrices + offsets[4k + i]), then per row ρ (ρ0·bx + ρ1·by) + (ρ2·bz + ρ3·1)
+/// with bind[4k .. 4k + 3] = (bx, by, bz, 1).
+struct JointRefitArgs {
+  const float* matrices;          // #J × 12
+  const uint32_t* sphere;         // #S: sphere id per record
+  const uint32_t* offsets;        // #S × 4: matrix offsets [floats] (joint × 12; unused: 0)
+  const float* weights;           // #S × 4 (unused: 0)
+  const float* bind;              // #S × 4: bind centre and 1
+  uint32_t group_end[4];          // records using 1, 2, 3, 4 influences end here
+  float *x, *y, *z;
+};
+
+/// One instruction set's kernels.
+struct Table {
+  void (*refit)(const RefitArgs& a, uint32_t begin, uint32_t end);
+  void (*block_boxes)(const BlockBoxArgs& a);
+  uint32_t (*block_rows)(const BroadPhaseArgs& a, uint32_t begin, uint32_t end, uint64_t* keys, uint32_t* box_tests,
+                         uint32_t* sphere_tests);
+  bool (*gather_boxes)(const GatherArgs& a);  // false: not handled (the caller gathers), nothing written
+  void (*joint_refit)(const JointRefitArgs& a);
+  bool (*finite)(const float* p, uint32_t n);  // all n floats finite (n a multiple of 4)
+};
+/// The kernels of `isa` [Limit: Supported(isa), else the CPU may fault].
+const Table& Kernels(Isa isa);
 
 }  // namespace kernels
 }  // namespace spherechain::runtime

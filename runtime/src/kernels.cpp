@@ -1,7 +1,9 @@
-// SIMD kernels of RefitJob and DetectJob (see internal.h): kernels.inl compiled for SSE2 (baseline
-// x86-64) and AVX (function-level target, chosen at Model::Init), or scalar on other targets.
+// SIMD kernels of RefitJob, DetectJob and JointRefitJob (see internal.h): kernels.inl and kernels_x86.inl
+// compiled for SSE2 (baseline x86-64) and AVX, kernels_avx512.inl for AVX-512 (function-level targets,
+// one set chosen at Model::Init), or scalar on other targets.
 #include <bit>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 
 #include "internal.h"
@@ -106,15 +108,64 @@ inline uint32_t Overlap8(V xi, V yi, V zi, V ri, const float* x, const float* y,
 #pragma GCC pop_options
 }  // namespace avx
 
-void RefitSse(const RefitArgs& a, uint32_t begin, uint32_t end) { sse::Refit(a, begin, end); }
-void RefitAvx(const RefitArgs& a, uint32_t begin, uint32_t end) { avx::Refit(a, begin, end); }
-void BlockBoxesSse(const BlockBoxArgs& a) { sse::BlockBoxes(a); }
-void BlockBoxesAvx(const BlockBoxArgs& a) { avx::BlockBoxes(a); }
-uint32_t BlockRowSse(const BroadPhaseArgs& a, uint32_t I, uint32_t* b, uint32_t* s) { return sse::BlockRow(a, I, b, s); }
-uint32_t BlockRowAvx(const BroadPhaseArgs& a, uint32_t I, uint32_t* b, uint32_t* s) { return avx::BlockRow(a, I, b, s); }
-bool HasAvx() {
+// GCC 12's AVX-512 headers pass _mm512_undefined_ps() (a self-initialised variable) as the merge source of
+// unmasked intrinsics, which -Wuninitialized reports at every inlined use (GCC bug 105593, fixed in 13).
+#if !defined(__clang__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wuninitialized"
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
+namespace avx512 {
+#pragma GCC push_options
+#pragma GCC target("avx512f,avx512vl,avx512dq,avx512bw,popcnt")
+#ifdef __clang__
+#pragma clang attribute push(__attribute__((target("avx512f,avx512vl,avx512dq,avx512bw,popcnt"))), apply_to = function)
+#endif
+struct Ops {  // formulas.inl's lane interface: 16 lanes, comparisons into mask registers
+  using V = __m512;
+  using M = __mmask16;
+  static V Set1(float v) { return _mm512_set1_ps(v); }
+  static V Sqrt(V v) { return _mm512_sqrt_ps(v); }
+  static M Gt(V a, V b) { return _mm512_cmp_ps_mask(a, b, _CMP_GT_OQ); }
+  static M Lt(V a, V b) { return _mm512_cmp_ps_mask(a, b, _CMP_LT_OQ); }
+  static M And(M a, M b) { return static_cast<M>(a & b); }
+  static V Blend(M m, V a, V b) { return _mm512_mask_blend_ps(m, b, a); }
+};
+#include "spherechain/runtime/formulas.inl"
+#include "kernels_avx512.inl"
+void RefitKernel(const RefitArgs& a, uint32_t begin, uint32_t end) { Refit(a, begin, end, &avx::Refit); }
+#ifdef __clang__
+#pragma clang attribute pop
+#endif
+#pragma GCC pop_options
+}  // namespace avx512
+#if !defined(__clang__)
+#pragma GCC diagnostic pop
+#endif
+
+namespace {
+bool NoGather(const GatherArgs&) { return false; }
+
+constexpr Table kTables[kIsaCount] = {
+    {&sse::Refit, &sse::BlockBoxes, &sse::BlockRows, &NoGather, &sse::JointRefit, &sse::Finite},
+    {&avx::Refit, &avx::BlockBoxes, &avx::BlockRows, &NoGather, &avx::JointRefit, &avx::Finite},
+    // AVX-512: the block boxes come with the gather (GatherBoxes); BlockBoxes (8 lanes) serves a model
+    // over kMaxGatherSpheres.
+    {&avx512::RefitKernel, &avx::BlockBoxes, &avx512::BlockRows, &avx512::GatherBoxes, &avx512::JointRefit,
+     &avx512::Finite},
+};
+}  // namespace
+
+bool Supported(Isa isa) {
   __builtin_cpu_init();
-  return __builtin_cpu_supports("avx") && __builtin_cpu_supports("popcnt");
+  switch (isa) {
+    case Isa::kSse2: return true;
+    case Isa::kAvx: return __builtin_cpu_supports("avx") && __builtin_cpu_supports("popcnt");
+    case Isa::kAvx512:  // libgcc's checks include the OS's XCR0 (the ZMM and mask state saved)
+      return Supported(Isa::kAvx) && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
+             __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512bw");
+  }
+  return false;
 }
 
 #else  // scalar: one lane at a time, the same formulas
@@ -156,14 +207,69 @@ inline void PivotCentroids(const RefitArgs& a, uint32_t s, uint32_t, V px[4], V 
 #include "kernels.inl"
 }  // namespace scalar
 
-void RefitSse(const RefitArgs& a, uint32_t begin, uint32_t end) { scalar::Refit(a, begin, end); }
-void RefitAvx(const RefitArgs& a, uint32_t begin, uint32_t end) { scalar::Refit(a, begin, end); }
-void BlockBoxesSse(const BlockBoxArgs& a) { scalar::BlockBoxes(a); }
-void BlockBoxesAvx(const BlockBoxArgs& a) { scalar::BlockBoxes(a); }
-uint32_t BlockRowSse(const BroadPhaseArgs& a, uint32_t I, uint32_t* b, uint32_t* s) { return scalar::BlockRow(a, I, b, s); }
-uint32_t BlockRowAvx(const BroadPhaseArgs& a, uint32_t I, uint32_t* b, uint32_t* s) { return scalar::BlockRow(a, I, b, s); }
-bool HasAvx() { return false; }
+namespace {
+bool NoGather(const GatherArgs&) { return false; }
+
+// JointRefitArgs, one float at a time: the same roundings as the x86 kernels.
+void JointRefitScalar(const JointRefitArgs& a) {
+  for (uint32_t n = 1; n <= 4; ++n)
+    for (uint32_t k = n == 1 ? 0 : a.group_end[n - 2]; k < a.group_end[n - 1]; ++k) {
+      float m[12];
+      const float* M = a.matrices + a.offsets[4 * k];
+      for (int e = 0; e < 12; ++e) m[e] = a.weights[4 * k] * M[e];
+      for (uint32_t i = 1; i < n; ++i) {
+        M = a.matrices + a.offsets[4 * k + i];
+        for (int e = 0; e < 12; ++e) m[e] = m[e] + a.weights[4 * k + i] * M[e];
+      }
+      const float* b = a.bind + size_t{4} * k;
+      float c[3];
+      for (int row = 0; row < 3; ++row) {
+        const float* p = m + 4 * row;
+        c[row] = (p[0] * b[0] + p[1] * b[1]) + (p[2] * b[2] + p[3] * b[3]);
+      }
+      const uint32_t s = a.sphere[k];
+      a.x[s] = c[0], a.y[s] = c[1], a.z[s] = c[2];
+    }
+}
+
+bool FiniteScalar(const float* p, uint32_t n) {
+  for (uint32_t i = 0; i < n; ++i)
+    if (!std::isfinite(p[i])) return false;
+  return true;
+}
+
+constexpr Table kScalar = {&scalar::Refit, &scalar::BlockBoxes, &scalar::BlockRows, &NoGather, &JointRefitScalar,
+                           &FiniteScalar};
+constexpr Table kTables[kIsaCount] = {kScalar, kScalar, kScalar};
+}  // namespace
+
+bool Supported(Isa isa) { return isa == Isa::kSse2; }
 
 #endif
+
+const char* ToString(Isa isa) {
+  switch (isa) {
+    case Isa::kSse2: return "sse2";
+    case Isa::kAvx: return "avx";
+    case Isa::kAvx512: return "avx512";
+  }
+  return "?";
+}
+
+Isa Best() {
+  static const Isa best = [] {
+    Isa cap = Isa::kAvx512;
+    if (const char* env = std::getenv("SPHERECHAIN_ISA")) {
+      for (int i = 0; i < kIsaCount; ++i)
+        if (std::strcmp(env, ToString(static_cast<Isa>(i))) == 0) cap = static_cast<Isa>(i);
+    }
+    for (int i = static_cast<int>(cap); i > 0; --i)
+      if (Supported(static_cast<Isa>(i))) return static_cast<Isa>(i);
+    return Isa::kSse2;
+  }();
+  return best;
+}
+
+const Table& Kernels(Isa isa) { return kTables[static_cast<int>(isa)]; }
 
 }  // namespace spherechain::runtime::kernels

@@ -58,7 +58,7 @@ void BlockBoxes(const BlockBoxArgs& a) {
 // and rounding is monotonic, so fl(dx) >= g per axis, fl(dx²+dy²+dz²) >= fl(g²) (squares and sums are
 // monotonic on values >= 0), while |fl(r_a + r_b)| <= fl(R_I + R_J); so g² >= (R_I + R_J)² implies
 // d² >= rr², i.e. no overlap. (A NaN d² or rr² never overlaps; infinite bounds only keep more pairs.)
-uint32_t BlockRow(const BroadPhaseArgs& a, uint32_t I, uint32_t* box_tests, uint32_t* sphere_tests) {
+uint32_t BlockRow(const BroadPhaseArgs& a, uint32_t I, uint64_t* keys, uint32_t* box_tests, uint32_t* sphere_tests) {
   const float* __restrict x = a.x;
   const float* __restrict y = a.y;
   const float* __restrict z = a.z;
@@ -68,7 +68,6 @@ uint32_t BlockRow(const BroadPhaseArgs& a, uint32_t I, uint32_t* box_tests, uint
   const V lzi = Set1(a.lz[I]), hzi = Set1(a.hz[I]), bri = Set1(a.br[I]);
   const uint8_t* live = a.live + size_t{I} * a.live_stride;
   const uint64_t* allowed = a.allowed + size_t{I} * a.blocks;
-  uint64_t* keys = a.keys + a.key_begin[I];
   uint32_t hits = 0, boxes = 0, spheres = 0;
   V ix[8 / kW], iy[8 / kW], iz[8 / kW], ir[8 / kW];  // the row block's spheres, |grown radius|
   for (uint32_t k = 0; k < 8; k += kW) {
@@ -123,6 +122,20 @@ uint32_t BlockRow(const BroadPhaseArgs& a, uint32_t I, uint32_t* box_tests, uint
         }
       }
     }
+  }
+  *box_tests = boxes;
+  *sphere_tests = spheres;
+  return hits;
+}
+
+// Row blocks [begin, end), one after the other, their keys contiguous.
+uint32_t BlockRows(const BroadPhaseArgs& a, uint32_t begin, uint32_t end, uint64_t* keys, uint32_t* box_tests,
+                   uint32_t* sphere_tests) {
+  uint32_t hits = 0, boxes = 0, spheres = 0;
+  for (uint32_t I = begin; I < end; ++I) {
+    uint32_t b, s;
+    hits += BlockRow(a, I, keys + hits, &b, &s);
+    boxes += b, spheres += s;
   }
   *box_tests = boxes;
   *sphere_tests = spheres;

@@ -60,3 +60,95 @@ __attribute__((always_inline)) inline void PivotCentroids4(const RefitArgs& a, u
     x[k] = r0, y[k] = r1, z[k] = r2;
   }
 }
+
+/// JointRefitArgs' records [begin, end), each blending its first N influences (see JointRefitArgs):
+/// rows as 4-float vectors (SSE2: three; AVX: rows 0–1 in one 8-float vector, row 2 in a 4-float one),
+/// w_i broadcast, M = ((w0·M0 + w1·M1) + w2·M2) + w3·M3 row-wise; the transform multiplies each row by
+/// (bx, by, bz, 1) and adds lanes as (ρ0 + ρ1) + (ρ2 + ρ3) — the SSE2 kernel through a 4×4 transpose,
+/// the AVX one with in-lane swaps (lane 0 of each row: (ρ0 + ρ1) + (ρ2 + ρ3), the same two roundings).
+template <int N>
+__attribute__((always_inline)) inline void JointGroup(const JointRefitArgs& a, uint32_t begin, uint32_t end) {
+  const float* __restrict M = a.matrices;
+  float* __restrict x = a.x;
+  float* __restrict y = a.y;
+  float* __restrict z = a.z;
+  for (uint32_t k = begin; k < end; ++k) {
+    const uint32_t* off = a.offsets + size_t{4} * k;
+    const float* w = a.weights + size_t{4} * k;
+    const uint32_t s = a.sphere[k];
+    if constexpr (kW == 4) {
+      const float* m = M + off[0];
+      __m128 wk = _mm_set1_ps(w[0]);
+      __m128 r0 = _mm_mul_ps(wk, _mm_loadu_ps(m)), r1 = _mm_mul_ps(wk, _mm_loadu_ps(m + 4)),
+             r2 = _mm_mul_ps(wk, _mm_loadu_ps(m + 8));
+#pragma GCC unroll 4
+      for (int i = 1; i < N; ++i) {
+        m = M + off[i];
+        wk = _mm_set1_ps(w[i]);
+        r0 = _mm_add_ps(r0, _mm_mul_ps(wk, _mm_loadu_ps(m)));
+        r1 = _mm_add_ps(r1, _mm_mul_ps(wk, _mm_loadu_ps(m + 4)));
+        r2 = _mm_add_ps(r2, _mm_mul_ps(wk, _mm_loadu_ps(m + 8)));
+      }
+      const __m128 p = _mm_loadu_ps(a.bind + size_t{4} * k);
+      __m128 a0 = _mm_mul_ps(r0, p), a1 = _mm_mul_ps(r1, p), a2 = _mm_mul_ps(r2, p), a3 = _mm_setzero_ps();
+      _MM_TRANSPOSE4_PS(a0, a1, a2, a3);
+      const __m128 c = _mm_add_ps(_mm_add_ps(a0, a1), _mm_add_ps(a2, a3));
+      _mm_store_ss(x + s, c);
+      _mm_store_ss(y + s, _mm_shuffle_ps(c, c, 1));
+      _mm_store_ss(z + s, _mm_shuffle_ps(c, c, 2));
+    } else {
+      const float* m = M + off[0];
+      __m256 wk = _mm256_broadcast_ss(w);
+      __m256 r01 = _mm256_mul_ps(wk, _mm256_loadu_ps(m));
+      __m128 r2 = _mm_mul_ps(_mm256_castps256_ps128(wk), _mm_loadu_ps(m + 8));
+#pragma GCC unroll 4
+      for (int i = 1; i < N; ++i) {
+        m = M + off[i];
+        wk = _mm256_broadcast_ss(w + i);
+        r01 = _mm256_add_ps(r01, _mm256_mul_ps(wk, _mm256_loadu_ps(m)));
+        r2 = _mm_add_ps(r2, _mm_mul_ps(_mm256_castps256_ps128(wk), _mm_loadu_ps(m + 8)));
+      }
+      const __m128 p = _mm_loadu_ps(a.bind + size_t{4} * k);
+      const __m256 v01 = _mm256_mul_ps(r01, _mm256_set_m128(p, p));
+      const __m128 v2 = _mm_mul_ps(r2, p);
+      const __m256 t01 = _mm256_add_ps(v01, _mm256_permute_ps(v01, 0xB1));  // (ρ0 + ρ1, ·, ρ2 + ρ3, ·)
+      const __m128 t2 = _mm_add_ps(v2, _mm_permute_ps(v2, 0xB1));
+      const __m256 u01 = _mm256_add_ps(t01, _mm256_permute_ps(t01, 0x4E));   // lane 0: (ρ0 + ρ1) + (ρ2 + ρ3)
+      const __m128 u2 = _mm_add_ps(t2, _mm_permute_ps(t2, 0x4E));
+      _mm_store_ss(x + s, _mm256_castps256_ps128(u01));
+      _mm_store_ss(y + s, _mm256_extractf128_ps(u01, 1));
+      _mm_store_ss(z + s, u2);
+    }
+  }
+}
+
+/// All of JointRefitArgs' records: one fixed-count loop per influence group.
+inline void JointRefit(const JointRefitArgs& a) {
+  JointGroup<1>(a, 0, a.group_end[0]);
+  JointGroup<2>(a, a.group_end[0], a.group_end[1]);
+  JointGroup<3>(a, a.group_end[1], a.group_end[2]);
+  JointGroup<4>(a, a.group_end[2], a.group_end[3]);
+}
+
+/// True when the n floats at p [Limit: n a multiple of 4] are all finite: x · 0 is ±0 for a finite x and
+/// NaN for a NaN or ±inf, and a sum of ±0 stays ±0 while a NaN stays NaN — so Σ x · 0 is NaN exactly when
+/// some x is not finite (four accumulators of kW lanes, then 4 lanes at a time).
+inline bool Finite(const float* p, uint32_t n) {
+  const V zero = Set1(0.0f);
+  V a0 = zero, a1 = zero, a2 = zero, a3 = zero;
+  uint32_t i = 0;
+  for (; i + 4 * kW <= n; i += 4 * kW) {
+    a0 = a0 + Load(p + i) * zero;
+    a1 = a1 + Load(p + i + kW) * zero;
+    a2 = a2 + Load(p + i + 2 * kW) * zero;
+    a3 = a3 + Load(p + i + 3 * kW) * zero;
+  }
+  for (; i + kW <= n; i += kW) a0 = a0 + Load(p + i) * zero;
+  const V sum = (a0 + a1) + (a2 + a3);
+  alignas(64) float lanes[kW];
+  Store(lanes, sum);
+  float total = 0.0f;
+  for (uint32_t l = 0; l < kW; ++l) total += lanes[l];
+  for (; i < n; ++i) total += p[i] * 0.0f;
+  return total == total;
+}

@@ -75,6 +75,8 @@ struct ModelSections {
   uint16_t *chain_spheres = nullptr, *excl_neighbors = nullptr, *joints = nullptr;
   float* weights = nullptr;
   uint32_t* order = nullptr;
+  uint32_t *joint_sphere = nullptr, *joint_offsets = nullptr;
+  float *joint_weights = nullptr, *joint_bind = nullptr;
   uint64_t* allowed[2] = {};
   uint8_t* live[2] = {};
   uint32_t* key_begin[2] = {};
@@ -86,7 +88,7 @@ struct ModelSections {
     uint32_t chained = 0;
     for (uint32_t c = 0; c < C; ++c) chained += asset.chains()->Get(c)->spheres()->size();
     const uint32_t E = asset.excluded_pairs() ? asset.excluded_pairs()->size() : 0;
-    const bool joint_weights = asset.sphere_joints() && asset.sphere_joint_weights() && asset.joint_count() > 0;
+    const bool has_joints = asset.sphere_joints() && asset.sphere_joint_weights() && asset.joint_count() > 0;
     const uint32_t live_stride = (B + 7) / 8;
     Carver k{0, base};
     for (auto& p : bind) p = k.Take<float>(S);
@@ -99,8 +101,14 @@ struct ModelSections {
     chain_spheres = k.Take<uint16_t>(chained);
     excl_offsets = k.Take<uint32_t>(S + 1);
     excl_neighbors = k.Take<uint16_t>(E);
-    if (joint_weights) joints = k.Take<uint16_t>(size_t{4} * S), weights = k.Take<float>(size_t{4} * S);
+    if (has_joints) joints = k.Take<uint16_t>(size_t{4} * S), weights = k.Take<float>(size_t{4} * S);
     order = k.Take<uint32_t>(size_t{8} * B);
+    if (has_joints) {
+      joint_sphere = k.Take<uint32_t>(S);
+      joint_offsets = k.Take<uint32_t>(size_t{4} * S);
+      joint_weights = k.Take<float>(size_t{4} * S);
+      joint_bind = k.Take<float>(size_t{4} * S);
+    }
     for (int m = 0; m < 2; ++m) {
       allowed[m] = k.Take<uint64_t>(size_t{B} * B);
       live[m] = k.Take<uint8_t>(size_t{B} * live_stride);
@@ -138,9 +146,12 @@ void Model::Release() {
   m1_candidates_ = m2_candidates_ = m1_tests_ = 0;
   contact_margin_ = 0.0f;
   a_ = ModelArrays{};
-  use_avx_ = false;
+  isa_ = 0;
   blocks_ = box_pitch_ = live_stride_ = key_slots_ = 0;
   order_ = nullptr;
+  joint_sphere_ = joint_offsets_ = nullptr;
+  joint_weights_ = joint_bind_ = nullptr;
+  std::fill(joint_group_end_, joint_group_end_ + 4, 0u);
   for (int m = 0; m < 2; ++m) allowed_[m] = nullptr, live_[m] = nullptr, key_begin_[m] = nullptr;
 }
 
@@ -219,9 +230,36 @@ Status Model::Build(const AssetView& view, unsigned char* memory, size_t bytes) 
   for (uint32_t s = 0; s < S; ++s) k.excl_offsets[s + 1] += k.excl_offsets[s];
   for (uint32_t i = 0; i < E; ++i) k.excl_neighbors[i] = ex->Get(i)->b();  // sorted by (a, b) already
 
+  uint32_t joint_group_end[4] = {};
   if (k.joints) {
     std::copy(a.sphere_joints()->begin(), a.sphere_joints()->end(), k.joints);
     std::copy(a.sphere_joint_weights()->begin(), a.sphere_joint_weights()->end(), k.weights);
+    // Joint records (kernels::JointRefitArgs): a sphere uses influence 0 and then influences 1, 2, 3
+    // while their weight is not 0 (the weights are stored by descending weight: the first 0 ends them).
+    // Records grouped by that count, so the kernels run a fixed number of blends per group (no branch
+    // per sphere); ids ascending in a group. Unused influences: offset 0, weight 0 (never read).
+    auto influences = [&](uint32_t s) {
+      uint32_t n = 1;
+      while (n < 4 && k.weights[4 * s + n] != 0.0f) ++n;
+      return n;
+    };
+    uint32_t rec = 0;
+    for (uint32_t n = 1; n <= 4; ++n) {
+      for (uint32_t s = 0; s < S; ++s) {
+        if (influences(s) != n) continue;
+        k.joint_sphere[rec] = s;
+        for (uint32_t i = 0; i < 4; ++i) {
+          k.joint_offsets[4 * rec + i] = i < n ? uint32_t{k.joints[4 * s + i]} * 12u : 0u;
+          k.joint_weights[4 * rec + i] = i < n ? k.weights[4 * s + i] : 0.0f;
+        }
+        k.joint_bind[4 * rec + 0] = k.bind[0][s];
+        k.joint_bind[4 * rec + 1] = k.bind[1][s];
+        k.joint_bind[4 * rec + 2] = k.bind[2][s];
+        k.joint_bind[4 * rec + 3] = 1.0f;
+        ++rec;
+      }
+      joint_group_end[n - 1] = rec;
+    }
   }
 
   // Broad-phase layout (kernels::BroadPhaseArgs): spheres grouped by body region (Asset.sphere_regions,
@@ -312,12 +350,15 @@ Status Model::Build(const AssetView& view, unsigned char* memory, size_t bytes) 
   joint_count_ = k.joints ? a.joint_count() : 0;
   contact_margin_ = a.contact_margin();
   a_ = k.a;
-  use_avx_ = kernels::HasAvx();
+  isa_ = static_cast<uint8_t>(kernels::Best());
   m1_tests_ = m1_tests;
   blocks_ = B, box_pitch_ = (B + 7) / 8 * 8, live_stride_ = live_stride;
   key_slots_ = static_cast<uint32_t>(key_slots);
   order_ = order;
   for (int m = 0; m < 2; ++m) allowed_[m] = k.allowed[m], live_[m] = k.live[m], key_begin_[m] = k.key_begin[m];
+  joint_sphere_ = k.joint_sphere, joint_offsets_ = k.joint_offsets, joint_weights_ = k.joint_weights;
+  joint_bind_ = k.joint_bind;
+  std::copy(joint_group_end, joint_group_end + 4, joint_group_end_);
   const uint64_t all = uint64_t{S} * (S - 1) / 2;
   m2_candidates_ = static_cast<uint32_t>(all - E);
   m1_candidates_ = key_begin_[0][B];  // non-excluded pairs sharing a chain: M1's allowed lanes

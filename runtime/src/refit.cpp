@@ -29,10 +29,7 @@ void Model::Internal::Refit(const RefitJob& job, uint32_t begin, uint32_t end) {
                                 a.offset_x, a.offset_y, a.offset_z, a.radius_scale,
                                 w.x_, w.y_, w.z_, w.r_, job.mode == RefitMode::kPivotFrame};
   if (begin >= end) return;
-  if (m.use_avx_)
-    kernels::RefitAvx(args, begin, end);
-  else
-    kernels::RefitSse(args, begin, end);
+  kernels::Kernels(static_cast<kernels::Isa>(m.isa_)).refit(args, begin, end);
 }
 
 Status RefitJob::Check() const {

@@ -79,15 +79,18 @@ struct Case {
 
 }  // namespace
 
-TEST_CASE("SIMD refit lanes equal the scalar formulas bit for bit (SSE2, AVX)") {
-  const bool avx = kernels::HasAvx();
-  const std::string isa_note = std::string("AVX kernel ") + (avx ? "tested" : "not available on this CPU: SSE2 only");
+TEST_CASE("SIMD refit lanes equal the scalar formulas bit for bit (SSE2, AVX, AVX-512)") {
+  std::string isa_note = "refit kernels tested:";
+  for (int isa = 0; isa < kernels::kIsaCount; ++isa)
+    isa_note += std::string(" ") + kernels::ToString(kernels::Isa(isa)) +
+                (kernels::Supported(kernels::Isa(isa)) ? "" : " (not on this CPU: skipped)");
   MESSAGE(isa_note);
   uint32_t degenerate = 0, lanes = 0;
-  for (uint32_t S : {1u, 3u, 4u, 7u, 8u, 13u, 64u, 301u}) {
+  for (uint32_t S : {1u, 3u, 4u, 7u, 8u, 13u, 16u, 17u, 33u, 64u, 301u}) {
     const Case c(S, 1000 + S);
     for (bool frame_mode : {true, false})
-      for (int isa = 0; isa < (avx ? 2 : 1); ++isa) {
+      for (int isa = 0; isa < kernels::kIsaCount; ++isa) {
+        if (!kernels::Supported(kernels::Isa(isa))) continue;
         CAPTURE(S);
         CAPTURE(frame_mode);
         CAPTURE(isa);
@@ -98,10 +101,12 @@ TEST_CASE("SIMD refit lanes equal the scalar formulas bit for bit (SSE2, AVX)") 
                                       c.local[0].data(), c.local[1].data(), c.local[2].data(), c.offset[0].data(),
                                       c.offset[1].data(), c.offset[2].data(), c.radius_scale.data(), x.data(),
                                       y.data(), z.data(), r.data(), frame_mode};
-        // Two ranges, so that lanes start at other positions than 0 (begin not a multiple of the width).
+        // Two ranges, so that lanes start at other positions than 0 (begin not a multiple of the width);
+        // the AVX-512 kernel runs full chunks of 16 and hands the rest (and the chunk reading the
+        // buffer's last vertex) to the AVX kernel.
         const uint32_t mid = S / 3;
-        if (isa == 0) kernels::RefitSse(args, 0, mid), kernels::RefitSse(args, mid, S);
-        else kernels::RefitAvx(args, 0, mid), kernels::RefitAvx(args, mid, S);
+        const kernels::Table& k = kernels::Kernels(kernels::Isa(isa));
+        k.refit(args, 0, mid), k.refit(args, mid, S);
         for (uint32_t s = 0; s < S; ++s) {
           float want[4];
           c.Scalar(s, frame_mode, want);

@@ -116,6 +116,53 @@ TEST_CASE("joint refit: the blend of two joints moves a centre by the weighted s
   }
 }
 
+TEST_CASE("joint refit: every influence count and weight pattern, bit for bit the documented blend") {
+  // Per sphere 1–4 influences of 5 joints, including a zero weight before nonzero ones (the blend stops at
+  // the first zero after influence 0: a (0.5, 0, 0.3, 0.2) sphere follows its first joint only) and a
+  // zero first weight; the model groups the spheres by influence count, the output stays by sphere id.
+  test::Mesh mesh;
+  test::AssetData data = test::TwoTubes(true, &mesh);
+  data.joint_count = 5;
+  const float patterns[6][4] = {{1, 0, 0, 0}, {0.5f, 0, 0.3f, 0.2f}, {0.4f, 0.3f, 0.2f, 0.1f},
+                                {0.7f, 0.3f, 0, 0}, {0, 0.6f, 0.4f, 0}, {0.25f, 0.25f, 0.25f, 0.25f}};
+  for (size_t s = 0; s < data.spheres.size(); ++s) {
+    const float* w = patterns[(s * 5) % 6];
+    data.sphere_joints.insert(data.sphere_joints.end(), {uint16_t(s % 5), uint16_t((s + 1) % 5),
+                                                         uint16_t((s + 3) % 5), uint16_t((s + 4) % 5)});
+    data.sphere_joint_weights.insert(data.sphere_joint_weights.end(), {w[0], w[1], w[2], w[3]});
+  }
+  test::AlignedBytes bytes = test::Serialize(data);
+  AssetView view;
+  REQUIRE(LoadAsset(bytes.data(), bytes.size, &view) == Status::kOk);
+  test::Character ctx;
+  REQUIRE(ctx.Init(view) == Status::kOk);
+  std::vector<float> m(12 * 5);
+  for (size_t i = 0; i < m.size(); ++i) m[i] = std::sin(float(i) * 1.7f) * (i % 4 == 3 ? 5.0f : 1.0f);
+  JointRefitJob job;
+  job.model = &ctx.model;
+  job.workspace = &ctx.ws;
+  job.joint_matrices = m.data();
+  job.joint_count = 5;
+  REQUIRE(job.Run() == Status::kOk);
+  const SphereArrays sp = ctx.ws.spheres();
+  uint32_t same = 0;
+  for (uint32_t s = 0; s < sp.count; ++s) {
+    const uint16_t* js = &data.sphere_joints[4 * s];
+    const float* ws = &data.sphere_joint_weights[4 * s];
+    float blend[12];
+    for (int e = 0; e < 12; ++e) blend[e] = ws[0] * m[12 * js[0] + e];
+    for (int k = 1; k < 4 && ws[k] != 0.0f; ++k)
+      for (int e = 0; e < 12; ++e) blend[e] = blend[e] + ws[k] * m[12 * js[k] + e];
+    const auto& b = data.spheres[s];
+    const float p[4] = {b.center().x(), b.center().y(), b.center().z(), 1.0f};
+    float c[3];
+    for (int row = 0; row < 3; ++row)
+      c[row] = (blend[4 * row] * p[0] + blend[4 * row + 1] * p[1]) + (blend[4 * row + 2] * p[2] + blend[4 * row + 3] * p[3]);
+    same += sp.x[s] == c[0] && sp.y[s] == c[1] && sp.z[s] == c[2] && sp.r[s] == b.radius();
+  }
+  CHECK(same == sp.count);
+}
+
 TEST_CASE("joint refit: column-major 4x4 matrices convert to the 3x4 row-major layout") {
   const float cm[16] = {1, 2, 3, 0, 4, 5, 6, 0, 7, 8, 9, 0, 10, 11, 12, 1};  // columns
   float rm[kJointMatrixFloats];

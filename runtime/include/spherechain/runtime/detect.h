@@ -64,8 +64,9 @@ uint32_t DetectBound(const AssetView& view, DetectMethod method);
 /// Asset.sphere_regions, else by chains; split at bind pose along the longest axis); per frame each
 /// block gets the box of its centres and its largest |radius|, a pair of blocks is kept when the gap
 /// between the boxes is below the sum of those radii (with the sphere test's own float operations:
-/// conservative to the last bit), and only kept pairs run their 8×8 sphere tests (SoA, 4 or 8 lanes),
-/// masked by a per-asset table of candidate lanes (excluded pairs, M1's pairs sharing no chain).
+/// conservative to the last bit), and only kept pairs run their 8×8 sphere tests (SoA, 4, 8 or 16 lanes:
+/// SSE2, AVX or AVX-512, picked at Model::Init; the same pairs, depths and counters on each), masked by a
+/// per-asset table of candidate lanes (excluded pairs, M1's pairs sharing no chain).
 /// Blocks follow the bind pose: a pose that scatters a block's spheres (not a body's motion) culls
 /// less, never wrongly.
 /// Cost: O(#S) gather and boxes + ≤ (#S/8)²/2 block tests + 64 sphere tests per kept block pair (on

@@ -2,12 +2,14 @@
 // the refit of a sphere (paper §5.1), the overlap test and the penetration depth of two spheres (§5.2).
 //
 // Compiled for the host (scalar: refit.h's helpers, the baker, detect.cpp's depths), for the host's SIMD
-// kernels (runtime/src/kernels.cpp includes formulas.inl once per instruction set, with its own lane
-// type) and for CUDA devices (cuda/src/batch.cu: SPHERECHAIN_HD is __host__ __device__ under nvcc).
-// Every backend evaluates the same operations in the same order, without FMA contraction (the host
-// build uses -std=c++20, i.e. -ffp-contract=off, and no FMA on baseline x86-64; the CUDA target is
-// compiled with --fmad=false), so their spheres and pairs agree bit for bit
-// (tests/runtime/formulas_test.cpp checks every SIMD lane against ScalarOps).
+// kernels (runtime/src/kernels.cpp includes formulas.inl once per instruction set — SSE2, AVX, AVX-512 —
+// with its own lane type) and for CUDA devices (cuda/src/batch.cu: SPHERECHAIN_HD is __host__ __device__ under nvcc).
+// Every backend evaluates the same operations in the same order, without FMA contraction (the runtime
+// is compiled with -ffp-contract=off — GCC contracts by default in C++, and the AVX-512 kernels' target
+// has FMA instructions; baseline x86-64 has none; the CUDA target is compiled with --fmad=false), so
+// their spheres and pairs agree bit for bit (tests/runtime/formulas_test.cpp checks every SIMD lane
+// against ScalarOps). Code of one's own that calls the scalar helpers (refit.h) with FMA enabled
+// (-march=native, -mfma) should pass -ffp-contract=off as well to get the same bits.
 #pragma once
 
 #include <cmath>

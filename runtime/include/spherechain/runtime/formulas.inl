@@ -3,8 +3,9 @@
 // No include guard, no includes: this file is included inside a namespace that provides `Ops` — a type
 // with `V` (a float or a vector of floats), `M` (its comparison mask) and static Set1, Sqrt, Gt, Lt, And,
 // Blend — once for the scalar host / device path (formulas.h, namespace formulas, ScalarOps) and once per
-// SIMD instruction set (runtime/src/kernels.cpp, namespaces sse and avx, so that the AVX copy is
-// compiled for AVX). V must support + − × ÷ lane-wise (IEEE single precision, no FMA).
+// SIMD instruction set (runtime/src/kernels.cpp, namespaces sse, avx and avx512, so that each copy is
+// compiled for its instruction set; avx512's mask type M is a __mmask16). V must support + − × ÷
+// lane-wise (IEEE single precision, no FMA).
 //
 // Inputs are the four pivot-polygon centroids p_k (k = 0..3) of a sphere, one lane per sphere, in model
 // space and source units (Asset.pivot_vertices → TriangleCentroid).

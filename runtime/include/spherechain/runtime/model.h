@@ -64,8 +64,9 @@ struct ModelArrays {
 
 /// What every character of one asset shares, built once per asset from its AssetView: the refit data
 /// in SoA (pivot vertices, pivot-frame coordinates, radius scales, bind spheres), the chain masks, the
-/// excluded pairs as per-sphere neighbour lists, the centre joint weights (schema v3), and the broad
-/// phase's static layout — spheres in blocks of 8 (grouped by body region, Asset.sphere_regions, else by
+/// excluded pairs as per-sphere neighbour lists, the centre joint weights (schema v3) and, for
+/// JointRefitJob, one record a sphere grouped by the number of influences it uses (so the blend runs a
+/// fixed count per group, no branch per sphere), and the broad phase's static layout — spheres in blocks of 8 (grouped by body region, Asset.sphere_regions, else by
 /// chain mask; each group split at bind pose by a kd split), per pair of blocks and per method the lanes
 /// to test (excluded pairs, M1's pairs sharing no chain and padding masked out).
 /// Immutable after Init: any number of Workspaces (characters) and threads may use one Model at once.
@@ -88,8 +89,10 @@ class Model {
   /// aligned to 64. Returns kOk; kErrorNullArgument (`!view.valid()`); kErrorOutOfMemory (allocation
   /// failed, or the broad phase's candidate lanes exceed 2^32) — the model is left empty on failure.
   /// Cost: O(#S² · log degree) time (the block-pair lane tables); memory: see RequiredBytes — ~110 B a
-  /// sphere + 2 × 9 B per pair of blocks of 8 spheres + 2 B per excluded pair (26 KB for MakeHuman's
-  /// 128 spheres). Not thread-safe on one object (nothing may use the model meanwhile).
+  /// sphere (+ 52 B with joint weights) + 2 × 9 B per pair of blocks of 8 spheres + 2 B per excluded pair
+  /// (32 KB for MakeHuman's 128 spheres). Picks the per-frame kernels here: SSE2, AVX or AVX-512, the
+  /// best the CPU runs (SPHERECHAIN_ISA=sse2|avx caps it), all giving the same bits.
+  /// Not thread-safe on one object (nothing may use the model meanwhile).
   Status Init(const AssetView& view);
 
   /// The same in caller memory (meshoptimizer-style): `memory` [Limit: 16-byte aligned, else
@@ -148,7 +151,7 @@ class Model {
   uint32_t m1_candidates_ = 0, m2_candidates_ = 0;
   float contact_margin_ = 0.0f;
   ModelArrays a_{};
-  bool use_avx_ = false;  // kernels: AVX (runtime dispatch) or SSE2 baseline
+  uint8_t isa_ = 0;  // kernels::Isa picked at Init (runtime dispatch: SSE2, AVX or AVX-512)
   uint32_t m1_tests_ = 0;  // Σ_chains n(n−1)/2 (DetectStats::tests of M1)
   // Broad-phase layout (DetectJob, both methods): B blocks of 8 slots.
   uint32_t blocks_ = 0, box_pitch_ = 0, live_stride_ = 0;  // B; B rounded up to 8; ceil(B / 8)
@@ -157,14 +160,21 @@ class Model {
   const uint64_t* allowed_[2] = {};       // [M1, M2] B×B lane masks of block pairs J >= I
   const uint8_t* live_[2] = {};           // [M1, M2] B × live_stride_: the pair has a lane
   const uint32_t* key_begin_[2] = {};     // [M1, M2] B + 1: key slots of each row block
+  // Joint refit records (JointRefitJob; null without joint weights): one a sphere, grouped by the
+  // number of influences it uses (1..4), ids ascending in a group.
+  const uint32_t* joint_sphere_ = nullptr;   // #S: sphere id per record
+  const uint32_t* joint_offsets_ = nullptr;  // #S × 4: matrix offsets [floats]
+  const float* joint_weights_ = nullptr;     // #S × 4
+  const float* joint_bind_ = nullptr;        // #S × 4: bind centre, 1
+  uint32_t joint_group_end_[4] = {};         // end of the records using 1, 2, 3, 4 influences
 };
 
 /// One character's state for one Model: its current spheres (SoA, #S + 8 each, NaN padding) and the
 /// per-frame scratch of DetectJob (spheres gathered in block order, block boxes, hit keys, per-row-block
 /// counters). Records the id() of the Model it was made for: a job given this workspace and another
 /// model answers kErrorWorkspaceModel and writes nothing.
-/// Ownership: one block of memory (~100 B per sphere + 8 B per candidate lane of the model: 22 KB for
-/// MakeHuman), its own (Init) or the caller's (InitInPlace). Move-only.
+/// Ownership: one block of memory (~100 B per sphere + 8 B per candidate lane of the model: 70 KB for
+/// MakeHuman's 128 spheres, 8,128 lanes), its own (Init) or the caller's (InitInPlace). Move-only.
 /// Thread safety: one job at a time per workspace; different workspaces are independent, also when they
 /// share a model.
 class Workspace {

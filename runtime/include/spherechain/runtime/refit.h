@@ -86,8 +86,8 @@ inline void TriangleCentroid(const float a[3], const float b[3], const float c[3
 /// formulas::RefitLanes (centre per RefitMode, radius = radius_scale · mean distance to the p_k).
 /// Inputs: positions (#V vertices, strided), mode, parallel_for [opt]. Output: the workspace's spheres
 /// (Workspace::spheres(), SoA, same space/units as positions).
-/// Cost: O(#S) — 12 vertex reads + ~120 flops per sphere (SSE2 or AVX, bit-identical to the scalar
-/// formulas); no allocation, no exceptions. With parallel_for set, spheres are split into ranges
+/// Cost: O(#S) — 12 vertex reads + ~120 flops per sphere (SSE2, AVX or AVX-512 — 4, 8 or 16 spheres an
+/// iteration, picked at Model::Init — all bit-identical to the scalar formulas); no allocation, no exceptions. With parallel_for set, spheres are split into ranges
 /// (`parallel_grain` spheres per task index). Thread safety: one job per workspace at a time; the model
 /// is only read.
 struct RefitJob {
@@ -136,8 +136,14 @@ inline void JointMatrixFromColumnMajor(const float m[16], float out[kJointMatrix
 /// that deform the vertices. Units: the asset's source units; output spheres in that model space.
 /// Borrowed for Run(). The joint weights and bind spheres are the model's (copied out of the asset at
 /// Model::Init: the asset bytes are not read). Output: the workspace's spheres (SoA), overwritten.
-/// Cost: O(#J) to check the matrices + O(#S · influences) — ≤ 4 × 12 multiply-adds per sphere;
-/// serial, no allocation, no exceptions. Thread safety: one job per workspace at a time.
+/// Order of operations (the contract the kernels keep bit for bit, tests/runtime/kernels_test.cpp): the
+/// blend runs over influence 0 and then influences 1, 2, 3 while their weight is not 0 (the first zero
+/// weight ends it), M = ((w0·M_j0 + w1·M_j1) + w2·M_j2) + w3·M_j3 per element; each centre coordinate is
+/// (m_r0·bx + m_r1·by) + (m_r2·bz + m_r3), no FMA.
+/// Cost: O(#J) to check the matrices + O(#S · influences) — ≤ 4 × 12 multiply-adds per sphere (SSE2,
+/// AVX or AVX-512: a row or a whole matrix per vector; the model groups the spheres by influence count,
+/// so no branch per sphere); serial, no allocation, no exceptions. Thread safety: one job per workspace
+/// at a time.
 struct JointRefitJob {
   const Model* model = nullptr;           ///< initialised; its centre joint weights (schema v3) are read
   Workspace* workspace = nullptr;         ///< made for `model`; its spheres are overwritten
