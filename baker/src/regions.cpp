@@ -37,10 +37,14 @@ Eigen::Vector3d UpVector(UpAxis up) {
   return Eigen::Vector3d::UnitY();
 }
 
-// The sphere's axis: along its region's sequence for limbs, up for the torso.
-Eigen::Vector3d SphereAxis(const Mesh& mesh, const std::vector<FittedSphere>& spheres, size_t s) {
+// The sphere's axis: along its region's sequence for limbs, up for the torso (a creature's trunk: its axis).
+Eigen::Vector3d SphereAxis(const Mesh& mesh, const std::vector<FittedSphere>& spheres, size_t s,
+                           const RegionLayout& layout) {
   const FittedSphere& S = spheres[s];
-  if (S.region == Region::kTorso) return UpVector(mesh.up_axis);
+  if (layout.IsTrunk(S.region)) {
+    const Eigen::Vector3d axis(layout.trunk_axis[0], layout.trunk_axis[1], layout.trunk_axis[2]);
+    return layout.paper || axis.norm() < 0.5 ? UpVector(mesh.up_axis) : axis;
+  }
   const FittedSphere* prev = nullptr;
   const FittedSphere* next = nullptr;
   for (const FittedSphere& o : spheres) {
@@ -84,8 +88,9 @@ Result<SurroundingRegions> BuildSurroundingRegions(const Mesh& mesh, const Segme
                                                    const std::vector<FittedSphere>& spheres, Ownership ownership) {
   if (spheres.empty()) return MakeError(Error::Code::kFit, "no sphere to assign triangles to");
   const uint32_t T = mesh.triangle_count();
-  std::array<std::vector<uint32_t>, kRegionCount> by_region;
-  for (size_t s = 0; s < spheres.size(); ++s) by_region[static_cast<int>(spheres[s].region)].push_back(uint32_t(s));
+  std::array<std::vector<uint32_t>, kMaxRegions> by_region;
+  for (size_t s = 0; s < spheres.size(); ++s)
+    if (static_cast<int>(spheres[s].region) < kMaxRegions) by_region[static_cast<int>(spheres[s].region)].push_back(uint32_t(s));
   std::vector<uint32_t> all(spheres.size());
   std::iota(all.begin(), all.end(), 0u);
 
@@ -93,7 +98,7 @@ Result<SurroundingRegions> BuildSurroundingRegions(const Mesh& mesh, const Segme
   out.triangle_spheres.resize(T);
   for (uint32_t t = 0; t < T; ++t) {
     const uint8_t r = t < seg.triangle_regions.size() ? seg.triangle_regions[t] : kNoRegion;
-    const std::vector<uint32_t>& candidates = (r < kRegionCount && !by_region[r].empty()) ? by_region[r] : all;
+    const std::vector<uint32_t>& candidates = (r < kMaxRegions && !by_region[r].empty()) ? by_region[r] : all;
     const Eigen::Vector3d c = Centroid(mesh, t);
     double best = std::numeric_limits<double>::infinity();
     uint32_t best_s = candidates.front();
@@ -114,7 +119,7 @@ Result<SurroundingRegions> BuildSurroundingRegions(const Mesh& mesh, const Segme
 }
 
 Result<Pivots> ChoosePivots(const Mesh& mesh, const std::vector<FittedSphere>& spheres,
-                            const SurroundingRegions& surrounding) {
+                            const SurroundingRegions& surrounding, const RegionLayout& layout) {
   const uint32_t T = mesh.triangle_count();
   std::vector<double> areas(T);
   for (uint32_t t = 0; t < T; ++t) areas[t] = Area(mesh, t);
@@ -129,7 +134,7 @@ Result<Pivots> ChoosePivots(const Mesh& mesh, const std::vector<FittedSphere>& s
 
   for (size_t s = 0; s < spheres.size(); ++s) {
     const FittedSphere& S = spheres[s];
-    const Eigen::Vector3d a = SphereAxis(mesh, spheres, s);
+    const Eigen::Vector3d a = SphereAxis(mesh, spheres, s, layout);
     // u: a fixed world direction projected off the axis (deterministic), v = a × u.
     Eigen::Vector3d ref = std::abs(a.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitZ();
     const Eigen::Vector3d u = (ref - ref.dot(a) * a).normalized();

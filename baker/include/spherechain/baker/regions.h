@@ -48,13 +48,14 @@ struct Pivots {
 };
 
 /// Chooses four pivot polygons per sphere, spread around it: in the plane perpendicular to the
-/// sphere's axis (limbs: towards the next sphere of the sequence; torso: up) the four triangles of its
+/// sphere's axis (limbs: towards the next sphere of the sequence; torso: up; a creature's trunk,
+/// `layout` not the paper's: RegionLayout::trunk_axis) the four triangles of its
 /// surrounding region whose centroids lie nearest the directions +u, +v, −u, −v and closest to the
 /// sphere's level, each of non-negligible area. The frame they span is never degenerate: a choice
 /// whose frame is ill-conditioned is replaced by the best-spread triangles of the sphere's
 /// neighbourhood. Errors: kFit naming the sphere when no non-degenerate choice exists.
 Result<Pivots> ChoosePivots(const Mesh& mesh, const std::vector<FittedSphere>& spheres,
-                            const SurroundingRegions& surrounding);
+                            const SurroundingRegions& surrounding, const RegionLayout& layout = RegionLayout());
 
 /// Skin weights of every sphere's centre, for the refit from joint matrices (schema v3
 /// Asset.joint_count / sphere_joints / sphere_joint_weights; runtime JointRefitJob).
