@@ -355,7 +355,7 @@ Result<BakeResult> Bake(const std::string& input_path, const BakeConfig& config,
   }
   {
     Context::Timer t(ctx, "pivots");
-    auto piv = ChoosePivots(mesh, spheres, r.surrounding, r.segmentation.layout);
+    auto piv = ChoosePivots(mesh, spheres, r.surrounding, &r.segmentation);
     if (!piv.ok()) return piv.error();
     r.pivots = std::move(piv).value();
   }

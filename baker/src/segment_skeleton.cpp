@@ -128,13 +128,10 @@ Result<Segmentation> SegmentBySkeleton(const Mesh& mesh, const SkeletonOptions& 
     for (size_t c : children[n]) branches += sub[c] >= min_share;
     if (branches >= 3) junction[n] = 1, ++junctions;
   }
-  if (junctions == 0) {
-    std::vector<size_t> heavy;  // the bones in tree order, for the message
-    for (size_t n : weighted) heavy.push_back(n);
+  if (junctions == 0)
     return NoLimbs("no bone has three branches that each move " + Percent(options.limb_min_share) +
-                   " of the surface (" + std::to_string(weighted.size()) + " weighted bones: " + bone_list(heavy, 12) +
-                   ")");
-  }
+                   " of the surface (" + std::to_string(weighted.size()) + " weighted bones: " +
+                   bone_list(weighted, 12) + ")");
 
   // 3. The trunk: the smallest subtree joining every junction.
   std::vector<size_t> below(nn, 0);  // junctions in each subtree
@@ -290,6 +287,8 @@ Result<Segmentation> SegmentBySkeleton(const Mesh& mesh, const SkeletonOptions& 
     }
     if (!dropped.empty()) {
       for (uint8_t& r : seg.triangle_regions) r = uint8_t(remap[r]);
+      const int trunk_kept = remap[size_t(trunk_region)];
+      for (int& r : joint_region) r = remap[size_t(r)] >= 0 ? remap[size_t(r)] : trunk_kept;  // a dropped limb's bones: the trunk's
       seg.layout = std::move(kept);
       shares = std::move(kept_shares);
       notes += "limbs without a triangle dropped: " + dropped + "; ";
@@ -298,6 +297,7 @@ Result<Segmentation> SegmentBySkeleton(const Mesh& mesh, const SkeletonOptions& 
   if (seg.layout.count() < 3)
     return NoLimbs("only " + std::to_string(seg.layout.count() - 1) +
                    " limb keeps triangles of its own (a creature needs two limbs besides the trunk)");
+  seg.joint_regions.assign(joint_region.begin(), joint_region.end());
   // Unique names, mirror pairs, the trunk's axis.
   {
     // A stem two limbs share ("Bone" of Bone.002.., Bone.003..) names neither: they take their first

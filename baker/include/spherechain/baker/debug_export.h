@@ -16,7 +16,8 @@ namespace spherechain::baker {
 std::array<float, 3> RegionColor(Region r);
 /// Colour of region `region` of asset `a`: the paper's five as RegionColor(Region); a creature's
 /// (Asset.regions, schema v4): the trunk grey, the limbs from a palette of 12 in region order (R0 orange,
-/// R1 blue, R2 green, R3 purple as the paper's, then red, teal, gold, brown, pink, olive, navy, cyan).
+/// R1 blue, R2 green, R3 purple as the paper's, then teal, brown, pink, olive, navy, cyan, lime, slate; no
+/// red, amber or magenta, the colours of contacts).
 std::array<float, 3> RegionColor(const runtime::AssetView& a, uint32_t region);
 /// "R0 left arm (orange)  R1 right arm (blue) …" — the legend of RegionColor(a, ·), names from the asset.
 std::string RegionLegend(const runtime::AssetView& a);

@@ -16,6 +16,10 @@ struct Segmentation {
   /// What the region values mean: the paper's five (rig, geometry, a plain map) or a creature's limbs
   /// and trunk (skeleton; a map that names its regions).
   RegionLayout layout;
+  /// The any-skeleton path: the region of each skin joint (#joints, Skin::joints order; a bone of no limb
+  /// is the trunk's); empty for the other methods. ChoosePivots (regions.h) puts a creature's pivots on
+  /// skin its own region's bones move.
+  std::vector<uint8_t> joint_regions;
 };
 
 /// kSkeleton: the any-skeleton path (SegmentBySkeleton), for rigged creatures that are not standing bipeds.
@@ -57,9 +61,13 @@ struct SkeletonOptions {
 /// Cost O(#V·influences + #bones + #T·#regions) plus MakeLimbsConnected; allocates.
 Result<Segmentation> SegmentBySkeleton(const Mesh& mesh, const SkeletonOptions& options = {}, Context* ctx = nullptr);
 
-/// Reads a user region map: a JSON file {"triangle_regions": [r0, r1, ...]} with #T values 0..4, or
-/// {"vertex_regions": [...]} with #V values (a triangle takes its vertices' majority).
-/// Errors: kIo, kConfig (wrong length, value out of range).
+/// Reads a user region map: a JSON file {"triangle_regions": [r0, r1, ...]} with #T values, or
+/// {"vertex_regions": [...]} with #V values (a triangle takes its vertices' majority). A value is a region
+/// index, its symbol ("R2") or its name ("left_leg"); the regions are the paper's five, or with
+/// "regions": ["Tail", "Leg_L", ..., "trunk"] (3..kMaxRegions unique names, the trunk last) a creature's
+/// layout (limbs paired left/right by name, trunk_axis measured).
+/// Errors: kIo, kConfig (wrong length, a value out of range or naming no region — the message lists the
+/// map's regions —, a bad or repeated "regions" name).
 Result<Segmentation> SegmentByMap(const Mesh& mesh, const std::string& map_path, Context* ctx = nullptr);
 
 /// kAuto: rig when the mesh has a skin whose bones are recognised, else geometry.

@@ -1,5 +1,6 @@
 // spherechain baker — the data every stage shares: the imported character (Mesh, Skin, Clip), the
-// five regions, Result<T> for fallible calls, and the injected Context for logs and stage timers.
+// regions (the paper's five, or a creature's RegionLayout), Result<T> for fallible calls, and the
+// injected Context for logs and stage timers.
 //
 // The baker library never prints: it logs through Context (the CLI routes it to spdlog), and every
 // call that reads user data returns Result<T>; exceptions from assimp, tinygltf or CGAL are caught at
@@ -21,7 +22,8 @@ namespace spherechain::baker {
 
 // ---------------------------------------------------------------------------------------------------
 // Regions (paper §3): R0 left arm, R1 right arm, R2 left leg, R3 right leg, R4 torso. Left/right is the
-// character's own. Head and neck belong to the torso, hands to the arms, feet to the legs.
+// character's own. Head and neck belong to the torso, hands to the arms, feet to the legs. A creature
+// (the any-skeleton path) has its own regions — a RegionLayout below —, whose values are Region values too.
 enum class Region : uint8_t { kLeftArm = 0, kRightArm = 1, kLeftLeg = 2, kRightLeg = 3, kTorso = 4 };
 inline constexpr int kRegionCount = 5;
 /// Sentinel for "no region" in per-triangle / per-vertex region arrays.
@@ -63,9 +65,13 @@ struct RegionLayout {
   /// of the up axis for the trunk (sphere order, side-by-side exclusions, pivots). Paper: unused (zero).
   std::array<double, 3> trunk_axis{0.0, 0.0, 0.0};
 
+  /// Number of regions (5 for the paper's; 3..kMaxRegions for a creature's).
   int count() const { return static_cast<int>(regions.size()); }
+  /// The trunk (the paper's R4 torso): always the last region.
   Region trunk() const { return static_cast<Region>(regions.size() - 1); }
+  /// True for the trunk.
   bool IsTrunk(Region r) const { return static_cast<int>(r) == count() - 1; }
+  /// True for a limb (any region before the trunk).
   bool IsLimb(Region r) const { return static_cast<int>(r) < count() - 1; }
   /// regions[r].name, or "none" for a value outside the layout.
   const char* Name(Region r) const {
