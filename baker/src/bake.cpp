@@ -204,6 +204,59 @@ bool HasFinding(const std::vector<PlausibilityFinding>& findings, const std::str
   return std::any_of(findings.begin(), findings.end(), [&](const PlausibilityFinding& f) { return f.code == code; });
 }
 
+/// A creature's adjacency beyond BindExcludedPairs (the any-skeleton path), pairs not in `excluded`:
+/// - sphere pairs whose surrounding regions' triangles already intersect at bind pose: a creature model
+///   often passes through its own skin at rest (horns, eyes, a tail's tuft), and those triangles touch
+///   in every frame without any collision (the bind_overlap rule's reason, met by the triangles);
+/// - pairs of spheres of two limbs whose regions share skin (a quadruped's neck and its fore legs at the
+///   chest, the tail and the hind legs), within 1.25 (rA + rB) + near at bind: the crease where they
+///   leave the trunk side by side, as a limb and the torso at the hip (BindExcludedPairs' junction rule).
+/// Humans skip it: the exact intersection test would cost MakeHuman ~0.1 s of its bake, and the human
+/// assets stay as they were. Errors: those of ExactSelfIntersections.
+struct CreatureExclusions {
+  std::set<SpherePair> pairs;
+  size_t bind_contacts = 0, creases = 0, triangle_pairs = 0;
+};
+Result<CreatureExclusions> CreatureExcludedPairs(const Mesh& mesh, const Segmentation& seg,
+                                                 const std::vector<FittedSphere>& spheres,
+                                                 const SurroundingRegions& surrounding,
+                                                 const std::vector<SpherePair>& excluded, double near) {
+  CreatureExclusions out;
+  const std::vector<uint32_t> weld = ComputeWeldIds(mesh.positions);
+  auto contacts = ExactSelfIntersections(mesh.positions.data(), mesh.vertex_count(), mesh.indices, weld);
+  if (!contacts.ok()) return contacts.error();
+  out.triangle_pairs = contacts->size();
+  auto known = [&](const SpherePair& p) {
+    return out.pairs.count(p) > 0 || std::binary_search(excluded.begin(), excluded.end(), p);
+  };
+  for (const TrianglePair& p : contacts.value()) {
+    uint16_t a = surrounding.triangle_spheres[p.a], b = surrounding.triangle_spheres[p.b];
+    if (a == b) continue;
+    if (a > b) std::swap(a, b);
+    if (!known({a, b})) out.pairs.emplace(a, b), ++out.bind_contacts;
+  }
+  const RegionLayout& layout = seg.layout;
+  std::vector<uint32_t> regions_at(mesh.vertex_count(), 0);  // per welded position: a bit per region using it
+  for (uint32_t t = 0; t < mesh.triangle_count(); ++t)
+    for (int k = 0; k < 3; ++k) regions_at[weld[mesh.indices[3 * t + k]]] |= 1u << seg.triangle_regions[t];
+  std::vector<uint32_t> meets(size_t(layout.count()), 0);  // per region: the regions sharing a vertex with it
+  for (uint32_t mask : regions_at)
+    for (int k = 0; k < layout.count(); ++k)
+      if (mask >> k & 1u) meets[size_t(k)] |= mask;
+  for (size_t i = 0; i < spheres.size(); ++i)
+    for (size_t j = i + 1; j < spheres.size(); ++j) {
+      const FittedSphere& A = spheres[i];
+      const FittedSphere& B = spheres[j];
+      if (A.region == B.region || !layout.IsLimb(A.region) || !layout.IsLimb(B.region) ||
+          !(meets[size_t(A.region)] >> int(B.region) & 1u))
+        continue;
+      const SpherePair p{uint16_t(i), uint16_t(j)};
+      if ((A.center - B.center).norm() < 1.25 * (A.radius + B.radius) + near && !known(p))
+        out.pairs.insert(p), ++out.creases;
+    }
+  return out;
+}
+
 }  // namespace
 
 Result<BakeResult> Bake(const std::string& input_path, const BakeConfig& config, Context* ctx) {
@@ -300,57 +353,18 @@ Result<BakeResult> Bake(const std::string& input_path, const BakeConfig& config,
     r.unassigned_triangles = mesh.triangle_count() - r.surrounding.offsets.back();
   }
   if (!r.segmentation.layout.paper && config.fit.method == FitMethod::kCover) {
-    // A creature model often passes through its own skin at rest (horns, eyes, a tail's tuft): those
-    // triangle pairs touch in every frame and are no collision. The sphere pairs that own them are
-    // adjacent (the bind_overlap rule's reason, met by the triangles rather than the spheres). Humans
-    // skip it (it would cost MakeHuman ~0.1 s of its 1 s bake, and their meshes are clean).
     Context::Timer t(ctx, "creature_exclusions");
-    auto contacts = ExactSelfIntersections(mesh.positions.data(), mesh.vertex_count(), mesh.indices,
-                                           ComputeWeldIds(mesh.positions));
-    if (!contacts.ok()) return contacts.error();
-    std::set<SpherePair> add;
-    for (const TrianglePair& p : contacts.value()) {
-      uint16_t a = r.surrounding.triangle_spheres[p.a], b = r.surrounding.triangle_spheres[p.b];
-      if (a == b) continue;
-      if (a > b) std::swap(a, b);
-      if (!std::binary_search(r.excluded.begin(), r.excluded.end(), SpherePair{a, b})) add.emplace(a, b);
-    }
-    r.bind_contact_exclusions = add.size();
-    // Two limbs that leave the trunk side by side share skin (a quadruped's neck and its fore legs at the
-    // chest, the tail and the hind legs): where they meet, their spheres are a crease as a limb and the
-    // torso are at the hip (BindExcludedPairs' junction rule, within 1.25 (rA + rB) + near at bind).
-    const RegionLayout& layout = r.segmentation.layout;
-    const std::vector<uint32_t> weld = ComputeWeldIds(mesh.positions);
-    std::vector<uint32_t> regions_at(mesh.vertex_count(), 0);  // bit per region whose triangles use the position
-    for (uint32_t t = 0; t < mesh.triangle_count(); ++t)
-      for (int k = 0; k < 3; ++k) regions_at[weld[mesh.indices[3 * t + k]]] |= 1u << r.segmentation.triangle_regions[t];
-    std::vector<uint32_t> meets(size_t(layout.count()), 0);  // per region: the regions sharing a vertex with it
-    for (uint32_t mask : regions_at)
-      for (int k = 0; k < layout.count(); ++k)
-        if (mask >> k & 1u) meets[size_t(k)] |= mask;
     const double near = (config.near_rel + 2.0 * config.contact_margin_rel) * r.fit.body_height;
-    size_t creases = 0;
-    for (size_t i = 0; i < spheres.size(); ++i)
-      for (size_t j = i + 1; j < spheres.size(); ++j) {
-        const FittedSphere& A = spheres[i];
-        const FittedSphere& B = spheres[j];
-        if (A.region == B.region || !layout.IsLimb(A.region) || !layout.IsLimb(B.region) ||
-            !(meets[size_t(A.region)] >> int(B.region) & 1u))
-          continue;
-        const SpherePair p{uint16_t(i), uint16_t(j)};
-        if ((A.center - B.center).norm() < 1.25 * (A.radius + B.radius) + near && !add.count(p) &&
-            !std::binary_search(r.excluded.begin(), r.excluded.end(), p)) {
-          add.insert(p);
-          ++creases;
-        }
-      }
-    r.limb_crease_exclusions = creases;
-    r.excluded.insert(r.excluded.end(), add.begin(), add.end());
+    auto extra = CreatureExcludedPairs(mesh, r.segmentation, spheres, r.surrounding, r.excluded, near);
+    if (!extra.ok()) return extra.error();
+    r.bind_contact_exclusions = extra->bind_contacts;
+    r.limb_crease_exclusions = extra->creases;
+    r.excluded.insert(r.excluded.end(), extra->pairs.begin(), extra->pairs.end());
     std::sort(r.excluded.begin(), r.excluded.end());
-    if (ctx && !add.empty())
-      ctx->Info("exclusions (creature): " + std::to_string(r.bind_contact_exclusions) +
-                " sphere pair(s) whose triangles intersect at bind pose (" + std::to_string(contacts->size()) +
-                " triangle pairs: the model passes through itself there), " + std::to_string(creases) +
+    if (ctx && !extra->pairs.empty())
+      ctx->Info("exclusions (creature): " + std::to_string(extra->bind_contacts) +
+                " sphere pair(s) whose triangles intersect at bind pose (" + std::to_string(extra->triangle_pairs) +
+                " triangle pairs: the model passes through itself there), " + std::to_string(extra->creases) +
                 " pair(s) of two limbs where they meet (a crease)");
   }
   {
