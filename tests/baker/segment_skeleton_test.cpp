@@ -11,6 +11,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <set>
 #include <string>
 #include <vector>
@@ -375,4 +376,36 @@ TEST_CASE("bake (heavy): Testwuson.X, the four-legged Wuson of assimp-testmodels
   CHECK(r->coverage->coverage > 0.9);
   CHECK(r->coverage->protrusion < 0.05);
   CHECK(r->bind_contact_exclusions > 0);  // horns and the tail's tuft pass through the skin at rest
+}
+
+TEST_CASE("bake: a quadruped whose bones carry humanoid names is rerouted from the rig path (horizontal trunk) to the skeleton") {
+  // The creature with its legs renamed as a biped's arms and legs: the bone-name rules find two arms (the
+  // fore legs) and two legs, but the torso lies along Z — PLAUS-TRUNK-AXIS — so auto takes the skeleton.
+  std::ifstream in(Creature());
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  for (const auto& [from, to] : {std::pair<std::string, std::string>{"ForeLeg_L_0", "LeftArm_0"}, {"ForeLeg_R_0", "RightArm_0"},
+                                 {"HindLeg_L_0", "LeftLeg_0"}, {"HindLeg_R_0", "RightLeg_0"}})
+    for (size_t at = text.find(from); at != std::string::npos; at = text.find(from, at)) text.replace(at, from.size(), to);
+  const fs::path path = fs::temp_directory_path() / "spherechain_skeleton_humanoid_names.gltf";
+  std::ofstream(path) << text;
+  auto rig = sc::SegmentByRig(Import(path.string()));
+  REQUIRE_MESSAGE(rig.ok(), (rig.ok() ? "" : rig.error().message));  // the rules take it for a biped
+  sc::BakeConfig config;
+  config.fit.cover_voxel_rel = 0.02;
+  config.fit.max_spheres = 64;
+  auto r = sc::Bake(path.string(), config);
+  REQUIRE_MESSAGE(r.ok(), (r.ok() ? "" : r.error().message));
+  CHECK(r->segmentation.method == "skeleton");
+  CHECK(r->segmentation.notes.find("the rig segmentation had a horizontal trunk (PLAUS-TRUNK-AXIS)") != std::string::npos);
+  REQUIRE(r->segmentation.layout.count() == 6);
+  CHECK(r->segmentation.layout.regions[3].name == "LeftArm");
+  CHECK(r->segmentation.layout.regions[3].mirror == 4);
+  CHECK(r->plausibility.empty());
+  // Forced to the rig, it is refused for its lying trunk.
+  config.segmentation = sc::SegmentMethod::kRig;
+  auto refused = sc::Bake(path.string(), config);
+  REQUIRE_FALSE(refused.ok());
+  CHECK(refused.error().code == sc::Error::Code::kImplausible);
+  CHECK(refused.error().message.find("PLAUS-TRUNK-AXIS") != std::string::npos);
+  fs::remove(path);
 }
