@@ -21,15 +21,35 @@ std::vector<ChainDef> DefaultChainDefs() {
 }
 
 std::vector<ChainDef> CreatureChainDefs(const RegionLayout& layout) {
-  std::vector<ChainDef> defs;
+  // Limbs in groups of consecutive limbs (one limb a group up to 7 limbs: 28 chains), so the chains stay
+  // within the runtime's 32 (runtime::kMaxChains): g groups give g(g + 1)/2 chains.
   const int limbs = layout.count() - 1;
-  const std::string trunk = RegionSymbol(layout.trunk());
-  for (int a = 0; a < limbs; ++a)
-    for (int b = a + 1; b < limbs; ++b)
-      defs.push_back({layout.regions[size_t(a)].name + "+" + layout.regions[size_t(b)].name,
-                      {RegionSymbol(Region(a)), RegionSymbol(Region(b))}});
-  for (int a = 0; a < limbs; ++a)
-    defs.push_back({layout.regions[size_t(a)].name + "+" + layout.regions.back().name, {RegionSymbol(Region(a)), trunk}});
+  const int groups = std::min(limbs, 7);
+  std::vector<std::vector<int>> group(size_t(std::max(groups, 0)));
+  for (int l = 0; l < limbs; ++l) group[size_t(l * groups / limbs)].push_back(l);
+  auto members = [&](const std::vector<int>& g, std::string* name) {
+    std::vector<std::string> m;
+    for (int l : g) {
+      m.push_back(RegionSymbol(Region(l)));
+      *name += (name->empty() ? "" : "+") + layout.regions[size_t(l)].name;
+    }
+    return m;
+  };
+  std::vector<ChainDef> defs;
+  for (int a = 0; a < groups; ++a)
+    for (int b = a + 1; b < groups; ++b) {
+      ChainDef d;
+      d.members = members(group[size_t(a)], &d.name);
+      for (const std::string& m : members(group[size_t(b)], &d.name)) d.members.push_back(m);
+      defs.push_back(std::move(d));
+    }
+  for (int a = 0; a < groups; ++a) {
+    ChainDef d;
+    d.members = members(group[size_t(a)], &d.name);
+    d.name += "+" + layout.regions.back().name;
+    d.members.push_back(RegionSymbol(layout.trunk()));
+    defs.push_back(std::move(d));
+  }
   return defs;
 }
 

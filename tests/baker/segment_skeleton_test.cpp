@@ -222,6 +222,21 @@ TEST_CASE("chains: a creature's chains pair every limb with the others and the t
   CHECK(past.error().message.find("R0..R4 or a region name") != std::string::npos);
   auto label = sc::BuildChains(spheres, {{"bad", {"R4L", "R0"}}}, L);
   REQUIRE_FALSE(label.ok());
+  // Ten limbs (a spider's eight legs, its head and abdomen): 7 groups, 28 chains, every pair still shared.
+  sc::RegionLayout spider;
+  spider.paper = false;
+  spider.regions.clear();
+  for (int k = 0; k < 10; ++k) spider.regions.push_back({"Leg" + std::to_string(k), sc::RegionKind::kLimb, -1, ""});
+  spider.regions.push_back({"body", sc::RegionKind::kTrunk, -1, ""});
+  const std::vector<sc::ChainDef> many = sc::CreatureChainDefs(spider);
+  CHECK(many.size() == 28);
+  for (int a = 0; a < 11; ++a)
+    for (int b = a; b < 11; ++b) {
+      const std::string ta = "R" + std::to_string(a), tb = "R" + std::to_string(b);
+      CHECK(std::any_of(many.begin(), many.end(), [&](const sc::ChainDef& d) {
+        return std::count(d.members.begin(), d.members.end(), ta) && std::count(d.members.begin(), d.members.end(), tb);
+      }));
+    }
   // The paper's layout keeps Table 1's tokens and message.
   auto paper = sc::BuildChains(spheres, {{"bad", {"R7"}}});
   REQUIRE_FALSE(paper.ok());

@@ -25,10 +25,11 @@ std::vector<ChainDef> DefaultChainDefs();
 
 /// A creature's chains (the any-skeleton path, whose limbs Table 1 does not know): one chain per pair of
 /// limbs, "A+B" = R_a ∪ R_b, then one per limb with the trunk, "A+trunk" = R_a ∪ R_trunk — L(L+1)/2
-/// chains for L limbs. Every pair of regions (and of spheres) shares at least one chain, so M1 tests
-/// every pair M2 tests (a limb's own pairs and the trunk's in several chains; M1 reports them once per
-/// chain). Built from `layout`'s names and symbols; Bake() uses them when the configuration keeps the
-/// default chains.
+/// chains for L ≤ 7 limbs; more limbs go in 7 groups of consecutive limbs (bone-tree order: a spider's
+/// neighbouring legs together), chains pairing the groups, 28 in all (runtime::kMaxChains is 32). Every
+/// pair of regions (and of spheres) shares at least one chain, so M1 tests every pair M2 tests (a limb's
+/// own pairs and the trunk's in several chains; M1 reports them once per chain). Built from `layout`'s
+/// names and symbols; Bake() uses them when the configuration keeps the default chains.
 std::vector<ChainDef> CreatureChainDefs(const RegionLayout& layout);
 
 /// A built chain ζ_i: sphere indices into the fitted sphere list, ascending, unique.
