@@ -20,13 +20,17 @@ struct BakeArgs {
 
 void PrintSummary(const baker::BakeResult& r, const baker::Context& ctx) {
   using baker::Region;
+  const baker::RegionLayout& layout = r.segmentation.layout;
   std::printf("\n%-10s %10s %8s\n", "region", "triangles", "spheres");
-  for (int k = 0; k < baker::kRegionCount; ++k) {
+  for (int k = 0; k < layout.count(); ++k) {
     const Region reg = static_cast<Region>(k);
     size_t tris = 0, sph = 0;
     for (uint8_t t : r.segmentation.triangle_regions) tris += t == k;
     for (const auto& s : r.fit.spheres) sph += s.region == reg;
-    std::printf("%-3s %-6s %10zu %8zu\n", baker::RegionSymbol(reg), baker::RegionName(reg), tris, sph);
+    std::printf("%-3s %-6s %10zu %8zu", baker::RegionSymbol(reg), layout.Name(reg), tris, sph);
+    if (!layout.paper)
+      std::printf("   %s, from bone %s", layout.IsTrunk(reg) ? "trunk" : "limb", layout.regions[size_t(k)].bone.c_str());
+    std::printf("\n");
   }
   std::printf("%-10s %10u %8zu   (unassigned triangles: %u)\n", "total", r.mesh.triangle_count(), r.fit.spheres.size(),
               r.unassigned_triangles);
@@ -81,6 +85,7 @@ int RunBake(const BakeArgs& a) {
   config.force = a.force;
   if (a.segmentation == "rig") config.segmentation = baker::SegmentMethod::kRig;
   else if (a.segmentation == "geometry") config.segmentation = baker::SegmentMethod::kGeometry;
+  else if (a.segmentation == "skeleton") config.segmentation = baker::SegmentMethod::kSkeleton;
   else if (a.segmentation == "map" && config.region_map.empty()) return Fail("--segmentation map needs --region-map");
 
   // Fail before the work when an output cannot be written.
@@ -130,8 +135,10 @@ void RegisterBake(CLI::App& app, Commands* commands) {
   sub->add_option("--config", args->config, "JSON bake configuration (parameters, chains, segmentation)")
       ->check(CLI::ExistingFile);
   sub->add_option("--rig", args->rig, "MakeHuman rig (.mhskel) for an OBJ; default: default.mhskel beside the OBJ");
-  sub->add_option("--segmentation", args->segmentation, "auto (rig when rigged, else geometry), rig, geometry, map")
-      ->check(CLI::IsMember({"auto", "rig", "geometry", "map"}));
+  sub->add_option("--segmentation", args->segmentation,
+                  "auto (rig when rigged, else geometry; a rigged creature that is no standing body: skeleton), rig, "
+                  "geometry, skeleton (the any-skeleton path: limbs branching off the trunk of the bone tree), map")
+      ->check(CLI::IsMember({"auto", "rig", "geometry", "skeleton", "map"}));
   sub->add_option("--vertices", args->vertices,
                   "Vertex contract for assimp formats (.x .fbx .dae ...): joined (default; what engines' importers "
                   "give: aiProcess_JoinIdenticalVertices) or source (the importer's own buffer); recorded in the "
@@ -143,7 +150,9 @@ void RegisterBake(CLI::App& app, Commands* commands) {
                 "and geometry segmentations disagreeing). Without it such a bake exits 1 naming each failed "
                 "check (PLAUS-... code, what and where) and writes nothing; with it the findings are printed, "
                 "go to the report as errors and into the asset, where `validate` reports them as errors");
-  sub->add_option("--region-map", args->region_map, "JSON region map {\"triangle_regions\": [...]} (implies map)");
+  sub->add_option("--region-map", args->region_map,
+                  "JSON region map {\"triangle_regions\": [...]} of region values or names (implies map); "
+                  "\"regions\": [names] makes a creature's layout (limbs, the trunk last)");
   sub->add_option("--disk-step", args->disk_step, "Torso disk step delta in source units (default: relative to height)");
   sub->add_option("--ray-csv", args->ray_csv, "CSV of the paper's per-ray comparison for the torso spheres");
   sub->add_option("--png", args->png, "PNG views (front and side) of regions and spheres (needs rsvg-convert)");

@@ -522,6 +522,7 @@ int RunEvaluate(const EvaluateArgs& a) {
   std::printf("evaluate: %s + %s — %s, %u frames, %u spheres, %u triangles, body height %.4g, margin %.4g (%.2f %%)\n",
               a.asset.c_str(), a.anim.mesh.c_str(), anim.Describe().c_str(), anim.frames, view.sphere_count, T, height, margin,
               100.0 * a.margin);
+  if (const std::string legend = RegionLegendLine(view); !legend.empty()) std::printf("%s\n", legend.c_str());
   std::printf("\n%5s  %-26s %8s %8s %8s %8s  %-22s %-22s %-22s %s\n", "frame", "pose", "contacts", "narrow", "excluded",
               "same sph", "exact regions", "proxy M1", "proxy M2", "missed by M2 / false alarms");
   for (uint32_t f = 0; f < anim.frames; ++f) {
@@ -597,7 +598,7 @@ int RunEvaluate(const EvaluateArgs& a) {
     std::vector<baker::FrameSphere> spheres;
     for (uint32_t s = 0; s < sp.count; ++s)
       spheres.push_back({{sp.x[s], sp.y[s], sp.z[s]}, sp.r[s],
-                         baker::RegionColor(static_cast<baker::Region>(std::clamp(sphere_region(s), 0, 4))), 0.35f});
+                         baker::RegionColor(view, uint32_t(std::max(sphere_region(s), 0))), 0.35f});
     char caption[256];
     std::snprintf(caption, sizeof caption,
                   "frame %u (%s): %u contacts, %u missed by the proxy's sphere pairs (red), the rest found (amber); "
@@ -611,6 +612,11 @@ int RunEvaluate(const EvaluateArgs& a) {
   if (!a.json.empty()) {
     nlohmann::json j;
     j["asset"] = a.asset;
+    if (view.asset->regions()) {  // a creature (schema v4): what R0..R(n-1) are
+      nlohmann::json names = nlohmann::json::array();
+      for (uint32_t r = 0; r < runtime::RegionCount(view); ++r) names.push_back(runtime::RegionName(view, r));
+      j["regions"] = names;
+    }
     j["mesh"] = a.anim.mesh;
     j["animation"] = anim.Describe();
     j["refit"] = a.refit;

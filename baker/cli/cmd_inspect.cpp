@@ -42,13 +42,25 @@ nlohmann::json Describe(const runtime::AssetView& v) {
                        {"vertices", p->vertex_count()}, {"first_triangle", p->first_triangle()},
                        {"triangles", p->triangle_count()}});
   j["parts"] = parts;
-  static const char* names[5] = {"left_arm", "right_arm", "left_leg", "right_leg", "torso"};
-  size_t tris[5] = {}, sph[5] = {};
+  // The paper's five regions, or (schema v4) the creature's that Asset.regions names.
+  const uint32_t R = runtime::RegionCount(v);
+  std::vector<size_t> tris(R, 0), sph(R, 0);
   for (uint8_t r : *a.triangle_regions())
-    if (r < 5) ++tris[r];
+    if (r < R) ++tris[r];
   for (uint8_t r : *a.sphere_regions())
-    if (r < 5) ++sph[r];
-  for (int k = 0; k < 5; ++k) j["regions"][names[k]] = {{"triangles", tris[k]}, {"spheres", sph[k]}};
+    if (r < R) ++sph[r];
+  for (uint32_t k = 0; k < R; ++k) {
+    nlohmann::json& e = j["regions"][runtime::RegionName(v, k)];
+    e = {{"triangles", tris[k]}, {"spheres", sph[k]}};
+    if (const auto* regions = a.regions()) {
+      const auto* info = regions->Get(k);
+      e["symbol"] = "R" + std::to_string(k);
+      e["kind"] = info->kind() == schema::RegionKind::Trunk ? "trunk" : "limb";
+      e["bone"] = info->bone() ? info->bone()->str() : "";
+      if (info->mirror() >= 0 && uint32_t(info->mirror()) < R) e["mirror"] = runtime::RegionName(v, uint32_t(info->mirror()));
+    }
+  }
+  if (a.regions()) j["body"] = "creature (any-skeleton path)";
   nlohmann::json chains = nlohmann::json::array();
   size_t total = 0;
   for (const auto* c : *a.chains()) {
@@ -109,8 +121,16 @@ int RunInspect(const InspectArgs& args) {
                 p["first_vertex"].get<unsigned>(), p["vertices"].get<unsigned>(), p["first_triangle"].get<unsigned>(),
                 p["triangles"].get<unsigned>());
   std::printf("spheres: %u\n", asset.view.sphere_count);
-  for (const auto& [name, r] : j["regions"].items())
-    std::printf("  %-10s triangles %6zu  spheres %3zu\n", name.c_str(), r["triangles"].get<size_t>(), r["spheres"].get<size_t>());
+  for (uint32_t k = 0; k < runtime::RegionCount(asset.view); ++k) {  // in region order
+    const std::string name = runtime::RegionName(asset.view, k);
+    const auto& r = j["regions"][name];
+    std::printf("  R%-2u %-10s triangles %6zu  spheres %3zu", k, name.c_str(), r["triangles"].get<size_t>(),
+                r["spheres"].get<size_t>());
+    if (r.contains("kind"))
+      std::printf("  %s, from bone %s%s", r["kind"].get<std::string>().c_str(), r["bone"].get<std::string>().c_str(),
+                  r.contains("mirror") ? (", mirror " + r["mirror"].get<std::string>()).c_str() : "");
+    std::printf("\n");
+  }
   std::printf("chains:");
   for (const auto& c : j["chains"]) std::printf(" %s=%zu", c["name"].get<std::string>().c_str(), c["spheres"].get<size_t>());
   std::printf(" (mean %.1f)\nexcluded pairs: %zu, unassigned triangles: %zu\n", j["mean_spheres_per_chain"].get<double>(),

@@ -93,6 +93,7 @@ int RunPlay(const PlayArgs& a) {
   std::printf("play: %s + %s — %s, %u frames, %u spheres, %u chains, refit %s, timings = min of %u runs\n",
               a.asset.c_str(), a.anim.mesh.c_str(), report.animation.c_str(), frames, view.sphere_count,
               view.chain_count, a.refit.c_str(), std::max(1u, a.repeat));
+  if (const std::string legend = RegionLegendLine(view); !legend.empty()) std::printf("%s\n", legend.c_str());
   if (!anim.clip) {
     std::printf("key poses:");
     for (size_t k = 0; k < anim.poses.size(); ++k)
@@ -137,12 +138,17 @@ int RunPlay(const PlayArgs& a) {
                 sum.narrow_median_us, sum.narrow_max_us);
   std::printf("  regions touching (frames):");
   if (sum.region_frames.empty()) std::printf(" none");
-  for (const auto& [p, c] : sum.region_frames) std::printf(" R%d-R%d(%u)", p.first, p.second, c);
+  for (const auto& [p, c] : sum.region_frames) std::printf(" %s(%u)", RegionPairName(view, p.first, p.second).c_str(), c);
   std::printf("\n");
 
   if (!a.json.empty()) {
     nlohmann::json j;
     j["asset"] = a.asset;
+    if (view.asset->regions()) {  // a creature (schema v4): what R0..R(n-1) are
+      nlohmann::json names = nlohmann::json::array();
+      for (uint32_t r = 0; r < runtime::RegionCount(view); ++r) names.push_back(runtime::RegionName(view, r));
+      j["regions"] = names;
+    }
     j["mesh"] = a.anim.mesh;
     j["method"] = a.method;
     j["refit"] = a.refit;

@@ -23,6 +23,7 @@
 #include "asset_file.h"
 #include "commands.h"
 #include "spherechain/playback/animation.h"
+#include "spherechain/baker/debug_export.h"
 #include "spherechain/baker/import.h"
 #include "spherechain/baker/write.h"
 #include "spherechain/runtime/narrow_phase.h"
@@ -286,6 +287,17 @@ int RunView(const ViewArgs& a) {
       {"triangle_regions", Base64(tri_regions)},
       {"sphere_regions", Base64(sphere_regions)},
       {"frames", frames_json}};
+  if (view.asset->regions()) {  // a creature (schema v4): its regions' names and the PNGs' colours
+    nlohmann::json names = nlohmann::json::array(), colors = nlohmann::json::array();
+    for (uint32_t r = 0; r < runtime::RegionCount(view); ++r) {
+      names.push_back("R" + std::to_string(r) + " " + runtime::RegionName(view, r));
+      const auto c = baker::RegionColor(view, r);
+      auto q = [](float x) { return int(std::clamp(x, 0.0f, 1.0f) * 255.0f + 0.5f); };
+      colors.push_back((q(c[0]) << 16) | (q(c[1]) << 8) | q(c[2]));
+    }
+    data["region_names"] = names;
+    data["region_colors"] = colors;
+  }
 
   // three.js and OrbitControls as data: URLs behind an import map: ES modules that import each other
   // ("three") and load from file:// with no server and no network.

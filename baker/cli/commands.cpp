@@ -42,4 +42,21 @@ int Fail(const std::string& message) {
   return 1;
 }
 
+std::string RegionLegendLine(const runtime::AssetView& view) {
+  if (!view.valid() || !view.asset->regions()) return {};
+  std::string s = "regions:";
+  const uint32_t n = runtime::RegionCount(view);
+  for (uint32_t r = 0; r < n; ++r)
+    s += std::string(r ? ", R" : " R") + std::to_string(r) + " " + runtime::RegionName(view, r) +
+         (runtime::IsTrunkRegion(view, r) ? " (trunk)" : "");
+  return s;
+}
+
+std::string RegionPairName(const runtime::AssetView& view, int a, int b) {
+  std::string s = "R" + std::to_string(a) + "-R" + std::to_string(b);
+  if (view.valid() && view.asset->regions() && a >= 0 && b >= 0)
+    s += std::string(" (") + runtime::RegionName(view, uint32_t(a)) + "-" + runtime::RegionName(view, uint32_t(b)) + ")";
+  return s;
+}
+
 }  // namespace spherechain::cli

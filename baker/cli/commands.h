@@ -8,6 +8,7 @@
 #include <CLI/CLI.hpp>
 
 #include "spherechain/baker/types.h"
+#include "spherechain/runtime/asset.h"
 
 namespace spherechain::cli {
 
@@ -32,5 +33,11 @@ baker::Context MakeLoggingContext();
 /// Logs `error` as "error: <code>: <message>" and returns exit code 1.
 int Fail(const baker::Error& error);
 int Fail(const std::string& message);
+
+/// "regions: R0 Tail, R1 HindLeg_L, …, R6 trunk (trunk)" for an asset that names its regions (a creature,
+/// schema v4); empty for the paper's five (the tables' R0..R4 are documented).
+std::string RegionLegendLine(const runtime::AssetView& view);
+/// "R1-R2" for a region pair; with the asset's names for a creature: "R1-R2 (HindLeg_L-HindLeg_R)".
+std::string RegionPairName(const runtime::AssetView& view, int a, int b);
 
 }  // namespace spherechain::cli

@@ -19,6 +19,7 @@ const char* MethodName(SegmentMethod m) {
   switch (m) {
     case SegmentMethod::kRig: return "rig";
     case SegmentMethod::kGeometry: return "geometry";
+    case SegmentMethod::kSkeleton: return "skeleton";
     case SegmentMethod::kAuto: break;
   }
   return "auto";
@@ -52,7 +53,7 @@ Result<BakeConfig> ParseBakeConfig(const std::string& text, const std::string& w
   if (!j.is_object()) return MakeError(Error::Code::kConfig, where + ": the configuration must be a JSON object");
   static const std::set<std::string> known = {"segmentation", "region_map", "rig", "rays", "spheres_per_level",
                                               "disk_step", "disk_step_rel", "penetration_depth", "chains",
-                                              "compare_segmentations", "fit", "max_spheres", "cover_voxel_rel",
+                                              "compare_segmentations", "fit", "max_spheres", "cover_voxel_rel", "cover_max_voxels",
                                               "min_radius_rel", "min_gain", "region_balance", "refine_sweeps", "dilation_rel",
                                               "skin_spheres", "skin_tolerance_rel", "skin_min_vertices",
                                               "contact_margin_rel", "near_rel", "vertices"};
@@ -66,8 +67,10 @@ Result<BakeConfig> ParseBakeConfig(const std::string& text, const std::string& w
     if (m == "auto") c.segmentation = SegmentMethod::kAuto;
     else if (m == "rig") c.segmentation = SegmentMethod::kRig;
     else if (m == "geometry") c.segmentation = SegmentMethod::kGeometry;
+    else if (m == "skeleton") c.segmentation = SegmentMethod::kSkeleton;
     else if (m != "map")
-      return MakeError(Error::Code::kConfig, where + ": 'segmentation' must be auto, rig, geometry or map, not '" + m + "'");
+      return MakeError(Error::Code::kConfig,
+                       where + ": 'segmentation' must be auto, rig, geometry, skeleton or map, not '" + m + "'");
     if (m == "map" && !j.contains("region_map"))
       return MakeError(Error::Code::kConfig, where + ": segmentation 'map' needs 'region_map'");
   }
@@ -98,6 +101,7 @@ Result<BakeConfig> ParseBakeConfig(const std::string& text, const std::string& w
   Status s = ReadNumber(j, "rays", 8, 4096, &c.fit.rays, where);
   if (s.ok()) s = ReadNumber(j, "max_spheres", 5, 4096, &c.fit.max_spheres, where);
   if (s.ok()) s = ReadNumber(j, "cover_voxel_rel", 1e-3, 0.1, &c.fit.cover_voxel_rel, where);
+  if (s.ok()) s = ReadNumber(j, "cover_max_voxels", 0, 100'000'000, &c.fit.cover_max_voxels, where);
   if (s.ok()) s = ReadNumber(j, "min_radius_rel", 0.0, 0.2, &c.fit.min_radius_rel, where);
   if (s.ok()) s = ReadNumber(j, "min_gain", 0.0, 1.0, &c.fit.min_gain, where);
   if (s.ok()) s = ReadNumber(j, "region_balance", 0.0, 1.0, &c.fit.region_balance, where);
@@ -149,6 +153,8 @@ std::string CanonicalConfig(const BakeConfig& c) {
   if (c.fit.method == FitMethod::kCover) {
     j["max_spheres"] = c.fit.max_spheres;
     j["cover_voxel_rel"] = c.fit.cover_voxel_rel;
+    // Added after assets were cached on the hash: written only when not the default (as "vertices").
+    if (c.fit.cover_max_voxels != FitParams().cover_max_voxels) j["cover_max_voxels"] = c.fit.cover_max_voxels;
     j["min_radius_rel"] = c.fit.min_radius_rel;
     j["min_gain"] = c.fit.min_gain;
     j["refine_sweeps"] = c.fit.refine_sweeps;
@@ -186,6 +192,71 @@ Error Refuse(const Mesh& mesh, const std::vector<PlausibilityFinding>& findings)
                        "anyway with these findings recorded in it");
 }
 
+bool IsTableOneChains(const std::vector<ChainDef>& defs) {
+  const std::vector<ChainDef> table = DefaultChainDefs();
+  if (defs.size() != table.size()) return false;
+  for (size_t i = 0; i < defs.size(); ++i)
+    if (defs[i].name != table[i].name || defs[i].members != table[i].members) return false;
+  return true;
+}
+
+bool HasFinding(const std::vector<PlausibilityFinding>& findings, const std::string& code) {
+  return std::any_of(findings.begin(), findings.end(), [&](const PlausibilityFinding& f) { return f.code == code; });
+}
+
+/// A creature's adjacency beyond BindExcludedPairs (the any-skeleton path), pairs not in `excluded`:
+/// - sphere pairs whose surrounding regions' triangles already intersect at bind pose: a creature model
+///   often passes through its own skin at rest (horns, eyes, a tail's tuft), and those triangles touch
+///   in every frame without any collision (the bind_overlap rule's reason, met by the triangles);
+/// - pairs of spheres of two limbs whose regions share skin (a quadruped's neck and its fore legs at the
+///   chest, the tail and the hind legs), within 1.25 (rA + rB) + near at bind: the crease where they
+///   leave the trunk side by side, as a limb and the torso at the hip (BindExcludedPairs' junction rule).
+/// Humans skip it: the exact intersection test would cost MakeHuman ~0.1 s of its bake, and the human
+/// assets stay as they were. Errors: those of ExactSelfIntersections.
+struct CreatureExclusions {
+  std::set<SpherePair> pairs;
+  size_t bind_contacts = 0, creases = 0, triangle_pairs = 0;
+};
+Result<CreatureExclusions> CreatureExcludedPairs(const Mesh& mesh, const Segmentation& seg,
+                                                 const std::vector<FittedSphere>& spheres,
+                                                 const SurroundingRegions& surrounding,
+                                                 const std::vector<SpherePair>& excluded, double near) {
+  CreatureExclusions out;
+  const std::vector<uint32_t> weld = ComputeWeldIds(mesh.positions);
+  auto contacts = ExactSelfIntersections(mesh.positions.data(), mesh.vertex_count(), mesh.indices, weld);
+  if (!contacts.ok()) return contacts.error();
+  out.triangle_pairs = contacts->size();
+  auto known = [&](const SpherePair& p) {
+    return out.pairs.count(p) > 0 || std::binary_search(excluded.begin(), excluded.end(), p);
+  };
+  for (const TrianglePair& p : contacts.value()) {
+    uint16_t a = surrounding.triangle_spheres[p.a], b = surrounding.triangle_spheres[p.b];
+    if (a == b) continue;
+    if (a > b) std::swap(a, b);
+    if (!known({a, b})) out.pairs.emplace(a, b), ++out.bind_contacts;
+  }
+  const RegionLayout& layout = seg.layout;
+  std::vector<uint32_t> regions_at(mesh.vertex_count(), 0);  // per welded position: a bit per region using it
+  for (uint32_t t = 0; t < mesh.triangle_count(); ++t)
+    for (int k = 0; k < 3; ++k) regions_at[weld[mesh.indices[3 * t + k]]] |= 1u << seg.triangle_regions[t];
+  std::vector<uint32_t> meets(size_t(layout.count()), 0);  // per region: the regions sharing a vertex with it
+  for (uint32_t mask : regions_at)
+    for (int k = 0; k < layout.count(); ++k)
+      if (mask >> k & 1u) meets[size_t(k)] |= mask;
+  for (size_t i = 0; i < spheres.size(); ++i)
+    for (size_t j = i + 1; j < spheres.size(); ++j) {
+      const FittedSphere& A = spheres[i];
+      const FittedSphere& B = spheres[j];
+      if (A.region == B.region || !layout.IsLimb(A.region) || !layout.IsLimb(B.region) ||
+          !(meets[size_t(A.region)] >> int(B.region) & 1u))
+        continue;
+      const SpherePair p{uint16_t(i), uint16_t(j)};
+      if ((A.center - B.center).norm() < 1.25 * (A.radius + B.radius) + near && !known(p))
+        out.pairs.insert(p), ++out.creases;
+    }
+  return out;
+}
+
 }  // namespace
 
 Result<BakeResult> Bake(const std::string& input_path, const BakeConfig& config, Context* ctx) {
@@ -205,7 +276,7 @@ Result<BakeResult> Bake(const std::string& input_path, const BakeConfig& config,
     if (!seg.ok()) return seg.error();
     r.segmentation = std::move(seg).value();
   }
-  if (config.compare_segmentations && config.region_map.empty() && mesh.skin) {
+  if (config.compare_segmentations && config.region_map.empty() && mesh.skin && r.segmentation.layout.paper) {
     Context::Timer t(ctx, "segment_compare");
     const SegmentMethod other = r.segmentation.method == "rig" ? SegmentMethod::kGeometry : SegmentMethod::kRig;
     auto seg2 = Segment(mesh, other, ctx);
@@ -223,6 +294,30 @@ Result<BakeResult> Bake(const std::string& input_path, const BakeConfig& config,
     Context::Timer t(ctx, "plausibility");
     r.plausibility = CheckPlausibility(mesh, r.segmentation, nullptr, r.agreement ? &*r.agreement : nullptr,
                                        config.plausibility);
+    // A horizontal trunk is no standing body: with segmentation auto, a rigged body takes the
+    // any-skeleton path (a quadruped whose bones carry humanoid names), whose own checks then decide.
+    if (config.segmentation == SegmentMethod::kAuto && config.region_map.empty() && mesh.skin &&
+        r.segmentation.layout.paper && HasFinding(r.plausibility, "PLAUS-TRUNK-AXIS")) {
+      Result<Segmentation> skeleton = SegmentBySkeleton(mesh, {}, ctx);
+      if (skeleton.ok()) {
+        if (ctx)
+          ctx->Info("segment: the " + r.segmentation.method + " segmentation has a horizontal trunk (PLAUS-TRUNK-AXIS): "
+                    "segmented as a creature by its skeleton instead");
+        const std::string biped = r.segmentation.method;
+        r.segmentation = std::move(skeleton).value();
+        r.segmentation.notes = "the " + biped + " segmentation had a horizontal trunk (PLAUS-TRUNK-AXIS); " +
+                               r.segmentation.notes;
+        r.agreement.reset();
+        r.other_segmentation.reset();
+        r.other_segmentation_error.clear();
+        r.plausibility = CheckPlausibility(mesh, r.segmentation, nullptr, nullptr, config.plausibility);
+      } else {
+        for (PlausibilityFinding& f : r.plausibility)
+          if (f.code == "PLAUS-TRUNK-AXIS") f.message += "; the any-skeleton path failed too: " + skeleton.error().message;
+      }
+    }
+    if (!r.segmentation.layout.paper && r.other_segmentation_error.empty())
+      r.other_segmentation_error = "a creature's regions (the any-skeleton path) have no geometric counterpart to compare with";
     if (!r.plausibility.empty() && !config.force) return Refuse(mesh, r.plausibility);
   }
   {
@@ -234,7 +329,11 @@ Result<BakeResult> Bake(const std::string& input_path, const BakeConfig& config,
   if (spheres.size() > 0xFFFF) return MakeError(Error::Code::kFit, "more than 65,535 spheres");
   {
     Context::Timer t(ctx, "chains");
-    auto chains = BuildChains(spheres, config.chains);
+    // A creature keeps its own chains (every limb with the others and the trunk) unless the
+    // configuration names chains other than Table 1's.
+    const RegionLayout& layout = r.segmentation.layout;
+    const bool creature_chains = !layout.paper && IsTableOneChains(config.chains);
+    auto chains = BuildChains(spheres, creature_chains ? CreatureChainDefs(layout) : config.chains, layout);
     if (!chains.ok()) return chains.error();
     r.chains = std::move(chains).value();
     if (config.fit.method == FitMethod::kPaper)
@@ -242,7 +341,7 @@ Result<BakeResult> Bake(const std::string& input_path, const BakeConfig& config,
     else
       r.excluded = BindExcludedPairs(spheres, (config.near_rel + 2.0 * config.contact_margin_rel) * r.fit.body_height,
                                      &r.exclusion_reasons,
-                                     &r.cross_region_bind_overlaps, mesh.up_axis);
+                                     &r.cross_region_bind_overlaps, mesh.up_axis, layout.paper ? nullptr : &layout);
   }
   {
     Context::Timer t(ctx, "surrounding_regions");
@@ -253,9 +352,24 @@ Result<BakeResult> Bake(const std::string& input_path, const BakeConfig& config,
     r.surrounding = std::move(surr).value();
     r.unassigned_triangles = mesh.triangle_count() - r.surrounding.offsets.back();
   }
+  if (!r.segmentation.layout.paper && config.fit.method == FitMethod::kCover) {
+    Context::Timer t(ctx, "creature_exclusions");
+    const double near = (config.near_rel + 2.0 * config.contact_margin_rel) * r.fit.body_height;
+    auto extra = CreatureExcludedPairs(mesh, r.segmentation, spheres, r.surrounding, r.excluded, near);
+    if (!extra.ok()) return extra.error();
+    r.bind_contact_exclusions = extra->bind_contacts;
+    r.limb_crease_exclusions = extra->creases;
+    r.excluded.insert(r.excluded.end(), extra->pairs.begin(), extra->pairs.end());
+    std::sort(r.excluded.begin(), r.excluded.end());
+    if (ctx && !extra->pairs.empty())
+      ctx->Info("exclusions (creature): " + std::to_string(extra->bind_contacts) +
+                " sphere pair(s) whose triangles intersect at bind pose (" + std::to_string(extra->triangle_pairs) +
+                " triangle pairs: the model passes through itself there), " + std::to_string(extra->creases) +
+                " pair(s) of two limbs where they meet (a crease)");
+  }
   {
     Context::Timer t(ctx, "pivots");
-    auto piv = ChoosePivots(mesh, spheres, r.surrounding);
+    auto piv = ChoosePivots(mesh, spheres, r.surrounding, &r.segmentation);
     if (!piv.ok()) return piv.error();
     r.pivots = std::move(piv).value();
   }
@@ -384,13 +498,22 @@ json MakeBakeReport(const BakeResult& r, const BakeConfig& config, const Context
   j["parts"] = parts;
 
   json regions = json::object();
-  for (int k = 0; k < kRegionCount; ++k) {
+  const RegionLayout& layout = r.segmentation.layout;
+  for (int k = 0; k < layout.count(); ++k) {
     const Region reg = static_cast<Region>(k);
     size_t tris = std::count(r.segmentation.triangle_regions.begin(), r.segmentation.triangle_regions.end(), uint8_t(k));
     size_t sph = std::count_if(spheres.begin(), spheres.end(), [&](const FittedSphere& s) { return s.region == reg; });
-    regions[RegionName(reg)] = {{"symbol", RegionSymbol(reg)}, {"triangles", tris}, {"spheres", sph}};
+    json& e = regions[layout.Name(reg)];
+    e = {{"symbol", RegionSymbol(reg)}, {"triangles", tris}, {"spheres", sph}};
+    if (!layout.paper) {  // a creature's: what each region is (the asset's Asset.regions)
+      const RegionInfo& info = layout.regions[size_t(k)];
+      e["kind"] = info.kind == RegionKind::kTrunk ? "trunk" : "limb";
+      e["bone"] = info.bone;
+      if (info.mirror >= 0) e["mirror"] = layout.Name(Region(info.mirror));
+    }
   }
   j["regions"] = regions;
+  if (!layout.paper) j["body"] = "creature (any-skeleton path: limbs off the trunk, their own chains)";
 
   json seg = {{"method", r.segmentation.method}, {"notes", r.segmentation.notes}};
   if (r.agreement && r.other_segmentation) {
@@ -434,7 +557,9 @@ json MakeBakeReport(const BakeResult& r, const BakeConfig& config, const Context
                        {"torso_side_by_side", r.exclusion_reasons.torso_side_by_side},
                        {"bind_overlap", r.exclusion_reasons.bind_overlap},
                        {"bind_near", r.exclusion_reasons.bind_near},
-                       {"junction", r.exclusion_reasons.junction}};
+                       {"junction", r.exclusion_reasons.junction},
+                       {"bind_contact", r.bind_contact_exclusions},
+                       {"limb_crease", r.limb_crease_exclusions}};
   if (!r.cross_region_bind_overlaps.empty()) {
     json w = json::array();
     for (const SpherePair& p : r.cross_region_bind_overlaps) w.push_back({p.first, p.second});

@@ -1,6 +1,7 @@
 #include "spherechain/baker/chains.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <set>
 
@@ -19,44 +20,86 @@ std::vector<ChainDef> DefaultChainDefs() {
   };
 }
 
+std::vector<ChainDef> CreatureChainDefs(const RegionLayout& layout) {
+  // Limbs in groups of consecutive limbs (one limb a group up to 7 limbs: 28 chains), so the chains stay
+  // within the runtime's 32 (runtime::kMaxChains): g groups give g(g + 1)/2 chains.
+  const int limbs = layout.count() - 1;
+  const int groups = std::min(limbs, 7);
+  std::vector<std::vector<int>> group(size_t(std::max(groups, 0)));
+  for (int l = 0; l < limbs; ++l) group[size_t(l * groups / limbs)].push_back(l);
+  auto members = [&](const std::vector<int>& g, std::string* name) {
+    std::vector<std::string> m;
+    for (int l : g) {
+      m.push_back(RegionSymbol(Region(l)));
+      *name += (name->empty() ? "" : "+") + layout.regions[size_t(l)].name;
+    }
+    return m;
+  };
+  std::vector<ChainDef> defs;
+  for (int a = 0; a < groups; ++a)
+    for (int b = a + 1; b < groups; ++b) {
+      ChainDef d;
+      d.members = members(group[size_t(a)], &d.name);
+      for (const std::string& m : members(group[size_t(b)], &d.name)) d.members.push_back(m);
+      defs.push_back(std::move(d));
+    }
+  for (int a = 0; a < groups; ++a) {
+    ChainDef d;
+    d.members = members(group[size_t(a)], &d.name);
+    d.name += "+" + layout.regions.back().name;
+    d.members.push_back(RegionSymbol(layout.trunk()));
+    defs.push_back(std::move(d));
+  }
+  return defs;
+}
+
 namespace {
 
-// True when sphere `s` belongs to the set named by `token`; false with *known=false for a bad token.
-bool InSet(const FittedSphere& s, const std::string& token, bool* known) {
-  *known = true;
-  if (token.size() == 2 && token[0] == 'R' && token[1] >= '0' && token[1] <= '4')
-    return static_cast<int>(s.region) == token[1] - '0';
-  if (token.size() == 3 && token.rfind("R4", 0) == 0) {
-    if (s.region != Region::kTorso) return false;
-    switch (token[2]) {
-      case 'L': return (s.labels & kLabelL) != 0;
-      case 'R': return (s.labels & kLabelR) != 0;
-      case 'T': return (s.labels & kLabelT) != 0;
-      case 'D': return (s.labels & kLabelD) != 0;
-      default: break;
+// The region a chain token names: "R<k>" (k < layout.count()) or a region's name; -1 otherwise.
+// `label` receives the torso label of "R<trunk>L/R/T/D" (the paper's layout only), else 0.
+int TokenRegion(const std::string& token, const RegionLayout& layout, uint8_t* label) {
+  *label = 0;
+  size_t digits = 0;
+  while (1 + digits < token.size() && std::isdigit(static_cast<unsigned char>(token[1 + digits]))) ++digits;
+  if (token.size() >= 2 && token[0] == 'R' && digits > 0 && digits <= 2 && (token.size() == 1 + digits || token.size() == 2 + digits)) {
+    const int k = std::stoi(token.substr(1, digits));
+    if (k >= layout.count()) return -1;
+    if (token.size() == 1 + digits) return k;
+    if (!layout.paper || !layout.IsTrunk(Region(k))) return -1;
+    switch (token.back()) {
+      case 'L': *label = kLabelL; return k;
+      case 'R': *label = kLabelR; return k;
+      case 'T': *label = kLabelT; return k;
+      case 'D': *label = kLabelD; return k;
+      default: return -1;
     }
   }
-  *known = false;
-  return false;
+  for (int k = 0; k < layout.count(); ++k)
+    if (token == layout.regions[size_t(k)].name) return k;
+  return -1;
 }
 
 }  // namespace
 
-Result<std::vector<Chain>> BuildChains(const std::vector<FittedSphere>& spheres, const std::vector<ChainDef>& defs) {
+Result<std::vector<Chain>> BuildChains(const std::vector<FittedSphere>& spheres, const std::vector<ChainDef>& defs,
+                                       const RegionLayout& layout) {
   if (defs.empty()) return MakeError(Error::Code::kConfig, "no chain is defined");
   if (spheres.size() > 0xFFFF) return MakeError(Error::Code::kConfig, "more than 65,535 spheres");
   std::vector<Chain> chains;
   for (const ChainDef& def : defs) {
     Chain chain{def.name, {}};
     for (const std::string& token : def.members) {
-      bool known = true;
-      for (size_t i = 0; i < spheres.size(); ++i) {
-        if (InSet(spheres[i], token, &known)) chain.spheres.push_back(static_cast<uint16_t>(i));
-        if (!known) break;
+      uint8_t label = 0;
+      const int region = TokenRegion(token, layout, &label);
+      if (region < 0) {
+        const std::string last = std::to_string(layout.count() - 1);
+        return MakeError(Error::Code::kConfig,
+                         "chain '" + def.name + "': unknown member '" + token + "' (expected R0..R" + last +
+                             (layout.paper ? ", R4L, R4R, R4T or R4D" : " or a region name of the layout") + ")");
       }
-      if (!known)
-        return MakeError(Error::Code::kConfig, "chain '" + def.name + "': unknown member '" + token +
-                                                   "' (expected R0..R4, R4L, R4R, R4T or R4D)");
+      for (size_t i = 0; i < spheres.size(); ++i)
+        if (static_cast<int>(spheres[i].region) == region && (label == 0 || (spheres[i].labels & label) != 0))
+          chain.spheres.push_back(static_cast<uint16_t>(i));
     }
     std::sort(chain.spheres.begin(), chain.spheres.end());
     chain.spheres.erase(std::unique(chain.spheres.begin(), chain.spheres.end()), chain.spheres.end());
@@ -108,10 +151,15 @@ std::vector<SpherePair> ExcludedPairs(const std::vector<FittedSphere>& spheres,
 
 std::vector<SpherePair> BindExcludedPairs(const std::vector<FittedSphere>& spheres, double near,
                                           ExclusionReasons* reasons,
-                                          std::vector<SpherePair>* cross_region_bind_overlaps, UpAxis up_axis) {
+                                          std::vector<SpherePair>* cross_region_bind_overlaps, UpAxis up_axis,
+                                          const RegionLayout* layout) {
   std::vector<SpherePair> pairs;
   ExclusionReasons why;
-  const Eigen::Vector3d up = fit_detail::UpVector(up_axis);
+  // The torso (a creature's trunk, whose axis stands for up) and its axis.
+  const Region torso = layout ? layout->trunk() : Region::kTorso;
+  const Eigen::Vector3d up = layout && !layout->paper
+                                 ? Eigen::Vector3d(layout->trunk_axis[0], layout->trunk_axis[1], layout->trunk_axis[2])
+                                 : fit_detail::UpVector(up_axis);
   const size_t n = spheres.size();
   for (size_t a = 0; a < n; ++a) {
     for (size_t b = a + 1; b < n; ++b) {
@@ -120,20 +168,20 @@ std::vector<SpherePair> BindExcludedPairs(const std::vector<FittedSphere>& spher
       const bool same_region = A.region == B.region;
       const double d = (A.center - B.center).norm(), rr = A.radius + B.radius;
       const SpherePair p{static_cast<uint16_t>(a), static_cast<uint16_t>(b)};
-      if (same_region && IsTubular(A.region) && std::abs(A.sequence - B.sequence) == 1) {
+      if (same_region && A.region != torso && std::abs(A.sequence - B.sequence) == 1) {
         ++why.limb_neighbour;
-      } else if (same_region && IsTubular(A.region) && std::abs(A.root_distance - B.root_distance) < rr) {
+      } else if (same_region && A.region != torso && std::abs(A.root_distance - B.root_distance) < rr) {
         ++why.limb_side_by_side;  // one cross-section of the tube: no fold brings their skins together
-      } else if (same_region && A.region == Region::kTorso &&
+      } else if (same_region && A.region == torso &&
                  std::abs(A.center.dot(up) - B.center.dot(up)) < std::max(A.radius, B.radius)) {
         ++why.torso_side_by_side;  // one level of the torso: a bending spine folds levels, not a level
       } else if (d < rr) {
         ++why.bind_overlap;
-        const bool limb_torso = (A.region == Region::kTorso) != (B.region == Region::kTorso);
+        const bool limb_torso = (A.region == torso) != (B.region == torso);
         if (!same_region && !limb_torso && cross_region_bind_overlaps) cross_region_bind_overlaps->push_back(p);
       } else if (d < rr + near) {
         ++why.bind_near;
-      } else if ((A.region == Region::kTorso) != (B.region == Region::kTorso) && d < 1.25 * rr + near) {
+      } else if ((A.region == torso) != (B.region == torso) && d < 1.25 * rr + near) {
         ++why.junction;  // a limb's root and the torso where the skin creases (hip, armpit)
       } else {
         continue;

@@ -13,6 +13,7 @@
 #include <unistd.h>
 #include <sys/wait.h>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <tiny_gltf.h>
 
@@ -45,6 +46,31 @@ Frame CharacterFrame(const Mesh& mesh, const runtime::AssetView& a) {
     if (regions->Get(s) == 1 || regions->Get(s) == 3) { r += p; ++nr; }
   }
   Eigen::Vector3f left = (nl && nr) ? Eigen::Vector3f(l / float(nl) - r / float(nr)) : Eigen::Vector3f::UnitX();
+  if (a.asset->regions()) {
+    // A creature: "front" is along its trunk (the principal axis of the trunk spheres' centres), so the
+    // first view looks at its side.
+    const uint32_t trunk = runtime::RegionCount(a) - 1;
+    Eigen::Vector3f mean = Eigen::Vector3f::Zero();
+    int n = 0;
+    for (uint32_t s = 0; s < a.sphere_count; ++s)
+      if (regions->Get(s) == trunk) {
+        const auto& c = spheres->Get(s)->center();
+        mean += Eigen::Vector3f(c.x(), c.y(), c.z());
+        ++n;
+      }
+    Eigen::Matrix3f cov = Eigen::Matrix3f::Zero();
+    for (uint32_t s = 0; s < a.sphere_count && n > 0; ++s)
+      if (regions->Get(s) == trunk) {
+        const auto& c = spheres->Get(s)->center();
+        const Eigen::Vector3f d = Eigen::Vector3f(c.x(), c.y(), c.z()) - mean / float(n);
+        cov += d * d.transpose();
+      }
+    const Eigen::Matrix3f flat = Eigen::Matrix3f::Identity() - f.up * f.up.transpose();  // the horizontal part
+    cov = flat * cov * flat;
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3f> es(cov);
+    const Eigen::Vector3f along = es.eigenvectors().col(2);
+    left = f.up.cross(along);  // front = left × up = along
+  }
   left -= left.dot(f.up) * f.up;
   if (left.norm() < 1e-9f) left = f.up.unitOrthogonal();
   f.left = left.normalized();
@@ -72,6 +98,33 @@ std::array<float, 3> RegionColor(Region r) {
   return {0.72f, 0.72f, 0.72f};
 }
 
+namespace {
+struct Named { const char* name; std::array<float, 3> rgb; };
+// No red, amber or magenta: the pictures mark contacts with them (RenderFrameSvg, the viewer).
+constexpr Named kPalette[12] = {
+    {"orange", {0.90f, 0.45f, 0.10f}}, {"blue", {0.20f, 0.45f, 0.85f}},  {"green", {0.20f, 0.65f, 0.30f}},
+    {"purple", {0.55f, 0.40f, 0.75f}}, {"teal", {0.10f, 0.60f, 0.60f}},  {"brown", {0.55f, 0.35f, 0.15f}},
+    {"pink", {0.95f, 0.60f, 0.80f}},   {"olive", {0.50f, 0.55f, 0.10f}}, {"navy", {0.15f, 0.20f, 0.50f}},
+    {"cyan", {0.40f, 0.85f, 0.95f}},   {"lime", {0.60f, 0.85f, 0.30f}},  {"slate", {0.45f, 0.50f, 0.60f}}};
+}  // namespace
+
+std::array<float, 3> RegionColor(const runtime::AssetView& a, uint32_t region) {
+  if (!a.valid() || !a.asset->regions()) return RegionColor(static_cast<Region>(std::min<uint32_t>(region, 4)));
+  if (runtime::IsTrunkRegion(a, region) || region >= runtime::RegionCount(a)) return {0.72f, 0.72f, 0.72f};
+  return kPalette[region % 12].rgb;
+}
+
+std::string RegionLegend(const runtime::AssetView& a) {
+  if (!a.valid() || !a.asset->regions())
+    return "R0 left arm (orange)  R1 right arm (blue)  R2 left leg (green)  R3 right leg (purple)  R4 torso (grey)";
+  std::string s;
+  const uint32_t n = runtime::RegionCount(a);
+  for (uint32_t r = 0; r < n; ++r)
+    s += std::string(r ? "  " : "") + RegionSymbol(static_cast<Region>(r)) + " " + runtime::RegionName(a, r) + " (" +
+         (runtime::IsTrunkRegion(a, r) ? "grey" : kPalette[r % 12].name) + ")";
+  return s;
+}
+
 Status ExportDebugGltf(const Mesh& mesh, const runtime::AssetView& a, const std::string& out_path) {
   if (mesh.vertex_count() != a.vertex_count || mesh.triangle_count() != a.triangle_count)
     return MakeError(Error::Code::kConfig, "the mesh (" + std::to_string(mesh.vertex_count()) + " vertices, " +
@@ -82,7 +135,7 @@ Status ExportDebugGltf(const Mesh& mesh, const runtime::AssetView& a, const std:
   // Vertex colours: a vertex takes the region of the last triangle that uses it (seams show as-is).
   std::vector<float> colors(size_t(mesh.vertex_count()) * 3, 0.5f);
   for (uint32_t t = 0; t < mesh.triangle_count(); ++t) {
-    const auto c = RegionColor(static_cast<Region>(tri_regions->Get(t)));
+    const auto c = RegionColor(a, tri_regions->Get(t));
     for (int k = 0; k < 3; ++k)
       for (int j = 0; j < 3; ++j) colors[3 * mesh.indices[3 * t + k] + j] = c[j];
   }
@@ -105,7 +158,7 @@ Status ExportDebugGltf(const Mesh& mesh, const runtime::AssetView& a, const std:
   const auto* spheres = a.asset->spheres();
   for (uint32_t s = 0; s < a.sphere_count; ++s) {
     const auto* S = spheres->Get(s);
-    const auto c = RegionColor(static_cast<Region>(a.asset->sphere_regions()->Get(s)));
+    const auto c = RegionColor(a, a.asset->sphere_regions()->Get(s));
     const uint32_t base = uint32_t(sp_pos.size() / 3);
     for (size_t k = 0; k < unit.size(); k += 3) {
       sp_pos.insert(sp_pos.end(), {S->center().x() + S->radius() * unit[k], S->center().y() + S->radius() * unit[k + 1],
@@ -233,10 +286,13 @@ std::string RenderSvg(const Mesh& mesh, const runtime::AssetView& a, const Pictu
   // the character's left (its left arm on the viewer's right); side, camera at the character's left
   // looking across, so screen x = −front (the character faces the viewer's left).
   struct View { Eigen::Vector3f sx, sy, toward_viewer; const char* name; };
-  const View views[2] = {{f.left, f.up, f.front, "front"}, {-f.front, f.up, f.left, "side (character's left)"}};
+  const bool creature = a.asset->regions() != nullptr;  // lying along `front`: its side first, then end-on
+  const View views[2] = {creature ? View{-f.front, f.up, f.left, "side"} : View{f.left, f.up, f.front, "front"},
+                         creature ? View{f.left, f.up, f.front, "end-on (along the trunk)"}
+                                  : View{-f.front, f.up, f.left, "side (character's left)"}};
   // One scale for every panel, the largest at which each view's projection (mesh and spheres) fits its
   // panel (a T-pose or wide arms included); each view centred on its own projected extent.
-  const int panel = width_px / 4, height = int(panel * 1.9f);
+  const int panel = width_px / 4, height = int(panel * (creature ? 1.0f : 1.9f));
   Eigen::Vector2f lo2[2], hi2[2];
   float scale = 1e30f;
   for (int vi = 0; vi < 2; ++vi) {
@@ -318,15 +374,14 @@ std::string RenderDebugSvg(const Mesh& mesh, const runtime::AssetView& a, int wi
   const auto* sphere_regions = a.asset->sphere_regions();
   Picture pic;
   pic.positions = mesh.positions.data();
-  pic.tri_left = [&](uint32_t t) { return RegionColor(static_cast<Region>(tri_regions->Get(t))); };
+  pic.tri_left = [&](uint32_t t) { return RegionColor(a, tri_regions->Get(t)); };
   pic.tri_right = [](uint32_t) { return std::array<float, 3>{0.85f, 0.85f, 0.85f}; };
   for (uint32_t s = 0; s < a.sphere_count; ++s) {
     const auto* S = spheres->Get(s);
     pic.spheres.push_back({{S->center().x(), S->center().y(), S->center().z()}, S->radius(),
-                           RegionColor(static_cast<Region>(sphere_regions->Get(s))), 0.45f});
+                           RegionColor(a, sphere_regions->Get(s)), 0.45f});
   }
-  pic.caption = "R0 left arm (orange)  R1 right arm (blue)  R2 left leg (green)  R3 right leg (purple)  R4 torso "
-                "(grey) — " + std::to_string(a.sphere_count) + " spheres";
+  pic.caption = RegionLegend(a) + " — " + std::to_string(a.sphere_count) + " spheres";
   return RenderSvg(mesh, a, pic, width_px);
 }
 
@@ -341,7 +396,7 @@ std::string RenderFrameSvg(const Mesh& mesh, const runtime::AssetView& a, const 
     return m == 1 ? std::array<float, 3>{0.95f, 0.05f, 0.05f} : m == 2 ? std::array<float, 3>{1.0f, 0.75f, 0.0f} : otherwise;
   };
   pic.tri_left = [&](uint32_t t) {
-    return marked(t, tri_regions ? RegionColor(static_cast<Region>(tri_regions->Get(t))) : std::array<float, 3>{0.8f, 0.8f, 0.8f});
+    return marked(t, tri_regions ? RegionColor(a, tri_regions->Get(t)) : std::array<float, 3>{0.8f, 0.8f, 0.8f});
   };
   pic.tri_right = [&](uint32_t t) { return marked(t, {0.85f, 0.85f, 0.85f}); };
   pic.spheres = spheres;

@@ -17,6 +17,10 @@ Result<FitResult> FitSpheres(const Mesh& mesh, const Segmentation& seg, const Fi
     return MakeError(Error::Code::kFit, "fit: segmentation has " + std::to_string(seg.triangle_regions.size()) +
                                             " triangle regions for " + std::to_string(mesh.triangle_count()) +
                                             " triangles");
+  if (params.method == FitMethod::kPaper && !seg.layout.paper)
+    return MakeError(Error::Code::kFit, "fit: the paper fit (\"fit\": \"paper\") needs the paper's five regions of a "
+                                        "standing body; a creature's " + std::to_string(seg.layout.count()) +
+                                        " regions (segmentation " + seg.method + ") take the cover fit (\"fit\": \"cover\")");
   try {
     std::vector<std::vector<uint32_t>> tris(kRegionCount);
     for (uint32_t t = 0; t < mesh.triangle_count(); ++t) {

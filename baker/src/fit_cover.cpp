@@ -45,8 +45,9 @@ struct Field {
   std::vector<float> dist;  // [Units: voxels]
   std::vector<uint16_t> count;
   float grow = 0.0f;  // dilation added to every ball [Units: voxels]
-  std::array<double, kRegionCount> volume{};  // voxels of each region
-  std::array<double, kRegionCount> weight{};  // gain per voxel of each region: volume^-balance
+  int regions = kRegionCount;                 // region values below this (RegionLayout::count())
+  std::array<double, kMaxRegions> volume{};   // voxels of each region
+  std::array<double, kMaxRegions> weight{};   // gain per voxel of each region: volume^-balance
 
   void Coords(size_t v, int64_t* i, int64_t* j, int64_t* k) const {
     *i = int64_t(v % n[0]);
@@ -86,10 +87,10 @@ struct Field {
   // What a sphere at c would add: the interior voxels it covers that no sphere covers yet, each
   // weighted by its region's weight.
   double Gain(size_t c) const {
-    std::array<uint32_t, kRegionCount> g{};
+    std::array<uint32_t, kMaxRegions> g{};
     ForBall(c, [&](size_t v) { g[label[v]] += count[v] == 0; });
     double sum = 0.0;
-    for (int r = 0; r < kRegionCount; ++r) sum += g[r] * weight[r];
+    for (int r = 0; r < regions; ++r) sum += g[r] * weight[r];
     return sum;
   }
   void Apply(size_t c, int delta) {
@@ -97,13 +98,13 @@ struct Field {
   }
 };
 
-// Per vertex: bit 0 when a triangle of one of `limbs` uses it, bit 1 when a torso triangle does
+// Per vertex: bit 0 when a triangle of one of `limbs` uses it, bit 1 when a torso (trunk) triangle does
 // (3: on the junction).
 std::vector<uint8_t> JunctionMask(const Mesh& mesh, const Segmentation& seg, std::initializer_list<Region> limbs) {
   std::vector<uint8_t> mask(mesh.vertex_count(), 0);
   for (uint32_t t = 0; t < mesh.triangle_count(); ++t) {
     const uint8_t r = seg.triangle_regions[t];
-    uint8_t bit = r == uint8_t(Region::kTorso) ? 2 : 0;
+    uint8_t bit = r == uint8_t(seg.layout.trunk()) ? 2 : 0;
     for (Region l : limbs)
       if (r == uint8_t(l)) bit = 1;
     if (bit)
@@ -184,12 +185,20 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
   const uint32_t T = mesh.triangle_count();
   if (seg.triangle_regions.size() != T)
     return MakeError(Error::Code::kFit, "fit cover: segmentation does not match the mesh's triangle count");
-  if (params.max_spheres < kRegionCount || params.max_spheres > 4096)
-    return MakeError(Error::Code::kFit, "fit cover: max_spheres must be in [5, 4096]");
+  const RegionLayout& layout = seg.layout;
+  const int nreg = layout.count();
+  if (nreg < 2 || nreg > kMaxRegions)
+    return MakeError(Error::Code::kFit, "fit cover: the layout has " + std::to_string(nreg) + " regions (2.." +
+                                            std::to_string(kMaxRegions) + ")");
+  if (params.max_spheres < std::max(kRegionCount, nreg) || params.max_spheres > 4096)
+    return MakeError(Error::Code::kFit, "fit cover: max_spheres must be in [" + std::to_string(std::max(kRegionCount, nreg)) +
+                                            ", 4096] (at least one sphere a region)");
   if (params.skin_spheres < 0 || params.skin_min_vertices < 1 || !(params.skin_tolerance_rel >= 0.0 && params.skin_tolerance_rel <= 0.2))
     return MakeError(Error::Code::kFit, "fit cover: skin_spheres must be >= 0, skin_min_vertices >= 1, skin_tolerance_rel in [0, 0.2]");
   if (!(params.cover_voxel_rel >= 1e-3 && params.cover_voxel_rel <= 0.1))
     return MakeError(Error::Code::kFit, "fit cover: cover_voxel_rel must be in [0.001, 0.1]");
+  if (params.cover_max_voxels < 0)
+    return MakeError(Error::Code::kFit, "fit cover: cover_max_voxels must be >= 0 (0: no budget)");
 
   // 1. The interior.
   CoverageOptions vopt;
@@ -197,6 +206,19 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
   vopt.max_voxels = 16'000'000;
   auto vox = VoxelizeInterior(mesh.positions, mesh.indices, vopt, ctx);
   if (!vox.ok()) return MakeError(Error::Code::kFit, "fit cover: " + vox.error().message);
+  if (!layout.paper && params.cover_max_voxels > 0 && vox->inside.size() > size_t(params.cover_max_voxels)) {
+    // A creature lies along its longest extent, the voxels' scale: a bulky one (a quadruped's trunk and
+    // head) has more interior at 1/200 of its length than the budget: coarser voxels, by the cube root of
+    // the excess (2 % more, to land under it). The paper's standing bodies keep 1/200 of their height.
+    const double grow = 1.02 * std::cbrt(double(vox->inside.size()) / double(params.cover_max_voxels));
+    if (ctx)
+      ctx->Info("fit cover: " + std::to_string(vox->inside.size()) + " interior voxels, over cover_max_voxels " +
+                std::to_string(params.cover_max_voxels) + ": voxels " + std::to_string(grow) + " times larger");
+    vopt.voxel_rel = float(params.cover_voxel_rel * grow);
+    Context::Timer t(ctx, "fit.cover.voxelize_coarser");  // its own name: the report keys timings by name
+    vox = VoxelizeInterior(mesh.positions, mesh.indices, vopt, nullptr);
+    if (!vox.ok()) return MakeError(Error::Code::kFit, "fit cover: " + vox.error().message);
+  }
   const InteriorVoxels& iv = vox.value();
   const double height = iv.body_height;
   if (iv.inside.size() < 64)
@@ -211,6 +233,7 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
   F.h = iv.voxel_size;
   F.origin = iv.origin;
   const size_t total = F.stride[2] * F.n[2];
+  F.regions = nreg;
   F.label.assign(total, kOutside);
   F.dist.assign(total, 0.0f);
   F.count.assign(total, 0);
@@ -243,7 +266,7 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
         hint = hit.first;
         prev = v;
         const uint8_t reg = seg.triangle_regions[tri_ids[size_t(hit.second - tris.cbegin())]];
-        if (reg >= kRegionCount) continue;
+        if (reg >= nreg) continue;
         F.label[v] = reg;
         F.dist[v] = float(std::sqrt(CGAL::squared_distance(q, hit.first)) / F.h);
       }
@@ -251,20 +274,20 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
     if (chunks > 0) query_chunk(0);  // the first query builds the search structures lazily: not in parallel
     ParallelFor(1, chunks, query_chunk);
     for (uint32_t v : iv.inside)
-      if (F.label[v] < kRegionCount) F.volume[F.label[v]] += 1.0;
+      if (F.label[v] < nreg) F.volume[F.label[v]] += 1.0;
   }
   // No limb sphere is centred behind its limb's junction plane (in the chest under a shoulder's skin,
   // in the pelvis under a hip's): the voxels there keep their region (a limb sphere may still reach
   // them), but a centre there follows the limb's skin out of the torso when the limb moves.
   std::vector<uint8_t> behind_junction(total, 0);
   {
-    std::array<Vector3d, kRegionCount> origin, normal;
-    std::array<bool, kRegionCount> has_plane{};
-    for (int r = 0; r < kRegionCount; ++r)
-      if (r != int(Region::kTorso)) has_plane[r] = JunctionPlane(mesh, seg, Region(r), &origin[r], &normal[r]);
+    std::array<Vector3d, kMaxRegions> origin, normal;
+    std::array<bool, kMaxRegions> has_plane{};
+    for (int r = 0; r < nreg; ++r)
+      if (layout.IsLimb(Region(r))) has_plane[r] = JunctionPlane(mesh, seg, Region(r), &origin[r], &normal[r]);
     for (uint32_t v : iv.inside) {
       const uint8_t reg = F.label[v];
-      if (reg < kRegionCount && has_plane[reg] && (iv.Centre(v) - origin[reg]).dot(normal[reg]) < 0.0)
+      if (reg < nreg && has_plane[reg] && (iv.Centre(v) - origin[reg]).dot(normal[reg]) < 0.0)
         behind_junction[v] = 1;
     }
   }
@@ -291,18 +314,18 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
       }
     return own >= 4;
   };
-  std::array<bool, kRegionCount> has_triangles{};
+  std::array<bool, kMaxRegions> has_triangles{};
   for (uint8_t r : seg.triangle_regions)
-    if (r < kRegionCount) has_triangles[r] = true;
-  for (int r = 0; r < kRegionCount; ++r)
+    if (r < nreg) has_triangles[r] = true;
+  for (int r = 0; r < nreg; ++r)
     if (has_triangles[r] && F.volume[r] < 1.0)
-      return MakeError(Error::Code::kFit, std::string("fit cover: region ") + RegionSymbol(Region(r)) +
+      return MakeError(Error::Code::kFit, std::string("fit cover: region ") + RegionSymbol(Region(r)) + " " + layout.Name(Region(r)) +
                                               " has no interior voxel (too thin for cover_voxel_rel " +
                                               std::to_string(params.cover_voxel_rel) + ")");
 
   double total_volume = 0.0;
-  for (int r = 0; r < kRegionCount; ++r) total_volume += F.volume[r];
-  for (int r = 0; r < kRegionCount; ++r)
+  for (int r = 0; r < nreg; ++r) total_volume += F.volume[r];
+  for (int r = 0; r < nreg; ++r)
     F.weight[r] = F.volume[r] > 0.0 ? std::pow(F.volume[r] / total_volume, -params.region_balance) / total_volume : 0.0;
 
   F.grow = float(params.dilation_rel * height / F.h);
@@ -315,7 +338,7 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
   std::vector<uint32_t> cand, start;
   for (uint32_t v : iv.inside) {
     if (F.label[v] == kOutside || F.dist[v] < rmin) continue;
-    if (behind_junction[v] || (F.label[v] != uint8_t(Region::kTorso) && !enclosed_by_own_skin(v))) continue;
+    if (behind_junction[v] || (F.label[v] != uint8_t(layout.trunk()) && !enclosed_by_own_skin(v))) continue;
     cand.push_back(v);
     int64_t i, j, k;
     F.Coords(v, &i, &j, &k);
@@ -329,7 +352,7 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
   //    The same lazy greedy serves 6c (the budget the skin pass leaves): `greedy(budget)` adds spheres
   //    from `start` until `chosen` holds `budget` or the best adds less than min_gain.
   std::vector<uint32_t> chosen;
-  std::array<int, kRegionCount> per_region{};
+  std::array<int, kMaxRegions> per_region{};
   auto greedy = [&](int budget) {
     using Entry = std::pair<double, uint32_t>;  // gain, candidate voxel (ties: the larger index — fixed)
     std::vector<double> first_gain(start.size());  // every start's gain at once, on all cores
@@ -348,7 +371,7 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
       if (now < params.min_gain && !first_of_region) {
         // Below the threshold: only regions still without a sphere may take one.
         bool all_served = true;
-        for (int r = 0; r < kRegionCount; ++r) all_served = all_served && (per_region[r] > 0 || F.volume[r] == 0.0);
+        for (int r = 0; r < nreg; ++r) all_served = all_served && (per_region[r] > 0 || F.volume[r] == 0.0);
         if (all_served) break;
         continue;
       }
@@ -359,14 +382,16 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
   };
   // The skin pass covers limb skin only: a body without limbs keeps the whole budget for its volume.
   bool has_limb = false;
-  for (int r = 0; r < kRegionCount; ++r) has_limb = has_limb || (r != int(Region::kTorso) && F.volume[r] > 0.0);
-  const int volume_budget = has_limb ? std::max(kRegionCount, params.max_spheres - params.skin_spheres) : params.max_spheres;
+  for (int r = 0; r < nreg; ++r) has_limb = has_limb || (layout.IsLimb(Region(r)) && F.volume[r] > 0.0);
+  const int volume_budget =
+      has_limb ? std::max(std::max(kRegionCount, nreg), params.max_spheres - params.skin_spheres) : params.max_spheres;
   {
     Context::Timer t(ctx, "fit.cover.greedy");
     greedy(volume_budget);
-    for (int r = 0; r < kRegionCount; ++r)
+    for (int r = 0; r < nreg; ++r)
       if (per_region[r] == 0 && has_triangles[r])
-        return MakeError(Error::Code::kFit, std::string("fit cover: no sphere fits region ") + RegionSymbol(Region(r)) +
+        return MakeError(Error::Code::kFit, std::string("fit cover: no sphere fits region ") + RegionSymbol(Region(r)) + " " +
+                                                layout.Name(Region(r)) +
                                                 " (thinner than min_radius_rel, or max_spheres too small)");
   }
   const size_t volume_spheres = chosen.size();
@@ -447,7 +472,7 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
       for (int k = 0; k < 3; ++k) vreg[mesh.indices[3 * t + k]] = seg.triangle_regions[t];
     std::vector<uint32_t> uncovered;
     for (uint32_t v = 0; v < V; ++v) {
-      if (vreg[v] >= kRegionCount || vreg[v] == uint8_t(Region::kTorso)) continue;
+      if (vreg[v] >= nreg || vreg[v] == uint8_t(layout.trunk())) continue;
       const Vector3d p = fit_detail::Vertex(mesh, v);
       double best = std::numeric_limits<double>::infinity();
       for (size_t k = 0; k < chosen.size(); ++k)
@@ -505,11 +530,11 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
 
   // 7. Spheres, their order and labels.
   const Vector3d up = fit_detail::UpVector(mesh.up_axis);
-  std::array<Vector3d, kRegionCount> centroid;
+  std::array<Vector3d, kMaxRegions> centroid;
   for (auto& c : centroid) c.setZero();
   for (uint32_t v : iv.inside)
     if (F.label[v] != kOutside) centroid[F.label[v]] += iv.Centre(v);
-  for (int r = 0; r < kRegionCount; ++r) centroid[r] /= std::max(1.0, F.volume[r]);  // volume: voxel counts
+  for (int r = 0; r < nreg; ++r) centroid[r] /= std::max(1.0, F.volume[r]);  // volume: voxel counts
   Vector3d left = Vector3d::Zero();
   for (auto [l, r] : {std::pair{0, 1}, std::pair{2, 3}}) {
     left = centroid[l] - centroid[r];
@@ -518,12 +543,14 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
   }
   if (left.norm() <= 1e-9 * height) left = up.unitOrthogonal();
   left.normalize();
-  const int torso = int(Region::kTorso);
+  const int torso = int(layout.trunk());
+  // A creature's trunk (RegionLayout::paper false) has no up: its spheres are ordered along its axis.
+  const Vector3d trunk_axis(layout.trunk_axis[0], layout.trunk_axis[1], layout.trunk_axis[2]);
   const auto [arm_lo, arm_hi] = JunctionBand(mesh, seg, up, {Region::kLeftArm, Region::kRightArm});
   const auto [leg_lo, leg_hi] = JunctionBand(mesh, seg, up, {Region::kLeftLeg, Region::kRightLeg});
 
   std::vector<FittedSphere> out;
-  for (int r = 0; r < kRegionCount; ++r) {
+  for (int r = 0; r < nreg; ++r) {
     std::vector<FittedSphere> group;
     const Vector3d root = r == torso ? Vector3d::Zero() : LimbRoot(mesh, seg, Region(r), centroid[torso]);
     for (size_t k = 0; k < chosen.size(); ++k) {
@@ -539,6 +566,11 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
       for (FittedSphere& s : group) s.root_distance = (s.center - root).norm();
       std::stable_sort(group.begin(), group.end(),
                        [](const FittedSphere& a, const FittedSphere& b) { return a.root_distance < b.root_distance; });
+    } else if (!layout.paper) {
+      // A creature's trunk: along its axis (no torso labels, no columns).
+      std::stable_sort(group.begin(), group.end(), [&](const FittedSphere& a, const FittedSphere& b) {
+        return a.center.dot(trunk_axis) < b.center.dot(trunk_axis);
+      });
     } else {
       // Torso: bottom-up, then from the character's left to its right; labels of Figure 6.
       std::stable_sort(group.begin(), group.end(), [&](const FittedSphere& a, const FittedSphere& b) {

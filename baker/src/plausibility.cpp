@@ -84,7 +84,10 @@ std::vector<PlausibilityFinding> CheckPlausibility(const Mesh& mesh, const Segme
   for (uint32_t v = 0; v < nv; ++v)
     if (g.used[v]) hmin = std::min(hmin, Position(mesh, v).dot(up)), hmax = std::max(hmax, Position(mesh, v).dot(up));
   const double height = std::max(hmax - hmin, 1e-12);
-  const int kTorso = static_cast<int>(Region::kTorso);
+  // The torso: R4 of the paper's five regions, a creature's trunk (the any-skeleton path) otherwise.
+  const RegionLayout& layout = seg.layout;
+  const int kTorso = static_cast<int>(layout.trunk());
+  const char* torso_word = layout.paper ? "torso" : "trunk";
 
   // Each limb: one piece, attached to the torso (triangles joined through welded vertices).
   std::vector<uint8_t> in_region(nv);
@@ -97,6 +100,15 @@ std::vector<PlausibilityFinding> CheckPlausibility(const Mesh& mesh, const Segme
   for (uint32_t t = 0; t < nt; ++t)
     if (seg.triangle_regions[t] == kTorso)
       for (int k = 0; k < 3; ++k) touches_torso[g.rep[mesh.indices[3 * t + k]]] = 1;
+  // Welded vertices used by triangles of two or more regions: a limb piece without one is a loose part
+  // (a mesh component of its own — a tail's tuft, an eye, a claw), no sign of a limb cut in two.
+  std::vector<uint8_t> first_region(nv, kNoRegion), shared(nv, 0);
+  for (uint32_t t = 0; t < nt; ++t)
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t v = g.rep[mesh.indices[3 * t + k]];
+      if (first_region[v] == kNoRegion) first_region[v] = seg.triangle_regions[t];
+      else if (first_region[v] != seg.triangle_regions[t]) shared[v] = 1;
+    }
   for (int r = 0; r < kTorso; ++r) {
     std::iota(parent.begin(), parent.end(), 0u);
     std::fill(in_region.begin(), in_region.end(), 0);
@@ -114,22 +126,31 @@ std::vector<PlausibilityFinding> CheckPlausibility(const Mesh& mesh, const Segme
         a = b;
       }
     }
-    const char* name = RegionName(static_cast<Region>(r));
+    const char* name = layout.Name(static_cast<Region>(r));
     if (!any) continue;  // an empty limb is the segmentation's error, not ours
+    std::vector<uint8_t> joined(nv, 0);  // per piece (its root): touches another region
+    for (uint32_t v = 0; v < nv; ++v)
+      if (in_region[v] && shared[v]) joined[find(v)] = 1;
     uint32_t pieces = 0;
-    for (uint32_t v = 0; v < nv; ++v) pieces += in_region[v] && find(v) == v;
+    for (uint32_t v = 0; v < nv; ++v) pieces += in_region[v] && find(v) == v && joined[v];
     if (pieces > 1)
       add("PLAUS-LIMB-PIECES", std::string(name) + " is " + std::to_string(pieces) + " separate pieces, not one");
-    if (!attached) add("PLAUS-LIMB-DETACHED", std::string(name) + " shares no vertex with the torso");
+    if (!attached) add("PLAUS-LIMB-DETACHED", std::string(name) + " shares no vertex with the " + torso_word);
   }
 
-  // Left/right balance (area and principal length).
-  RegionShape shape[kRegionCount];
-  for (int r = 0; r < kRegionCount; ++r) shape[r] = Shape(mesh, seg, tri_area, r);
-  for (int pair = 0; pair < 2; ++pair) {
-    const RegionShape& l = shape[2 * pair];
-    const RegionShape& rr = shape[2 * pair + 1];
-    const char* what = pair == 0 ? "arms" : "legs";
+  // Left/right balance (area and principal length): the paper's arms and legs, a creature's limbs
+  // paired by their names (RegionInfo::mirror).
+  std::vector<RegionShape> shape(size_t(layout.count()));
+  for (int r = 0; r < layout.count(); ++r) shape[size_t(r)] = Shape(mesh, seg, tri_area, r);
+  std::vector<std::pair<int, int>> pairs;
+  for (int r = 0; r < kTorso; ++r)
+    if (const int m = layout.regions[size_t(r)].mirror; m > r && m < kTorso) pairs.emplace_back(r, m);
+  for (const auto& [left, right] : pairs) {
+    const RegionShape& l = shape[size_t(left)];
+    const RegionShape& rr = shape[size_t(right)];
+    const std::string what = layout.paper ? (left == 0 ? "arms" : "legs")
+                                          : std::string("limbs (") + layout.Name(Region(left)) + ", " +
+                                                layout.Name(Region(right)) + ")";
     if (l.area <= 0 || rr.area <= 0) continue;
     const double area_ratio = std::min(l.area, rr.area) / std::max(l.area, rr.area);
     const double length_ratio = std::min(l.length, rr.length) / std::max(std::max(l.length, rr.length), 1e-300);
@@ -143,8 +164,9 @@ std::vector<PlausibilityFinding> CheckPlausibility(const Mesh& mesh, const Segme
                                     Fixed(l.length / height) + ", right " + Fixed(rr.length / height) + " of the height)");
   }
 
-  // The head: the top band of the body within a column around the torso's centre.
-  if (shape[kTorso].area > 0) {
+  // The head: the top band of the body within a column around the torso's centre (a standing body only:
+  // a creature's head is wherever its neck leads).
+  if (layout.paper && shape[kTorso].area > 0) {
     const Eigen::Vector3d c = shape[kTorso].centroid;
     double head = 0, in_limb = 0;
     for (uint32_t t = 0; t < nt; ++t) {
@@ -162,8 +184,8 @@ std::vector<PlausibilityFinding> CheckPlausibility(const Mesh& mesh, const Segme
                                     " % limb regions (bound " + Fixed(100.0 * limits.head_limb_share, 0) + " %)");
   }
 
-  // The trunk stands along the up axis (biped path).
-  if (shape[kTorso].area > 0) {
+  // The trunk stands along the up axis (biped path; a creature's trunk lies as it lies).
+  if (layout.paper && shape[kTorso].area > 0) {
     const double tilt = std::acos(std::min(1.0, std::abs(shape[kTorso].axis.dot(up)))) * 180.0 / M_PI;
     if (tilt > limits.trunk_tilt_deg)
       add("PLAUS-TRUNK-AXIS", "the torso's principal axis is " + Fixed(tilt, 0) + " degrees from the up axis (bound " +

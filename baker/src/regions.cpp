@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <numeric>
 
@@ -37,10 +38,14 @@ Eigen::Vector3d UpVector(UpAxis up) {
   return Eigen::Vector3d::UnitY();
 }
 
-// The sphere's axis: along its region's sequence for limbs, up for the torso.
-Eigen::Vector3d SphereAxis(const Mesh& mesh, const std::vector<FittedSphere>& spheres, size_t s) {
+// The sphere's axis: along its region's sequence for limbs, up for the torso (a creature's trunk: its axis).
+Eigen::Vector3d SphereAxis(const Mesh& mesh, const std::vector<FittedSphere>& spheres, size_t s,
+                           const RegionLayout& layout) {
   const FittedSphere& S = spheres[s];
-  if (S.region == Region::kTorso) return UpVector(mesh.up_axis);
+  if (layout.IsTrunk(S.region)) {
+    const Eigen::Vector3d axis(layout.trunk_axis[0], layout.trunk_axis[1], layout.trunk_axis[2]);
+    return layout.paper || axis.norm() < 0.5 ? UpVector(mesh.up_axis) : axis;
+  }
   const FittedSphere* prev = nullptr;
   const FittedSphere* next = nullptr;
   for (const FittedSphere& o : spheres) {
@@ -84,8 +89,9 @@ Result<SurroundingRegions> BuildSurroundingRegions(const Mesh& mesh, const Segme
                                                    const std::vector<FittedSphere>& spheres, Ownership ownership) {
   if (spheres.empty()) return MakeError(Error::Code::kFit, "no sphere to assign triangles to");
   const uint32_t T = mesh.triangle_count();
-  std::array<std::vector<uint32_t>, kRegionCount> by_region;
-  for (size_t s = 0; s < spheres.size(); ++s) by_region[static_cast<int>(spheres[s].region)].push_back(uint32_t(s));
+  std::array<std::vector<uint32_t>, kMaxRegions> by_region;
+  for (size_t s = 0; s < spheres.size(); ++s)
+    if (static_cast<int>(spheres[s].region) < kMaxRegions) by_region[static_cast<int>(spheres[s].region)].push_back(uint32_t(s));
   std::vector<uint32_t> all(spheres.size());
   std::iota(all.begin(), all.end(), 0u);
 
@@ -93,7 +99,7 @@ Result<SurroundingRegions> BuildSurroundingRegions(const Mesh& mesh, const Segme
   out.triangle_spheres.resize(T);
   for (uint32_t t = 0; t < T; ++t) {
     const uint8_t r = t < seg.triangle_regions.size() ? seg.triangle_regions[t] : kNoRegion;
-    const std::vector<uint32_t>& candidates = (r < kRegionCount && !by_region[r].empty()) ? by_region[r] : all;
+    const std::vector<uint32_t>& candidates = (r < kMaxRegions && !by_region[r].empty()) ? by_region[r] : all;
     const Eigen::Vector3d c = Centroid(mesh, t);
     double best = std::numeric_limits<double>::infinity();
     uint32_t best_s = candidates.front();
@@ -114,8 +120,30 @@ Result<SurroundingRegions> BuildSurroundingRegions(const Mesh& mesh, const Segme
 }
 
 Result<Pivots> ChoosePivots(const Mesh& mesh, const std::vector<FittedSphere>& spheres,
-                            const SurroundingRegions& surrounding) {
+                            const SurroundingRegions& surrounding, const Segmentation* segmentation) {
+  const RegionLayout paper;
+  const RegionLayout& layout = segmentation ? segmentation->layout : paper;
   const uint32_t T = mesh.triangle_count();
+  // A creature (joint regions known): per vertex, the share of its skin weight on each region's bones, so
+  // a sphere's pivots can sit on skin its own bones move (a hip's trunk sphere must not follow the leg).
+  const int nreg = layout.count();
+  std::vector<float> bone_share;  // #V × nreg
+  if (segmentation && !segmentation->joint_regions.empty() && mesh.skin &&
+      mesh.skin->weight_offsets.size() == size_t(mesh.vertex_count()) + 1) {
+    const Skin& skin = *mesh.skin;
+    bone_share.assign(size_t(mesh.vertex_count()) * size_t(nreg), 0.0f);
+    for (uint32_t v = 0; v < mesh.vertex_count(); ++v)
+      for (uint32_t k = skin.weight_offsets[v]; k < skin.weight_offsets[v + 1]; ++k) {
+        const uint32_t j = skin.weight_joints[k];
+        if (j < segmentation->joint_regions.size() && segmentation->joint_regions[j] < nreg)
+          bone_share[size_t(v) * nreg + segmentation->joint_regions[j]] += skin.weights[k];
+      }
+  }
+  auto anchored = [&](uint32_t t, Region r) {  // ≥ 90 % of the corners' weight on region r's bones
+    float sum = 0.0f;
+    for (int k = 0; k < 3; ++k) sum += bone_share[size_t(mesh.indices[3 * t + k]) * nreg + size_t(r)];
+    return sum >= 0.9f * 3.0f;
+  };
   std::vector<double> areas(T);
   for (uint32_t t = 0; t < T; ++t) areas[t] = Area(mesh, t);
   std::vector<double> sorted = areas;
@@ -129,7 +157,7 @@ Result<Pivots> ChoosePivots(const Mesh& mesh, const std::vector<FittedSphere>& s
 
   for (size_t s = 0; s < spheres.size(); ++s) {
     const FittedSphere& S = spheres[s];
-    const Eigen::Vector3d a = SphereAxis(mesh, spheres, s);
+    const Eigen::Vector3d a = SphereAxis(mesh, spheres, s, layout);
     // u: a fixed world direction projected off the axis (deterministic), v = a × u.
     Eigen::Vector3d ref = std::abs(a.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitZ();
     const Eigen::Vector3d u = (ref - ref.dot(a) * a).normalized();
@@ -137,10 +165,16 @@ Result<Pivots> ChoosePivots(const Mesh& mesh, const std::vector<FittedSphere>& s
     const Eigen::Vector3d targets[4] = {u, v, -u, -v};
 
     // Candidates: the surrounding region's triangles of non-negligible area; when too few, the
-    // triangles of the same region nearest the centre.
+    // triangles of the same region nearest the centre. A creature's sphere first tries the triangles its
+    // own region's bones move (`allowed`), then any.
+    std::function<bool(uint32_t)> allowed = [](uint32_t) { return true; };
     std::vector<uint32_t> candidates;
-    for (uint32_t k = surrounding.offsets[s]; k < surrounding.offsets[s + 1]; ++k)
-      if (areas[surrounding.triangles[k]] > min_area) candidates.push_back(surrounding.triangles[k]);
+    auto gather = [&] {
+      candidates.clear();
+      for (uint32_t k = surrounding.offsets[s]; k < surrounding.offsets[s + 1]; ++k)
+        if (areas[surrounding.triangles[k]] > min_area && allowed(surrounding.triangles[k]))
+          candidates.push_back(surrounding.triangles[k]);
+    };
 
     auto choose = [&](const std::vector<uint32_t>& cand, double axial_weight, std::array<uint32_t, 4>* pick) {
       for (int k = 0; k < 4; ++k) {
@@ -171,8 +205,13 @@ Result<Pivots> ChoosePivots(const Mesh& mesh, const std::vector<FittedSphere>& s
     };
 
     std::array<uint32_t, 4> pick{};
-    bool ok = candidates.size() >= 4 && choose(candidates, 0.5, &pick) && well_conditioned(pick);
-    if (!ok) {
+    bool ok = false;
+    for (int pass = bone_share.empty() ? 1 : 0; pass < 2 && !ok; ++pass) {
+      if (pass == 0) allowed = [&](uint32_t t) { return anchored(t, S.region); };
+      else allowed = [](uint32_t) { return true; };
+      gather();
+      ok = candidates.size() >= 4 && choose(candidates, 0.5, &pick) && well_conditioned(pick);
+      if (ok) break;
       // Widen to the neighbourhood: triangles within k·r of the centre (k = 2.5, 4, 8), with a relaxed
       // level constraint each time, until a well-spread choice appears.
       for (double reach : {2.5, 4.0, 8.0}) {
@@ -183,7 +222,7 @@ Result<Pivots> ChoosePivots(const Mesh& mesh, const std::vector<FittedSphere>& s
           wide.clear();
           for (uint32_t t = 0; t < T; ++t)
             if (areas[t] > 0.0 && (!own || spheres[surrounding.triangle_spheres[t]].region == S.region) &&
-                (Centroid(mesh, t) - S.center).norm() < reach * S.radius)
+                allowed(t) && (Centroid(mesh, t) - S.center).norm() < reach * S.radius)
               wide.push_back(t);
           if (wide.size() >= 4) break;
         }

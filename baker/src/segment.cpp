@@ -4,10 +4,13 @@
 
 #include <nlohmann/json.hpp>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
 #include <algorithm>
 #include <array>
+#include <cctype>
+#include <map>
 #include <cmath>
 #include <fstream>
 #include <numeric>
@@ -194,7 +197,7 @@ struct Pieces {
   std::vector<uint32_t> of_triangle;
   std::vector<uint8_t> region;
   std::vector<double> area;
-  std::vector<std::array<uint32_t, kRegionCount>> contact;  ///< welded vertices shared with each region
+  std::vector<std::array<uint32_t, kMaxRegions>> contact;  ///< welded vertices shared with each region
 };
 
 Pieces FindPieces(const Mesh& mesh, const WeldedGraph& g, const std::vector<double>& tri_area,
@@ -211,7 +214,7 @@ Pieces FindPieces(const Mesh& mesh, const WeldedGraph& g, const std::vector<doub
 
   UnionFind uf(nt);
   for (uint32_t v = 0; v < nv; ++v) {
-    std::array<int64_t, kRegionCount> first;
+    std::array<int64_t, kMaxRegions> first;
     first.fill(-1);
     for (uint32_t k = off[v]; k < off[v + 1]; ++k) {
       const uint32_t t = inc[k];
@@ -250,14 +253,16 @@ Pieces FindPieces(const Mesh& mesh, const WeldedGraph& g, const std::vector<doub
 
 }  // namespace
 
-void MakeLimbsConnected(const Mesh& mesh, std::vector<uint8_t>& regions, std::string& notes) {
+void MakeLimbsConnected(const Mesh& mesh, std::vector<uint8_t>& regions, std::string& notes,
+                        const RegionLayout& layout, bool keep_loose_parts) {
   const WeldedGraph g = BuildWeldedGraph(mesh);
   const std::vector<double> tri_area = TriangleAreas(mesh);
-  const uint8_t torso = static_cast<uint8_t>(Region::kTorso);
+  const uint8_t torso = static_cast<uint8_t>(layout.trunk());
+  const int nreg = layout.count();
   size_t moved_limb = 0, moved_torso = 0;
   for (int iter = 0; iter < 6; ++iter) {
     const Pieces p = FindPieces(mesh, g, tri_area, regions);
-    std::array<int64_t, kRegionCount> largest;
+    std::array<int64_t, kMaxRegions> largest;
     largest.fill(-1);
     for (size_t c = 0; c < p.region.size(); ++c) {
       auto& l = largest[p.region[c]];
@@ -268,16 +273,20 @@ void MakeLimbsConnected(const Mesh& mesh, std::vector<uint8_t>& regions, std::st
     for (size_t c = 0; c < p.region.size(); ++c) {
       if (static_cast<int64_t>(c) == largest[p.region[c]]) continue;
       if (p.region[c] != torso) {
+        // A loose part (a mesh component touching no other region: a tail's tuft, an eye) may keep the
+        // region its bones give it.
+        if (keep_loose_parts && std::all_of(p.contact[c].begin(), p.contact[c].end(), [](uint32_t n) { return n == 0; }))
+          continue;
         // A stray limb piece: to the region it touches most, else the torso.
         int best = torso;
         uint32_t best_contact = 0;
-        for (int r = 0; r < kRegionCount; ++r)
+        for (int r = 0; r < nreg; ++r)
           if (p.contact[c][r] > best_contact) best = r, best_contact = p.contact[c][r];
         target[c] = static_cast<int16_t>(best);
       } else {
         // A torso island touching exactly one limb joins that limb.
         int only = -1, touching = 0;
-        for (int r = 0; r < kRegionCount; ++r)
+        for (int r = 0; r < nreg; ++r)
           if (p.contact[c][r] > 0) only = r, ++touching;
         if (touching == 1 && only != torso) target[c] = static_cast<int16_t>(only);
       }
@@ -300,26 +309,114 @@ void MakeLimbsConnected(const Mesh& mesh, std::vector<uint8_t>& regions, std::st
 
 void ComputeVertexRegions(const Mesh& mesh, Segmentation& seg) {
   const uint32_t nv = mesh.vertex_count();
-  std::vector<std::array<uint32_t, kRegionCount>> votes(nv, std::array<uint32_t, kRegionCount>{});
-  for (uint32_t i = 0; i < mesh.indices.size(); ++i) ++votes[mesh.indices[i]][seg.triangle_regions[i / 3]];
+  const size_t nreg = size_t(seg.layout.count());
+  std::vector<uint32_t> votes(size_t(nv) * nreg, 0);
+  for (uint32_t i = 0; i < mesh.indices.size(); ++i)
+    if (seg.triangle_regions[i / 3] < nreg) ++votes[size_t(mesh.indices[i]) * nreg + seg.triangle_regions[i / 3]];
   seg.vertex_regions.assign(nv, kNoRegion);
   for (uint32_t v = 0; v < nv; ++v) {
     uint32_t best = 0;
-    for (int r = 0; r < kRegionCount; ++r)
-      if (votes[v][r] > best) best = votes[v][r], seg.vertex_regions[v] = static_cast<uint8_t>(r);
+    for (size_t r = 0; r < nreg; ++r)
+      if (votes[size_t(v) * nreg + r] > best) best = votes[size_t(v) * nreg + r], seg.vertex_regions[v] = static_cast<uint8_t>(r);
   }
 }
 
-std::string RegionCounts(const std::vector<uint8_t>& triangle_regions) {
-  std::array<size_t, kRegionCount> n{};
+std::string RegionCounts(const std::vector<uint8_t>& triangle_regions, const RegionLayout& layout) {
+  std::vector<size_t> n(size_t(layout.count()), 0);
   for (uint8_t r : triangle_regions)
-    if (r < kRegionCount) ++n[r];
+    if (r < n.size()) ++n[r];
   std::ostringstream s;
-  for (int r = 0; r < kRegionCount; ++r) {
-    s << (r ? ", " : "") << RegionSymbol(static_cast<Region>(r)) << ' ' << RegionName(static_cast<Region>(r)) << ' '
-      << n[r];
+  for (int r = 0; r < layout.count(); ++r) {
+    s << (r ? ", " : "") << RegionSymbol(static_cast<Region>(r)) << ' ' << layout.Name(static_cast<Region>(r)) << ' '
+      << n[size_t(r)];
   }
   return s.str();
+}
+
+std::vector<std::string> NameTokens(std::string_view name) {
+  std::vector<std::string> out;
+  std::string cur;
+  auto flush = [&] {
+    if (!cur.empty()) out.push_back(cur), cur.clear();
+  };
+  for (size_t i = 0; i < name.size(); ++i) {
+    const unsigned char c = static_cast<unsigned char>(name[i]);
+    if (!std::isalnum(c)) {
+      flush();
+      continue;
+    }
+    if (!cur.empty()) {
+      const unsigned char p = static_cast<unsigned char>(name[i - 1]);
+      const bool case_up = std::islower(p) && std::isupper(c);
+      const bool digit_change = (std::isdigit(p) != 0) != (std::isdigit(c) != 0);
+      if (case_up || digit_change) flush();
+    }
+    cur.push_back(static_cast<char>(std::tolower(c)));
+  }
+  flush();
+  return out;
+}
+
+namespace {
+bool IsSideToken(const std::string& t) {
+  return t == "l" || t == "left" || t == "lft" || t == "r" || t == "right" || t == "rgt";
+}
+int SideOf(const std::vector<std::string>& tokens) {
+  for (const std::string& t : tokens) {
+    if (t == "l" || t == "left" || t == "lft") return 1;
+    if (t == "r" || t == "right" || t == "rgt") return -1;
+  }
+  return 0;
+}
+}  // namespace
+
+void PairMirrorLimbs(RegionLayout& layout) {
+  const int limbs = layout.count() - 1;
+  std::vector<std::vector<std::string>> tokens(size_t(std::max(limbs, 0)));
+  std::vector<std::string> key(tokens.size());
+  for (int a = 0; a < limbs; ++a) {
+    layout.regions[size_t(a)].mirror = -1;
+    tokens[size_t(a)] = NameTokens(layout.regions[size_t(a)].name);
+    for (const std::string& t : tokens[size_t(a)])
+      if (!IsSideToken(t)) key[size_t(a)] += t + " ";
+  }
+  for (int a = 0; a < limbs; ++a) {
+    const int side = SideOf(tokens[size_t(a)]);
+    if (side == 0 || layout.regions[size_t(a)].mirror >= 0) continue;
+    for (int b = a + 1; b < limbs; ++b)
+      if (layout.regions[size_t(b)].mirror < 0 && SideOf(tokens[size_t(b)]) == -side && key[size_t(a)] == key[size_t(b)]) {
+        layout.regions[size_t(a)].mirror = b;
+        layout.regions[size_t(b)].mirror = a;
+        break;
+      }
+  }
+}
+
+std::array<double, 3> TrunkAxis(const Mesh& mesh, const std::vector<uint8_t>& triangle_regions, Region trunk) {
+  const std::vector<double> tri_area = TriangleAreas(mesh);
+  double a = 0.0;
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d m = Eigen::Matrix3d::Zero();
+  for (uint32_t t = 0; t < mesh.triangle_count() && t < triangle_regions.size(); ++t) {
+    if (triangle_regions[t] != uint8_t(trunk)) continue;
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3d p = Position(mesh, mesh.indices[3 * t + k]);
+      a += tri_area[t];
+      c += tri_area[t] * p;
+      m += tri_area[t] * p * p.transpose();
+    }
+  }
+  Eigen::Vector3d axis = UpVector(mesh.up_axis);
+  if (a > 0.0) {
+    c /= a;
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(m / a - c * c.transpose());
+    if (es.eigenvalues()[2] > 0.0) axis = es.eigenvectors().col(2);
+    int big = 0;  // a fixed orientation: the largest component positive
+    for (int k = 1; k < 3; ++k)
+      if (std::abs(axis[k]) > std::abs(axis[big])) big = k;
+    if (axis[big] < 0.0) axis = -axis;
+  }
+  return {axis.x(), axis.y(), axis.z()};
 }
 
 }  // namespace segment_detail
@@ -346,22 +443,64 @@ Result<Segmentation> SegmentByMap(const Mesh& mesh, const std::string& map_path,
   const nlohmann::json& arr = per_triangle ? j["triangle_regions"] : j["vertex_regions"];
   const size_t want = per_triangle ? mesh.triangle_count() : mesh.vertex_count();
   const char* what = per_triangle ? "triangle_regions" : "vertex_regions";
+  const std::string where = std::string("segment: region map '") + map_path + "'";
   if (!arr.is_array() || arr.size() != want) {
-    return MakeError(Error::Code::kConfig, std::string("segment: region map '") + map_path + "': \"" + what +
-                                               "\" has " + std::to_string(arr.is_array() ? arr.size() : 0) +
+    return MakeError(Error::Code::kConfig, where + ": \"" + what + "\" has " +
+                                               std::to_string(arr.is_array() ? arr.size() : 0) +
                                                " values, the mesh has " + std::to_string(want));
   }
+  // The layout: the paper's five, or the creature regions the map names ("regions": limbs, the trunk last).
+  RegionLayout layout;
+  if (j.contains("regions")) {
+    const nlohmann::json& names = j["regions"];
+    if (!names.is_array() || names.size() < 3 || names.size() > size_t(kMaxRegions))
+      return MakeError(Error::Code::kConfig, where + ": \"regions\" must be an array of 3 to " +
+                                                 std::to_string(kMaxRegions) + " region names (the limbs, the trunk last)");
+    layout.paper = false;
+    layout.regions.clear();
+    for (size_t i = 0; i < names.size(); ++i) {
+      if (!names[i].is_string() || names[i].get<std::string>().empty())
+        return MakeError(Error::Code::kConfig, where + ": regions[" + std::to_string(i) + "] = " + names[i].dump() +
+                                                   " is not a region name");
+      RegionInfo info;
+      info.name = names[i].get<std::string>();
+      info.kind = i + 1 == names.size() ? RegionKind::kTrunk : RegionKind::kLimb;
+      for (const RegionInfo& other : layout.regions)
+        if (other.name == info.name)
+          return MakeError(Error::Code::kConfig, where + ": region '" + info.name + "' is named twice in \"regions\"");
+      layout.regions.push_back(std::move(info));
+    }
+    PairMirrorLimbs(layout);
+  }
+  auto known_names = [&] {
+    std::string list;
+    for (int r = 0; r < layout.count(); ++r) list += std::string(r ? ", " : "") + layout.Name(Region(r));
+    return list + " (or R0..R" + std::to_string(layout.count() - 1) + ", or 0.." + std::to_string(layout.count() - 1) + ")";
+  };
   std::vector<uint8_t> values(want);
   for (size_t i = 0; i < want; ++i) {
-    if (!arr[i].is_number_integer() || arr[i].get<int64_t>() < 0 || arr[i].get<int64_t>() >= kRegionCount) {
-      return MakeError(Error::Code::kConfig, std::string("segment: region map '") + map_path + "': " + what + "[" +
-                                                 std::to_string(i) + "] = " + arr[i].dump() +
-                                                 " is not a region 0..4");
+    const nlohmann::json& e = arr[i];
+    int64_t value = -1;
+    if (e.is_number_integer()) {
+      value = e.get<int64_t>();
+    } else if (e.is_string()) {
+      const std::string name = e.get<std::string>();
+      for (int r = 0; r < layout.count() && value < 0; ++r)
+        if (name == layout.Name(Region(r)) || name == RegionSymbol(Region(r))) value = r;
+      if (value < 0)
+        return MakeError(Error::Code::kConfig, where + ": " + what + "[" + std::to_string(i) + "] = \"" + name +
+                                                   "\" names no region of the map; its regions: " + known_names());
     }
-    values[i] = static_cast<uint8_t>(arr[i].get<int64_t>());
+    if (value < 0 || value >= layout.count()) {
+      return MakeError(Error::Code::kConfig, where + ": " + what + "[" + std::to_string(i) + "] = " + e.dump() +
+                                                 " is not a region 0.." + std::to_string(layout.count() - 1) +
+                                                 " or a region name: " + known_names());
+    }
+    values[i] = static_cast<uint8_t>(value);
   }
   Segmentation seg;
   seg.method = "map";
+  seg.layout = std::move(layout);
   if (per_triangle) {
     seg.triangle_regions = std::move(values);
   } else {
@@ -372,8 +511,10 @@ Result<Segmentation> SegmentByMap(const Mesh& mesh, const std::string& map_path,
       seg.triangle_regions[t] = (b == c) ? b : a;  // majority; all different → the first vertex's
     }
   }
+  if (!seg.layout.paper)
+    seg.layout.trunk_axis = TrunkAxis(mesh, seg.triangle_regions, seg.layout.trunk());
   ComputeVertexRegions(mesh, seg);
-  seg.notes = std::string("region map ") + map_path + " (" + what + "); " + RegionCounts(seg.triangle_regions);
+  seg.notes = std::string("region map ") + map_path + " (" + what + "); " + RegionCounts(seg.triangle_regions, seg.layout);
   if (ctx) ctx->Info("segment: " + seg.notes);
   return seg;
 }
@@ -382,6 +523,7 @@ Result<Segmentation> Segment(const Mesh& mesh, SegmentMethod method, Context* ct
   switch (method) {
     case SegmentMethod::kRig: return SegmentByRig(mesh, ctx);
     case SegmentMethod::kGeometry: return SegmentByGeometry(mesh, ctx);
+    case SegmentMethod::kSkeleton: return SegmentBySkeleton(mesh, {}, ctx);
     case SegmentMethod::kAuto: break;
   }
   if (mesh.skin) {
@@ -389,7 +531,15 @@ Result<Segmentation> Segment(const Mesh& mesh, SegmentMethod method, Context* ct
     if (rig.ok()) return rig;
     if (ctx) ctx->Warn("segment: rig not usable (" + rig.error().message + "); falling back to geometry");
   }
-  return SegmentByGeometry(mesh, ctx);
+  Result<Segmentation> geometry = SegmentByGeometry(mesh, ctx);
+  if (geometry.ok() || geometry.error().code != Error::Code::kSegmentation) return geometry;
+  // Not a standing body: a rigged creature may still be segmented by its bone tree (the any-skeleton path).
+  Result<Segmentation> skeleton = SegmentBySkeleton(mesh, {}, ctx);
+  if (skeleton.ok()) {
+    if (ctx) ctx->Info("segment: " + geometry.error().message + "; segmented as a creature by its skeleton instead");
+    return skeleton;
+  }
+  return MakeError(Error::Code::kSegmentation, geometry.error().message + "; " + skeleton.error().message);
 }
 
 SegmentationAgreement CompareSegmentations(const Mesh& mesh, const Segmentation& a, const Segmentation& b) {

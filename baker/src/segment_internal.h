@@ -50,11 +50,17 @@ std::vector<double> TriangleAreas(const Mesh& mesh);
 /// through shared welded vertices): for each limb region every piece but the largest (by area) moves to
 /// the region it touches most (the torso when it touches nothing); then every torso piece but the
 /// largest that touches a single limb only (an island enclosed by that limb) joins that limb.
-/// Appends what it did to `notes`.
-void MakeLimbsConnected(const Mesh& mesh, std::vector<uint8_t>& triangle_regions, std::string& notes);
+/// Appends what it did to `notes`. `layout` says which region is the trunk and how many there are (the
+/// paper's five by default; region values must be below layout.count()). `keep_loose_parts`: a limb
+/// piece that touches no other region at all (a mesh component of its own: a tail's tuft, an eye, a
+/// claw) keeps its region instead of going to the torso (the any-skeleton path, where such parts are
+/// skinned to the limb they belong to).
+void MakeLimbsConnected(const Mesh& mesh, std::vector<uint8_t>& triangle_regions, std::string& notes,
+                        const RegionLayout& layout = RegionLayout(), bool keep_loose_parts = false);
 
 /// Fills Segmentation::vertex_regions from triangle_regions: a vertex takes the majority region of its
-/// incident triangles (ties go to the lowest region value); kNoRegion when unreferenced.
+/// incident triangles (ties go to the lowest region value); kNoRegion when unreferenced. Regions of
+/// seg.layout.
 void ComputeVertexRegions(const Mesh& mesh, Segmentation& seg);
 
 /// Bone-name rules (segment_rig.cpp): the region a bone's weights go to, or nullopt for a limb bone
@@ -69,7 +75,19 @@ std::optional<Region> RegionOfBone(std::string_view bone_name);
 /// like a foot (foot, toe, ankle, heel, ball); kNone otherwise (the head is found by geometry).
 Extremity ExtremityOfBone(std::string_view bone_name);
 
-/// "R0 left_arm 1234 tri, R1 ..." summary for notes and logs.
-std::string RegionCounts(const std::vector<uint8_t>& triangle_regions);
+/// "R0 left_arm 1234, R1 ..." summary for notes and logs (names from `layout`).
+std::string RegionCounts(const std::vector<uint8_t>& triangle_regions, const RegionLayout& layout = RegionLayout());
+
+/// Lower-case alphanumeric tokens of a bone or region name, split at other characters, lower→upper case
+/// changes and letter↔digit changes ("HindLeg_L_01" → hind, leg, l, 01).
+std::vector<std::string> NameTokens(std::string_view name);
+
+/// Sets RegionInfo::mirror of a layout's limbs: two limbs whose names differ only by a side token
+/// (l/left/lft against r/right/rgt) are a pair ("HindLeg_L" and "HindLeg_R"); first match in order.
+void PairMirrorLimbs(RegionLayout& layout);
+
+/// The principal axis (unit, largest component positive) of the corners of the triangles of region
+/// `trunk`, area-weighted; Mesh::up_axis when the region is empty. Bind pose, model space.
+std::array<double, 3> TrunkAxis(const Mesh& mesh, const std::vector<uint8_t>& triangle_regions, Region trunk);
 
 }  // namespace spherechain::baker::segment_detail

@@ -14,14 +14,23 @@ const char* RegionName(Region r) {
 }
 
 const char* RegionSymbol(Region r) {
-  switch (r) {
-    case Region::kLeftArm: return "R0";
-    case Region::kRightArm: return "R1";
-    case Region::kLeftLeg: return "R2";
-    case Region::kRightLeg: return "R3";
-    case Region::kTorso: return "R4";
+  static const char* const kSymbols[kMaxRegions] = {
+      "R0",  "R1",  "R2",  "R3",  "R4",  "R5",  "R6",  "R7",  "R8",  "R9",  "R10", "R11", "R12", "R13", "R14", "R15",
+      "R16", "R17", "R18", "R19", "R20", "R21", "R22", "R23", "R24", "R25", "R26", "R27", "R28", "R29", "R30", "R31"};
+  const int k = static_cast<int>(r);
+  return k < kMaxRegions ? kSymbols[k] : "R?";
+}
+
+std::vector<RegionInfo> RegionLayout::PaperRegions() {
+  std::vector<RegionInfo> r(5);
+  const char* names[5] = {"left_arm", "right_arm", "left_leg", "right_leg", "torso"};
+  const int mirrors[5] = {1, 0, 3, 2, -1};
+  for (int k = 0; k < 5; ++k) {
+    r[size_t(k)].name = names[k];
+    r[size_t(k)].mirror = mirrors[k];
   }
-  return "R?";
+  r[4].kind = RegionKind::kTrunk;
+  return r;
 }
 
 const char* ToString(Error::Code code) {

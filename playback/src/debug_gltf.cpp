@@ -192,8 +192,9 @@ Status ExportAnimatedGltf(const Mesh& mesh, const runtime::AssetView& asset, con
   body.pbrMetallicRoughness.metallicFactor = 0.0;
   body.doubleSided = true;
   m.materials.push_back(body);
-  for (int r = 0; r < baker::kRegionCount; ++r) {
-    const auto c = baker::RegionColor(static_cast<baker::Region>(r));
+  const int region_count = int(runtime::RegionCount(asset));  // 5, or a creature's (schema v4)
+  for (int r = 0; r < region_count; ++r) {
+    const auto c = baker::RegionColor(asset, uint32_t(r));
     tinygltf::Material glass;
     glass.name = std::string("spheres_") + baker::RegionSymbol(static_cast<baker::Region>(r));
     glass.alphaMode = "BLEND";
@@ -206,7 +207,7 @@ Status ExportAnimatedGltf(const Mesh& mesh, const runtime::AssetView& asset, con
   std::vector<float> colors(size_t(V) * 3, 0.5f);
   if (const auto* tri_regions = asset.asset->triangle_regions())
     for (uint32_t t = 0; t < mesh.triangle_count() && t < tri_regions->size(); ++t) {
-      const auto c = baker::RegionColor(static_cast<baker::Region>(tri_regions->Get(t)));
+      const auto c = baker::RegionColor(asset, tri_regions->Get(t));
       for (int k = 0; k < 3; ++k)
         for (int j = 0; j < 3; ++j) colors[3 * size_t(mesh.indices[3 * size_t(t) + k]) + j] = c[j];
     }
@@ -283,7 +284,7 @@ Status ExportAnimatedGltf(const Mesh& mesh, const runtime::AssetView& asset, con
   const int unit_ind = g.Accessor(g.View(unit_idx.data(), unit_idx.size() * 2, TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER),
                                   TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, unit_idx.size(), TINYGLTF_TYPE_SCALAR);
   const int first_sphere_mesh = int(m.meshes.size());
-  for (int r = 0; r < baker::kRegionCount; ++r) {
+  for (int r = 0; r < region_count; ++r) {
     tinygltf::Primitive p;
     p.attributes["POSITION"] = unit_pos;
     p.attributes["NORMAL"] = unit_pos;
@@ -307,7 +308,8 @@ Status ExportAnimatedGltf(const Mesh& mesh, const runtime::AssetView& asset, con
   for (uint32_t s = 0; s < S; ++s) {
     tinygltf::Node node;
     node.name = "sphere_" + std::to_string(s);
-    const int region = sphere_regions && s < sphere_regions->size() ? std::min<int>(sphere_regions->Get(s), 4) : 4;
+    const int region = sphere_regions && s < sphere_regions->size() ? std::min<int>(sphere_regions->Get(s), region_count - 1)
+                                                                    : region_count - 1;
     node.mesh = first_sphere_mesh + region;
     const float* T = &sphere_t[size_t(s) * F * 3];
     const float* R = &sphere_s[size_t(s) * F * 3];

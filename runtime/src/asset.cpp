@@ -150,6 +150,20 @@ Status Semantics(const Asset& a, AssetView* view) {
     }
   }
 
+  // Regions (optional, schema v4): what region values mean; the trunk last.
+  if (const auto* regions = a.regions()) {
+    const uint32_t R = regions->size();
+    if (R < 2 || R > kMaxRegions) return Status::kErrorRegions;
+    for (uint32_t r = 0; r < R; ++r)
+      if ((regions->Get(r)->kind() == schema::RegionKind::Trunk) != (r + 1 == R)) return Status::kErrorRegions;
+    if (const auto* sr = a.sphere_regions())
+      for (uint8_t r : *sr)
+        if (r >= R) return Status::kErrorRegions;
+    if (const auto* tr = a.triangle_regions())
+      for (uint8_t r : *tr)
+        if (r >= R) return Status::kErrorRegions;
+  }
+
   view->asset = &a;
   view->sphere_count = S;
   view->vertex_count = V;
@@ -175,7 +189,7 @@ Status LoadAsset(const void* bytes, size_t size, AssetView* out) {
   if (version < kMinSchemaVersion) return Status::kErrorVersionTooOld;
   if (version > kSchemaVersion) return Status::kErrorVersionTooNew;
 
-  fb::Verifier verifier(buf, size, /*max_depth=*/8, /*max_tables=*/16 + 1024 + 65536 + 256, /*check_alignment=*/true);
+  fb::Verifier verifier(buf, size, /*max_depth=*/8, /*max_tables=*/16 + 1024 + 65536 + 256 + 256, /*check_alignment=*/true);
   if (!schema::VerifyAssetBuffer(verifier)) return Status::kErrorCorrupt;
 
   AssetView view;
@@ -191,6 +205,26 @@ TriangleSpan SurroundingTriangles(const AssetView& view, uint32_t sphere) {
   const uint32_t begin = offs->Get(sphere), end = offs->Get(sphere + 1);
   if (begin == end) return {};
   return {view.asset->surrounding_triangles()->data() + begin, end - begin};
+}
+
+uint32_t RegionCount(const AssetView& view) {
+  if (!view.valid()) return 0;
+  return view.asset->regions() ? view.asset->regions()->size() : 5u;
+}
+
+const char* RegionName(const AssetView& view, uint32_t region) {
+  static const char* const kPaper[5] = {"left_arm", "right_arm", "left_leg", "right_leg", "torso"};
+  if (region >= RegionCount(view)) return "";
+  if (const auto* regions = view.asset->regions()) {
+    const auto* name = regions->Get(region)->name();
+    return name ? name->c_str() : "";
+  }
+  return kPaper[region];
+}
+
+bool IsTrunkRegion(const AssetView& view, uint32_t region) {
+  const uint32_t n = RegionCount(view);
+  return n > 0 && region + 1 == n;
 }
 
 TriangleSpan PivotTriangles(const AssetView& view, uint32_t sphere) {

@@ -33,6 +33,8 @@ const char* ToString(Status s) {
     case Status::kErrorContactMargin: return "kErrorContactMargin: Asset.contact_margin is negative";
     case Status::kErrorSkinWeights:
       return "kErrorSkinWeights: a sphere's joint weights are negative, not finite or do not sum to 1";
+    case Status::kErrorRegions:
+      return "kErrorRegions: Asset.regions malformed (count, one trunk last, or a region value past them)";
     case Status::kErrorJointCount:
       return "kErrorJointCount: the joint matrix count differs from the asset's Asset.joint_count";
     case Status::kErrorNonFiniteJoints: return "kErrorNonFiniteJoints: a joint matrix holds a NaN or an infinity";

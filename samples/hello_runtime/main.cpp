@@ -92,14 +92,15 @@ int main(int argc, char** argv) {
   }
 
   // 4. Print the pairs and the mesh triangles behind them (the surrounding regions, for a narrow phase).
-  static const char* kRegion[5] = {"left_arm", "right_arm", "left_leg", "right_leg", "torso"};
+  // Region names from the asset: the paper's five, or a creature's limbs and trunk (schema v4).
   const auto* sphere_regions = asset.asset->sphere_regions();
   std::printf("%s: %u spheres, %u colliding pairs with the left arm pushed into the chest\n", argv[1],
               asset.sphere_count, count);
   for (uint32_t i = 0; i < count; ++i) {
     const runtime::Collision& c = pairs[i];
     std::printf("  sphere %3u (%-9s) x sphere %3u (%-9s) depth %.3f  triangles %u + %u\n", c.a,
-                kRegion[sphere_regions->Get(c.a)], c.b, kRegion[sphere_regions->Get(c.b)], c.depth,
+                runtime::RegionName(asset, sphere_regions->Get(c.a)), c.b, runtime::RegionName(asset, sphere_regions->Get(c.b)),
+                c.depth,
                 runtime::SurroundingTriangles(asset, c.a).count, runtime::SurroundingTriangles(asset, c.b).count);
   }
   return 0;

@@ -351,7 +351,7 @@ TEST_CASE("heavy: bake MakeHuman with the cover fit — coverage, protrusion, sc
   std::memcpy(storage.data(), r->asset.data(), r->asset.size());
   rt::AssetView view;
   REQUIRE(rt::LoadAsset(storage.data(), r->asset.size(), &view) == rt::Status::kOk);
-  CHECK(view.asset->schema_version() == rt::kSchemaVersion);
+  CHECK(view.asset->schema_version() == rt::kPaperSchemaVersion);
   REQUIRE(view.asset->coverage() != nullptr);
   CHECK(view.asset->coverage()->coverage() == doctest::Approx(r->coverage->coverage).epsilon(1e-6));
   CHECK(std::string(view.asset->fit_method()->c_str()) == "cover");

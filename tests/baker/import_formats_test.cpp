@@ -74,13 +74,20 @@ TEST_CASE("import formats (heavy): the three humans bake, the creatures and the 
     CHECK(r->segmentation.method == "geometry");  // no skin: segmented from the shape alone
     CHECK(!r->centre_weights.has_value());       // and no joint refit
   }
-  for (const char* rel : {"SMD/WusonSMD.smd", "B3D/WusonBlitz.b3d", "MS3D/Wuson.ms3d", "MD5/SimpleCube.md5mesh"}) {
+  // Not standing bodies, and no creature either (the any-skeleton path names why: no rig, one bone).
+  const std::pair<const char*, const char*> refused[] = {
+      {"SMD/WusonSMD.smd", "no recognisable limbs: the skin uses 1 bone (root)"},
+      {"B3D/WusonBlitz.b3d", "the mesh has no skin"},
+      {"MS3D/Wuson.ms3d", "the mesh has no skin"},
+      {"MD5/SimpleCube.md5mesh", "segment (skeleton): "}};
+  for (const auto& [rel, why] : refused) {
     CAPTURE(rel);
     const std::string path = test::AssimpModel(rel);
     if (!test::Require(path)) continue;
     auto r = Bake(path, BakeConfig{});
     REQUIRE(!r.ok());
     CHECK(r.error().message.find("not a standing body") != std::string::npos);
+    CHECK_MESSAGE(r.error().message.find(why) != std::string::npos, r.error().message);
   }
 }
 

@@ -128,8 +128,15 @@ std::array<int, sc::kRegionCount> PieceCounts(const sc::Mesh& mesh, const sc::Se
 }
 
 std::string Describe(const sc::Segmentation& s) {
-  const auto n = Counts(s);
   std::ostringstream o;
+  if (!s.layout.paper) {  // a creature's (the any-skeleton path: Testwuson.X)
+    o << s.method << ":";
+    for (int r = 0; r < s.layout.count(); ++r)
+      o << ' ' << s.layout.regions[size_t(r)].name << ' '
+        << std::count(s.triangle_regions.begin(), s.triangle_regions.end(), uint8_t(r));
+    return o.str();
+  }
+  const auto n = Counts(s);
   o << s.method << ": L-arm " << n[0] << ", R-arm " << n[1] << ", L-leg " << n[2] << ", R-leg " << n[3] << ", torso "
     << n[4];
   return o.str();

@@ -94,6 +94,10 @@ struct AssetData {
   uint32_t joint_count = 0;                 // Asset.joint_count (schema v3)
   std::vector<uint16_t> sphere_joints;      // [opt] #S×4: empty = field absent
   std::vector<float> sphere_joint_weights;  // [opt] #S×4: empty = field absent
+  std::vector<uint8_t> sphere_regions;      // [opt] #S: empty = field absent
+  std::vector<uint8_t> triangle_regions;    // [opt] #T: empty = field absent
+  /// [opt] Asset.regions (schema v4): names and kinds (true: Trunk); empty = field absent.
+  std::vector<std::pair<std::string, bool>> regions;
 };
 
 inline void Orthonormal(const float d[3], float u[3], float v[3]) {
@@ -220,6 +224,16 @@ inline AlignedBytes Serialize(const AssetData& d) {
   flatbuffers::Offset<flatbuffers::Vector<float>> sw;
   if (!d.sphere_joints.empty()) sj = b.CreateVector(d.sphere_joints);
   if (!d.sphere_joint_weights.empty()) sw = b.CreateVector(d.sphere_joint_weights);
+  flatbuffers::Offset<flatbuffers::Vector<uint8_t>> sr, tr;
+  if (!d.sphere_regions.empty()) sr = b.CreateVector(d.sphere_regions);
+  if (!d.triangle_regions.empty()) tr = b.CreateVector(d.triangle_regions);
+  flatbuffers::Offset<flatbuffers::Vector<flatbuffers::Offset<schema::RegionInfo>>> regions;
+  if (!d.regions.empty()) {
+    std::vector<flatbuffers::Offset<schema::RegionInfo>> list;
+    for (const auto& [name, trunk] : d.regions)
+      list.push_back(schema::CreateRegionInfo(b, b.CreateString(name), trunk ? schema::RegionKind::Trunk : schema::RegionKind::Limb));
+    regions = b.CreateVector(list);
+  }
   auto gen = b.CreateString("asset_builder.h");
   auto units = b.CreateString("unknown");
   schema::AssetBuilder ab(b);
@@ -243,6 +257,9 @@ inline AlignedBytes Serialize(const AssetData& d) {
   if (d.joint_count != 0) ab.add_joint_count(d.joint_count);
   if (!d.sphere_joints.empty()) ab.add_sphere_joints(sj);
   if (!d.sphere_joint_weights.empty()) ab.add_sphere_joint_weights(sw);
+  if (!d.sphere_regions.empty()) ab.add_sphere_regions(sr);
+  if (!d.triangle_regions.empty()) ab.add_triangle_regions(tr);
+  if (!d.regions.empty()) ab.add_regions(regions);
   b.Finish(ab.Finish(), d.identifier.c_str());
   AlignedBytes out;
   out.assign(b.GetBufferPointer(), b.GetSize());

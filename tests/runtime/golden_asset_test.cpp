@@ -151,3 +151,44 @@ TEST_CASE("golden v3 asset (CesiumMan, cover fit, joint weights, baked by sphere
   job.workspace = &ctx2.ws;
   CHECK(job.Run() == Status::kErrorMissingField);
 }
+
+TEST_CASE("golden v4 asset (the synthetic creature, any-skeleton path) names its regions, which v3 readers refuse") {
+  // tests/data/creature/creature.gltf baked by `spherechain bake` (default configuration): five limbs and
+  // a trunk in Asset.regions, 15 chains pairing them.
+  const std::string path = spherechain::test::SourceFile("tests/data/golden/v4/creature.sphc");
+  REQUIRE_MESSAGE(spherechain::test::Require(path), "the golden asset is part of the repository");
+  size_t size = 0;
+  std::vector<uint64_t> bytes = ReadAligned(path, &size);
+  AssetView view;
+  REQUIRE(LoadAsset(bytes.data(), size, &view) == Status::kOk);
+  CHECK(view.asset->schema_version() == 4);
+  CHECK(view.triangle_count == 1504);
+  CHECK(view.chain_count == 15);
+  REQUIRE(RegionCount(view) == 6);
+  const char* names[6] = {"Tail", "HindLeg_L", "HindLeg_R", "ForeLeg_L", "ForeLeg_R", "trunk"};
+  for (uint32_t r = 0; r < 6; ++r) CHECK(std::string(RegionName(view, r)) == names[r]);
+  CHECK(IsTrunkRegion(view, 5));
+  CHECK(view.asset->regions()->Get(3)->mirror() == 4);
+  // Region values stay within the table (LoadAsset checked it): every region owns spheres.
+  std::vector<int> spheres(6, 0);
+  for (uint8_t r : *view.asset->sphere_regions()) ++spheres.at(r);
+  for (int n : spheres) CHECK(n > 0);
+  // The joint refit at bind pose (identity matrices; the creature's skin has 13 joints): nothing collides.
+  spherechain::test::Character ctx;
+  REQUIRE(ctx.Init(view) == Status::kOk);
+  REQUIRE(view.asset->joint_count() == 13);
+  std::vector<float> identity(13 * kJointMatrixFloats, 0.0f);
+  for (int j = 0; j < 13; ++j)
+    for (int d = 0; d < 3; ++d) identity[12 * j + 5 * d] = 1.0f;
+  JointRefitJob job;
+  job.model = &ctx.model;
+  job.workspace = &ctx.ws;
+  job.joint_matrices = identity.data();
+  job.joint_count = 13;
+  REQUIRE(job.Run() == Status::kOk);
+  CHECK(CountM2(view, ctx) == 0);
+  // This SDK reads v1..v4; a v3 SDK's kSchemaVersion was 3, so it answers kErrorVersionTooNew for this
+  // asset (what LoadAsset answers here for a version past kSchemaVersion):
+  CHECK(kSchemaVersion == 4);
+  CHECK(kPaperSchemaVersion == 3);
+}

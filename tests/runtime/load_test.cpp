@@ -184,6 +184,43 @@ TEST_CASE("LoadAsset: semantic errors each give their status") {
   expect([](test::AssetData& d) {
     d.spheres.clear();
   }, Status::kErrorNoSpheres);
+  // Regions (schema v4): 2..kMaxRegions, one Trunk and it the last, every region value below their count.
+  auto creature = [](test::AssetData& d) {
+    d.regions = {{"Tail", false}, {"Leg_L", false}, {"trunk", true}};
+    d.sphere_regions.assign(d.spheres.size(), 2);
+    d.sphere_regions[0] = 0;
+    d.triangle_regions.assign(d.triangle_spheres.size(), 1);
+  };
+  {
+    test::AssetData d = base;
+    creature(d);
+    REQUIRE(Load(d, &view) == Status::kOk);
+    CHECK(RegionCount(view) == 3);
+    CHECK(std::string(RegionName(view, 0)) == "Tail");
+    CHECK(std::string(RegionName(view, 2)) == "trunk");
+    CHECK(std::string(RegionName(view, 3)).empty());
+    CHECK(IsTrunkRegion(view, 2));
+    CHECK_FALSE(IsTrunkRegion(view, 1));
+  }
+  {
+    test::AssetData d = base;  // no regions: the paper's five
+    REQUIRE(Load(d, &view) == Status::kOk);
+    CHECK(RegionCount(view) == 5);
+    CHECK(std::string(RegionName(view, 4)) == "torso");
+    CHECK(IsTrunkRegion(view, 4));
+  }
+  expect([&](test::AssetData& d) { creature(d); d.sphere_regions[1] = 3; }, Status::kErrorRegions);
+  expect([&](test::AssetData& d) { creature(d); d.triangle_regions[0] = 7; }, Status::kErrorRegions);
+  expect([&](test::AssetData& d) { creature(d); d.regions[2].second = false; }, Status::kErrorRegions);  // no trunk
+  expect([&](test::AssetData& d) { creature(d); d.regions[0].second = true; }, Status::kErrorRegions);   // trunk first
+  expect([&](test::AssetData& d) { creature(d); d.regions.resize(1); d.sphere_regions.assign(d.spheres.size(), 0);
+                                   d.triangle_regions.assign(d.triangle_spheres.size(), 0); d.regions[0].second = true; },
+         Status::kErrorRegions);  // one region only
+  expect([&](test::AssetData& d) {
+    creature(d);
+    d.regions.assign(kMaxRegions + 1, {"limb", false});
+    d.regions.back().second = true;
+  }, Status::kErrorRegions);
 }
 
 TEST_CASE("ToString names every status and Succeeded/Failed split them") {
@@ -228,6 +265,7 @@ TEST_CASE("ToString names every status and Succeeded/Failed split them") {
       {Status::kErrorExcludedPairs, "kErrorExcludedPairs"},
       {Status::kErrorContactMargin, "kErrorContactMargin"},
       {Status::kErrorSkinWeights, "kErrorSkinWeights"},
+      {Status::kErrorRegions, "kErrorRegions"},
   };
   for (const auto& [status, name] : all) {
     CAPTURE(name);

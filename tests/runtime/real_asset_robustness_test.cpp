@@ -1,6 +1,7 @@
 // Untrusted-input robustness on real baked assets (STYLE.md: "every truncated prefix of a valid
 // buffer under AddressSanitizer"): the committed corpus assets fuzz/corpus/load_asset/{cesium_man,
-// bcn_epileptic}.sphc (baked from ../shared/data/gltf/CesiumMan.gltf and assimp's X/BCN_Epileptic.X).
+// bcn_epileptic, creature}.sphc (baked from ../shared/data/gltf/CesiumMan.gltf, assimp's X/BCN_Epileptic.X and
+// tests/data/creature/creature.gltf: a schema v4 asset with its Asset.regions).
 // Every prefix is rejected; thousands of seeded bit flips are rejected or load and then run the
 // whole per-frame sequence without breaking an invariant. Each buffer is an exact-size heap copy, so
 // ASan (asan preset) sees any read past the end.
@@ -29,7 +30,7 @@ std::vector<uint8_t> ReadCorpusAsset(const std::string& name) {
 }  // namespace
 
 TEST_CASE("Real asset: every truncated prefix is an error, never a crash") {
-  for (const std::string name : {std::string("cesium_man.sphc"), std::string("bcn_epileptic.sphc")}) {
+  for (const std::string name : {std::string("cesium_man.sphc"), std::string("bcn_epileptic.sphc"), std::string("creature.sphc")}) {
     const std::vector<uint8_t> full = ReadCorpusAsset(name);
     CAPTURE(name);
     REQUIRE(full.size() > 1000);
@@ -54,7 +55,7 @@ TEST_CASE("Real asset: every truncated prefix is an error, never a crash") {
 
 TEST_CASE("Real asset: 4000 seeded bit flips are rejected or load and run cleanly") {
   std::mt19937 rng(0x5eedu);
-  for (const std::string name : {std::string("cesium_man.sphc"), std::string("bcn_epileptic.sphc")}) {
+  for (const std::string name : {std::string("cesium_man.sphc"), std::string("bcn_epileptic.sphc"), std::string("creature.sphc")}) {
     const std::vector<uint8_t> full = ReadCorpusAsset(name);
     CAPTURE(name);
     REQUIRE(full.size() > 1000);

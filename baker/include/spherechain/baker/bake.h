@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "spherechain/baker/chains.h"
+#include "spherechain/baker/contacts.h"
 #include "spherechain/baker/coverage.h"
 #include "spherechain/baker/fit.h"
 #include "spherechain/baker/import.h"
@@ -20,12 +21,13 @@
 namespace spherechain::baker {
 
 /// Bake configuration. JSON form (every key optional):
-/// { "fit": "cover"|"paper", "max_spheres": 128, "cover_voxel_rel": 0.005, "min_radius_rel": 0.003,
+/// { "fit": "cover"|"paper", "max_spheres": 128, "cover_voxel_rel": 0.005, "cover_max_voxels": 140000,
+///   "min_radius_rel": 0.003,
 ///   "min_gain": 0.0002, "region_balance": 0.5, "refine_sweeps": 4, "dilation_rel": 0.003,
 ///   "skin_spheres": 16, "skin_tolerance_rel": 0.01, "skin_min_vertices": 8,
 ///   "contact_margin_rel": 0.004,
 ///   "near_rel": 0.005,
-///   "segmentation": "auto"|"rig"|"geometry"|"map", "region_map": "map.json", "rig": "x.mhskel",
+///   "segmentation": "auto"|"rig"|"geometry"|"skeleton"|"map", "region_map": "map.json", "rig": "x.mhskel",
 ///   "rays": 80, "spheres_per_level": 2, "disk_step": 0.25, "disk_step_rel": 0.015,
 ///   "penetration_depth": 0.3, "chains": [{"name": "zeta0", "members": ["R0", "R4L", "R2"]}, ...] }
 struct BakeConfig {
@@ -77,6 +79,13 @@ struct BakeResult {
   std::vector<SpherePair> excluded;
   std::vector<SpherePair> cross_region_bind_overlaps;
   ExclusionReasons exclusion_reasons;                  ///< cover fit: why pairs were excluded
+  /// A creature's (the any-skeleton path): sphere pairs excluded because triangles of their surrounding
+  /// regions already intersect at bind pose (horns, eyes, a tail's tuft modelled through the skin: the
+  /// model's own interpenetration, never a collision), added to `excluded`.
+  size_t bind_contact_exclusions = 0;
+  /// A creature's: pairs of spheres of two limbs whose regions share skin (the neck and a fore leg at the
+  /// chest), within 1.25 (rA + rB) + near at bind — the crease where they leave the trunk side by side.
+  size_t limb_crease_exclusions = 0;
   std::optional<CoverageStats> coverage;               ///< bind-pose coverage of φ1' (absent: not measurable)
   CoverageOptions coverage_options;                    ///< what it was measured with
   SurroundingRegions surrounding;

@@ -12,7 +12,8 @@ namespace spherechain::baker {
 
 /// A chain definition: a name and the sphere sets it unites. Member tokens:
 /// "R0".."R3" (a whole tubular region), "R4" (the whole torso), "R4L", "R4R", "R4T", "R4D" (torso
-/// spheres carrying that label, Figure 6).
+/// spheres carrying that label, Figure 6). A creature's layout (RegionLayout::paper false): "R0".."R<n−1>"
+/// or a region's name ("Tail", "trunk"); no labels.
 struct ChainDef {
   std::string name;
   std::vector<std::string> members;
@@ -22,15 +23,26 @@ struct ChainDef {
 /// ζ4 = R0 ∪ R4T ∪ R4R ∪ R3, ζ5 = R1 ∪ R4T ∪ R4L ∪ R2.
 std::vector<ChainDef> DefaultChainDefs();
 
+/// A creature's chains (the any-skeleton path, whose limbs Table 1 does not know): one chain per pair of
+/// limbs, "A+B" = R_a ∪ R_b, then one per limb with the trunk, "A+trunk" = R_a ∪ R_trunk — L(L+1)/2
+/// chains for L ≤ 7 limbs; more limbs go in 7 groups of consecutive limbs (bone-tree order: a spider's
+/// neighbouring legs together), chains pairing the groups, 28 in all (runtime::kMaxChains is 32). Every
+/// pair of regions (and of spheres) shares at least one chain, so M1 tests every pair M2 tests (a limb's
+/// own pairs and the trunk's in several chains; M1 reports them once per chain). Built from `layout`'s
+/// names and symbols; Bake() uses them when the configuration keeps the default chains.
+std::vector<ChainDef> CreatureChainDefs(const RegionLayout& layout);
+
 /// A built chain ζ_i: sphere indices into the fitted sphere list, ascending, unique.
 struct Chain {
   std::string name;
   std::vector<uint16_t> spheres;
 };
 
-/// Builds the chains. Errors: kConfig for an unknown member token, an empty chain, more than 65,535
-/// spheres, or no chain at all.
-Result<std::vector<Chain>> BuildChains(const std::vector<FittedSphere>& spheres, const std::vector<ChainDef>& defs);
+/// Builds the chains; tokens name regions of `layout` (the paper's five by default). Errors: kConfig for an
+/// unknown member token (a region the layout does not have; a torso label outside the paper's layout), a
+/// chain with fewer than two spheres, more than 65,535 spheres, or no chain at all.
+Result<std::vector<Chain>> BuildChains(const std::vector<FittedSphere>& spheres, const std::vector<ChainDef>& defs,
+                                       const RegionLayout& layout = RegionLayout());
 
 /// A pair of sphere indices, a < b.
 using SpherePair = std::pair<uint16_t, uint16_t>;
@@ -71,10 +83,11 @@ struct ExclusionReasons {
 /// apart at bind pose are tested (a bending spine, an elbow folding the forearm onto the upper arm).
 /// Sorted by (a, b), unique. `reasons` [opt, out] counts them by reason; `cross_region_bind_overlaps`
 /// [opt, out] as ExcludedPairs (bind-overlapping pairs of two different regions other than a limb and
-/// the torso). Cost: O(#S²).
+/// the torso). `layout` [opt]: the regions' meaning (nullptr: the paper's five, torso R4 along `up`); a
+/// creature's layout makes its trunk the torso and RegionLayout::trunk_axis its up. Cost: O(#S²).
 std::vector<SpherePair> BindExcludedPairs(const std::vector<FittedSphere>& spheres, double near,
                                           ExclusionReasons* reasons = nullptr,
                                           std::vector<SpherePair>* cross_region_bind_overlaps = nullptr,
-                                          UpAxis up = UpAxis::kY);
+                                          UpAxis up = UpAxis::kY, const RegionLayout* layout = nullptr);
 
 }  // namespace spherechain::baker

@@ -14,6 +14,13 @@ namespace spherechain::baker {
 
 /// sRGB colour of a region in every picture: R0 orange, R1 blue, R2 green, R3 purple, R4 grey.
 std::array<float, 3> RegionColor(Region r);
+/// Colour of region `region` of asset `a`: the paper's five as RegionColor(Region); a creature's
+/// (Asset.regions, schema v4): the trunk grey, the limbs from a palette of 12 in region order (R0 orange,
+/// R1 blue, R2 green, R3 purple as the paper's, then teal, brown, pink, olive, navy, cyan, lime, slate; no
+/// red, amber or magenta, the colours of contacts).
+std::array<float, 3> RegionColor(const runtime::AssetView& a, uint32_t region);
+/// "R0 left arm (orange)  R1 right arm (blue) …" — the legend of RegionColor(a, ·), names from the asset.
+std::string RegionLegend(const runtime::AssetView& a);
 
 /// Writes `out_path` (.gltf, buffers embedded): node "mesh" = the character coloured by region
 /// (COLOR_0 per vertex, from the asset's triangle_regions), node "spheres" = one UV sphere per asset

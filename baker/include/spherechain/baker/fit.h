@@ -24,6 +24,13 @@ struct FitParams {
   // --- cover fit (FitCover) ---
   int max_spheres = 128;              ///< sphere budget [Limit: 5..4096]
   double cover_voxel_rel = 1.0 / 200; ///< interior voxel edge / body height [Limit: 0.001..0.1]
+  /// Budget of interior voxels for a creature (a segmentation whose RegionLayout is not the paper's): one
+  /// with more at cover_voxel_rel (bulky along its longest extent, the voxels' scale: the Wuson, 267,000)
+  /// is voxelised again with voxels larger by the cube root of the excess (× 1.02), so its fit costs what
+  /// a human's does (MakeHuman 95,000 … mrfixit 132,000 interior voxels; the paper's standing bodies are
+  /// never capped). 0: no budget. [Limit: >= 0] JSON "cover_max_voxels" (in the configuration hash only
+  /// when not the default)
+  int cover_max_voxels = 140'000;
   double min_radius_rel = 0.003;      ///< smallest sphere radius / body height (fingers, toes: none)
   double min_gain = 0.0002;           ///< stop when the best sphere adds less than this (weighted share
                                       ///< of the body's volume, see region_balance) [Limit: 0..1]
@@ -129,7 +136,8 @@ Result<std::vector<FittedSphere>> FitTorso(const Mesh& mesh, const std::vector<u
 /// The "cover" fit: spheres that fill each region, at most params.max_spheres in all.
 /// Method (after Coverage Axis, Dou et al. 2022, and the coverage objective of variational sphere
 /// sets, Wang et al. 2006):
-/// 1. the body's interior as voxel centres of edge cover_voxel_rel × height (VoxelizeInterior: the
+/// 1. the body's interior as voxel centres of edge cover_voxel_rel × height (a creature's: coarser when
+///    that gives more than cover_max_voxels interior voxels) (VoxelizeInterior: the
 ///    ray-parity test of MeasureCoverage, which tolerates open real meshes);
 /// 2. for each interior voxel, the exact distance to the nearest triangle (CGAL AABB_tree) — the
 ///    radius of the largest ball centred there inside the surface — and the region of that triangle;

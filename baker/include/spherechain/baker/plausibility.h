@@ -14,11 +14,17 @@
 namespace spherechain::baker {
 
 /// One failed check. Codes (stable):
-///   PLAUS-LIMB-PIECES    a limb region is not one connected piece (triangles joined through welded vertices)
-///   PLAUS-LIMB-DETACHED  a limb region shares no (welded) vertex with the torso
-///   PLAUS-LIMB-BALANCE   left and right arm (or leg) differ too much in area or in length
+///   PLAUS-LIMB-PIECES    a limb region is not one connected piece (triangles joined through welded vertices;
+///                        loose parts — pieces that share no vertex with any other region, a mesh component
+///                        of their own such as a tail's tuft or an eye — are not counted)
+///   PLAUS-LIMB-DETACHED  a limb region shares no (welded) vertex with the torso (a creature's trunk)
+///   PLAUS-LIMB-BALANCE   left and right arm (or leg) differ too much in area or in length; a creature's
+///                        limbs paired by name (RegionInfo::mirror: HindLeg_L and HindLeg_R)
 ///   PLAUS-HEAD-IN-LIMB   the top of the body above the torso's centre (the head) is mostly a limb region
-///   PLAUS-TRUNK-AXIS     the torso region's principal axis is far from the up axis (a horizontal trunk)
+///                        (the paper's layout only: a standing body)
+///   PLAUS-TRUNK-AXIS     the torso region's principal axis is far from the up axis (a horizontal trunk;
+///                        the paper's layout only — Bake() with segmentation auto then tries the
+///                        any-skeleton path on a rigged body)
 ///   PLAUS-OUTSIDE        too much of the spheres' volume lies outside the body (coverage.h protrusion)
 ///   PLAUS-SEG-AGREE      rig and geometry segmentations disagree on too many triangles
 struct PlausibilityFinding {

@@ -48,13 +48,19 @@ struct Pivots {
 };
 
 /// Chooses four pivot polygons per sphere, spread around it: in the plane perpendicular to the
-/// sphere's axis (limbs: towards the next sphere of the sequence; torso: up) the four triangles of its
+/// sphere's axis (limbs: towards the next sphere of the sequence; torso: up; a creature's trunk:
+/// RegionLayout::trunk_axis of `segmentation`'s layout) the four triangles of its
 /// surrounding region whose centroids lie nearest the directions +u, +v, −u, −v and closest to the
 /// sphere's level, each of non-negligible area. The frame they span is never degenerate: a choice
 /// whose frame is ill-conditioned is replaced by the best-spread triangles of the sphere's
 /// neighbourhood. Errors: kFit naming the sphere when no non-degenerate choice exists.
+/// `segmentation` [opt]: its layout (null: the paper's five); when it carries joint regions (the
+/// any-skeleton path, Segmentation::joint_regions) each sphere first looks for pivots among the triangles
+/// whose corners have ≥ 90 % of their skin weight on its own region's bones — the skin that moves with it
+/// (a trunk sphere at the hip otherwise follows the leg's skin there) — and takes any triangle only when
+/// no well-spread four are found so.
 Result<Pivots> ChoosePivots(const Mesh& mesh, const std::vector<FittedSphere>& spheres,
-                            const SurroundingRegions& surrounding);
+                            const SurroundingRegions& surrounding, const Segmentation* segmentation = nullptr);
 
 /// Skin weights of every sphere's centre, for the refit from joint matrices (schema v3
 /// Asset.joint_count / sphere_joints / sphere_joint_weights; runtime JointRefitJob).

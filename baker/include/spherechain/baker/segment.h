@@ -12,11 +12,19 @@ namespace spherechain::baker {
 struct Segmentation {
   std::vector<uint8_t> triangle_regions;  ///< #T, Region value per triangle (never kNoRegion on success)
   std::vector<uint8_t> vertex_regions;    ///< #V, Region per vertex (kNoRegion for unreferenced vertices)
-  std::string method;                     ///< "rig", "geometry" or "map"
+  std::string method;                     ///< "rig", "geometry", "map" or "skeleton"
   std::string notes;                      ///< human-readable diagnostics (pose found, cut heights, ...)
+  /// What the region values mean: the paper's five (rig, geometry, a plain map) or a creature's limbs
+  /// and trunk (skeleton; a map that names its regions).
+  RegionLayout layout;
+  /// The any-skeleton path: the region of each skin joint (#joints, Skin::joints order; a bone of no limb
+  /// is the trunk's); empty for the other methods. ChoosePivots (regions.h) puts a creature's pivots on
+  /// skin its own region's bones move.
+  std::vector<uint8_t> joint_regions;
 };
 
-enum class SegmentMethod : uint8_t { kAuto, kRig, kGeometry };
+/// kSkeleton: the any-skeleton path (SegmentBySkeleton), for rigged creatures that are not standing bipeds.
+enum class SegmentMethod : uint8_t { kAuto, kRig, kGeometry, kSkeleton };
 
 /// Segments from skin weights and bone-name rules (arm/hand/finger/clavicle → arm? see segment_rig.cpp;
 /// side from `.L`/`_L`/`Left`/...; legs from thigh/leg/knee/foot/toe; everything else torso).
@@ -29,9 +37,38 @@ Result<Segmentation> SegmentByRig(const Mesh& mesh, Context* ctx = nullptr);
 /// two arms cannot be found.
 Result<Segmentation> SegmentByGeometry(const Mesh& mesh, Context* ctx = nullptr);
 
-/// Reads a user region map: a JSON file {"triangle_regions": [r0, r1, ...]} with #T values 0..4, or
-/// {"vertex_regions": [...]} with #V values (a triangle takes its vertices' majority).
-/// Errors: kIo, kConfig (wrong length, value out of range).
+/// Bounds of the any-skeleton path.
+struct SkeletonOptions {
+  /// A branch of the bone tree is a limb when its bones move at least this share of the body's surface
+  /// (skin weights × vertex area); smaller branches stay with the region they hang from. A junction is
+  /// a bone where three such branches meet. [Limit: (0, 0.5)] Wuson: legs 7–10 %, tail 12 %, ears 1–2 %.
+  double limb_min_share = 0.03;
+};
+
+/// The any-skeleton path (issue 11): segments a rigged creature that is not a standing biped
+/// (quadrupeds, many-legged creatures, tails, necks, wings) from its bone tree and skin weights, into a
+/// creature RegionLayout: limbs R0..R(n−2) (the branches off the trunk: legs, tail, neck and head...),
+/// trunk R(n−1). Method (segment_skeleton.cpp): each bone's share of the surface (skin weights × vertex
+/// area); junctions, bones where three branches of at least `limb_min_share` meet; the trunk, the
+/// smallest subtree of bones joining the junctions; a limb per branch off the trunk of at least
+/// `limb_min_share`, with everything below it; triangles by the region of largest summed weight over
+/// their corners; each limb one connected piece (as SegmentByRig); limbs left without a triangle
+/// dropped. Limbs are numbered in bone-tree order, named from their bones (common stem of the main
+/// chain, else the bone moving the most surface: "HindLeg_L", "Tail", "Neck"; unique), paired left/right
+/// by names that differ only in a side token; layout.trunk_axis is the trunk's principal axis.
+/// Errors: kSegmentation "segment (skeleton): the mesh has no skin: ..." (no rig), "segment (skeleton): no
+/// recognisable limbs: ..." (fewer than three weighted bones, no junction, more than kMaxRegions − 1
+/// limbs, a trunk or fewer than two limbs left with triangles) — the message names the bones.
+/// Cost O(#V·influences + #bones + #T·#regions) plus MakeLimbsConnected; allocates.
+Result<Segmentation> SegmentBySkeleton(const Mesh& mesh, const SkeletonOptions& options = {}, Context* ctx = nullptr);
+
+/// Reads a user region map: a JSON file {"triangle_regions": [r0, r1, ...]} with #T values, or
+/// {"vertex_regions": [...]} with #V values (a triangle takes its vertices' majority). A value is a region
+/// index, its symbol ("R2") or its name ("left_leg"); the regions are the paper's five, or with
+/// "regions": ["Tail", "Leg_L", ..., "trunk"] (3..kMaxRegions unique names, the trunk last) a creature's
+/// layout (limbs paired left/right by name, trunk_axis measured).
+/// Errors: kIo, kConfig (wrong length, a value out of range or naming no region — the message lists the
+/// map's regions —, a bad or repeated "regions" name).
 Result<Segmentation> SegmentByMap(const Mesh& mesh, const std::string& map_path, Context* ctx = nullptr);
 
 /// kAuto: rig when the mesh has a skin whose bones are recognised, else geometry.

@@ -1,5 +1,6 @@
 // spherechain baker — the data every stage shares: the imported character (Mesh, Skin, Clip), the
-// five regions, Result<T> for fallible calls, and the injected Context for logs and stage timers.
+// regions (the paper's five, or a creature's RegionLayout), Result<T> for fallible calls, and the
+// injected Context for logs and stage timers.
 //
 // The baker library never prints: it logs through Context (the CLI routes it to spdlog), and every
 // call that reads user data returns Result<T>; exceptions from assimp, tinygltf or CGAL are caught at
@@ -21,17 +22,64 @@ namespace spherechain::baker {
 
 // ---------------------------------------------------------------------------------------------------
 // Regions (paper §3): R0 left arm, R1 right arm, R2 left leg, R3 right leg, R4 torso. Left/right is the
-// character's own. Head and neck belong to the torso, hands to the arms, feet to the legs.
+// character's own. Head and neck belong to the torso, hands to the arms, feet to the legs. A creature
+// (the any-skeleton path) has its own regions — a RegionLayout below —, whose values are Region values too.
 enum class Region : uint8_t { kLeftArm = 0, kRightArm = 1, kLeftLeg = 2, kRightLeg = 3, kTorso = 4 };
 inline constexpr int kRegionCount = 5;
 /// Sentinel for "no region" in per-triangle / per-vertex region arrays.
 inline constexpr uint8_t kNoRegion = 0xFF;
 
-/// "left_arm", "right_arm", "left_leg", "right_leg", "torso"; "none" for anything else.
+/// "left_arm", "right_arm", "left_leg", "right_leg", "torso"; "none" for anything else (the paper's
+/// names; a creature's regions are named by its RegionLayout).
 const char* RegionName(Region r);
-/// "R0".."R4".
+/// "R0".."R31" (the region value as a symbol, any layout); "R?" past kMaxRegions.
 const char* RegionSymbol(Region r);
 inline bool IsTubular(Region r) { return r != Region::kTorso; }
+
+/// Most regions a layout holds (region values are bytes; kNoRegion = 0xFF marks none). The any-skeleton
+/// path refuses a creature with more limbs than kMaxRegions − 1.
+inline constexpr int kMaxRegions = 32;
+
+/// What a region is: a limb (tubular: its spheres form a sequence from where it joins the trunk
+/// outwards) or the trunk (the paper's torso; one per layout, the last region).
+enum class RegionKind : uint8_t { kLimb = 0, kTrunk = 1 };
+
+/// One region of a RegionLayout.
+struct RegionInfo {
+  std::string name;  ///< "left_arm" ... "torso" (paper); any-skeleton: from its bones ("HindLeg_L", "Tail"), "trunk"
+  RegionKind kind = RegionKind::kLimb;
+  int mirror = -1;   ///< the region on the other side of a left/right pair, or −1 (balance checks)
+  std::string bone;  ///< [opt] any-skeleton: the limb's first bone (the trunk: the bone joining its junctions)
+};
+
+/// The regions of a body and what each is. Region values (Segmentation::triangle_regions,
+/// FittedSphere::region, schema Asset.sphere_regions) index `regions`; the trunk is always the last.
+/// Default-constructed: the paper's five (R0 left arm, R1 right arm, R2 left leg, R3 right leg, R4 torso).
+/// The any-skeleton path (segment.h SegmentBySkeleton) builds a creature's: limbs R0..R(n−2), trunk R(n−1).
+struct RegionLayout {
+  std::vector<RegionInfo> regions = PaperRegions();
+  /// true for the paper's five regions (a standing biped: torso along Mesh::up_axis, Table 1 chains,
+  /// torso labels L/R/T/D); false for a creature's layout.
+  bool paper = true;
+  /// Creature layouts: the trunk's principal axis (unit; bind pose, model space), which plays the part
+  /// of the up axis for the trunk (sphere order, side-by-side exclusions, pivots). Paper: unused (zero).
+  std::array<double, 3> trunk_axis{0.0, 0.0, 0.0};
+
+  /// Number of regions (5 for the paper's; 3..kMaxRegions for a creature's).
+  int count() const { return static_cast<int>(regions.size()); }
+  /// The trunk (the paper's R4 torso): always the last region.
+  Region trunk() const { return static_cast<Region>(regions.size() - 1); }
+  /// True for the trunk.
+  bool IsTrunk(Region r) const { return static_cast<int>(r) == count() - 1; }
+  /// True for a limb (any region before the trunk).
+  bool IsLimb(Region r) const { return static_cast<int>(r) < count() - 1; }
+  /// regions[r].name, or "none" for a value outside the layout.
+  const char* Name(Region r) const {
+    return static_cast<int>(r) < count() ? regions[static_cast<size_t>(r)].name.c_str() : "none";
+  }
+  /// The paper's five regions (limbs mirrored 0↔1, 2↔3; the torso last).
+  static std::vector<RegionInfo> PaperRegions();
+};
 
 // ---------------------------------------------------------------------------------------------------
 /// An error a caller can show a user: a stable code and a message that says what and where.

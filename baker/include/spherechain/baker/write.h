@@ -62,7 +62,10 @@ struct AssetInputs {
 };
 
 /// Serialises the asset. Deterministic: the same inputs give the same bytes (no timestamps, no
-/// pointers, no unordered containers). The buffer is FlatBuffers-aligned from its start.
+/// pointers, no unordered containers). The buffer is FlatBuffers-aligned from its start. Schema version:
+/// runtime::kPaperSchemaVersion (3) for a segmentation of the paper's five regions; for a creature's
+/// layout (RegionLayout::paper false) runtime::kSchemaVersion (4) with Asset.regions from
+/// Segmentation::layout (names, kinds, mirrors, first bones).
 std::vector<uint8_t> BuildAsset(const AssetInputs& in);
 
 /// Writes `bytes` to `path` atomically: a temporary file in the same folder, flushed, then renamed over

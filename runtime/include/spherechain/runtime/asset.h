@@ -12,8 +12,16 @@ namespace spherechain::runtime {
 /// The schema version this SDK writes and reads (schemas/spherechain.fbs, Asset.schema_version). Bump
 /// on any change old readers cannot read or would misread; keep a golden asset per version in
 /// tests/data/golden/. v2 added Asset.contact_margin, fit_method and coverage; v3 joint_count,
-/// sphere_joints and sphere_joint_weights (the refit from joint matrices, JointRefitJob).
-inline constexpr uint32_t kSchemaVersion = 3;
+/// sphere_joints and sphere_joint_weights (the refit from joint matrices, JointRefitJob); v4 Asset.regions
+/// (a creature's limbs and trunk, the baker's any-skeleton path: region values index it). The baker writes
+/// the lowest version that reads an asset correctly — 3 for the paper's five regions (no `regions`), 4
+/// with `regions` — so a v3 reader refuses a creature (kErrorVersionTooNew) rather than misname its regions.
+inline constexpr uint32_t kSchemaVersion = 4;
+/// The version of an asset without Asset.regions (the paper's five regions): what the baker writes for
+/// a standing body, readable by v3 SDKs.
+inline constexpr uint32_t kPaperSchemaVersion = 3;
+/// Most regions an asset may name (Asset.regions; region values are bytes).
+inline constexpr uint32_t kMaxRegions = 32;
 /// The oldest schema version this SDK still reads: v1 and v2 assets load, with what later versions
 /// added absent (v1: contact margin 0 — their spheres were tested unmargined —, fit "paper", no
 /// coverage; v1 and v2: no joint weights, so JointRefitJob answers kErrorMissingField — re-bake).
@@ -63,7 +71,7 @@ struct AssetView {
 ///     kSchemaVersion — read before the
 ///     full verification so an asset from another SDK version gets the clear message);
 ///  2. flatbuffers::Verifier (alignment checked, max depth 8 — the schema nests 3 deep — and max
-///     tables 16 + 1024 chains + 65536 mesh parts + 256 forced bake findings): kErrorCorrupt;
+///     tables 16 + 1024 chains + 65536 mesh parts + 256 forced bake findings + 256 regions): kErrorCorrupt;
 ///  3. semantics: kErrorMissingField, kErrorNoSpheres, kErrorTooManySpheres, kErrorTooManyChains,
 ///     kErrorCountMismatch (#S in spheres, pivot_frames, 4·#S pivot_triangles, 12·#S pivot_vertices,
 ///     #S+1 surrounding_offsets, optional spheres_phi1/phi2/sphere_regions/sphere_labels; #T in
@@ -76,7 +84,9 @@ struct AssetView {
 ///     (contact_margin < 0; NaN or inf: kErrorNonFinite), and the optional v3 joint weights:
 ///     sphere_joints and sphere_joint_weights both present or both absent, 4·#S each
 ///     (kErrorCountMismatch), joint indices < joint_count (kErrorIndexOutOfRange), weights finite,
-///     >= 0 and summing to 1 ± 1e-3 per sphere (kErrorSkinWeights).
+///     >= 0 and summing to 1 ± 1e-3 per sphere (kErrorSkinWeights); the optional v4 regions: 2 to
+///     kMaxRegions, exactly one Trunk and it the last, every sphere_regions / triangle_regions value below
+///     their count (kErrorRegions).
 /// Returns kOk with `*out` filled.
 /// Cost: O(size) reads, no allocation, no exceptions; thread-safe (pure function of its inputs).
 /// Untrusted input: every truncated prefix and bit flip returns an error, never crashes (tested).
@@ -93,6 +103,17 @@ struct TriangleSpan {
 /// surrounding_triangles. [Limit: sphere < view.sphere_count; otherwise (programmer error) asserts in
 /// debug and returns an empty span]. Cost: O(1), no allocation. Lifetime: the asset bytes.
 TriangleSpan SurroundingTriangles(const AssetView& view, uint32_t sphere);
+
+/// Regions of the asset (what Asset.sphere_regions / triangle_regions values mean): len(Asset.regions) for
+/// a creature (schema v4), else 5 — the paper's R0 left_arm, R1 right_arm, R2 left_leg, R3 right_leg,
+/// R4 torso. 0 for an invalid view. Cost O(1).
+uint32_t RegionCount(const AssetView& view);
+/// Name of region `region`: Asset.regions[region].name ("HindLeg_L", "Tail", "trunk"), or the paper's
+/// "left_arm" … "torso"; "" when `region` >= RegionCount(view). Never null. Lifetime: the asset bytes
+/// (or static). Cost O(1).
+const char* RegionName(const AssetView& view, uint32_t region);
+/// True for the trunk (a creature's Trunk region, the paper's R4 torso). Cost O(1).
+bool IsTrunkRegion(const AssetView& view, uint32_t region);
 
 /// The four pivot triangles of `sphere` (Asset.pivot_triangles[4·sphere ..]), each < #T; empty span
 /// on out-of-range `sphere`. Cost O(1). Lifetime: the asset bytes.

@@ -67,6 +67,9 @@ enum class [[nodiscard]] Status : uint32_t {
   kErrorContactMargin = 0x8000'020Du,    ///< Asset.contact_margin < 0 (schema v2).
   kErrorSkinWeights = 0x8000'020Eu,      ///< A sphere's joint weight is negative or not finite, or its four
                                          ///< weights do not sum to 1 ± 1e-3 (schema v3).
+  kErrorRegions = 0x8000'020Fu,          ///< Asset.regions (schema v4) malformed: fewer than 2 or more than
+                                         ///< kMaxRegions regions, a Trunk that is not exactly the last one,
+                                         ///< or a sphere_regions / triangle_regions value past it.
 };
 
 /// True for kOk and every success-with-detail (kOkTruncated). Cost: one compare.

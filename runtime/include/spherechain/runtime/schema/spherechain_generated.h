@@ -45,6 +45,9 @@ struct AccuracyBuilder;
 struct Asset;
 struct AssetBuilder;
 
+struct RegionInfo;
+struct RegionInfoBuilder;
+
 struct BakeFinding;
 struct BakeFindingBuilder;
 
@@ -82,6 +85,37 @@ inline const char *EnumNameUpAxis(UpAxis e) {
   if (flatbuffers::IsOutRange(e, UpAxis::Y, UpAxis::X)) return "";
   const size_t index = static_cast<size_t>(e);
   return EnumNamesUpAxis()[index];
+}
+
+/// What a region value means (Asset.regions).
+enum class RegionKind : uint8_t {
+  Limb = 0,
+  Trunk = 1,
+  MIN = Limb,
+  MAX = Trunk
+};
+
+inline const RegionKind (&EnumValuesRegionKind())[2] {
+  static const RegionKind values[] = {
+    RegionKind::Limb,
+    RegionKind::Trunk
+  };
+  return values;
+}
+
+inline const char * const *EnumNamesRegionKind() {
+  static const char * const names[3] = {
+    "Limb",
+    "Trunk",
+    nullptr
+  };
+  return names;
+}
+
+inline const char *EnumNameRegionKind(RegionKind e) {
+  if (flatbuffers::IsOutRange(e, RegionKind::Limb, RegionKind::Trunk)) return "";
+  const size_t index = static_cast<size_t>(e);
+  return EnumNamesRegionKind()[index];
 }
 
 FLATBUFFERS_MANUALLY_ALIGNED_STRUCT(4) Vec3 FLATBUFFERS_FINAL_CLASS {
@@ -729,7 +763,8 @@ struct Asset FLATBUFFERS_FINAL_CLASS : private flatbuffers::Table {
     VT_VERTEX_CONTRACT = 66,
     VT_SOURCE_VERTEX_COUNT = 68,
     VT_JOINED_VERTEX_COUNT = 70,
-    VT_FORCED_FINDINGS = 72
+    VT_FORCED_FINDINGS = 72,
+    VT_REGIONS = 74
   };
   uint32_t schema_version() const {
     return GetField<uint32_t>(VT_SCHEMA_VERSION, 0);
@@ -839,6 +874,12 @@ struct Asset FLATBUFFERS_FINAL_CLASS : private flatbuffers::Table {
   const flatbuffers::Vector<flatbuffers::Offset<spherechain::schema::BakeFinding>> *forced_findings() const {
     return GetPointer<const flatbuffers::Vector<flatbuffers::Offset<spherechain::schema::BakeFinding>> *>(VT_FORCED_FINDINGS);
   }
+  /// What each region value of sphere_regions / triangle_regions means: R0..R(n−2) a creature's limbs,
+  /// R(n−1) its trunk (exactly one Trunk, the last). Absent (v1–v3, or a v4 reader's paper body): the
+  /// paper's five, R0 left_arm, R1 right_arm, R2 left_leg, R3 right_leg, R4 torso.
+  const flatbuffers::Vector<flatbuffers::Offset<spherechain::schema::RegionInfo>> *regions() const {
+    return GetPointer<const flatbuffers::Vector<flatbuffers::Offset<spherechain::schema::RegionInfo>> *>(VT_REGIONS);
+  }
   bool Verify(flatbuffers::Verifier &verifier) const {
     return VerifyTableStart(verifier) &&
            VerifyField<uint32_t>(verifier, VT_SCHEMA_VERSION, 4) &&
@@ -907,6 +948,9 @@ struct Asset FLATBUFFERS_FINAL_CLASS : private flatbuffers::Table {
            VerifyOffset(verifier, VT_FORCED_FINDINGS) &&
            verifier.VerifyVector(forced_findings()) &&
            verifier.VerifyVectorOfTables(forced_findings()) &&
+           VerifyOffset(verifier, VT_REGIONS) &&
+           verifier.VerifyVector(regions()) &&
+           verifier.VerifyVectorOfTables(regions()) &&
            verifier.EndTable();
   }
 };
@@ -1020,6 +1064,9 @@ struct AssetBuilder {
   void add_forced_findings(flatbuffers::Offset<flatbuffers::Vector<flatbuffers::Offset<spherechain::schema::BakeFinding>>> forced_findings) {
     fbb_.AddOffset(Asset::VT_FORCED_FINDINGS, forced_findings);
   }
+  void add_regions(flatbuffers::Offset<flatbuffers::Vector<flatbuffers::Offset<spherechain::schema::RegionInfo>>> regions) {
+    fbb_.AddOffset(Asset::VT_REGIONS, regions);
+  }
   explicit AssetBuilder(flatbuffers::FlatBufferBuilder &_fbb)
         : fbb_(_fbb) {
     start_ = fbb_.StartTable();
@@ -1067,8 +1114,10 @@ inline flatbuffers::Offset<Asset> CreateAsset(
     flatbuffers::Offset<flatbuffers::String> vertex_contract = 0,
     uint32_t source_vertex_count = 0,
     uint32_t joined_vertex_count = 0,
-    flatbuffers::Offset<flatbuffers::Vector<flatbuffers::Offset<spherechain::schema::BakeFinding>>> forced_findings = 0) {
+    flatbuffers::Offset<flatbuffers::Vector<flatbuffers::Offset<spherechain::schema::BakeFinding>>> forced_findings = 0,
+    flatbuffers::Offset<flatbuffers::Vector<flatbuffers::Offset<spherechain::schema::RegionInfo>>> regions = 0) {
   AssetBuilder builder_(_fbb);
+  builder_.add_regions(regions);
   builder_.add_forced_findings(forced_findings);
   builder_.add_joined_vertex_count(joined_vertex_count);
   builder_.add_source_vertex_count(source_vertex_count);
@@ -1143,7 +1192,8 @@ inline flatbuffers::Offset<Asset> CreateAssetDirect(
     const char *vertex_contract = nullptr,
     uint32_t source_vertex_count = 0,
     uint32_t joined_vertex_count = 0,
-    const std::vector<flatbuffers::Offset<spherechain::schema::BakeFinding>> *forced_findings = nullptr) {
+    const std::vector<flatbuffers::Offset<spherechain::schema::BakeFinding>> *forced_findings = nullptr,
+    const std::vector<flatbuffers::Offset<spherechain::schema::RegionInfo>> *regions = nullptr) {
   auto generator__ = generator ? _fbb.CreateString(generator) : 0;
   auto parts__ = parts ? _fbb.CreateVector<flatbuffers::Offset<spherechain::schema::MeshPart>>(*parts) : 0;
   auto units__ = units ? _fbb.CreateString(units) : 0;
@@ -1168,6 +1218,7 @@ inline flatbuffers::Offset<Asset> CreateAssetDirect(
   auto sphere_joint_weights__ = sphere_joint_weights ? _fbb.CreateVector<float>(*sphere_joint_weights) : 0;
   auto vertex_contract__ = vertex_contract ? _fbb.CreateString(vertex_contract) : 0;
   auto forced_findings__ = forced_findings ? _fbb.CreateVector<flatbuffers::Offset<spherechain::schema::BakeFinding>>(*forced_findings) : 0;
+  auto regions__ = regions ? _fbb.CreateVector<flatbuffers::Offset<spherechain::schema::RegionInfo>>(*regions) : 0;
   return spherechain::schema::CreateAsset(
       _fbb,
       schema_version,
@@ -1204,7 +1255,98 @@ inline flatbuffers::Offset<Asset> CreateAssetDirect(
       vertex_contract__,
       source_vertex_count,
       joined_vertex_count,
-      forced_findings__);
+      forced_findings__,
+      regions__);
+}
+
+/// One region of a body (Asset.regions, schema v4).
+struct RegionInfo FLATBUFFERS_FINAL_CLASS : private flatbuffers::Table {
+  typedef RegionInfoBuilder Builder;
+  enum FlatBuffersVTableOffset FLATBUFFERS_VTABLE_UNDERLYING_TYPE {
+    VT_NAME = 4,
+    VT_KIND = 6,
+    VT_MIRROR = 8,
+    VT_BONE = 10
+  };
+  const flatbuffers::String *name() const {
+    return GetPointer<const flatbuffers::String *>(VT_NAME);
+  }
+  spherechain::schema::RegionKind kind() const {
+    return static_cast<spherechain::schema::RegionKind>(GetField<uint8_t>(VT_KIND, 0));
+  }
+  int16_t mirror() const {
+    return GetField<int16_t>(VT_MIRROR, -1);
+  }
+  const flatbuffers::String *bone() const {
+    return GetPointer<const flatbuffers::String *>(VT_BONE);
+  }
+  bool Verify(flatbuffers::Verifier &verifier) const {
+    return VerifyTableStart(verifier) &&
+           VerifyOffset(verifier, VT_NAME) &&
+           verifier.VerifyString(name()) &&
+           VerifyField<uint8_t>(verifier, VT_KIND, 1) &&
+           VerifyField<int16_t>(verifier, VT_MIRROR, 2) &&
+           VerifyOffset(verifier, VT_BONE) &&
+           verifier.VerifyString(bone()) &&
+           verifier.EndTable();
+  }
+};
+
+struct RegionInfoBuilder {
+  typedef RegionInfo Table;
+  flatbuffers::FlatBufferBuilder &fbb_;
+  flatbuffers::uoffset_t start_;
+  void add_name(flatbuffers::Offset<flatbuffers::String> name) {
+    fbb_.AddOffset(RegionInfo::VT_NAME, name);
+  }
+  void add_kind(spherechain::schema::RegionKind kind) {
+    fbb_.AddElement<uint8_t>(RegionInfo::VT_KIND, static_cast<uint8_t>(kind), 0);
+  }
+  void add_mirror(int16_t mirror) {
+    fbb_.AddElement<int16_t>(RegionInfo::VT_MIRROR, mirror, -1);
+  }
+  void add_bone(flatbuffers::Offset<flatbuffers::String> bone) {
+    fbb_.AddOffset(RegionInfo::VT_BONE, bone);
+  }
+  explicit RegionInfoBuilder(flatbuffers::FlatBufferBuilder &_fbb)
+        : fbb_(_fbb) {
+    start_ = fbb_.StartTable();
+  }
+  flatbuffers::Offset<RegionInfo> Finish() {
+    const auto end = fbb_.EndTable(start_);
+    auto o = flatbuffers::Offset<RegionInfo>(end);
+    return o;
+  }
+};
+
+inline flatbuffers::Offset<RegionInfo> CreateRegionInfo(
+    flatbuffers::FlatBufferBuilder &_fbb,
+    flatbuffers::Offset<flatbuffers::String> name = 0,
+    spherechain::schema::RegionKind kind = spherechain::schema::RegionKind::Limb,
+    int16_t mirror = -1,
+    flatbuffers::Offset<flatbuffers::String> bone = 0) {
+  RegionInfoBuilder builder_(_fbb);
+  builder_.add_bone(bone);
+  builder_.add_name(name);
+  builder_.add_mirror(mirror);
+  builder_.add_kind(kind);
+  return builder_.Finish();
+}
+
+inline flatbuffers::Offset<RegionInfo> CreateRegionInfoDirect(
+    flatbuffers::FlatBufferBuilder &_fbb,
+    const char *name = nullptr,
+    spherechain::schema::RegionKind kind = spherechain::schema::RegionKind::Limb,
+    int16_t mirror = -1,
+    const char *bone = nullptr) {
+  auto name__ = name ? _fbb.CreateString(name) : 0;
+  auto bone__ = bone ? _fbb.CreateString(bone) : 0;
+  return spherechain::schema::CreateRegionInfo(
+      _fbb,
+      name__,
+      kind,
+      mirror,
+      bone__);
 }
 
 /// One failed bake check kept in a forced asset (Asset.forced_findings).
