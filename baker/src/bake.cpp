@@ -56,7 +56,7 @@ Result<BakeConfig> ParseBakeConfig(const std::string& text, const std::string& w
                                               "compare_segmentations", "fit", "max_spheres", "cover_voxel_rel", "cover_max_voxels",
                                               "min_radius_rel", "min_gain", "region_balance", "refine_sweeps", "dilation_rel",
                                               "skin_spheres", "skin_tolerance_rel", "skin_min_vertices",
-                                              "contact_margin_rel", "near_rel", "vertices"};
+                                              "contact_margin_rel", "near_rel", "vertices", "regions"};
   for (auto it = j.begin(); it != j.end(); ++it)
     if (!known.count(it.key())) return MakeError(Error::Code::kConfig, where + ": unknown key '" + it.key() + "'");
 
@@ -80,6 +80,12 @@ Result<BakeConfig> ParseBakeConfig(const std::string& text, const std::string& w
   }
   if (j.contains("region_map")) c.region_map = j["region_map"];
   if (j.contains("rig")) c.import.rig_path = j["rig"];
+  if (j.contains("regions")) {
+    const std::string v = j["regions"].is_string() ? j["regions"].get<std::string>() : std::string();
+    if (v == "extended") c.regions = RegionSet::kExtended;
+    else if (v == "paper") c.regions = RegionSet::kPaper;
+    else return MakeError(Error::Code::kConfig, where + ": 'regions' must be \"extended\" or \"paper\"");
+  }
   if (j.contains("vertices")) {  // import.h VertexContract
     const std::string v = j["vertices"].is_string() ? j["vertices"].get<std::string>() : std::string();
     if (v == "joined") c.import.vertices = VertexContract::kJoined;
@@ -149,6 +155,9 @@ std::string CanonicalConfig(const BakeConfig& c) {
   json j;  // nlohmann::json objects are key-sorted: stable
   j["segmentation"] = c.region_map.empty() ? MethodName(c.segmentation) : "map";
   j["fit"] = FitMethodName(c.fit.method);
+  // Added with the extended layout: written only for it, so `regions: paper` (the default) bakes hash
+  // exactly as every asset before it did.
+  if (c.regions == RegionSet::kExtended && c.fit.method == FitMethod::kCover) j["regions"] = "extended";
   if (c.import.vertices != VertexContract::kAuto) j["vertices"] = ToString(c.import.vertices);
   if (c.fit.method == FitMethod::kCover) {
     j["max_spheres"] = c.fit.max_spheres;
@@ -320,6 +329,15 @@ Result<BakeResult> Bake(const std::string& input_path, const BakeConfig& config,
       r.other_segmentation_error = "a creature's regions (the any-skeleton path) have no geometric counterpart to compare with";
     if (!r.plausibility.empty() && !config.force) return Refuse(mesh, r.plausibility);
   }
+  // Head, hands and feet (issue 11, `regions: extended`, the cover fit only): cut from the five
+  // regions the checks above accepted, each then a region with its own spheres and chains.
+  if (config.regions == RegionSet::kExtended && config.fit.method == FitMethod::kCover &&
+      r.segmentation.layout.IsPaperFive()) {
+    Context::Timer t(ctx, "extremities");
+    auto split = SplitExtremities(mesh, r.segmentation, ExtremityMethod::kAuto, ctx);
+    if (!split.ok()) return split.error();
+    if (Status s = ApplyExtremities(mesh, split.value(), &r.segmentation); !s.ok()) return s.error();
+  }
   {
     auto fit = FitSpheres(mesh, r.segmentation, config.fit, ctx);
     if (!fit.ok()) return fit.error();
@@ -332,8 +350,12 @@ Result<BakeResult> Bake(const std::string& input_path, const BakeConfig& config,
     // A creature keeps its own chains (every limb with the others and the trunk) unless the
     // configuration names chains other than Table 1's.
     const RegionLayout& layout = r.segmentation.layout;
-    const bool creature_chains = !layout.paper && IsTableOneChains(config.chains);
-    auto chains = BuildChains(spheres, creature_chains ? CreatureChainDefs(layout) : config.chains, layout);
+    const bool table_one = IsTableOneChains(config.chains);
+    const std::vector<ChainDef> defs = !table_one          ? config.chains
+                                       : !layout.paper       ? CreatureChainDefs(layout)
+                                       : layout.IsPaperFive() ? config.chains
+                                                              : ExtendedChainDefs(layout);
+    auto chains = BuildChains(spheres, defs, layout);
     if (!chains.ok()) return chains.error();
     r.chains = std::move(chains).value();
     if (config.fit.method == FitMethod::kPaper)
@@ -341,7 +363,7 @@ Result<BakeResult> Bake(const std::string& input_path, const BakeConfig& config,
     else
       r.excluded = BindExcludedPairs(spheres, (config.near_rel + 2.0 * config.contact_margin_rel) * r.fit.body_height,
                                      &r.exclusion_reasons,
-                                     &r.cross_region_bind_overlaps, mesh.up_axis, layout.paper ? nullptr : &layout);
+                                     &r.cross_region_bind_overlaps, mesh.up_axis, layout.IsPaperFive() ? nullptr : &layout);
   }
   {
     Context::Timer t(ctx, "surrounding_regions");
@@ -505,15 +527,17 @@ json MakeBakeReport(const BakeResult& r, const BakeConfig& config, const Context
     size_t sph = std::count_if(spheres.begin(), spheres.end(), [&](const FittedSphere& s) { return s.region == reg; });
     json& e = regions[layout.Name(reg)];
     e = {{"symbol", RegionSymbol(reg)}, {"triangles", tris}, {"spheres", sph}};
-    if (!layout.paper) {  // a creature's: what each region is (the asset's Asset.regions)
+    if (!layout.IsPaperFive()) {  // a creature's or the extended layout: what each region is (Asset.regions)
       const RegionInfo& info = layout.regions[size_t(k)];
       e["kind"] = info.kind == RegionKind::kTrunk ? "trunk" : "limb";
-      e["bone"] = info.bone;
+      if (!info.bone.empty()) e["bone"] = info.bone;
       if (info.mirror >= 0) e["mirror"] = layout.Name(Region(info.mirror));
+      if (info.parent >= 0) e["parent"] = layout.Name(Region(info.parent));
     }
   }
   j["regions"] = regions;
   if (!layout.paper) j["body"] = "creature (any-skeleton path: limbs off the trunk, their own chains)";
+  else if (!layout.IsPaperFive()) j["body"] = "standing biped, extended regions (head, hands, feet: Table 1's chains extended)";
 
   json seg = {{"method", r.segmentation.method}, {"notes", r.segmentation.notes}};
   if (r.agreement && r.other_segmentation) {

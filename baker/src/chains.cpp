@@ -20,6 +20,36 @@ std::vector<ChainDef> DefaultChainDefs() {
   };
 }
 
+std::vector<ChainDef> ExtendedChainDefs(const RegionLayout& layout) {
+  // Each limb token of Table 1 brings the parts hanging off it (an arm its hand, a leg its foot); the
+  // torso's labelled sets are the trunk's; the head joins the chains of both sides and the arms' chain.
+  const int trunk = int(layout.trunk());
+  auto limb = [&](int paper_region) {
+    std::vector<std::string> m{RegionSymbol(Region(paper_region))};
+    for (int k = 0; k < layout.count(); ++k)
+      if (layout.regions[size_t(k)].parent == paper_region) m.push_back(RegionSymbol(Region(k)));
+    return m;
+  };
+  auto torso = [&](char label) { return std::string(RegionSymbol(Region(trunk))) + label; };
+  const int head = layout.Find("head");
+  std::vector<ChainDef> defs;
+  for (const ChainDef& d : DefaultChainDefs()) {
+    ChainDef e{d.name, {}};
+    for (const std::string& token : d.members) {
+      if (token.size() == 2 && token[1] >= '0' && token[1] <= '3') {
+        for (const std::string& m : limb(token[1] - '0')) e.members.push_back(m);
+      } else {
+        e.members.push_back(torso(token.back()));
+      }
+    }
+    // ζ0 (left side), ζ1 (right side), ζ2 (both arms): a hand meets the face.
+    if (head >= 0 && (d.name == "zeta0" || d.name == "zeta1" || d.name == "zeta2"))
+      e.members.push_back(RegionSymbol(Region(head)));
+    defs.push_back(std::move(e));
+  }
+  return defs;
+}
+
 std::vector<ChainDef> CreatureChainDefs(const RegionLayout& layout) {
   // Limbs in groups of consecutive limbs (one limb a group up to 7 limbs: 28 chains), so the chains stay
   // within the runtime's 32 (runtime::kMaxChains): g groups give g(g + 1)/2 chains.
@@ -160,6 +190,12 @@ std::vector<SpherePair> BindExcludedPairs(const std::vector<FittedSphere>& spher
   const Eigen::Vector3d up = layout && !layout->paper
                                  ? Eigen::Vector3d(layout->trunk_axis[0], layout->trunk_axis[1], layout->trunk_axis[2])
                                  : fit_detail::UpVector(up_axis);
+  // Two regions joined at a junction: a limb and the region it hangs off (the torso; a hand's arm, a foot's
+  // leg in the extended layout).
+  auto parent_of = [&](Region r) { return layout ? layout->Parent(r) : torso; };
+  auto joined = [&](Region a, Region b) {
+    return a != b && ((a != torso && parent_of(a) == b) || (b != torso && parent_of(b) == a));
+  };
   const size_t n = spheres.size();
   for (size_t a = 0; a < n; ++a) {
     for (size_t b = a + 1; b < n; ++b) {
@@ -177,12 +213,11 @@ std::vector<SpherePair> BindExcludedPairs(const std::vector<FittedSphere>& spher
         ++why.torso_side_by_side;  // one level of the torso: a bending spine folds levels, not a level
       } else if (d < rr) {
         ++why.bind_overlap;
-        const bool limb_torso = (A.region == torso) != (B.region == torso);
-        if (!same_region && !limb_torso && cross_region_bind_overlaps) cross_region_bind_overlaps->push_back(p);
+        if (!same_region && !joined(A.region, B.region) && cross_region_bind_overlaps) cross_region_bind_overlaps->push_back(p);
       } else if (d < rr + near) {
         ++why.bind_near;
-      } else if ((A.region == torso) != (B.region == torso) && d < 1.25 * rr + near) {
-        ++why.junction;  // a limb's root and the torso where the skin creases (hip, armpit)
+      } else if (joined(A.region, B.region) && d < 1.25 * rr + near) {
+        ++why.junction;  // a limb's root and what it hangs off, where the skin creases (hip, armpit, wrist)
       } else {
         continue;
       }

@@ -46,7 +46,7 @@ Frame CharacterFrame(const Mesh& mesh, const runtime::AssetView& a) {
     if (regions->Get(s) == 1 || regions->Get(s) == 3) { r += p; ++nr; }
   }
   Eigen::Vector3f left = (nl && nr) ? Eigen::Vector3f(l / float(nl) - r / float(nr)) : Eigen::Vector3f::UnitX();
-  if (a.asset->regions()) {
+  if (a.asset->regions() && !a.asset->biped()) {
     // A creature: "front" is along its trunk (the principal axis of the trunk spheres' centres), so the
     // first view looks at its side.
     const uint32_t trunk = runtime::RegionCount(a) - 1;
@@ -286,7 +286,9 @@ std::string RenderSvg(const Mesh& mesh, const runtime::AssetView& a, const Pictu
   // the character's left (its left arm on the viewer's right); side, camera at the character's left
   // looking across, so screen x = −front (the character faces the viewer's left).
   struct View { Eigen::Vector3f sx, sy, toward_viewer; const char* name; };
-  const bool creature = a.asset->regions() != nullptr;  // lying along `front`: its side first, then end-on
+  // A creature lies along `front`: its side first, then end-on. A biped (the paper's five regions, or
+  // the extended layout) stands: front, then side.
+  const bool creature = a.asset->regions() != nullptr && !a.asset->biped();
   const View views[2] = {creature ? View{-f.front, f.up, f.left, "side"} : View{f.left, f.up, f.front, "front"},
                          creature ? View{f.left, f.up, f.front, "end-on (along the trunk)"}
                                   : View{-f.front, f.up, f.left, "side (character's left)"}};

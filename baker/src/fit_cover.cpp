@@ -98,13 +98,15 @@ struct Field {
   }
 };
 
-// Per vertex: bit 0 when a triangle of one of `limbs` uses it, bit 1 when a torso (trunk) triangle does
-// (3: on the junction).
-std::vector<uint8_t> JunctionMask(const Mesh& mesh, const Segmentation& seg, std::initializer_list<Region> limbs) {
+// Per vertex: bit 0 when a triangle of one of `limbs` uses it, bit 1 when a triangle of `base` does (3: on
+// the junction). `base`: the torso (trunk) by default; a limb's parent for its own junction (a hand's arm).
+std::vector<uint8_t> JunctionMask(const Mesh& mesh, const Segmentation& seg, std::initializer_list<Region> limbs,
+                                  int base = -1) {
   std::vector<uint8_t> mask(mesh.vertex_count(), 0);
+  const uint8_t base_region = uint8_t(base >= 0 ? Region(base) : seg.layout.trunk());
   for (uint32_t t = 0; t < mesh.triangle_count(); ++t) {
     const uint8_t r = seg.triangle_regions[t];
-    uint8_t bit = r == uint8_t(seg.layout.trunk()) ? 2 : 0;
+    uint8_t bit = r == base_region ? 2 : 0;
     for (Region l : limbs)
       if (r == uint8_t(l)) bit = 1;
     if (bit)
@@ -113,11 +115,12 @@ std::vector<uint8_t> JunctionMask(const Mesh& mesh, const Segmentation& seg, std
   return mask;
 }
 
-// Mean of the vertices shared by region `reg`'s triangles and the torso's (its root), or the region's
-// vertex nearest the torso's centroid when the two do not touch.
+// Mean of the vertices shared by region `reg`'s triangles and its parent's (the torso; a hand's arm, a
+// foot's leg: RegionLayout::Parent) — its root —, or the region's vertex nearest the torso's centroid
+// when the two do not touch.
 Vector3d LimbRoot(const Mesh& mesh, const Segmentation& seg, Region reg, const Vector3d& torso_centroid) {
   const uint32_t V = mesh.vertex_count();
-  const std::vector<uint8_t> mask = JunctionMask(mesh, seg, {reg});
+  const std::vector<uint8_t> mask = JunctionMask(mesh, seg, {reg}, int(seg.layout.Parent(reg)));
   Vector3d sum = Vector3d::Zero();
   size_t n = 0;
   double best = std::numeric_limits<double>::infinity();
@@ -146,13 +149,13 @@ std::pair<double, double> JunctionBand(const Mesh& mesh, const Segmentation& seg
   return {lo, hi};
 }
 
-// The plane that separates limb `reg` from the torso: least-squares plane through the vertices the
-// two share (the junction loop at the shoulder or hip), its normal pointing into the limb (towards
-// the mean of the limb's vertices). Returns false when they share fewer than 3 vertices or the loop
-// is too close to a line for a plane to be defined.
+// The plane that separates limb `reg` from its parent (the torso; a hand's arm, a foot's leg):
+// least-squares plane through the vertices the two share (the junction loop at the shoulder, hip, wrist
+// or ankle), its normal pointing into the limb (towards the mean of the limb's vertices). Returns false
+// when they share fewer than 3 vertices or the loop is too close to a line for a plane to be defined.
 bool JunctionPlane(const Mesh& mesh, const Segmentation& seg, Region reg, Vector3d* origin, Vector3d* normal) {
   const uint32_t V = mesh.vertex_count();
-  const std::vector<uint8_t> mask = JunctionMask(mesh, seg, {reg});
+  const std::vector<uint8_t> mask = JunctionMask(mesh, seg, {reg}, int(seg.layout.Parent(reg)));
   Vector3d sum = Vector3d::Zero(), limb = Vector3d::Zero();
   size_t n = 0, n_limb = 0;
   for (uint32_t v = 0; v < V; ++v) {
@@ -326,7 +329,18 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
   double total_volume = 0.0;
   for (int r = 0; r < nreg; ++r) total_volume += F.volume[r];
   for (int r = 0; r < nreg; ++r)
-    F.weight[r] = F.volume[r] > 0.0 ? std::pow(F.volume[r] / total_volume, -params.region_balance) / total_volume : 0.0;
+    // A region cut out of another (the extended layout's head, hands and feet: RegionInfo::volume_group)
+    // weighs its voxels by the share of the region it came from, so the volume cover spends the budget as
+    // on the paper's five regions; the cut only decides which region each chosen sphere belongs to.
+    if (F.volume[r] > 0.0) {
+      const int g = layout.regions[size_t(r)].volume_group;
+      double group_volume = 0.0;
+      for (int q = 0; q < nreg; ++q)
+        if (q == (g >= 0 ? g : r) || layout.regions[size_t(q)].volume_group == (g >= 0 ? g : r)) group_volume += F.volume[q];
+      F.weight[r] = std::pow(group_volume / total_volume, -params.region_balance) / total_volume;
+    } else {
+      F.weight[r] = 0.0;
+    }
 
   F.grow = float(params.dilation_rel * height / F.h);
 

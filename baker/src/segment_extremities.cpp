@@ -179,6 +179,9 @@ Result<ExtremitySplit> SplitExtremities(const Mesh& mesh, const Segmentation& se
   const uint32_t V = mesh.vertex_count(), T = mesh.triangle_count();
   if (seg.triangle_regions.size() != T)
     return MakeError(Error::Code::kSegmentation, "extremities: segmentation does not match the mesh's triangle count");
+  if (!seg.layout.IsPaperFive())
+    return MakeError(Error::Code::kSegmentation, "extremities: head, hands and feet are cut from the paper's five regions "
+                                                 "(a standing biped), not from a creature's layout");
   ExtremitySplit out;
   out.triangle_parts.assign(T, kNone);
   std::ostringstream notes;
@@ -358,6 +361,56 @@ Result<ExtremitySplit> SplitExtremities(const Mesh& mesh, const Segmentation& se
   out.notes = notes.str();
   if (ctx) ctx->Info("segment (extremities): " + out.notes);
   return out;
+}
+
+Status ApplyExtremities(const Mesh& mesh, const ExtremitySplit& split, Segmentation* seg) {
+  const uint32_t T = mesh.triangle_count();
+  if (!seg->layout.IsPaperFive())
+    return MakeError(Error::Code::kSegmentation, "extremities: the extended layout starts from the paper's five regions");
+  if (split.triangle_parts.size() != T || seg->triangle_regions.size() != T)
+    return MakeError(Error::Code::kSegmentation, "extremities: the split does not match the mesh's triangle count");
+  std::array<bool, kExtremityCount + 1> found{};
+  for (uint8_t p : split.triangle_parts)
+    if (p >= 1 && p <= kExtremityCount) found[p] = true;
+  bool any = false;
+  for (bool f : found) any = any || f;
+  if (!any) return Ok{};
+  RegionLayout layout;  // the paper's five, the torso (R4) moved to the end below
+  RegionInfo torso = layout.regions.back();
+  layout.regions.pop_back();
+  std::array<int, kExtremityCount + 1> index{};
+  index.fill(-1);
+  for (int e = 1; e <= kExtremityCount; ++e) {
+    if (!found[size_t(e)]) continue;
+    RegionInfo info;
+    info.name = ExtremityName(Extremity(e));
+    const Extremity ex = Extremity(e);
+    info.parent = ex == Extremity::kLeftHand ? int(Region::kLeftArm) : ex == Extremity::kRightHand ? int(Region::kRightArm)
+                : ex == Extremity::kLeftFoot ? int(Region::kLeftLeg) : ex == Extremity::kRightFoot ? int(Region::kRightLeg) : -1;
+    info.volume_group = info.parent >= 0 ? info.parent : int(Region::kTorso);  // remapped below for the torso
+    index[size_t(e)] = int(layout.regions.size());
+    layout.regions.push_back(std::move(info));
+  }
+  for (auto [l, r] : {std::pair{Extremity::kLeftHand, Extremity::kRightHand}, std::pair{Extremity::kLeftFoot, Extremity::kRightFoot}})
+    if (index[size_t(l)] >= 0 && index[size_t(r)] >= 0) {
+      layout.regions[size_t(index[size_t(l)])].mirror = index[size_t(r)];
+      layout.regions[size_t(index[size_t(r)])].mirror = index[size_t(l)];
+    }
+  const uint8_t new_torso = uint8_t(layout.regions.size());
+  layout.regions.push_back(std::move(torso));
+  for (RegionInfo& info : layout.regions)
+    if (info.volume_group == int(Region::kTorso)) info.volume_group = new_torso;
+  layout.paper = true;
+  for (uint32_t t = 0; t < T; ++t) {
+    const uint8_t p = split.triangle_parts[t];
+    if (p >= 1 && p <= kExtremityCount && index[p] >= 0) seg->triangle_regions[t] = uint8_t(index[p]);
+    else if (seg->triangle_regions[t] == uint8_t(Region::kTorso)) seg->triangle_regions[t] = new_torso;
+  }
+  seg->layout = std::move(layout);
+  segment_detail::ComputeVertexRegions(mesh, *seg);
+  seg->notes += "; extended (head, hands, feet): " + split.notes + "; " +
+                segment_detail::RegionCounts(seg->triangle_regions, seg->layout);
+  return Ok{};
 }
 
 }  // namespace spherechain::baker

@@ -156,21 +156,21 @@ std::vector<uint8_t> BuildAsset(const AssetInputs& in) {
     forced_v = b.CreateVector(list);
   }
 
-  // A creature's regions (schema v4): the only reason to write v4 — a body of the paper's five regions
-  // stays v3, readable by v3 SDKs and byte-identical to what they baked.
+  // A creature's regions or the extended layout (schema v4): the only reason to write v4 — a body of the
+  // paper's five regions stays v3, readable by v3 SDKs and byte-identical to what they baked.
   const RegionLayout& layout = in.segmentation->layout;
   flatbuffers::Offset<flatbuffers::Vector<flatbuffers::Offset<fb::RegionInfo>>> regions_table;
-  if (!layout.paper) {
+  if (!layout.IsPaperFive()) {
     std::vector<flatbuffers::Offset<fb::RegionInfo>> list;
     for (const RegionInfo& r : layout.regions)
       list.push_back(fb::CreateRegionInfo(b, b.CreateString(r.name),
                                           r.kind == RegionKind::kTrunk ? fb::RegionKind::Trunk : fb::RegionKind::Limb,
-                                          int16_t(r.mirror), b.CreateString(r.bone)));
+                                          int16_t(r.mirror), b.CreateString(r.bone), int16_t(r.parent)));
     regions_table = b.CreateVector(list);
   }
 
   fb::AssetBuilder ab(b);
-  ab.add_schema_version(layout.paper ? spherechain::runtime::kPaperSchemaVersion : spherechain::runtime::kSchemaVersion);
+  ab.add_schema_version(layout.IsPaperFive() ? spherechain::runtime::kPaperSchemaVersion : spherechain::runtime::kSchemaVersion);
   ab.add_generator(generator);
   ab.add_contact_margin(float(in.contact_margin));
   ab.add_fit_method(fit_method);
@@ -184,7 +184,8 @@ std::vector<uint8_t> BuildAsset(const AssetInputs& in) {
   ab.add_source_vertex_count(mesh.source_vertex_count);
   ab.add_joined_vertex_count(mesh.joined_vertex_count);
   if (forced) ab.add_forced_findings(forced_v);
-  if (!layout.paper) ab.add_regions(regions_table);
+  if (!layout.IsPaperFive()) ab.add_regions(regions_table);
+  if (!layout.IsPaperFive() && layout.paper) ab.add_biped(true);
   ab.add_fingerprint(fingerprint);
   ab.add_parts(parts_v);
   ab.add_units(units);

@@ -3,9 +3,11 @@
 // hand to find), the real humans by rig and by geometry, and the documented error.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <array>
 #include <string>
 
+#include "spherechain/baker/chains.h"
 #include "spherechain/baker/import.h"
 #include "spherechain/baker/segment.h"
 #include "synthetic_body.h"
@@ -169,4 +171,116 @@ TEST_CASE("extremities (heavy): the humans of assimp-testmodels and CesiumMan �
     CHECK(split->method[size_t(sc::Extremity::kLeftFoot)].empty() != c.feet);
     CHECK(split->method[size_t(sc::Extremity::kRightFoot)].empty() != c.feet);
   }
+}
+
+// ---- the extended layout (regions: extended) -----------------------------------------------------------
+
+TEST_CASE("extended layout: ApplyExtremities makes head, hands and feet regions — order, mirrors, parents, the torso last") {
+  const SyntheticBody body = MakeSyntheticBody(false, 0, /*extremities=*/true);
+  auto seg = sc::SegmentByGeometry(body.mesh);
+  REQUIRE(seg.ok());
+  const sc::Segmentation five = seg.value();
+  auto split = sc::SplitExtremities(body.mesh, five, sc::ExtremityMethod::kGeometry);
+  REQUIRE(split.ok());
+  sc::Segmentation ext = five;
+  REQUIRE(sc::ApplyExtremities(body.mesh, split.value(), &ext).ok());
+  const sc::RegionLayout& L = ext.layout;
+  REQUIRE(L.count() == 10);
+  CHECK(L.paper);
+  CHECK_FALSE(L.IsPaperFive());
+  const char* names[10] = {"left_arm", "right_arm", "left_leg", "right_leg", "head",
+                           "left_hand", "right_hand", "left_foot", "right_foot", "torso"};
+  for (int k = 0; k < 10; ++k) CHECK(L.regions[size_t(k)].name == names[k]);
+  CHECK(L.IsTrunk(sc::Region(9)));
+  CHECK(L.regions[9].kind == sc::RegionKind::kTrunk);
+  // Hands and feet mirror each other and hang off their limb; the head off the torso.
+  CHECK(L.regions[5].mirror == 6);
+  CHECK(L.regions[7].mirror == 8);
+  CHECK(int(L.Parent(sc::Region(5))) == 0);
+  CHECK(int(L.Parent(sc::Region(6))) == 1);
+  CHECK(int(L.Parent(sc::Region(7))) == 2);
+  CHECK(int(L.Parent(sc::Region(8))) == 3);
+  CHECK(int(L.Parent(sc::Region(4))) == 9);
+  CHECK(L.regions[5].volume_group == 0);
+  CHECK(L.regions[4].volume_group == 9);
+  // Every triangle moved by its part: a part's triangles to its region, the torso's to R9, the rest kept.
+  for (uint32_t t = 0; t < body.mesh.triangle_count(); ++t) {
+    const uint8_t p = split->triangle_parts[t], before = five.triangle_regions[t], after = ext.triangle_regions[t];
+    if (p != 0) CHECK(after == uint8_t(L.Find(sc::ExtremityName(sc::Extremity(p)))));
+    else if (before == uint8_t(sc::Region::kTorso)) CHECK(after == 9);
+    else CHECK(after == before);
+  }
+  // Only the paper's five are split; a creature's layout is refused.
+  sc::Segmentation again = ext;
+  CHECK_FALSE(sc::ApplyExtremities(body.mesh, split.value(), &again).ok());
+  CHECK_FALSE(sc::SplitExtremities(body.mesh, ext).ok());
+}
+
+TEST_CASE("extended layout: a body without hands keeps its arms whole — only the parts found become regions") {
+  const SyntheticBody body = MakeSyntheticBody(false);  // arms end in round caps
+  auto seg = sc::SegmentByGeometry(body.mesh);
+  REQUIRE(seg.ok());
+  auto split = sc::SplitExtremities(body.mesh, seg.value(), sc::ExtremityMethod::kGeometry);
+  REQUIRE(split.ok());
+  sc::Segmentation ext = seg.value();
+  REQUIRE(sc::ApplyExtremities(body.mesh, split.value(), &ext).ok());
+  CHECK(ext.layout.Find("left_hand") < 0);
+  CHECK(ext.layout.Find("head") == 4);
+  CHECK(ext.layout.regions.back().name == "torso");
+  CHECK(ext.layout.count() == 5 + 1 + (split->method[size_t(sc::Extremity::kLeftFoot)].empty() ? 0 : 2));
+}
+
+TEST_CASE("extended layout: Table 1's chains extended — each limb with its hand or foot, the head with both sides and the arms") {
+  sc::RegionLayout L;
+  L.regions = sc::RegionLayout::PaperRegions();
+  CHECK(sc::ExtendedChainDefs(L).size() == sc::DefaultChainDefs().size());
+  for (size_t i = 0; i < sc::DefaultChainDefs().size(); ++i) CHECK(sc::ExtendedChainDefs(L)[i].members == sc::DefaultChainDefs()[i].members);
+  // The layout ApplyExtremities builds when every part is found.
+  sc::RegionInfo torso = L.regions.back();
+  L.regions.pop_back();
+  const char* parts[5] = {"head", "left_hand", "right_hand", "left_foot", "right_foot"};
+  const int parents[5] = {-1, 0, 1, 2, 3};
+  for (int k = 0; k < 5; ++k) {
+    sc::RegionInfo r;
+    r.name = parts[k];
+    r.parent = parents[k];
+    L.regions.push_back(r);
+  }
+  L.regions.push_back(torso);
+  const auto defs = sc::ExtendedChainDefs(L);
+  REQUIRE(defs.size() == 6);
+  auto has = [](const sc::ChainDef& d, const char* m) { return std::find(d.members.begin(), d.members.end(), m) != d.members.end(); };
+  // ζ0 = R0 ∪ left hand ∪ R9L ∪ R2 ∪ left foot ∪ head.
+  for (const char* m : {"R0", "R5", "R9L", "R2", "R7", "R4"}) CHECK_MESSAGE(has(defs[0], m), "zeta0 " << m);
+  CHECK_FALSE(has(defs[0], "R6"));
+  // ζ2 both arms, both hands, the shoulders' band and the head: hand on face, fingers interlocked.
+  for (const char* m : {"R0", "R5", "R9T", "R1", "R6", "R4"}) CHECK_MESSAGE(has(defs[2], m), "zeta2 " << m);
+  // ζ3 both legs and feet: a foot on the other shin.
+  for (const char* m : {"R2", "R7", "R9D", "R3", "R8"}) CHECK_MESSAGE(has(defs[3], m), "zeta3 " << m);
+  CHECK_FALSE(has(defs[3], "R4"));
+}
+
+TEST_CASE("extended layout: the junction exclusion follows the parent — a hand with its forearm, not with the torso") {
+  sc::RegionLayout L;
+  sc::RegionInfo torso = L.regions.back();
+  L.regions.pop_back();
+  sc::RegionInfo hand;
+  hand.name = "left_hand";
+  hand.parent = 0;
+  L.regions.push_back(hand);  // R4
+  L.regions.push_back(torso);  // R5
+  auto sphere = [](int region, double x, double r) {
+    sc::FittedSphere s;
+    s.region = sc::Region(region);
+    s.center = {x, 0, 0};
+    s.radius = r;
+    return s;
+  };
+  // 0: forearm; 1: hand 1.1 (rA + rB) from it (the wrist's crease); 2: torso, as close to the hand again.
+  const std::vector<sc::FittedSphere> spheres = {sphere(0, 0.0, 1.0), sphere(4, 2.2, 1.0), sphere(5, 4.4, 1.0)};
+  sc::ExclusionReasons why;
+  const auto pairs = sc::BindExcludedPairs(spheres, 0.0, &why, nullptr, sc::UpAxis::kY, &L);
+  CHECK(std::find(pairs.begin(), pairs.end(), sc::SpherePair{0, 1}) != pairs.end());
+  CHECK(std::find(pairs.begin(), pairs.end(), sc::SpherePair{1, 2}) == pairs.end());
+  CHECK(why.junction == 1);
 }

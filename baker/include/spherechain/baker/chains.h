@@ -23,6 +23,13 @@ struct ChainDef {
 /// ζ4 = R0 ∪ R4T ∪ R4R ∪ R3, ζ5 = R1 ∪ R4T ∪ R4L ∪ R2.
 std::vector<ChainDef> DefaultChainDefs();
 
+/// Table 1 on the extended layout (head, hands and feet: segment.h ApplyExtremities): the same six chains,
+/// each limb with the parts hanging off it (ζ0 = R0 ∪ left hand ∪ R4L ∪ R2 ∪ left foot, …; the torso's
+/// labelled sets are the trunk's), and the head in ζ0, ζ1 and ζ2 — so a hand meets the face (ζ0, ζ1: its
+/// own side's; ζ2: either), a hand the other arm and hand (ζ2, ζ4, ζ5), a foot the other leg and foot (ζ3).
+/// Tokens are R<k> of `layout`. On the paper's five regions it returns DefaultChainDefs() unchanged.
+std::vector<ChainDef> ExtendedChainDefs(const RegionLayout& layout);
+
 /// A creature's chains (the any-skeleton path, whose limbs Table 1 does not know): one chain per pair of
 /// limbs, "A+B" = R_a ∪ R_b, then one per limb with the trunk, "A+trunk" = R_a ∪ R_trunk — L(L+1)/2
 /// chains for L ≤ 7 limbs; more limbs go in 7 groups of consecutive limbs (bone-tree order: a spider's
@@ -69,8 +76,10 @@ struct ExclusionReasons {
                                   ///< skin between them moves them together at the hips and armpits)
   size_t bind_overlap = 0;    ///< ‖cA − cB‖ < rA + rB at bind pose
   size_t bind_near = 0;       ///< ‖cA − cB‖ < rA + rB + near at bind pose (they nearly touch)
-  size_t junction = 0;        ///< a limb sphere and a torso sphere with ‖cA − cB‖ < 1.25 (rA + rB) + near:
-                              ///< the crease of the hip or armpit, where flexing folds skin on skin
+  size_t junction = 0;        ///< a limb sphere and a sphere of the region it hangs off (the torso; in the
+                              ///< extended layout a hand's arm, a foot's leg: RegionInfo::parent) with
+                              ///< ‖cA − cB‖ < 1.25 (rA + rB) + near: the crease of the hip, armpit, wrist or
+                              ///< ankle, where flexing folds skin on skin
 };
 
 /// Adjacent pairs from bind-pose geometry and the limb sequences (the "cover" fit's rule): consecutive

@@ -110,6 +110,16 @@ struct ExtremitySplit {
 Result<ExtremitySplit> SplitExtremities(const Mesh& mesh, const Segmentation& seg,
                                         ExtremityMethod method = ExtremityMethod::kAuto, Context* ctx = nullptr);
 
+/// Turns a five-region segmentation into the extended layout (`regions: extended`, issue 11): the parts
+/// `split` found become regions of their own — R0..R3 stay the arms and legs, then head, left_hand,
+/// right_hand, left_foot, right_foot (those found, in that order), the torso last. RegionLayout::paper
+/// stays true (a standing biped: Table 1's chains, extended by ExtendedChainDefs; torso labels); hands
+/// and feet mirror each other and hang off their arm / leg (RegionInfo::parent), the head off the torso.
+/// A part that was not found stays in its region. Segmentation::vertex_regions is recomputed and a
+/// summary appended to `notes`. Errors: kSegmentation when `seg` is not the paper's five regions or
+/// `split` does not match it (#T). No-op (Ok) when nothing was found.
+Status ApplyExtremities(const Mesh& mesh, const ExtremitySplit& split, Segmentation* seg);
+
 /// Fraction of triangles (area-weighted) on which two segmentations agree, overall and per region
 /// (IoU per region). Both must have the same triangle count.
 struct SegmentationAgreement {

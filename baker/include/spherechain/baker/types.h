@@ -50,6 +50,15 @@ struct RegionInfo {
   RegionKind kind = RegionKind::kLimb;
   int mirror = -1;   ///< the region on the other side of a left/right pair, or −1 (balance checks)
   std::string bone;  ///< [opt] any-skeleton: the limb's first bone (the trunk: the bone joining its junctions)
+  /// The region a limb hangs off: −1 the trunk (every paper limb, every creature limb); a human's
+  /// extended layout (RegionLayout::Extended) hangs each hand off its arm and each foot off its leg.
+  /// Junction planes, limb roots (the sequence's start), the crease exclusions and the attachment check
+  /// look at the limb's parent.
+  int parent = -1;
+  /// The region whose volume share weighs this one's in the cover fit's greedy (FitParams::region_balance):
+  /// −1 its own; the extended layout's head, hands and feet take the torso's, arm's and leg's, so the
+  /// budget goes where it went on the paper's five regions. Baker-only (not in the asset).
+  int volume_group = -1;
 };
 
 /// The regions of a body and what each is. Region values (Segmentation::triangle_regions,
@@ -58,8 +67,9 @@ struct RegionInfo {
 /// The any-skeleton path (segment.h SegmentBySkeleton) builds a creature's: limbs R0..R(n−2), trunk R(n−1).
 struct RegionLayout {
   std::vector<RegionInfo> regions = PaperRegions();
-  /// true for the paper's five regions (a standing biped: torso along Mesh::up_axis, Table 1 chains,
-  /// torso labels L/R/T/D); false for a creature's layout.
+  /// true for a standing biped — the paper's five regions, or the extended layout with head, hands and
+  /// feet (RegionLayout::Extended): torso along Mesh::up_axis, Table 1's chains (extended), torso labels
+  /// L/R/T/D; false for a creature's layout.
   bool paper = true;
   /// Creature layouts: the trunk's principal axis (unit; bind pose, model space), which plays the part
   /// of the up axis for the trunk (sphere order, side-by-side exclusions, pivots). Paper: unused (zero).
@@ -76,6 +86,19 @@ struct RegionLayout {
   /// regions[r].name, or "none" for a value outside the layout.
   const char* Name(Region r) const {
     return static_cast<int>(r) < count() ? regions[static_cast<size_t>(r)].name.c_str() : "none";
+  }
+  /// The region limb `r` hangs off (RegionInfo::parent; the trunk when −1).
+  Region Parent(Region r) const {
+    const int p = static_cast<int>(r) < count() ? regions[static_cast<size_t>(r)].parent : -1;
+    return p >= 0 ? static_cast<Region>(p) : trunk();
+  }
+  /// The paper's five regions, unchanged (schema v3 assets describe no layout: these are implied).
+  bool IsPaperFive() const { return paper && count() == 5; }
+  /// The region named `name`, or −1.
+  int Find(const std::string& name) const {
+    for (int k = 0; k < count(); ++k)
+      if (regions[static_cast<size_t>(k)].name == name) return k;
+    return -1;
   }
   /// The paper's five regions (limbs mirrored 0↔1, 2↔3; the torso last).
   static std::vector<RegionInfo> PaperRegions();

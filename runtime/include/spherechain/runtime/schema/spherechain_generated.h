@@ -764,7 +764,8 @@ struct Asset FLATBUFFERS_FINAL_CLASS : private flatbuffers::Table {
     VT_SOURCE_VERTEX_COUNT = 68,
     VT_JOINED_VERTEX_COUNT = 70,
     VT_FORCED_FINDINGS = 72,
-    VT_REGIONS = 74
+    VT_REGIONS = 74,
+    VT_BIPED = 76
   };
   uint32_t schema_version() const {
     return GetField<uint32_t>(VT_SCHEMA_VERSION, 0);
@@ -880,6 +881,11 @@ struct Asset FLATBUFFERS_FINAL_CLASS : private flatbuffers::Table {
   const flatbuffers::Vector<flatbuffers::Offset<spherechain::schema::RegionInfo>> *regions() const {
     return GetPointer<const flatbuffers::Vector<flatbuffers::Offset<spherechain::schema::RegionInfo>> *>(VT_REGIONS);
   }
+  /// The regions are a standing biped's (the extended layout: the paper's five with head, hands and feet
+  /// cut out; up is Mesh up, Table 1's chains extended), not a creature's. False when absent.
+  bool biped() const {
+    return GetField<uint8_t>(VT_BIPED, 0) != 0;
+  }
   bool Verify(flatbuffers::Verifier &verifier) const {
     return VerifyTableStart(verifier) &&
            VerifyField<uint32_t>(verifier, VT_SCHEMA_VERSION, 4) &&
@@ -951,6 +957,7 @@ struct Asset FLATBUFFERS_FINAL_CLASS : private flatbuffers::Table {
            VerifyOffset(verifier, VT_REGIONS) &&
            verifier.VerifyVector(regions()) &&
            verifier.VerifyVectorOfTables(regions()) &&
+           VerifyField<uint8_t>(verifier, VT_BIPED, 1) &&
            verifier.EndTable();
   }
 };
@@ -1067,6 +1074,9 @@ struct AssetBuilder {
   void add_regions(flatbuffers::Offset<flatbuffers::Vector<flatbuffers::Offset<spherechain::schema::RegionInfo>>> regions) {
     fbb_.AddOffset(Asset::VT_REGIONS, regions);
   }
+  void add_biped(bool biped) {
+    fbb_.AddElement<uint8_t>(Asset::VT_BIPED, static_cast<uint8_t>(biped), 0);
+  }
   explicit AssetBuilder(flatbuffers::FlatBufferBuilder &_fbb)
         : fbb_(_fbb) {
     start_ = fbb_.StartTable();
@@ -1115,7 +1125,8 @@ inline flatbuffers::Offset<Asset> CreateAsset(
     uint32_t source_vertex_count = 0,
     uint32_t joined_vertex_count = 0,
     flatbuffers::Offset<flatbuffers::Vector<flatbuffers::Offset<spherechain::schema::BakeFinding>>> forced_findings = 0,
-    flatbuffers::Offset<flatbuffers::Vector<flatbuffers::Offset<spherechain::schema::RegionInfo>>> regions = 0) {
+    flatbuffers::Offset<flatbuffers::Vector<flatbuffers::Offset<spherechain::schema::RegionInfo>>> regions = 0,
+    bool biped = false) {
   AssetBuilder builder_(_fbb);
   builder_.add_regions(regions);
   builder_.add_forced_findings(forced_findings);
@@ -1152,6 +1163,7 @@ inline flatbuffers::Offset<Asset> CreateAsset(
   builder_.add_fingerprint(fingerprint);
   builder_.add_generator(generator);
   builder_.add_schema_version(schema_version);
+  builder_.add_biped(biped);
   builder_.add_up_axis(up_axis);
   return builder_.Finish();
 }
@@ -1193,7 +1205,8 @@ inline flatbuffers::Offset<Asset> CreateAssetDirect(
     uint32_t source_vertex_count = 0,
     uint32_t joined_vertex_count = 0,
     const std::vector<flatbuffers::Offset<spherechain::schema::BakeFinding>> *forced_findings = nullptr,
-    const std::vector<flatbuffers::Offset<spherechain::schema::RegionInfo>> *regions = nullptr) {
+    const std::vector<flatbuffers::Offset<spherechain::schema::RegionInfo>> *regions = nullptr,
+    bool biped = false) {
   auto generator__ = generator ? _fbb.CreateString(generator) : 0;
   auto parts__ = parts ? _fbb.CreateVector<flatbuffers::Offset<spherechain::schema::MeshPart>>(*parts) : 0;
   auto units__ = units ? _fbb.CreateString(units) : 0;
@@ -1256,7 +1269,8 @@ inline flatbuffers::Offset<Asset> CreateAssetDirect(
       source_vertex_count,
       joined_vertex_count,
       forced_findings__,
-      regions__);
+      regions__,
+      biped);
 }
 
 /// One region of a body (Asset.regions, schema v4).
@@ -1266,7 +1280,8 @@ struct RegionInfo FLATBUFFERS_FINAL_CLASS : private flatbuffers::Table {
     VT_NAME = 4,
     VT_KIND = 6,
     VT_MIRROR = 8,
-    VT_BONE = 10
+    VT_BONE = 10,
+    VT_PARENT = 12
   };
   const flatbuffers::String *name() const {
     return GetPointer<const flatbuffers::String *>(VT_NAME);
@@ -1280,6 +1295,9 @@ struct RegionInfo FLATBUFFERS_FINAL_CLASS : private flatbuffers::Table {
   const flatbuffers::String *bone() const {
     return GetPointer<const flatbuffers::String *>(VT_BONE);
   }
+  int16_t parent() const {
+    return GetField<int16_t>(VT_PARENT, -1);
+  }
   bool Verify(flatbuffers::Verifier &verifier) const {
     return VerifyTableStart(verifier) &&
            VerifyOffset(verifier, VT_NAME) &&
@@ -1288,6 +1306,7 @@ struct RegionInfo FLATBUFFERS_FINAL_CLASS : private flatbuffers::Table {
            VerifyField<int16_t>(verifier, VT_MIRROR, 2) &&
            VerifyOffset(verifier, VT_BONE) &&
            verifier.VerifyString(bone()) &&
+           VerifyField<int16_t>(verifier, VT_PARENT, 2) &&
            verifier.EndTable();
   }
 };
@@ -1308,6 +1327,9 @@ struct RegionInfoBuilder {
   void add_bone(flatbuffers::Offset<flatbuffers::String> bone) {
     fbb_.AddOffset(RegionInfo::VT_BONE, bone);
   }
+  void add_parent(int16_t parent) {
+    fbb_.AddElement<int16_t>(RegionInfo::VT_PARENT, parent, -1);
+  }
   explicit RegionInfoBuilder(flatbuffers::FlatBufferBuilder &_fbb)
         : fbb_(_fbb) {
     start_ = fbb_.StartTable();
@@ -1324,10 +1346,12 @@ inline flatbuffers::Offset<RegionInfo> CreateRegionInfo(
     flatbuffers::Offset<flatbuffers::String> name = 0,
     spherechain::schema::RegionKind kind = spherechain::schema::RegionKind::Limb,
     int16_t mirror = -1,
-    flatbuffers::Offset<flatbuffers::String> bone = 0) {
+    flatbuffers::Offset<flatbuffers::String> bone = 0,
+    int16_t parent = -1) {
   RegionInfoBuilder builder_(_fbb);
   builder_.add_bone(bone);
   builder_.add_name(name);
+  builder_.add_parent(parent);
   builder_.add_mirror(mirror);
   builder_.add_kind(kind);
   return builder_.Finish();
@@ -1338,7 +1362,8 @@ inline flatbuffers::Offset<RegionInfo> CreateRegionInfoDirect(
     const char *name = nullptr,
     spherechain::schema::RegionKind kind = spherechain::schema::RegionKind::Limb,
     int16_t mirror = -1,
-    const char *bone = nullptr) {
+    const char *bone = nullptr,
+    int16_t parent = -1) {
   auto name__ = name ? _fbb.CreateString(name) : 0;
   auto bone__ = bone ? _fbb.CreateString(bone) : 0;
   return spherechain::schema::CreateRegionInfo(
@@ -1346,7 +1371,8 @@ inline flatbuffers::Offset<RegionInfo> CreateRegionInfoDirect(
       name__,
       kind,
       mirror,
-      bone__);
+      bone__,
+      parent);
 }
 
 /// One failed bake check kept in a forced asset (Asset.forced_findings).

@@ -1,0 +1,61 @@
+# `regions: extended` (issue 11, head, hands and feet) on the MakeHuman body: the bake names ten regions (the
+# summary, the report's regions with their parents, a v4 asset `inspect` reads), and the key poses of
+# data/poses/makehuman_extremities are detected by the part that makes them: the right hand on the face (head
+# and right hand, exact and reported by M2), the fingers interlocked (the two hands). `evaluate --regions paper`
+# scores the same asset on the paper's five regions. Skips visibly without ../shared/data.
+if(NOT EXISTS ${MESH})
+  message("SKIPPED: ${MESH} not found (../shared/data is absent)")
+  return()
+endif()
+file(REMOVE_RECURSE ${WORK})
+file(MAKE_DIRECTORY ${WORK})
+file(WRITE ${WORK}/extended.json "{\"regions\": \"extended\"}")
+execute_process(COMMAND ${CLI} bake ${MESH} -o ${WORK}/mh.sphc --config ${WORK}/extended.json --report ${WORK}/mh.json
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "bake --config regions extended failed (${rc}):\n${out}${err}")
+endif()
+foreach(name head left_hand right_hand left_foot right_foot torso)
+  if(NOT out MATCHES "${name}")
+    message(FATAL_ERROR "the bake summary does not list region ${name}:\n${out}")
+  endif()
+endforeach()
+file(READ ${WORK}/mh.json report)
+string(JSON parent GET "${report}" regions right_hand parent)
+string(JSON hand_spheres GET "${report}" regions right_hand spheres)
+string(JSON head_spheres GET "${report}" regions head spheres)
+if(NOT parent STREQUAL "right_arm" OR hand_spheres LESS 1 OR head_spheres LESS 1)
+  message(FATAL_ERROR "report: right_hand's parent '${parent}', ${hand_spheres} hand and ${head_spheres} head spheres")
+endif()
+execute_process(COMMAND ${CLI} inspect ${WORK}/mh.sphc --json RESULT_VARIABLE rc OUTPUT_VARIABLE ins ERROR_VARIABLE err)
+if(NOT rc EQUAL 0 OR NOT ins MATCHES "right_hand")
+  message(FATAL_ERROR "inspect of the extended asset (${rc}) does not name its regions:\n${ins}${err}")
+endif()
+
+# The key pose of each excursion is frame 4 of 8 (rest at 0).
+foreach(case "hand_on_face;R4-R6" "fingers_interlocked;R5-R6")
+  list(GET case 0 pose)
+  list(GET case 1 pair)
+  execute_process(COMMAND ${CLI} -q evaluate ${WORK}/mh.sphc --mesh ${MESH} --morph ${POSES}/${pose}.json --frames 8
+                          --no-coverage --json ${WORK}/${pose}.json
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "evaluate --morph ${pose} failed (${rc}):\n${out}${err}")
+  endif()
+  file(READ ${WORK}/${pose}.json j)
+  string(JSON exact GET "${j}" frames 4 exact_region_pairs)
+  string(JSON proxy GET "${j}" frames 4 proxy_region_pairs_m2)
+  message(STATUS "${pose}, key frame: exact ${exact}, M2 ${proxy}")
+  if(NOT exact MATCHES "\"${pair}\"" OR NOT proxy MATCHES "\"${pair}\"")
+    message(FATAL_ERROR "${pose}: region pair ${pair} (exact: ${exact}; M2: ${proxy})")
+  endif()
+endforeach()
+
+execute_process(COMMAND ${CLI} -q evaluate ${WORK}/mh.sphc --mesh ${MESH} --morph ${POSES}/hand_on_face.json --frames 8
+                        --no-coverage --regions paper --json ${WORK}/paper.json
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+file(READ ${WORK}/paper.json j)
+string(JSON exact GET "${j}" frames 4 exact_region_pairs)
+if(NOT rc EQUAL 0 OR NOT exact MATCHES "\"R1-R4\"" OR exact MATCHES "R6")
+  message(FATAL_ERROR "--regions paper: the hand on the face should be R1-R4 (right arm, torso), got ${exact} (${rc})")
+endif()
