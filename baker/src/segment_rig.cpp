@@ -18,30 +18,6 @@ namespace spherechain::baker {
 namespace segment_detail {
 namespace {
 
-std::vector<std::string> Tokens(std::string_view name) {
-  std::vector<std::string> out;
-  std::string cur;
-  auto flush = [&] {
-    if (!cur.empty()) out.push_back(cur), cur.clear();
-  };
-  for (size_t i = 0; i < name.size(); ++i) {
-    const unsigned char c = static_cast<unsigned char>(name[i]);
-    if (!std::isalnum(c)) {
-      flush();
-      continue;
-    }
-    if (!cur.empty()) {
-      const unsigned char p = static_cast<unsigned char>(name[i - 1]);
-      const bool case_up = std::islower(p) && std::isupper(c);
-      const bool digit_change = (std::isdigit(p) != 0) != (std::isdigit(c) != 0);
-      if (case_up || digit_change) flush();
-    }
-    cur.push_back(static_cast<char>(std::tolower(c)));
-  }
-  flush();
-  return out;
-}
-
 bool Contains(const std::string& s, std::initializer_list<const char*> words) {
   for (const char* w : words)
     if (s.find(w) != std::string::npos) return true;
@@ -53,7 +29,7 @@ bool Contains(const std::string& s, std::initializer_list<const char*> words) {
 std::optional<Region> RegionOfBone(std::string_view bone_name) {
   int side = 0;  // +1 left, -1 right
   std::string joined;
-  for (const std::string& t : Tokens(bone_name)) {
+  for (const std::string& t : NameTokens(bone_name)) {
     if (t == "l" || t == "left" || t == "lft") side = 1;
     else if (t == "r" || t == "right" || t == "rgt") side = -1;
     else if (t == "armature" || t == "skeleton") continue;
