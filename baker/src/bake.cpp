@@ -1,7 +1,9 @@
 #include "spherechain/baker/bake.h"
+#include "spherechain/baker/training_poses.h"
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -56,7 +58,8 @@ Result<BakeConfig> ParseBakeConfig(const std::string& text, const std::string& w
                                               "compare_segmentations", "fit", "max_spheres", "cover_voxel_rel", "cover_max_voxels",
                                               "min_radius_rel", "min_gain", "region_balance", "refine_sweeps", "dilation_rel",
                                               "skin_spheres", "skin_tolerance_rel", "skin_min_vertices",
-                                              "contact_margin_rel", "near_rel", "vertices", "regions"};
+                                              "contact_margin_rel", "near_rel", "vertices", "regions", "pivot_poses",
+                                              "pivot_pose_angle"};
   for (auto it = j.begin(); it != j.end(); ++it)
     if (!known.count(it.key())) return MakeError(Error::Code::kConfig, where + ": unknown key '" + it.key() + "'");
 
@@ -118,6 +121,8 @@ Result<BakeConfig> ParseBakeConfig(const std::string& text, const std::string& w
   if (s.ok()) s = ReadNumber(j, "skin_min_vertices", 1, 1000000, &c.fit.skin_min_vertices, where);
   if (s.ok()) s = ReadNumber(j, "contact_margin_rel", 0.0, 0.05, &c.contact_margin_rel, where);
   if (s.ok()) s = ReadNumber(j, "near_rel", 0.0, 0.2, &c.near_rel, where);
+  if (s.ok()) s = ReadNumber(j, "pivot_poses", 0u, 256u, &c.pivot_poses, where);
+  if (s.ok()) s = ReadNumber(j, "pivot_pose_angle", 0.0, 90.0, &c.pivot_pose_angle, where);
   if (s.ok()) s = ReadNumber(j, "spheres_per_level", 2, 2, &c.fit.spheres_per_level, where);
   if (s.ok()) s = ReadNumber(j, "disk_step", 1e-9, 1e9, &c.fit.disk_step, where);
   if (s.ok()) s = ReadNumber(j, "disk_step_rel", 1e-4, 0.5, &c.fit.disk_step_rel, where);
@@ -175,6 +180,8 @@ std::string CanonicalConfig(const BakeConfig& c) {
   }
   j["contact_margin_rel"] = c.contact_margin_rel;
   j["near_rel"] = c.near_rel;
+  // Added after assets were cached on the hash: written only when on (the default is off).
+  if (c.pivot_poses) j["pivot_poses"] = c.pivot_poses, j["pivot_pose_angle"] = c.pivot_pose_angle;
   j["rays"] = c.fit.rays;
   j["spheres_per_level"] = c.fit.spheres_per_level;
   j["disk_step"] = c.fit.disk_step;
@@ -390,10 +397,33 @@ Result<BakeResult> Bake(const std::string& input_path, const BakeConfig& config,
                 " pair(s) of two limbs where they meet (a crease)");
   }
   {
+    std::vector<std::vector<float>> poses;
+    if (config.pivot_poses && mesh.skin) {
+      Context::Timer tp(ctx, "pivot_poses");
+      TrainingPoseOptions po;
+      po.count = config.pivot_poses;
+      po.max_angle_deg = float(config.pivot_pose_angle);
+      poses = SampleTrainingPoses(mesh, po);
+    }
     Context::Timer t(ctx, "pivots");
-    auto piv = ChoosePivots(mesh, spheres, r.surrounding, &r.segmentation);
+    PivotTraining training;
+    training.poses = &poses;
+    training.witness_reach = 0.02 * r.fit.body_height;
+    auto piv = ChoosePivots(mesh, spheres, r.surrounding, &r.segmentation, poses.empty() ? nullptr : &training);
     if (!piv.ok()) return piv.error();
     r.pivots = std::move(piv).value();
+    if (ctx && r.pivots.training.poses) {
+      const Pivots::Training& pt = r.pivots.training;
+      char line[200];
+      std::snprintf(line, sizeof line,
+                    "pivots: refined on %u random poses of the rig: %u of %zu spheres changed, tracking error "
+                    "%.3f -> %.3f %% of the height",
+                    pt.poses, pt.spheres_changed, spheres.size(), 100 * pt.error_before / r.fit.body_height,
+                    100 * pt.error_after / r.fit.body_height);
+      ctx->Info(line);
+    } else if (ctx && config.pivot_poses && !mesh.skin) {
+      ctx->Info("pivots: pivot_poses ignored: the mesh has no skin to pose");
+    }
   }
   {
     Context::Timer t(ctx, "phi2_accuracy");
@@ -631,6 +661,12 @@ json MakeBakeReport(const BakeResult& r, const BakeConfig& config, const Context
                                        "largest kept and renormalised; radius = bind radius"}};
   }
   j["sphere_table"] = per;
+  if (r.pivots.training.poses)
+    j["pivot_training"] = {{"poses", r.pivots.training.poses},
+                           {"max_angle_deg", config.pivot_pose_angle},
+                           {"spheres_changed", r.pivots.training.spheres_changed},
+                           {"tracking_error_before_rel", r.pivots.training.error_before / r.fit.body_height},
+                           {"tracking_error_after_rel", r.pivots.training.error_after / r.fit.body_height}};
   json plaus = json::array();
   for (const PlausibilityFinding& f : r.plausibility)
     plaus.push_back({{"code", f.code}, {"severity", "error"}, {"message", f.message}});

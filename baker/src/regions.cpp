@@ -8,6 +8,7 @@
 
 #include <Eigen/Geometry>
 
+#include "parallel.h"
 #include "spherechain/runtime/refit.h"
 
 namespace spherechain::baker {
@@ -72,6 +73,168 @@ bool PivotsWellConditioned(const float p[4][3], float min_length) {
   return a.cross(b).norm() / (na * nb) > 0.25f && runtime::BuildPivotFrame(p, &basis);
 }
 
+// The refit of one sphere on one set of positions, exactly as the runtime's kPivotFrame computes it
+// (refit.h): frame from the four pivot centroids, the bind centre's frame coordinates, radius scaled by
+// the mean pivot distance; a degenerate frame falls back to the mean centroid + offset (kPaper).
+struct PivotBind {
+  float local[3], offset[3], radius_scale;
+};
+
+void PivotCentroids(const float* positions, const Mesh& mesh, const std::array<uint32_t, 4>& tris, float p[4][3]) {
+  for (int k = 0; k < 4; ++k) {
+    const uint32_t* tri = &mesh.indices[3 * size_t(tris[k])];
+    runtime::TriangleCentroid(&positions[3 * size_t(tri[0])], &positions[3 * size_t(tri[1])],
+                              &positions[3 * size_t(tri[2])], p[k]);
+  }
+}
+
+bool BindPivots(const Mesh& mesh, const std::array<uint32_t, 4>& tris, const FittedSphere& S, PivotBind* out) {
+  float p[4][3];
+  PivotCentroids(mesh.positions.data(), mesh, tris, p);
+  runtime::PivotFrameBasis basis;
+  if (!runtime::BuildPivotFrame(p, &basis)) return false;
+  const float c[3] = {float(S.center.x()), float(S.center.y()), float(S.center.z())};
+  runtime::PivotFrameToLocal(basis, c, out->local);
+  for (int k = 0; k < 3; ++k) out->offset[k] = c[k] - basis.origin[k];
+  const float md = runtime::PivotMeanDistance(p, c);
+  if (!(md > 0.0f)) return false;
+  out->radius_scale = float(S.radius) / md;
+  return true;
+}
+
+void RefitOne(const float* positions, const Mesh& mesh, const std::array<uint32_t, 4>& tris, const PivotBind& b,
+              float c[3], float* r) {
+  float p[4][3];
+  PivotCentroids(positions, mesh, tris, p);
+  runtime::PivotFrameBasis basis;
+  if (runtime::BuildPivotFrame(p, &basis)) {
+    runtime::PivotFrameToModel(basis, b.local, c);
+  } else {
+    for (int k = 0; k < 3; ++k) c[k] = basis.origin[k] + b.offset[k];
+  }
+  *r = b.radius_scale * runtime::PivotMeanDistance(p, c);
+}
+
+// ChoosePivots' refinement against the training poses (regions.h PivotTraining): per sphere, coordinate
+// descent over the best-placed triangles per direction, each change kept only when it lowers the
+// tracking error of the sphere's witness vertices. Spheres are independent: on all cores, same result.
+void RefinePivotsOnPoses(const Mesh& mesh, const std::vector<FittedSphere>& spheres,
+                         const SurroundingRegions& surrounding, const RegionLayout& layout,
+                         const std::vector<double>& areas, double min_area, const PivotTraining& training,
+                         std::vector<std::array<uint32_t, 4>>* picks, Pivots::Training* stats) {
+  const std::vector<std::vector<float>>& poses = *training.poses;
+  const uint32_t V = mesh.vertex_count(), T = mesh.triangle_count();
+  for (const std::vector<float>& pose : poses)
+    if (pose.size() != size_t(V) * 3) return;
+  constexpr size_t kMaxWitnesses = 192, kPerDirection = 8;
+  std::vector<double> before(spheres.size(), 0.0), after(spheres.size(), 0.0);
+  std::vector<uint8_t> changed_any(spheres.size(), 0);
+  std::vector<uint8_t> triangle_region(T);
+  for (uint32_t t = 0; t < T; ++t) triangle_region[t] = uint8_t(spheres[surrounding.triangle_spheres[t]].region);
+
+  detail::ParallelFor(0, spheres.size(), [&](size_t s) {
+    const FittedSphere& S = spheres[s];
+    const Eigen::Vector3f c0 = S.center.cast<float>();
+    const float r0 = float(S.radius);
+    // Witnesses: the skin near the sphere's surface, every k-th when there are many.
+    std::vector<uint32_t> witnesses;
+    for (uint32_t v = 0; v < V; ++v) {
+      const Eigen::Vector3f x(mesh.positions[3 * v], mesh.positions[3 * v + 1], mesh.positions[3 * v + 2]);
+      if ((x - c0).norm() - r0 <= training.witness_reach) witnesses.push_back(v);
+    }
+    if (witnesses.empty()) return;
+    if (witnesses.size() > kMaxWitnesses) {
+      std::vector<uint32_t> kept;
+      for (size_t i = 0; i < kMaxWitnesses; ++i) kept.push_back(witnesses[i * witnesses.size() / kMaxWitnesses]);
+      witnesses.swap(kept);
+    }
+    std::vector<float> bind_f(witnesses.size());
+    for (size_t i = 0; i < witnesses.size(); ++i) {
+      const float* x = &mesh.positions[3 * size_t(witnesses[i])];
+      bind_f[i] = r0 - Eigen::Vector3f(x[0] - c0.x(), x[1] - c0.y(), x[2] - c0.z()).norm();
+    }
+    auto error = [&](const std::array<uint32_t, 4>& tris) {
+      PivotBind b;
+      if (!BindPivots(mesh, tris, S, &b)) return std::numeric_limits<double>::infinity();
+      double sum = 0.0;
+      for (const std::vector<float>& pose : poses) {
+        float c[3], r;
+        RefitOne(pose.data(), mesh, tris, b, c, &r);
+        double mean_abs = 0.0, worst = 0.0;
+        for (size_t i = 0; i < witnesses.size(); ++i) {
+          const float* x = &pose[3 * size_t(witnesses[i])];
+          const float dx = x[0] - c[0], dy = x[1] - c[1], dz = x[2] - c[2];
+          const double df = double(r - std::sqrt(dx * dx + dy * dy + dz * dz)) - bind_f[i];
+          mean_abs += std::abs(df);
+          worst = std::max(worst, df);
+        }
+        sum += mean_abs / double(witnesses.size()) + worst;
+      }
+      return std::isfinite(sum) ? sum / double(poses.size()) : std::numeric_limits<double>::infinity();
+    };
+
+    // Candidates per direction (+u, +v, −u, −v, as ChoosePivots places them): the surrounding region's
+    // triangles and the sphere's own region's within 1.5 r, ranked as the geometric choice ranks them.
+    const Eigen::Vector3d a = SphereAxis(mesh, spheres, s, layout);
+    const Eigen::Vector3d ref = std::abs(a.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitZ();
+    const Eigen::Vector3d u = (ref - ref.dot(a) * a).normalized(), v = a.cross(u);
+    const Eigen::Vector3d targets[4] = {u, v, -u, -v};
+    std::vector<uint32_t> pool;
+    for (uint32_t k = surrounding.offsets[s]; k < surrounding.offsets[s + 1]; ++k)
+      if (areas[surrounding.triangles[k]] > min_area) pool.push_back(surrounding.triangles[k]);
+    for (uint32_t t = 0; t < T; ++t)
+      if (surrounding.triangle_spheres[t] != s && triangle_region[t] == uint8_t(S.region) && areas[t] > min_area &&
+          (Centroid(mesh, t) - S.center).norm() < 1.5 * S.radius)
+        pool.push_back(t);
+    std::array<std::vector<uint32_t>, 4> ranked;
+    for (int k = 0; k < 4; ++k) {
+      std::vector<std::pair<double, uint32_t>> scored;
+      for (uint32_t t : pool) {
+        const Eigen::Vector3d d = Centroid(mesh, t) - S.center;
+        const double axial = d.dot(a);
+        const Eigen::Vector3d radial = d - axial * a;
+        const double rn = radial.norm();
+        if (rn < 1e-12) continue;
+        const double score = radial.dot(targets[k]) / rn - 0.5 * std::abs(axial) / std::max(S.radius, 1e-12);
+        if (score > 0.0) scored.emplace_back(-score, t);
+      }
+      const size_t n = std::min(kPerDirection, scored.size());
+      std::partial_sort(scored.begin(), scored.begin() + n, scored.end());
+      for (size_t i = 0; i < n; ++i) ranked[k].push_back(scored[i].second);
+    }
+
+    // A change must gain more than float noise: 1e-4 of the radius (E is a length).
+    const double min_gain = 1e-4 * S.radius;
+    std::array<uint32_t, 4> best = (*picks)[s];
+    double best_error = error(best);
+    before[s] = best_error;
+    for (int sweep = 0; sweep < 2; ++sweep) {
+      bool changed = false;
+      for (int k = 0; k < 4; ++k)
+        for (uint32_t t : ranked[k]) {
+          if (std::find(best.begin(), best.end(), t) != best.end()) continue;
+          std::array<uint32_t, 4> trial = best;
+          trial[k] = t;
+          float p[4][3];
+          PivotCentroids(mesh.positions.data(), mesh, trial, p);
+          if (!PivotsWellConditioned(p, float(0.05 * S.radius))) continue;
+          const double e = error(trial);
+          if (e < best_error - min_gain) best_error = e, best = trial, changed = true;
+        }
+      if (!changed) break;
+    }
+    after[s] = best_error;
+    changed_any[s] = best != (*picks)[s];
+    (*picks)[s] = best;
+  });
+  stats->poses = uint32_t(poses.size());
+  for (size_t s = 0; s < spheres.size(); ++s) {
+    stats->spheres_changed += changed_any[s];
+    if (std::isfinite(before[s]) && std::isfinite(after[s]))
+      stats->error_before += before[s] / double(spheres.size()), stats->error_after += after[s] / double(spheres.size());
+  }
+}
+
 }  // namespace
 
 std::vector<uint32_t> SurroundingRegions::Vertices(const Mesh& mesh, size_t sphere) const {
@@ -120,7 +283,8 @@ Result<SurroundingRegions> BuildSurroundingRegions(const Mesh& mesh, const Segme
 }
 
 Result<Pivots> ChoosePivots(const Mesh& mesh, const std::vector<FittedSphere>& spheres,
-                            const SurroundingRegions& surrounding, const Segmentation* segmentation) {
+                            const SurroundingRegions& surrounding, const Segmentation* segmentation,
+                            const PivotTraining* training) {
   const RegionLayout paper;
   const RegionLayout& layout = segmentation ? segmentation->layout : paper;
   const uint32_t T = mesh.triangle_count();
@@ -150,11 +314,7 @@ Result<Pivots> ChoosePivots(const Mesh& mesh, const std::vector<FittedSphere>& s
   std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
   const double min_area = 0.05 * sorted[sorted.size() / 2];
 
-  Pivots out;
-  out.triangles.reserve(spheres.size() * 4);
-  out.vertices.reserve(spheres.size() * 12);
-  out.frames.resize(spheres.size());
-
+  std::vector<std::array<uint32_t, 4>> picks(spheres.size());
   for (size_t s = 0; s < spheres.size(); ++s) {
     const FittedSphere& S = spheres[s];
     const Eigen::Vector3d a = SphereAxis(mesh, spheres, s, layout);
@@ -236,10 +396,21 @@ Result<Pivots> ChoosePivots(const Mesh& mesh, const std::vector<FittedSphere>& s
     if (!ok)
       return MakeError(Error::Code::kFit, "sphere " + std::to_string(s) + " (" + RegionSymbol(S.region) +
                                               "): no four non-degenerate pivot polygons around it");
+    picks[s] = pick;
+  }
 
+  Pivots out;
+  if (training && training->poses && !training->poses->empty())
+    RefinePivotsOnPoses(mesh, spheres, surrounding, layout, areas, min_area, *training, &picks, &out.training);
+
+  out.triangles.reserve(spheres.size() * 4);
+  out.vertices.reserve(spheres.size() * 12);
+  out.frames.resize(spheres.size());
+  for (size_t s = 0; s < spheres.size(); ++s) {
+    const FittedSphere& S = spheres[s];
     float p[4][3];
     for (int k = 0; k < 4; ++k) {
-      const uint32_t t = pick[k];
+      const uint32_t t = picks[s][k];
       out.triangles.push_back(t);
       for (int j = 0; j < 3; ++j) out.vertices.push_back(mesh.indices[3 * t + j]);
       // The centroid exactly as the runtime's refit computes it.

@@ -26,7 +26,7 @@ namespace spherechain::baker {
 ///   "min_gain": 0.0002, "region_balance": 0.5, "refine_sweeps": 4, "dilation_rel": 0.003,
 ///   "skin_spheres": 16, "skin_tolerance_rel": 0.01, "skin_min_vertices": 8,
 ///   "contact_margin_rel": 0.004,
-///   "near_rel": 0.005,
+///   "near_rel": 0.005, "pivot_poses": 0, "pivot_pose_angle": 30,
 ///   "segmentation": "auto"|"rig"|"geometry"|"skeleton"|"map", "region_map": "map.json", "rig": "x.mhskel",
 ///   "regions": "extended"|"paper",
 ///   "rays": 80, "spheres_per_level": 2, "disk_step": 0.25, "disk_step_rel": 0.015,
@@ -54,6 +54,13 @@ struct BakeConfig {
   /// height of each other at bind pose are adjacent (chains.h BindExcludedPairs) — so nothing the
   /// margin reaches at bind pose is ever reported.
   double near_rel = 0.005;
+  /// Pivot choice refined against random poses of the rig (regions.h PivotTraining, training_poses.h):
+  /// how many poses ("pivot_poses" [Limit: 0..256]; 0, the default, keeps the geometric choice alone;
+  /// ignored without a skin; 24 is what README "Pivots trained on poses" measures) and how far each joint
+  /// turns ("pivot_pose_angle" [Units: degrees] [Limit: [0, 90]]). Opt-in: on the reference animations it
+  /// trades sphere-pair recall for fewer false alarms on some bodies and not on others (measured there).
+  uint32_t pivot_poses = 0;
+  double pivot_pose_angle = 30.0;
   /// Write the asset even when a plausibility check fails (plausibility.h, issue 11 "no silent wrong
   /// bake"): the findings then go to BakeResult::plausibility, the report (errors with their codes) and
   /// the asset (schema Asset.forced_findings, which `spherechain validate` reports as errors). CLI

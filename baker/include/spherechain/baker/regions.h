@@ -45,6 +45,22 @@ struct Pivots {
     float mean_distance = 0.0f;              ///< mean ‖c − p_k‖ over the four pivot centroids
   };
   std::vector<Frame> frames;  ///< #S
+  /// What the refinement against training poses did (ChoosePivots `training`; zeros without it).
+  struct Training {
+    uint32_t poses = 0;            ///< poses the choice was weighed against
+    uint32_t spheres_changed = 0;  ///< spheres whose pivots differ from the geometric choice
+    double error_before = 0.0;     ///< mean over spheres of the tracking error E, geometric choice [Units: source]
+    double error_after = 0.0;      ///< the same after refinement (≤ error_before)
+  } training;
+};
+
+/// What ChoosePivots weighs its choice against: random poses of the character's own rig
+/// (SampleTrainingPoses), over which a choice should keep the sphere where the skin around it goes.
+struct PivotTraining {
+  const std::vector<std::vector<float>>* poses = nullptr;  ///< #P buffers of #V×3 (model space, source units)
+  /// The skin a sphere answers for: the vertices within `witness_reach` of its bind surface
+  /// (|c − v| − r ≤ reach) [Units: source] [Limit: > 0]; the bake uses 2 % of the body height.
+  double witness_reach = 0.0;
 };
 
 /// Chooses four pivot polygons per sphere, spread around it: in the plane perpendicular to the
@@ -59,8 +75,16 @@ struct Pivots {
 /// whose corners have ≥ 90 % of their skin weight on its own region's bones — the skin that moves with it
 /// (a trunk sphere at the hip otherwise follows the leg's skin there) — and takes any triangle only when
 /// no well-spread four are found so.
+/// `training` [opt]: with poses, each sphere's choice is then refined against them — coordinate descent
+/// over the 8 best-placed triangles per direction (its surrounding region's and its own region's within
+/// 1.5 r), keeping a change only when it lowers the tracking error E, the mean over the poses of
+/// mean_i |ΔF_i| + max(0, max_i ΔF_i), with F_i = r − ‖c − v_i‖ over the sphere's witness vertices
+/// (the paper's accuracy measure F, §3.2, bind vs refit pose) and the refit exactly as the runtime's
+/// kPivotFrame (refit.h). Our method (no published source); the error is the paper's F. Cost:
+/// O(#S · 64 · #P · witnesses ≤ 192), on all cores; deterministic.
 Result<Pivots> ChoosePivots(const Mesh& mesh, const std::vector<FittedSphere>& spheres,
-                            const SurroundingRegions& surrounding, const Segmentation* segmentation = nullptr);
+                            const SurroundingRegions& surrounding, const Segmentation* segmentation = nullptr,
+                            const PivotTraining* training = nullptr);
 
 /// Skin weights of every sphere's centre, for the refit from joint matrices (schema v3
 /// Asset.joint_count / sphere_joints / sphere_joint_weights; runtime JointRefitJob).
