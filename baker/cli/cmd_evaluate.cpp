@@ -9,7 +9,9 @@
 // intersecting pair whose owning spheres (surrounding regions, §5.1) differ and are not an excluded
 // pair; the other intersections (same sphere, excluded pair: skinning artefacts at joints) are counted
 // apart. Summary: the proxy's recall (region pairs and sphere pairs), its false alarms (a region pair
-// reported where no triangles of the two regions come within --margin), the narrow phase's recall and
+// reported where no triangles of the two regions come within --margin), the sphere-pair precision (the share of
+// M2's pairs whose own surrounding regions — the triangles handed back for them — come within it), the narrow
+// phase's recall and
 // precision (triangle pairs), bind-pose coverage / protrusion of φ1, φ1', φ2, and per frame the refit spheres'
 // coverage of the deformed mesh and how far they stick out of its skin.
 // --sweep-margin re-runs M1 and M2 on the same refit spheres with other contact margins (DetectJob::margin)
@@ -91,6 +93,7 @@ struct SweepPoint {
   double margin_rel = 0;
   size_t found_m1 = 0, found_m2 = 0, sfound_m1 = 0, sfound_m2 = 0, false_m1 = 0, false_m2 = 0, false_frames = 0;
   size_t pairs_m2 = 0;  // sphere pairs M2 reported (the narrow phase's work)
+  size_t imprecise_m2 = 0;  // of those, pairs whose own surrounding regions come nowhere within the margin
 };
 
 std::string RegionName(const RegionPair& p) { return "R" + std::to_string(p.first) + "-R" + std::to_string(p.second); }
@@ -138,6 +141,9 @@ struct FrameEval {
   // gap ‖cA − cB‖ − rA − rB − 2·margin [Units: source] (> 0: apart even with the margin).
   std::map<SpherePairKey, float> missed_sphere_gaps;  // exact contact, M2 did not report the pair
   std::map<SpherePairKey, float> false_sphere_gaps;   // M2 reported, inside a false-alarm region pair
+  // Imprecise sphere pairs: M2 pairs whose own surrounding regions (the triangles the runtime hands back for
+  // them) come nowhere within the margin, whatever else their region pair touches in the frame.
+  std::map<SpherePairKey, float> imprecise_gaps;
   // The refit spheres against this frame's deformed mesh (coverage.h; only with coverage on): how well
   // the refit keeps the bind fit's fill and how far the spheres stick out of the deformed skin.
   bool has_refit_coverage = false;
@@ -218,10 +224,14 @@ int RunEvaluate(const EvaluateArgs& a) {
     const int ra = sphere_region(sa), rb = sphere_region(sb);
     return RegionPair(std::min(ra, rb), std::max(ra, rb));
   };
-  // Triangles by the region of their owning sphere (for the false-alarm distance test).
+  // Triangles by the region of their owning sphere, and by the sphere (for the false-alarm distance tests).
   std::map<int, std::vector<uint32_t>> region_triangles;
+  std::vector<std::vector<uint32_t>> sphere_triangles(view.asset->spheres()->size());
   for (uint32_t t = 0; t < T; ++t)
-    if (narrow.triangle_sphere(t) != 0xFFFF) region_triangles[sphere_region(narrow.triangle_sphere(t))].push_back(t);
+    if (const uint32_t s = narrow.triangle_sphere(t); s != 0xFFFF) {
+      region_triangles[sphere_region(s)].push_back(t);
+      if (s < sphere_triangles.size()) sphere_triangles[s].push_back(t);
+    }
 
   double lo = 1e300, hi = -1e300;
   const int up = mesh.up_axis == baker::UpAxis::kZ ? 2 : mesh.up_axis == baker::UpAxis::kX ? 0 : 1;
@@ -381,6 +391,23 @@ int RunEvaluate(const EvaluateArgs& a) {
       if (row.m1_regions.count(rp)) row.false_m1.insert(rp);
       if (row.m2_regions.count(rp)) row.false_m2.insert(rp);
     }
+    // Sphere-pair precision: does anything of the two spheres' own surrounding regions come within the margin.
+    std::map<SpherePairKey, bool> pair_near;  // per frame
+    auto is_imprecise = [&](const SpherePairKey& k) -> baker::Result<bool> {
+      if (row.exact_spheres.count(k)) return false;
+      if (auto it = pair_near.find(k); it != pair_near.end()) return !it->second;
+      auto near = baker::AnyTrianglesWithin(positions.data(), V, mesh.indices, weld, sphere_triangles[k.first],
+                                            sphere_triangles[k.second], margin);
+      if (!near.ok()) return near.error();
+      pair_near[k] = near.value();
+      return !near.value();
+    };
+    std::set<SpherePairKey> imprecise;
+    for (const SpherePairKey& k : row.m2_spheres) {
+      auto f = is_imprecise(k);
+      if (!f.ok()) return Fail(f.error());
+      if (f.value()) imprecise.insert(k);
+    }
     // The same refit spheres under other contact margins.
     for (SweepPoint& pt : sweep) {
       std::set<RegionPair> regions[2];
@@ -394,6 +421,11 @@ int RunEvaluate(const EvaluateArgs& a) {
       pt.sfound_m1 += CountIn(row.exact_spheres, pairs[0]);
       pt.sfound_m2 += CountIn(row.exact_spheres, pairs[1]);
       pt.pairs_m2 += pairs[1].size();
+      for (const SpherePairKey& k : pairs[1]) {
+        auto f = is_imprecise(k);
+        if (!f.ok()) return Fail(f.error());
+        pt.imprecise_m2 += f.value();
+      }
       bool any_false = false;
       for (int m = 0; m < 2; ++m)
         for (const RegionPair& rp : regions[m]) {
@@ -416,6 +448,7 @@ int RunEvaluate(const EvaluateArgs& a) {
         if (!row.m2_spheres.count(k)) row.missed_sphere_gaps[k] = gap(k);
       for (const SpherePairKey& k : row.m2_spheres)
         if (row.false_m2.count(region_pair(k.first, k.second))) row.false_sphere_gaps[k] = gap(k);
+      for (const SpherePairKey& k : imprecise) row.imprecise_gaps[k] = gap(k);
     }
     const double elapsed = std::chrono::duration<double>(Clock::now() - t_start).count();
     if (tty) {
@@ -453,6 +486,7 @@ int RunEvaluate(const EvaluateArgs& a) {
   size_t exact_regions = 0, found_m1 = 0, found_m2 = 0, exact_spheres = 0, sfound_m1 = 0, sfound_m2 = 0;
   size_t false_m1 = 0, false_m2 = 0, gt = 0, narrow_total = 0, narrow_true = 0, excluded = 0, same = 0, unassigned = 0;
   nlohmann::json false_frames = nlohmann::json::array();
+  size_t imprecise_m2 = 0, reported_m2 = 0;
   std::vector<double> narrow_us;
   double exact_ms = 0;
   uint32_t worst = 0;
@@ -467,6 +501,8 @@ int RunEvaluate(const EvaluateArgs& a) {
     false_m1 += r.false_m1.size();
     false_m2 += r.false_m2.size();
     if (!r.false_m1.empty() || !r.false_m2.empty()) false_frames.push_back(f);
+    imprecise_m2 += r.imprecise_gaps.size();
+    reported_m2 += r.m2_spheres.size();
     gt += r.contacts;
     narrow_total += r.narrow.contacts;
     narrow_true += r.narrow_true;
@@ -561,6 +597,10 @@ int RunEvaluate(const EvaluateArgs& a) {
               100 * srecall_m2);
   std::printf("proxy false alarms (nothing within the margin): M1 %zu, M2 %zu, in %zu frames\n", false_m1, false_m2,
               false_frames.size());
+  const double sphere_precision_m2 = Ratio(double(reported_m2 - imprecise_m2), double(reported_m2));
+  std::printf("sphere-pair precision M2 (reported pairs whose own surrounding regions come within the margin): "
+              "%.1f %% (%zu/%zu)\n",
+              100 * sphere_precision_m2, reported_m2 - imprecise_m2, reported_m2);
   std::printf("narrow phase: recall %.2f %% (%zu/%zu), precision %.2f %% (%zu/%zu); median %.1f us, max %.1f us a frame "
               "(exact ground truth: %.1f ms a frame)\n",
               100 * n_recall, narrow_true, gt, 100 * n_precision, narrow_true, narrow_total,
@@ -581,14 +621,16 @@ int RunEvaluate(const EvaluateArgs& a) {
   if (!sweep.empty()) {
     std::printf("\ncontact margin sweep (same refit spheres; the asset's margin is %.4g = %.2f %% of height):\n",
                 double(model.contact_margin()), 100.0 * model.contact_margin() / height);
-    std::printf("%10s %8s  %18s  %18s  %18s  %11s  %14s  %14s\n", "margin %h", "margin", "region recall M1", "region recall M2",
-                "sphere recall M2", "false M1/M2", "false frames", "pairs/frame M2");
+    std::printf("%10s %8s  %18s  %18s  %18s  %11s  %14s  %14s  %16s\n", "margin %h", "margin", "region recall M1",
+                "region recall M2", "sphere recall M2", "false M1/M2", "false frames", "pairs/frame M2",
+                "sphere precision");
     for (const SweepPoint& pt : sweep)
-      std::printf("%10.2f %8.4g  %9.1f %% (%3zu)  %9.1f %% (%3zu)  %15.1f %%  %5zu/%-5zu  %6zu of %-4u  %14.1f\n",
+      std::printf("%10.2f %8.4g  %9.1f %% (%3zu)  %9.1f %% (%3zu)  %15.1f %%  %5zu/%-5zu  %6zu of %-4u  %14.1f  %14.1f %%\n",
                   100 * pt.margin_rel, pt.margin_rel * height, 100 * Ratio(double(pt.found_m1), double(exact_regions)),
                   pt.found_m1, 100 * Ratio(double(pt.found_m2), double(exact_regions)), pt.found_m2,
                   100 * Ratio(double(pt.sfound_m2), double(exact_spheres)), pt.false_m1, pt.false_m2, pt.false_frames,
-                  anim.frames, anim.frames ? double(pt.pairs_m2) / anim.frames : 0.0);
+                  anim.frames, anim.frames ? double(pt.pairs_m2) / anim.frames : 0.0,
+                  100 * Ratio(double(pt.pairs_m2 - pt.imprecise_m2), double(pt.pairs_m2)));
   }
 
   // ---- outputs (nothing is written before every frame succeeded) ----------------------------------------
@@ -662,6 +704,7 @@ int RunEvaluate(const EvaluateArgs& a) {
                     {"missed_contacts_m2", r.missed_contacts},
                     {"missed_sphere_pairs_m2", SphereGapList(r.missed_sphere_gaps, height)},
                     {"false_alarm_sphere_pairs_m2", SphereGapList(r.false_sphere_gaps, height)},
+                    {"imprecise_sphere_pairs_m2", SphereGapList(r.imprecise_gaps, height)},
                     {"narrow", {{"contacts", r.narrow.contacts}, {"true_contacts", r.narrow_true},
                                 {"candidate_pairs", r.narrow.candidate_pairs}, {"triangle_tests", r.narrow.triangle_tests},
                                 {"us", r.narrow_us}}},
@@ -688,7 +731,8 @@ int RunEvaluate(const EvaluateArgs& a) {
                       {"false_alarms_m1", pt.false_m1},
                       {"false_alarms_m2", pt.false_m2},
                       {"false_alarm_frames", pt.false_frames},
-                      {"sphere_pairs_per_frame_m2", anim.frames ? double(pt.pairs_m2) / anim.frames : 0.0}});
+                      {"sphere_pairs_per_frame_m2", anim.frames ? double(pt.pairs_m2) / anim.frames : 0.0},
+                      {"sphere_precision_m2", Ratio(double(pt.pairs_m2 - pt.imprecise_m2), double(pt.pairs_m2))}});
       j["margin_sweep"] = sw;
     }
     j["summary"] = {
@@ -699,7 +743,8 @@ int RunEvaluate(const EvaluateArgs& a) {
         {"exact_region_pairs", exact_regions},
         {"proxy", {{"recall_m1", recall_m1}, {"recall_m2", recall_m2}, {"sphere_recall_m1", srecall_m1},
                    {"sphere_recall_m2", srecall_m2}, {"false_alarms_m1", false_m1}, {"false_alarms_m2", false_m2},
-                   {"false_alarm_frames", false_frames}}},
+                   {"false_alarm_frames", false_frames}, {"sphere_pairs_m2", reported_m2},
+                   {"sphere_precision_m2", sphere_precision_m2}}},
         {"narrow", {{"recall", n_recall}, {"precision", n_precision}, {"contacts", narrow_total},
                     {"median_us", narrow_us.empty() ? 0.0 : narrow_us[narrow_us.size() / 2]},
                     {"max_us", narrow_us.empty() ? 0.0 : narrow_us.back()}}},
