@@ -484,6 +484,12 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
     std::vector<uint8_t> vreg(V, kOutside);
     for (uint32_t t = 0; t < T; ++t)
       for (int k = 0; k < 3; ++k) vreg[mesh.indices[3 * t + k]] = seg.triangle_regions[t];
+    // The head of the extended layout gets at most a quarter of the pass: a round part the volume cover
+    // fills, whose face the pass would otherwise chase vertex by vertex (uncapped it took 34 of CesiumMan's
+    // 128 spheres, leaving its hands 2–3 each); the face still gets some, for a hand laid on it.
+    const int head = layout.paper && !layout.IsPaperFive() ? layout.Find("head") : -1;
+    const int head_cap = std::max(1, params.skin_spheres / 4);
+    int head_added = 0;
     std::vector<uint32_t> uncovered;
     for (uint32_t v = 0; v < V; ++v) {
       if (vreg[v] >= nreg || vreg[v] == uint8_t(layout.trunk())) continue;
@@ -524,6 +530,7 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
         continue;
       }
       if (now < size_t(params.skin_min_vertices)) break;
+      if (head >= 0 && int(F.label[v]) == head && head_added++ >= head_cap) continue;  // the head's share is spent
       for (uint32_t u : reach[v]) done[u] = 1;
       chosen.push_back(v);
       balls.push_back(off_grid(v));

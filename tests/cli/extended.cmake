@@ -27,6 +27,13 @@ string(JSON head_spheres GET "${report}" regions head spheres)
 if(NOT parent STREQUAL "right_arm" OR hand_spheres LESS 1 OR head_spheres LESS 1)
   message(FATAL_ERROR "report: right_hand's parent '${parent}', ${hand_spheres} hand and ${head_spheres} head spheres")
 endif()
+# The skin pass gives the head at most a quarter of its 16 spheres: uncapped, the face took 9 of them (head 14
+# spheres, hands 3 and 2); capped, the head has 9 and each hand 4.
+string(JSON left_hand_spheres GET "${report}" regions left_hand spheres)
+message(STATUS "spheres: head ${head_spheres}, left hand ${left_hand_spheres}, right hand ${hand_spheres}")
+if(head_spheres GREATER 10 OR hand_spheres LESS 4 OR left_hand_spheres LESS 4)
+  message(FATAL_ERROR "the skin pass's share: head ${head_spheres} spheres (cap: volume + 4), hands ${left_hand_spheres} and ${hand_spheres} (>= 4 each)")
+endif()
 execute_process(COMMAND ${CLI} inspect ${WORK}/mh.sphc --json RESULT_VARIABLE rc OUTPUT_VARIABLE ins ERROR_VARIABLE err)
 if(NOT rc EQUAL 0 OR NOT ins MATCHES "right_hand")
   message(FATAL_ERROR "inspect of the extended asset (${rc}) does not name its regions:\n${ins}${err}")
