@@ -96,6 +96,30 @@ double TrackingError(const Mesh& mesh, const FittedSphere& S, const Pivots& piv,
   return total / double(poses.size());
 }
 
+// Three spheres along the tube (radius 0.95 at y = 1.5, 4.5, 7.5: the middle one at the knee), one region,
+// each owning the triangles nearest it.
+struct Tube {
+  std::vector<FittedSphere> spheres;
+  Segmentation seg;
+  SurroundingRegions surr;
+};
+Tube ThreeSpheres(const Mesh& mesh) {
+  Tube t;
+  t.spheres.resize(3);
+  for (int k = 0; k < 3; ++k) {
+    t.spheres[k].region = Region::kLeftLeg;
+    t.spheres[k].sequence = k;
+    t.spheres[k].center = {0, 1.5 + 3.0 * k, 0};
+    t.spheres[k].radius = 0.95;
+  }
+  t.seg.triangle_regions.assign(mesh.triangle_count(), uint8_t(Region::kLeftLeg));
+  t.seg.vertex_regions.assign(mesh.vertex_count(), uint8_t(Region::kLeftLeg));
+  auto surr = BuildSurroundingRegions(mesh, t.seg, t.spheres);
+  REQUIRE(surr.ok());
+  t.surr = std::move(surr).value();
+  return t;
+}
+
 }  // namespace
 
 TEST_CASE("training poses: no angle gives the bind pose; a rigid skin moves rigidly; same seed, same poses") {
@@ -155,20 +179,9 @@ TEST_CASE("training poses: no angle gives the bind pose; a rigid skin moves rigi
 
 TEST_CASE("pivots refined on training poses: the bind sphere is kept and the tracking error never grows") {
   const Mesh mesh = BendingCylinder(Skinning::kBlend);
-  // Three spheres along the tube, the middle one at the knee, each owning the triangles nearest it.
-  std::vector<FittedSphere> spheres(3);
-  for (int k = 0; k < 3; ++k) {
-    spheres[k].region = Region::kLeftLeg;
-    spheres[k].sequence = k;
-    spheres[k].center = {0, 1.5 + 3.0 * k, 0};
-    spheres[k].radius = 0.95;
-  }
-  Segmentation seg;
-  seg.triangle_regions.assign(mesh.triangle_count(), uint8_t(Region::kLeftLeg));
-  seg.vertex_regions.assign(mesh.vertex_count(), uint8_t(Region::kLeftLeg));
-  auto surr = BuildSurroundingRegions(mesh, seg, spheres);
-  REQUIRE(surr.ok());
-  auto plain = ChoosePivots(mesh, spheres, surr.value(), &seg);
+  const Tube tube = ThreeSpheres(mesh);
+  const auto& [spheres, seg, surr] = tube;
+  auto plain = ChoosePivots(mesh, spheres, surr, &seg);
   REQUIRE(plain.ok());
 
   TrainingPoseOptions po;
@@ -177,7 +190,7 @@ TEST_CASE("pivots refined on training poses: the bind sphere is kept and the tra
   PivotTraining training;
   training.poses = &poses;
   training.witness_reach = 0.2;
-  auto trained = ChoosePivots(mesh, spheres, surr.value(), &seg, &training);
+  auto trained = ChoosePivots(mesh, spheres, surr, &seg, &training);
   REQUIRE(trained.ok());
 
   // Nothing moves: nothing to improve, the geometric choice stays.
@@ -186,7 +199,7 @@ TEST_CASE("pivots refined on training poses: the bind sphere is kept and the tra
   const auto bind_only = SampleTrainingPoses(mesh, still);
   PivotTraining idle = training;
   idle.poses = &bind_only;
-  auto unchanged = ChoosePivots(mesh, spheres, surr.value(), &seg, &idle);
+  auto unchanged = ChoosePivots(mesh, spheres, surr, &seg, &idle);
   REQUIRE(unchanged.ok());
   CHECK(unchanged->triangles == plain->triangles);
 
@@ -222,18 +235,8 @@ TEST_CASE("pivots refined on training poses: a strip of skin on another bone is 
   // rest of the tube stays with the root: refined, no pivot lies wholly on the strip, and the tracking
   // error falls by more than half (measured: 0.055 → 0.023; what is left is the strip's own witnesses).
   const Mesh mesh = BendingCylinder(Skinning::kFlap);
-  std::vector<FittedSphere> spheres(3);
-  for (int k = 0; k < 3; ++k) {
-    spheres[k].region = Region::kLeftLeg;
-    spheres[k].sequence = k;
-    spheres[k].center = {0, 1.5 + 3.0 * k, 0};
-    spheres[k].radius = 0.95;
-  }
-  Segmentation seg;
-  seg.triangle_regions.assign(mesh.triangle_count(), uint8_t(Region::kLeftLeg));
-  seg.vertex_regions.assign(mesh.vertex_count(), uint8_t(Region::kLeftLeg));
-  auto surr = BuildSurroundingRegions(mesh, seg, spheres);
-  REQUIRE(surr.ok());
+  const Tube tube = ThreeSpheres(mesh);
+  const auto& [spheres, seg, surr] = tube;
   const Skin& skin = *mesh.skin;
   auto on_knee = [&](const Pivots& piv, size_t s) {
     int n = 0;
@@ -243,7 +246,7 @@ TEST_CASE("pivots refined on training poses: a strip of skin on another bone is 
     }
     return n;
   };
-  auto plain = ChoosePivots(mesh, spheres, surr.value(), &seg);
+  auto plain = ChoosePivots(mesh, spheres, surr, &seg);
   REQUIRE(plain.ok());
   REQUIRE(on_knee(plain.value(), 1) == 3);  // the premise: the geometric choice takes a triangle of the strip
 
@@ -251,7 +254,7 @@ TEST_CASE("pivots refined on training poses: a strip of skin on another bone is 
   PivotTraining training;
   training.poses = &poses;
   training.witness_reach = 0.2;
-  auto trained = ChoosePivots(mesh, spheres, surr.value(), &seg, &training);
+  auto trained = ChoosePivots(mesh, spheres, surr, &seg, &training);
   REQUIRE(trained.ok());
   CHECK(on_knee(trained.value(), 1) < on_knee(plain.value(), 1));
   for (int k = 0; k < 4; ++k) {  // no pivot wholly on the strip
