@@ -170,6 +170,17 @@ TEST_CASE("bake: configuration errors name the key") {
   CHECK(ok->fit.rays == 40);
   REQUIRE(ok->chains.size() == 1);
   CHECK(ok->chains[0].name == "arms");
+  // Pivot training: off by default, bounded, named in the message.
+  CHECK(ok->pivot_poses == 0);
+  for (const char* bad : {R"({"pivot_poses": 300})", R"({"pivot_poses": -1})", R"({"pivot_pose_angle": 91})"}) {
+    auto b = ParseBakeConfig(bad, "cfg.json");
+    REQUIRE_FALSE(b.ok());
+    CHECK(b.error().message.find("pivot_pose") != std::string::npos);
+  }
+  auto trained = ParseBakeConfig(R"({"pivot_poses": 24, "pivot_pose_angle": 20})", "cfg.json");
+  REQUIRE(trained.ok());
+  CHECK(trained->pivot_poses == 24);
+  CHECK(trained->pivot_pose_angle == 20.0);
 }
 
 TEST_CASE("bake: atomic write leaves the old file intact when the folder is missing, and replaces it otherwise") {
@@ -251,4 +262,39 @@ TEST_CASE("bake: an implausible body is refused, and with force written with its
   CHECK(report["plausibility"]["errors"][0]["code"] == "PLAUS-LIMB-DETACHED");
   CHECK(report["plausibility"]["errors"][0]["severity"] == "error");
   CHECK(report["timings_ms"].contains("plausibility"));
+}
+
+TEST_CASE("bake: pivots trained on poses change the pivots only — same spheres and exclusions, reported, deterministic") {
+  const std::string creature = test::SourceFile("tests/data/creature/creature.gltf");
+  auto plain_config = ParseBakeConfig(R"({"cover_voxel_rel": 0.01, "max_spheres": 64})", "test");
+  auto trained_config = ParseBakeConfig(R"({"cover_voxel_rel": 0.01, "max_spheres": 64, "pivot_poses": 12})", "test");
+  REQUIRE(plain_config.ok());
+  REQUIRE(trained_config.ok());
+  auto plain = Bake(creature, plain_config.value());
+  auto trained = Bake(creature, trained_config.value());
+  auto again = Bake(creature, trained_config.value());
+  REQUIRE_MESSAGE(plain.ok(), (plain.ok() ? "" : plain.error().message));
+  REQUIRE_MESSAGE(trained.ok(), (trained.ok() ? "" : trained.error().message));
+  REQUIRE(again.ok());
+  CheckRoundTrip(trained.value());
+  CHECK(trained->asset == again->asset);  // same poses, same refinement, on any number of cores
+
+  REQUIRE(trained->fit.spheres.size() == plain->fit.spheres.size());
+  for (size_t s = 0; s < plain->fit.spheres.size(); ++s) {
+    CHECK(trained->fit.spheres[s].center == plain->fit.spheres[s].center);
+    CHECK(trained->fit.spheres[s].radius == plain->fit.spheres[s].radius);
+  }
+  CHECK(trained->excluded == plain->excluded);
+  CHECK(plain->pivots.training.poses == 0);
+  const Pivots::Training& t = trained->pivots.training;
+  CHECK(t.poses == 12);
+  CHECK(t.spheres_changed > 0);
+  CHECK(trained->pivots.triangles != plain->pivots.triangles);
+  CHECK(t.error_after <= t.error_before);
+  CHECK(t.error_after > 0.0);
+  Context ctx;
+  const nlohmann::json report = MakeBakeReport(trained.value(), trained_config.value(), ctx);
+  CHECK(report["pivot_training"]["poses"] == 12);
+  CHECK(report["params"]["pivot_poses"] == 12);
+  CHECK_FALSE(MakeBakeReport(plain.value(), plain_config.value(), ctx).contains("pivot_training"));
 }
