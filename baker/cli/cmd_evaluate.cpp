@@ -1,4 +1,4 @@
-// spherechain evaluate ASSET --mesh INPUT [--clip NAME | --morph POSES...] [--frames N] [--margin REL]
+// spherechain evaluate ASSET --mesh INPUT [--clip NAME | --morph POSES...] [--frames N] [--margin REL] [--crease REL]
 //                      [--refit paper|frame|joints] [--json OUT] [--png OUT] [--min-recall R] [--no-coverage]
 //                      [--sweep-margin[=M1,M2,...]]
 //
@@ -8,7 +8,9 @@
 // frame, and the proxy's sphere pairs (M1 chains, M2 all spheres) after the refit. A *contact* is an
 // intersecting pair whose owning spheres (surrounding regions, §5.1) differ and are not an excluded
 // pair; the other intersections (same sphere, excluded pair: skinning artefacts at joints) are counted
-// apart. Summary: the proxy's recall (region pairs and sphere pairs), its false alarms (a region pair
+// apart. Since that truth follows the asset's exclusions and sphere ownership, a second one does not: the
+// intersecting pairs whose triangles' bind-pose centroids lie at least --crease apart (contacts by bind
+// distance), and how many of them M2's sphere and region pairs cover — the number to compare assets by. Summary: the proxy's recall (region pairs and sphere pairs), its false alarms (a region pair
 // reported where no triangles of the two regions come within --margin), the sphere-pair precision (the share of
 // M2's pairs whose own surrounding regions — the triangles handed back for them — come within it), the narrow
 // phase's recall and
@@ -54,6 +56,7 @@ struct EvaluateArgs {
   std::string asset, rig, json, png, refit = "frame", regions = "asset";
   AnimationArgs anim;  // --mesh, --clip, --morph, --poses-dir, --frames
   double margin = 0.01;
+  double crease = 0.03;  // --crease: the asset-independent truth's bind-distance bound, fraction of the height
   double min_recall = std::numeric_limits<double>::quiet_NaN();
   bool coverage = true;
   std::string sweep;  // "" (no sweep), "auto" (the default margins) or a comma-separated list of fractions of height
@@ -137,6 +140,10 @@ struct FrameEval {
   std::set<RegionPair> false_m1, false_m2;
   uint32_t missed_contacts = 0;  // contacts in region pairs M2 did not report
   uint32_t missed_sphere_contacts = 0;  // contacts whose sphere pair M2 did not report
+  // The asset-independent truth: intersecting triangle pairs whose bind-pose centroids lie at least --crease
+  // apart, whatever the asset's exclusions and sphere ownership; and how many of them M2's sphere pairs and
+  // region pairs cover (the pair of owning spheres reported, or their regions), or the asset excludes.
+  uint32_t apart = 0, apart_sphere = 0, apart_region = 0, apart_excluded = 0, apart_same = 0;
   // Per sphere pair, for an artist (and a tuner) to see which spheres miss or cry wolf: the refit spheres'
   // gap ‖cA − cB‖ − rA − rB − 2·margin [Units: source] (> 0: apart even with the margin).
   std::map<SpherePairKey, float> missed_sphere_gaps;  // exact contact, M2 did not report the pair
@@ -236,7 +243,15 @@ int RunEvaluate(const EvaluateArgs& a) {
   double lo = 1e300, hi = -1e300;
   const int up = mesh.up_axis == baker::UpAxis::kZ ? 2 : mesh.up_axis == baker::UpAxis::kX ? 0 : 1;
   for (uint32_t v = 0; v < V; ++v) lo = std::min(lo, double(mesh.positions[3 * v + up])), hi = std::max(hi, double(mesh.positions[3 * v + up]));
-  const double height = hi - lo, margin = a.margin * height;
+  const double height = hi - lo, margin = a.margin * height, crease = a.crease * height;
+  std::vector<Eigen::Vector3d> bind_centroid(T);
+  for (uint32_t t = 0; t < T; ++t) {
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    for (int k = 0; k < 3; ++k)
+      c += Eigen::Vector3d(mesh.positions[3 * mesh.indices[3 * t + k]], mesh.positions[3 * mesh.indices[3 * t + k] + 1],
+                           mesh.positions[3 * mesh.indices[3 * t + k] + 2]);
+    bind_centroid[t] = c / 3.0;
+  }
   const runtime::RefitMode mode = a.refit == "paper" ? runtime::RefitMode::kPaper : runtime::RefitMode::kPivotFrame;
   // --refit joints: the spheres a GPU-skinned game gets (JointRefitJob: linear blend skinning of the
   // centres by the frame's skinning matrices), judged against the same truth.
@@ -350,6 +365,17 @@ int RunEvaluate(const EvaluateArgs& a) {
     if (!exact.ok()) return Fail(baker::Error{exact.error().code, "frame " + std::to_string(f) + ": " + exact.error().message});
     for (const baker::TrianglePair& p : exact.value()) {
       const uint32_t sa = narrow.triangle_sphere(p.a), sb = narrow.triangle_sphere(p.b);
+      if ((bind_centroid[p.a] - bind_centroid[p.b]).norm() >= crease) {
+        ++row.apart;
+        if (sa == 0xFFFF || sb == 0xFFFF) {
+        } else if (sa == sb) {
+          ++row.apart_same;
+        } else {
+          row.apart_excluded += narrow.IsExcluded(sa, sb);
+          row.apart_sphere += row.m2_spheres.count({std::min(sa, sb), std::max(sa, sb)}) > 0;
+          row.apart_region += row.m2_regions.count(region_pair(sa, sb)) > 0;
+        }
+      }
       if (sa == 0xFFFF || sb == 0xFFFF) {
         ++row.unassigned;
       } else if (sa == sb) {
@@ -487,6 +513,7 @@ int RunEvaluate(const EvaluateArgs& a) {
   size_t false_m1 = 0, false_m2 = 0, gt = 0, narrow_total = 0, narrow_true = 0, excluded = 0, same = 0, unassigned = 0;
   nlohmann::json false_frames = nlohmann::json::array();
   size_t imprecise_m2 = 0, reported_m2 = 0;
+  size_t apart = 0, apart_sphere = 0, apart_region = 0, apart_excluded = 0, apart_same = 0;
   std::vector<double> narrow_us;
   double exact_ms = 0;
   uint32_t worst = 0;
@@ -502,6 +529,8 @@ int RunEvaluate(const EvaluateArgs& a) {
     false_m2 += r.false_m2.size();
     if (!r.false_m1.empty() || !r.false_m2.empty()) false_frames.push_back(f);
     imprecise_m2 += r.imprecise_gaps.size();
+    apart += r.apart, apart_sphere += r.apart_sphere, apart_region += r.apart_region;
+    apart_excluded += r.apart_excluded, apart_same += r.apart_same;
     reported_m2 += r.m2_spheres.size();
     gt += r.contacts;
     narrow_total += r.narrow.contacts;
@@ -598,6 +627,14 @@ int RunEvaluate(const EvaluateArgs& a) {
   std::printf("proxy false alarms (nothing within the margin): M1 %zu, M2 %zu, in %zu frames\n", false_m1, false_m2,
               false_frames.size());
   const double sphere_precision_m2 = Ratio(double(reported_m2 - imprecise_m2), double(reported_m2));
+  const double apart_recall_sphere = Ratio(double(apart_sphere), double(apart));
+  const double apart_recall_region = Ratio(double(apart_region), double(apart));
+  std::printf("contacts by bind distance (the asset-independent truth: intersecting triangles whose bind centroids lie "
+              ">= %.3g %% of the height apart): %zu triangle pairs; covered by M2's sphere pairs %.1f %%, by its region "
+              "pairs %.1f %%; in pairs the asset excludes %.1f %%, inside one sphere's region %.1f %%\n",
+              100 * a.crease, apart, 100 * apart_recall_sphere, 100 * apart_recall_region,
+              100 * Ratio(double(apart_excluded), double(apart)) * (apart > 0),
+              100 * Ratio(double(apart_same), double(apart)) * (apart > 0));
   std::printf("sphere-pair precision M2 (reported pairs whose own surrounding regions come within the margin): "
               "%.1f %% (%zu/%zu)\n",
               100 * sphere_precision_m2, reported_m2 - imprecise_m2, reported_m2);
@@ -705,6 +742,8 @@ int RunEvaluate(const EvaluateArgs& a) {
                     {"missed_sphere_pairs_m2", SphereGapList(r.missed_sphere_gaps, height)},
                     {"false_alarm_sphere_pairs_m2", SphereGapList(r.false_sphere_gaps, height)},
                     {"imprecise_sphere_pairs_m2", SphereGapList(r.imprecise_gaps, height)},
+                    {"contacts_by_bind_distance", {{"triangle_pairs", r.apart}, {"covered_by_sphere_pairs_m2", r.apart_sphere},
+                                                   {"covered_by_region_pairs_m2", r.apart_region}}},
                     {"narrow", {{"contacts", r.narrow.contacts}, {"true_contacts", r.narrow_true},
                                 {"candidate_pairs", r.narrow.candidate_pairs}, {"triangle_tests", r.narrow.triangle_tests},
                                 {"us", r.narrow_us}}},
@@ -745,6 +784,10 @@ int RunEvaluate(const EvaluateArgs& a) {
                    {"sphere_recall_m2", srecall_m2}, {"false_alarms_m1", false_m1}, {"false_alarms_m2", false_m2},
                    {"false_alarm_frames", false_frames}, {"sphere_pairs_m2", reported_m2},
                    {"sphere_precision_m2", sphere_precision_m2}}},
+        {"contacts_by_bind_distance", {{"crease_rel", a.crease}, {"triangle_pairs", apart},
+                                       {"covered_by_sphere_pairs_m2", apart_recall_sphere},
+                                       {"covered_by_region_pairs_m2", apart_recall_region},
+                                       {"in_excluded_pairs", apart_excluded}, {"inside_one_sphere", apart_same}}},
         {"narrow", {{"recall", n_recall}, {"precision", n_precision}, {"contacts", narrow_total},
                     {"median_us", narrow_us.empty() ? 0.0 : narrow_us[narrow_us.size() / 2]},
                     {"max_us", narrow_us.empty() ? 0.0 : narrow_us.back()}}},
@@ -779,6 +822,11 @@ void RegisterEvaluate(CLI::App& app, Commands* commands) {
   sub->add_option("--margin", args->margin,
                   "A reported region pair is a false alarm when no triangles of the two regions come within this "
                   "distance, as a fraction of the body height (default 0.01)");
+  sub->add_option("--crease", args->crease,
+                  "The asset-independent truth counts intersecting triangles whose bind-pose centroids lie at least "
+                  "this far apart, as a fraction of the body height (default 0.03; nearer pairs are skin folding at "
+                  "a joint); printed and in the JSON as contacts_by_bind_distance")
+      ->check(CLI::Range(0.0, 1.0));
   sub->add_option("--refit", args->refit,
                   "Refit: paper, frame (default; both from the deformed vertices) or joints (JointRefitJob: the centres "
                   "skinned by the frame's joint matrices, what a GPU-skinned game runs; needs a rigged input)")

@@ -77,6 +77,16 @@ message(STATUS "sphere-pair precision M2 ${main_precision} of ${reported} report
 if(NOT main_precision GREATER 0.3 OR main_precision GREATER 1 OR NOT reported GREATER 0)
   message(FATAL_ERROR "sphere-pair precision ${main_precision} (${reported} pairs reported): expected in (0.3, 1]")
 endif()
+# The asset-independent truth (contacts by bind distance): the crossed arms' hand and forearm lie far apart at
+# bind, so there are such contacts; a reported sphere pair always reports its region pair, so the region pairs
+# cover at least what the sphere pairs cover.
+string(JSON apart GET "${json}" summary contacts_by_bind_distance triangle_pairs)
+string(JSON apart_s GET "${json}" summary contacts_by_bind_distance covered_by_sphere_pairs_m2)
+string(JSON apart_r GET "${json}" summary contacts_by_bind_distance covered_by_region_pairs_m2)
+message(STATUS "contacts by bind distance: ${apart} triangle pairs, covered by sphere pairs ${apart_s}, region pairs ${apart_r}")
+if(NOT apart GREATER 0 OR apart_s GREATER apart_r OR apart_r GREATER 1 OR NOT apart_r GREATER 0.5)
+  message(FATAL_ERROR "contacts_by_bind_distance: ${apart} pairs, sphere cover ${apart_s}, region cover ${apart_r}")
+endif()
 string(JSON ip TYPE "${json}" frames 0 imprecise_sphere_pairs_m2)
 if(NOT ip STREQUAL "ARRAY")
   message(FATAL_ERROR "frames[0].imprecise_sphere_pairs_m2: ${ip}, expected an array")
