@@ -485,8 +485,8 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
     for (uint32_t t = 0; t < T; ++t)
       for (int k = 0; k < 3; ++k) vreg[mesh.indices[3 * t + k]] = seg.triangle_regions[t];
     // The head of the extended layout gets at most a quarter of the pass: a round part the volume cover
-    // fills, whose face the pass would otherwise chase vertex by vertex (uncapped it took 34 of CesiumMan's
-    // 128 spheres, leaving its hands 2–3 each); the face still gets some, for a hand laid on it.
+    // fills, whose face the pass would otherwise chase vertex by vertex (uncapped, CesiumMan's head ended with
+    // 34 of its 128 spheres and each hand with 2–3); the face still gets some, for a hand laid on it.
     const int head = layout.paper && !layout.IsPaperFive() ? layout.Find("head") : -1;
     const int head_cap = std::max(1, params.skin_spheres / 4);
     int head_added = 0;

@@ -27,8 +27,8 @@ string(JSON head_spheres GET "${report}" regions head spheres)
 if(NOT parent STREQUAL "right_arm" OR hand_spheres LESS 1 OR head_spheres LESS 1)
   message(FATAL_ERROR "report: right_hand's parent '${parent}', ${hand_spheres} hand and ${head_spheres} head spheres")
 endif()
-# The skin pass gives the head at most a quarter of its 16 spheres: uncapped, the face took 9 of them (head 14
-# spheres, hands 3 and 2); capped, the head has 9 and each hand 4.
+# The skin pass gives the head at most a quarter of its 16 spheres: uncapped, the head ended with 14 spheres and
+# the hands with 3 and 2; capped, the head has 9 and each hand 4.
 string(JSON left_hand_spheres GET "${report}" regions left_hand spheres)
 message(STATUS "spheres: head ${head_spheres}, left hand ${left_hand_spheres}, right hand ${hand_spheres}")
 if(head_spheres GREATER 10 OR hand_spheres LESS 4 OR left_hand_spheres LESS 4)
