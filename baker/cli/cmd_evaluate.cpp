@@ -10,12 +10,12 @@
 // pair; the other intersections (same sphere, excluded pair: skinning artefacts at joints) are counted
 // apart. Since that truth follows the asset's exclusions and sphere ownership, a second one does not: the
 // intersecting pairs whose triangles' bind-pose centroids lie at least --crease apart (contacts by bind
-// distance), and how many of them M2's sphere and region pairs cover — the number to compare assets by. Summary: the proxy's recall (region pairs and sphere pairs), its false alarms (a region pair
-// reported where no triangles of the two regions come within --margin), the sphere-pair precision (the share of
-// M2's pairs whose own surrounding regions — the triangles handed back for them — come within it), the narrow
-// phase's recall and
-// precision (triangle pairs), bind-pose coverage / protrusion of φ1, φ1', φ2, and per frame the refit spheres'
-// coverage of the deformed mesh and how far they stick out of its skin.
+// distance), and how many of them M2's sphere and region pairs cover — the number to compare assets by.
+// Summary: the proxy's recall (region pairs and sphere pairs), its false alarms (a region pair reported where
+// no triangles of the two regions come within --margin), the sphere-pair precision (the share of M2's pairs
+// whose own surrounding regions — the triangles handed back for them — come within it), the narrow phase's
+// recall and precision (triangle pairs), bind-pose coverage / protrusion of φ1, φ1', φ2, and per frame the
+// refit spheres' coverage of the deformed mesh and how far they stick out of its skin.
 // --sweep-margin re-runs M1 and M2 on the same refit spheres with other contact margins (DetectJob::margin)
 // and prints recall and false alarms against the margin: the trade a user picks the bake's
 // contact_margin_rel from.
