@@ -57,7 +57,9 @@ struct Pivots {
 /// What ChoosePivots weighs its choice against: random poses of the character's own rig
 /// (SampleTrainingPoses), over which a choice should keep the sphere where the skin around it goes.
 struct PivotTraining {
-  const std::vector<std::vector<float>>* poses = nullptr;  ///< #P buffers of #V×3 (model space, source units)
+  /// #P buffers of #V×3 (model space, source units); not owned, read during ChoosePivots only. Any buffer of
+  /// another size, or none, leaves the geometric choice as it is (Pivots::training stays zero).
+  const std::vector<std::vector<float>>* poses = nullptr;
   /// The skin a sphere answers for: the vertices within `witness_reach` of its bind surface
   /// (|c − v| − r ≤ reach) [Units: source] [Limit: > 0]; the bake uses 2 % of the body height.
   double witness_reach = 0.0;
