@@ -129,6 +129,9 @@ struct FrameEval {
   uint32_t contacts = 0, same_sphere = 0, excluded = 0, unassigned = 0, degenerate = 0;
   std::set<RegionPair> exact_regions;
   std::set<SpherePairKey> exact_spheres;
+  // Intersecting triangle pairs per sphere pair: contacts, and those inside excluded pairs (what each
+  // exclusion hides: JSON contact_sphere_pairs / excluded_sphere_pairs).
+  std::map<SpherePairKey, uint32_t> contacts_by_pair, excluded_by_pair;
   // Narrow phase.
   runtime::NarrowPhaseStats narrow;
   uint32_t narrow_true = 0;  // contacts also in the ground truth
@@ -156,6 +159,13 @@ struct FrameEval {
   bool has_refit_coverage = false;
   baker::CoverageStats refit_coverage;
 };
+
+/// [{"a", "b", "triangle_pairs"}]: sphere pairs with how many intersecting triangle pairs they own.
+nlohmann::json PairCountList(const std::map<SpherePairKey, uint32_t>& counts) {
+  nlohmann::json j = nlohmann::json::array();
+  for (const auto& [k, n] : counts) j.push_back({{"a", k.first}, {"b", k.second}, {"triangle_pairs", n}});
+  return j;
+}
 
 /// [{"a", "b", "gap_rel"}]: sphere pairs with their refit gap as a fraction of the body height.
 nlohmann::json SphereGapList(const std::map<SpherePairKey, float>& gaps, double height) {
@@ -382,11 +392,13 @@ int RunEvaluate(const EvaluateArgs& a) {
         ++row.same_sphere;
       } else if (narrow.IsExcluded(sa, sb)) {
         ++row.excluded;
+        ++row.excluded_by_pair[{std::min(sa, sb), std::max(sa, sb)}];
       } else {
         ++row.contacts;
         const SpherePairKey key{std::min(sa, sb), std::max(sa, sb)};
         const RegionPair rp = region_pair(sa, sb);
         row.exact_spheres.insert(key);
+        ++row.contacts_by_pair[key];
         row.exact_regions.insert(rp);
         row.narrow_true += narrow_pairs.count(p);
         row.missed_contacts += !row.m2_regions.count(rp);
@@ -742,6 +754,8 @@ int RunEvaluate(const EvaluateArgs& a) {
                     {"missed_sphere_pairs_m2", SphereGapList(r.missed_sphere_gaps, height)},
                     {"false_alarm_sphere_pairs_m2", SphereGapList(r.false_sphere_gaps, height)},
                     {"imprecise_sphere_pairs_m2", SphereGapList(r.imprecise_gaps, height)},
+                    {"contact_sphere_pairs", PairCountList(r.contacts_by_pair)},
+                    {"excluded_sphere_pairs", PairCountList(r.excluded_by_pair)},
                     {"contacts_by_bind_distance", {{"triangle_pairs", r.apart}, {"covered_by_sphere_pairs_m2", r.apart_sphere},
                                                    {"covered_by_region_pairs_m2", r.apart_region}}},
                     {"narrow", {{"contacts", r.narrow.contacts}, {"true_contacts", r.narrow_true},

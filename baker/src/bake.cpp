@@ -57,7 +57,7 @@ Result<BakeConfig> ParseBakeConfig(const std::string& text, const std::string& w
                                               "disk_step", "disk_step_rel", "penetration_depth", "chains",
                                               "compare_segmentations", "fit", "max_spheres", "cover_voxel_rel", "cover_max_voxels",
                                               "min_radius_rel", "min_gain", "region_balance", "refine_sweeps", "dilation_rel",
-                                              "skin_spheres", "skin_tolerance_rel", "skin_min_vertices",
+                                              "skin_spheres", "skin_tolerance_rel", "skin_min_vertices", "medial_min_rel",
                                               "contact_margin_rel", "near_rel", "vertices", "regions", "pivot_poses",
                                               "pivot_pose_angle"};
   for (auto it = j.begin(); it != j.end(); ++it)
@@ -119,6 +119,7 @@ Result<BakeConfig> ParseBakeConfig(const std::string& text, const std::string& w
   if (s.ok()) s = ReadNumber(j, "skin_spheres", 0, 4091, &c.fit.skin_spheres, where);
   if (s.ok()) s = ReadNumber(j, "skin_tolerance_rel", 0.0, 0.2, &c.fit.skin_tolerance_rel, where);
   if (s.ok()) s = ReadNumber(j, "skin_min_vertices", 1, 1000000, &c.fit.skin_min_vertices, where);
+  if (s.ok()) s = ReadNumber(j, "medial_min_rel", 0.0001, 1.0, &c.fit.medial_min_rel, where);
   if (s.ok()) s = ReadNumber(j, "contact_margin_rel", 0.0, 0.05, &c.contact_margin_rel, where);
   if (s.ok()) s = ReadNumber(j, "near_rel", 0.0, 0.2, &c.near_rel, where);
   if (s.ok()) s = ReadNumber(j, "pivot_poses", 0u, 256u, &c.pivot_poses, where);
@@ -177,6 +178,7 @@ std::string CanonicalConfig(const BakeConfig& c) {
     j["skin_spheres"] = c.fit.skin_spheres;
     j["skin_tolerance_rel"] = c.fit.skin_tolerance_rel;
     j["skin_min_vertices"] = c.fit.skin_min_vertices;
+    j["medial_min_rel"] = c.fit.medial_min_rel;
   }
   j["contact_margin_rel"] = c.contact_margin_rel;
   j["near_rel"] = c.near_rel;

@@ -96,7 +96,52 @@ struct Field {
   void Apply(size_t c, int delta) {
     ForBall(c, [&](size_t v) { count[v] = static_cast<uint16_t>(count[v] + delta); });
   }
+  // Counts a ball off the grid (centre [Units: source], radius [Units: voxels], the dilation added) as
+  // covering the interior voxels whose centres it holds: the skin pass's medial balls (6b) in 6c.
+  void ApplyBall(const Vector3d& centre, double radius, int delta) {
+    const Vector3d g = (centre - origin) / h - Vector3d::Constant(0.5);
+    const double r = radius + grow, r2 = r * r;
+    const int64_t lo[3] = {int64_t(std::ceil(g.x() - r)), int64_t(std::ceil(g.y() - r)), int64_t(std::ceil(g.z() - r))};
+    const int64_t hi[3] = {int64_t(std::floor(g.x() + r)), int64_t(std::floor(g.y() + r)), int64_t(std::floor(g.z() + r))};
+    for (int64_t k = std::max<int64_t>(0, lo[2]); k <= std::min<int64_t>(int64_t(n[2]) - 1, hi[2]); ++k)
+      for (int64_t j = std::max<int64_t>(0, lo[1]); j <= std::min<int64_t>(int64_t(n[1]) - 1, hi[1]); ++j)
+        for (int64_t i = std::max<int64_t>(0, lo[0]); i <= std::min<int64_t>(int64_t(n[0]) - 1, hi[0]); ++i) {
+          const Vector3d d = Vector3d(double(i), double(j), double(k)) - g;
+          const size_t v = size_t(i) + size_t(j) * stride[1] + size_t(k) * stride[2];
+          if (d.squaredNorm() <= r2 && label[v] != kOutside) count[v] = static_cast<uint16_t>(count[v] + delta);
+        }
+  }
 };
+
+// The medial ball behind skin point `p`: the ray from p along its inward unit normal `n` to where it leaves
+// the body (the far side of a finger, a palm, a toe), its midpoint the centre, the distance from there to the
+// skin the radius (inscribed by construction). The single-ray form of the shape diameter function (Shapira,
+// Shamir & Cohen-Or 2008) and of ray-shooting medial approximations. Triangles with a corner at p are skipped;
+// `exit` receives the primitive the ray leaves through. Returns the radius, 0 when the ray never leaves
+// (n points out of a closed body) or leaves within `t_min`.
+double MedialBallAlongNormal(const Tree& tree, const surface_detail::TriangleList& tris, const Vector3d& p,
+                             const Vector3d& n, double t_min, Vector3d* centre, size_t* exit) {
+  using Ray3 = surface_detail::K::Ray_3;
+  const Point3 origin(p.x(), p.y(), p.z());
+  const double eps2 = t_min * t_min * 1e-6;
+  auto at_p = [&](surface_detail::TriangleList::const_iterator it) {
+    for (int k = 0; k < 3; ++k)
+      if (CGAL::squared_distance((*it)[k], origin) <= eps2) return true;
+    return false;
+  };
+  const Ray3 ray(origin, surface_detail::K::Vector_3(n.x(), n.y(), n.z()));
+  const auto hit = tree.first_intersected_primitive(ray, at_p);
+  if (!hit) return 0.0;
+  const surface_detail::Triangle3& tri = **hit;
+  const Vector3d a(tri[0].x(), tri[0].y(), tri[0].z()), b(tri[1].x(), tri[1].y(), tri[1].z()),
+      c(tri[2].x(), tri[2].y(), tri[2].z());
+  const double t = fit_detail::RayTriangle(p, n, a, b, c);
+  if (!(t > t_min) || !std::isfinite(t)) return 0.0;
+  *centre = p + 0.5 * t * n;
+  *exit = size_t(*hit - tris.cbegin());
+  const Point3 q(centre->x(), centre->y(), centre->z());
+  return std::sqrt(CGAL::squared_distance(q, tree.closest_point(q)));
+}
 
 // Per vertex: bit 0 when a triangle of one of `limbs` uses it, bit 1 when a triangle of `base` does (3: on
 // the junction). `base`: the torso (trunk) by default; a limb's parent for its own junction (a hand's arm).
@@ -475,7 +520,13 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
   // 6b. Skin pass: the limb vertices farther than skin_tolerance_rel outside every sphere of their
   //     region (a hand's fingers and palm, a foot: too little volume for the cover above) are covered
   //     greedily, each time by the candidate ball of their region that brings the most of them within
-  //     tolerance (lazy greedy set cover of the surface), with the budget the volume cover left.
+  //     tolerance (lazy greedy set cover of the surface), with the budget the volume cover left. The
+  //     candidates: the interior voxels' balls, and the medial ball behind each uncovered vertex (off the
+  //     voxel grid: a finger or a toe a few voxels thick has almost no interior voxel of its own, yet its
+  //     medial balls are the spheres that follow it).
+  std::vector<uint8_t> ball_region;  // region of balls[k]
+  for (uint32_t c : chosen) ball_region.push_back(F.label[c]);
+  constexpr uint32_t kMedial = std::numeric_limits<uint32_t>::max();  // chosen[k] of a medial ball: no voxel
   const double dilation = params.dilation_rel * height;
   if (int skin_left = params.max_spheres - int(chosen.size()); params.skin_spheres > 0 && skin_left > 0) {
     Context::Timer t(ctx, "fit.cover.skin");
@@ -496,12 +547,13 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
       const Vector3d p = fit_detail::Vertex(mesh, v);
       double best = std::numeric_limits<double>::infinity();
       for (size_t k = 0; k < chosen.size(); ++k)
-        if (F.label[chosen[k]] == vreg[v]) best = std::min(best, (p - balls[k].first).norm() - balls[k].second - dilation);
+        if (ball_region[k] == vreg[v]) best = std::min(best, (p - balls[k].first).norm() - balls[k].second - dilation);
       if (best > tol) uncovered.push_back(v);
     }
-    // Which candidate balls bring which uncovered vertices within tolerance: candidates of the vertex's
-    // region in a cube of 3 % of the height around it (a thin part's ball is far smaller).
+    // Which candidate balls bring which uncovered vertices within tolerance. Candidate keys: an interior
+    // voxel's index (< total), or total + m for the medial ball m.
     std::unordered_map<uint32_t, std::vector<uint32_t>> reach;
+    // (a) Interior voxels of the vertex's region in a cube of 3 % of the height around it.
     const int64_t K = int64_t(std::ceil(0.03 * height / F.h));
     for (uint32_t u = 0; u < uncovered.size(); ++u) {
       const Vector3d p = fit_detail::Vertex(mesh, uncovered[u]);
@@ -515,11 +567,81 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
             if ((iv.Centre(v) - p).norm() <= double(F.dist[v]) * F.h + dilation + tol) reach[uint32_t(v)].push_back(u);
           }
     }
+    // (b) Medial balls: at most kMaxMedial uncovered vertices (evenly strided), each with the medial ball
+    //     behind it (MedialBallAlongNormal), kept when its radius is at least medial_min_rel of the height
+    //     and its ray leaves the body through skin of the vertex's own region.
+    std::vector<std::pair<Vector3d, double>> medial;
+    std::vector<uint8_t> medial_region;
+    if (!uncovered.empty()) {
+      // Inward vertex normals: area-weighted face normals, turned by the sign of the enclosed volume.
+      double volume6 = 0.0;
+      std::vector<Vector3d> normal(V, Vector3d::Zero());
+      for (uint32_t t = 0; t < T; ++t) {
+        const Vector3d a = fit_detail::Vertex(mesh, mesh.indices[3 * t]), b = fit_detail::Vertex(mesh, mesh.indices[3 * t + 1]),
+                       c = fit_detail::Vertex(mesh, mesh.indices[3 * t + 2]);
+        const Vector3d nrm = (b - a).cross(c - a);
+        volume6 += a.dot(b.cross(c));
+        for (int k = 0; k < 3; ++k) normal[mesh.indices[3 * t + k]] += nrm;
+      }
+      const double inward = volume6 >= 0.0 ? -1.0 : 1.0;  // outward-wound faces: the normals point out
+      constexpr size_t kMaxMedial = 16384;
+      const size_t step = (uncovered.size() + kMaxMedial - 1) / kMaxMedial;
+      std::vector<uint32_t> seeds;
+      for (size_t u = 0; u < uncovered.size(); u += step) seeds.push_back(uint32_t(u));
+      std::vector<std::pair<Vector3d, double>> ball(seeds.size(), {Vector3d::Zero(), 0.0});
+      const double t_min = 1e-4 * height, rmin_medial = params.medial_min_rel * height;
+      ParallelFor(0, seeds.size(), [&](size_t i) {
+        const uint32_t v = uncovered[seeds[i]];
+        const Vector3d nv = normal[v];
+        if (!(nv.norm() > 0.0)) return;
+        const Vector3d n = inward * nv.normalized();
+        Vector3d c = Vector3d::Zero();
+        size_t exit = 0;
+        const double r = MedialBallAlongNormal(tree, tris, fit_detail::Vertex(mesh, v), n, t_min, &c, &exit);
+        if (!(r >= rmin_medial)) return;  // too thin, or the ray never left the body (n points out of it)
+        const surface_detail::Triangle3& tri = tris[exit];
+        const Vector3d ta(tri[0].x(), tri[0].y(), tri[0].z()), tb(tri[1].x(), tri[1].y(), tri[1].z()),
+            tc(tri[2].x(), tri[2].y(), tri[2].z());
+        if (-inward * (tb - ta).cross(tc - ta).dot(n) <= 0.0) return;  // the ray entered the skin: n pointed out
+        if (seg.triangle_regions[tri_ids[exit]] != vreg[v]) return;  // it leaves through another region
+        ball[i] = {c, r};
+      });
+      // Uncovered vertices bucketed in cubes of 2 % of the height, for the balls' reach.
+      const double cell = 0.02 * height;
+      auto key = [&](int64_t i, int64_t j, int64_t k) {
+        return (uint64_t(i + (1 << 20)) << 42) | (uint64_t(j + (1 << 20)) << 21) | uint64_t(k + (1 << 20));
+      };
+      std::unordered_map<uint64_t, std::vector<uint32_t>> bucket;
+      for (uint32_t u = 0; u < uncovered.size(); ++u) {
+        const Vector3d g = fit_detail::Vertex(mesh, uncovered[u]) / cell;
+        bucket[key(int64_t(std::floor(g.x())), int64_t(std::floor(g.y())), int64_t(std::floor(g.z())))].push_back(u);
+      }
+      for (size_t i = 0; i < seeds.size(); ++i) {
+        if (ball[i].second <= 0.0) continue;
+        const uint8_t reg = vreg[uncovered[seeds[i]]];
+        const Vector3d& c = ball[i].first;
+        const double R = ball[i].second + dilation + tol;
+        const Vector3d lo = (c - Vector3d::Constant(R)) / cell, hi = (c + Vector3d::Constant(R)) / cell;
+        std::vector<uint32_t> list;
+        for (int64_t k = int64_t(std::floor(lo.z())); k <= int64_t(std::floor(hi.z())); ++k)
+          for (int64_t j = int64_t(std::floor(lo.y())); j <= int64_t(std::floor(hi.y())); ++j)
+            for (int64_t ii = int64_t(std::floor(lo.x())); ii <= int64_t(std::floor(hi.x())); ++ii) {
+              const auto it = bucket.find(key(ii, j, k));
+              if (it == bucket.end()) continue;
+              for (uint32_t u : it->second)
+                if (vreg[uncovered[u]] == reg && (fit_detail::Vertex(mesh, uncovered[u]) - c).norm() <= R) list.push_back(u);
+            }
+        if (list.empty()) continue;
+        reach[uint32_t(total + medial.size())] = std::move(list);
+        medial.push_back(ball[i]);
+        medial_region.push_back(reg);
+      }
+    }
     std::vector<uint8_t> done(uncovered.size(), 0);
-    using Entry = std::pair<size_t, uint32_t>;  // vertices brought in, candidate voxel (ties: larger index)
+    using Entry = std::pair<size_t, uint32_t>;  // vertices brought in, candidate key (ties: the larger key)
     std::priority_queue<Entry> queue;
     for (const auto& [v, list] : reach) queue.emplace(list.size(), v);
-    int added = 0;
+    int added = 0, added_medial = 0;
     while (!queue.empty() && added < skin_left) {
       const uint32_t v = queue.top().second;
       queue.pop();
@@ -530,23 +652,33 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
         continue;
       }
       if (now < size_t(params.skin_min_vertices)) break;
-      if (head >= 0 && int(F.label[v]) == head && head_added++ >= head_cap) continue;  // the head's share is spent
+      const bool is_medial = v >= total;
+      const uint8_t reg = is_medial ? medial_region[v - total] : F.label[v];
+      if (head >= 0 && int(reg) == head && head_added++ >= head_cap) continue;  // the head's share is spent
       for (uint32_t u : reach[v]) done[u] = 1;
-      chosen.push_back(v);
-      balls.push_back(off_grid(v));
+      chosen.push_back(is_medial ? kMedial : v);
+      balls.push_back(is_medial ? medial[v - total] : off_grid(v));
+      ball_region.push_back(reg);
       ++added;
+      added_medial += is_medial;
     }
     if (ctx)
       ctx->Info("fit cover: skin pass: " + std::to_string(uncovered.size()) + " limb vertices beyond " +
-                std::to_string(params.skin_tolerance_rel) + " of the height, " + std::to_string(added) + " spheres added");
+                std::to_string(params.skin_tolerance_rel) + " of the height, " + std::to_string(added) + " spheres added (" +
+                std::to_string(added_medial) + " medial balls of " + std::to_string(medial.size()) + " candidates)");
   }
   // 6c. The budget the skin pass left goes back to the volume cover, the skin spheres counting as cover
   //     (CesiumMan's hands needed 6 of the 16 held back: 10 more spheres for its torso and limbs).
   if (const size_t before = chosen.size(); volume_budget < params.max_spheres && int(before) < params.max_spheres) {
     Context::Timer t(ctx, "fit.cover.leftover");  // its own name: the report keys timings by name
-    for (size_t k = volume_spheres; k < before; ++k) F.Apply(chosen[k], +1);
+    for (size_t k = volume_spheres; k < before; ++k) {
+      if (chosen[k] == kMedial)
+        F.ApplyBall(balls[k].first, balls[k].second / F.h, +1);
+      else
+        F.Apply(chosen[k], +1);
+    }
     greedy(params.max_spheres);
-    for (size_t k = before; k < chosen.size(); ++k) balls.push_back(off_grid(chosen[k]));
+    for (size_t k = before; k < chosen.size(); ++k) balls.push_back(off_grid(chosen[k])), ball_region.push_back(F.label[chosen[k]]);
   }
 
   // 7. Spheres, their order and labels.
@@ -575,7 +707,7 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
     std::vector<FittedSphere> group;
     const Vector3d root = r == torso ? Vector3d::Zero() : LimbRoot(mesh, seg, Region(r), centroid[torso]);
     for (size_t k = 0; k < chosen.size(); ++k) {
-      if (F.label[chosen[k]] != r) continue;
+      if (ball_region[k] != r) continue;
       FittedSphere s;
       s.center = s.center_phi1 = s.center_phi2 = balls[k].first;
       s.radius = s.radius_phi1 = s.radius_phi2 = balls[k].second + dilation;

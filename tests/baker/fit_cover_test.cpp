@@ -196,6 +196,60 @@ TEST_CASE("heavy: fit cover: the skin pass covers a thin hand the volume cover l
   CHECK(in_hand >= 2);
 }
 
+TEST_CASE("fit cover: the skin pass's medial balls follow fingers thinner than a voxel") {
+  // A torso (radius 1, 4 high), an arm (radius 0.3, 3 long) and four fingers at its end: tubes of radius
+  // 0.025, 0.6 long, their axes 0.12 apart. Voxels of 0.08 (cover_voxel_rel 0.02): a finger holds no
+  // interior voxel, so no voxel ball can follow it; the medial ball behind each of its vertices is the
+  // finger's own inscribed ball (radius 0.025, centre on its axis).
+  sb::Mesh m;
+  sb::Segmentation seg;
+  AppendPart(&m, &seg, ClosedTube(1.0, 1.0, 4.0, 48, 32), Vector3d::Zero(), sb::Region::kTorso);
+  AppendPart(&m, &seg, ClosedTube(0.3, 0.3, 3.0, 32, 24), Vector3d(2.5, 0.0, 0.0), sb::Region::kLeftArm);
+  const uint32_t fingers_first = m.vertex_count();
+  constexpr double kFingerR = 0.025, kSpacing = 0.12;
+  const double finger_x0 = 2.5 - 1.5 * kSpacing;
+  for (int f = 0; f < 4; ++f)
+    AppendPart(&m, &seg, ClosedTube(kFingerR, kFingerR, 0.6, 16, 12), Vector3d(finger_x0 + f * kSpacing, 3.05, 0.0),
+               sb::Region::kLeftArm);
+  m.up_axis = sb::UpAxis::kY;
+  const double height = 4.0, tol = 0.01 * height;
+  sb::FitParams p;
+  p.max_spheres = 96;
+  p.skin_spheres = 48;
+  p.skin_min_vertices = 1;
+  p.cover_voxel_rel = 0.022;  // 0.08 voxels: 22,000 interior voxels, fast under ASan too
+
+  sb::FitParams voxels_only = p;
+  voxels_only.medial_min_rel = 1.0;  // no medial ball is that large: the voxel candidates alone
+  auto bare = sb::FitCover(m, seg, voxels_only);
+  REQUIRE_MESSAGE(bare.ok(), (bare.ok() ? "" : bare.error().message));
+  auto fit = sb::FitCover(m, seg, p);
+  REQUIRE_MESSAGE(fit.ok(), (fit.ok() ? "" : fit.error().message));
+
+  const size_t finger_vertices = m.vertex_count() - fingers_first;
+  const size_t u_bare = Uncovered(m, fingers_first, bare.value(), sb::Region::kLeftArm, tol),
+               u_fit = Uncovered(m, fingers_first, fit.value(), sb::Region::kLeftArm, tol);
+  MESSAGE("fingers: " << finger_vertices << " vertices beyond tolerance: voxel candidates only " << u_bare
+                      << ", with medial balls " << u_fit);
+  CHECK(u_bare * 2 >= finger_vertices);  // most of the fingers stay bare without them
+  CHECK(u_fit == 0);                      // every finger vertex within tolerance with them
+  size_t in_fingers = 0;
+  for (const auto& s : fit.value()) {
+    if (s.center.x() < 2.0 || s.center.y() < 3.05) continue;  // the torso, the arm
+    ++in_fingers;
+    CHECK(s.region == sb::Region::kLeftArm);
+    // On a finger's axis (x = x0 + k spacing, z = 0), its radius the finger's plus the dilation.
+    const double k = std::round((s.center.x() - finger_x0) / kSpacing);
+    CHECK(k >= 0.0);
+    CHECK(k <= 3.0);
+    CHECK(std::abs(s.center.x() - (finger_x0 + k * kSpacing)) < 0.1 * kFingerR);
+    CHECK(std::abs(s.center.z()) < 0.1 * kFingerR);
+    CHECK(s.radius == doctest::Approx(kFingerR + p.dilation_rel * height).epsilon(0.08));
+  }
+  CHECK(in_fingers >= 8);  // at least two a finger
+  CHECK(fit->size() <= 96);
+}
+
 TEST_CASE("fit cover: the budget the skin pass leaves goes back to the volume cover") {
   // A torso and an arm, smooth tubes: with skin_min_vertices out of reach the skin pass adds nothing,
   // and the 16 spheres held back for it fill the volume instead: all 48 of the budget are spent (32

@@ -24,7 +24,7 @@ namespace spherechain::baker {
 /// { "fit": "cover"|"paper", "max_spheres": 128, "cover_voxel_rel": 0.005, "cover_max_voxels": 140000,
 ///   "min_radius_rel": 0.003,
 ///   "min_gain": 0.0002, "region_balance": 0.5, "refine_sweeps": 4, "dilation_rel": 0.003,
-///   "skin_spheres": 16, "skin_tolerance_rel": 0.01, "skin_min_vertices": 8,
+///   "skin_spheres": 16, "skin_tolerance_rel": 0.01, "skin_min_vertices": 8, "medial_min_rel": 0.001,
 ///   "contact_margin_rel": 0.004,
 ///   "near_rel": 0.005, "pivot_poses": 0, "pivot_pose_angle": 30,
 ///   "segmentation": "auto"|"rig"|"geometry"|"skeleton"|"map", "region_map": "map.json", "rig": "x.mhskel",

@@ -49,6 +49,11 @@ struct FitParams {
   /// The skin pass stops when the best sphere would bring fewer uncovered vertices within tolerance.
   /// [Limit: 1..1e6]
   int skin_min_vertices = 8;
+  /// Smallest medial ball the skin pass may take / body height. Its candidates include, behind each
+  /// uncovered vertex, the ball centred halfway along the inward normal ray to the far skin (FitCover 6b),
+  /// off the voxel grid — the spheres of fingers and toes a voxel or two thick. 1 (larger than any limb)
+  /// leaves the voxel candidates alone. [Limit: 0.0001..1] JSON "medial_min_rel"
+  double medial_min_rel = 0.001;
   // --- paper fit (FitTubular, FitTorso) ---
   int rays = 80;                    ///< N_r, rays of the torso disk [Limit: >= 8]
   int spheres_per_level = 2;        ///< N_s [Limit: 2]
@@ -146,7 +151,21 @@ Result<std::vector<FittedSphere>> FitTorso(const Mesh& mesh, const std::vector<u
 ///    of its own region's still-uncovered interior (so arms and legs are served like the torso), until
 ///    max_spheres or the best adds < min_gain; every region gets at least one sphere;
 /// 5. optimisation: refine_sweeps passes of coordinate ascent — each sphere moves to the neighbouring
-///    candidate voxel (26-neighbourhood, same region) whose ball adds most, while coverage grows.
+///    candidate voxel (26-neighbourhood, same region) whose ball adds most, while coverage grows;
+/// 6. each centre pushed off the grid towards the medial axis while its inscribed radius grows;
+/// 6b. skin pass (limbs, when skin_spheres > 0): the limb vertices more than skin_tolerance_rel × height
+///    outside every sphere of their region are covered by lazy greedy set cover, each step the candidate
+///    ball of their region that brings the most of them within tolerance (at least skin_min_vertices),
+///    with the budget the volume cover left. Candidates: the interior voxels' balls within 3 % of the
+///    height of an uncovered vertex, and the medial ball behind each uncovered vertex (at most 16,384,
+///    strided): the ray along its inward normal (area-weighted face normals, oriented by the enclosed
+///    volume's sign) to where it leaves the body through skin of the same region, its midpoint the centre,
+///    the distance to the skin the radius, kept when ≥ medial_min_rel × height — the spheres of fingers
+///    and toes a voxel or two thick, which hold no interior voxel (single-ray shape diameter, Shapira et
+///    al. 2008; cf. Ma et al. 2012's medial points from normals). The extended layout's head gets at most
+///    a quarter of the pass;
+/// 6c. the budget the skin pass leaves goes back to the volume cover (4, the skin spheres counting as
+///    cover).
 /// Radii = distance to the surface + dilation_rel × height: the spheres touch the skin from inside, so
 /// protrusion is only the dilation and the voxel sampling of the mesh. Order and labels: limbs from
 /// the torso outwards (distance from the centroid of the vertices the limb shares with the torso);
@@ -157,7 +176,9 @@ Result<std::vector<FittedSphere>> FitTorso(const Mesh& mesh, const std::vector<u
 /// `mesh`: bind pose, model space; `seg` must match it (#T). Errors: kFit (parameters out of range,
 /// segmentation size mismatch, a mesh that encloses almost no volume, a region with triangles but no
 /// interior voxel or no sphere, a voxelisation error). A region without triangles gets no sphere. Cost: O(#T log #T + #voxels + Σ candidate ball voxels
-/// × lazy re-evaluations); allocates ~8 bytes a voxel of the bounding box. Adds "fit.cover.*" timings.
+/// × lazy re-evaluations + #uncovered limb vertices × (one ray and one closest-point query + the vertices
+/// within a ball's reach)); allocates ~8 bytes a voxel of the bounding box. Adds "fit.cover.*" timings.
+/// Deterministic on any number of cores (fixed chunks; the medial balls are computed per vertex).
 Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation& seg, const FitParams& params,
                                            Context* ctx = nullptr);
 
