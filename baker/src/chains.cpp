@@ -196,6 +196,10 @@ std::vector<SpherePair> BindExcludedPairs(const std::vector<FittedSphere>& spher
   auto joined = [&](Region a, Region b) {
     return a != b && ((a != torso && parent_of(a) == b) || (b != torso && parent_of(b) == a));
   };
+  // Two limbs hanging off the same region (both legs off the torso at the crotch, both arms off it).
+  auto siblings = [&](Region a, Region b) {
+    return a != b && a != torso && b != torso && parent_of(a) == parent_of(b);
+  };
   const size_t n = spheres.size();
   for (size_t a = 0; a < n; ++a) {
     for (size_t b = a + 1; b < n; ++b) {
@@ -218,6 +222,12 @@ std::vector<SpherePair> BindExcludedPairs(const std::vector<FittedSphere>& spher
         ++why.bind_near;
       } else if (joined(A.region, B.region) && d < 1.25 * rr + near) {
         ++why.junction;  // a limb's root and what it hangs off, where the skin creases (hip, armpit, wrist)
+      } else if (siblings(A.region, B.region) && d < 1.25 * rr + near && A.root_distance < rr &&
+                 B.root_distance < rr) {
+        // The roots of two limbs leaving one region side by side (the thighs either side of the crotch):
+        // closing the limbs presses the skin between them, as at a junction. Only spheres within rA + rB
+        // of their limb's root: further down, two legs standing close are two limbs, not a crease.
+        ++why.sibling_crease;
       } else {
         continue;
       }

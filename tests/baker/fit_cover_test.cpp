@@ -349,6 +349,49 @@ TEST_CASE("exclusions from bind geometry on a bent limb: neighbours and near pai
   CHECK(std::find(ex4.begin(), ex4.end(), sb::SpherePair{2, k}) == ex4.end());
 }
 
+TEST_CASE("exclusions from bind geometry: the crotch — two legs' root spheres, not their lower spheres") {
+  // Up is y. Each leg: a root sphere (radius 0.5, 0.3 from the leg's root) and one further down (radius
+  // 0.5, 2.0 from it). The two root spheres are 1.2 apart: beyond rA + rB + near = 1.05, within
+  // 1.25 (rA + rB) + near = 1.3 — a sibling crease. The lower spheres, as close, are two legs standing
+  // side by side (root distance 2.0 > rA + rB): tested. A torso sphere as close is a junction, not this.
+  std::vector<sb::FittedSphere> sp(4);
+  const double x[4] = {0.6, -0.6, 0.6, -0.6};
+  for (int i = 0; i < 4; ++i) {
+    sp[i].region = i % 2 == 0 ? sb::Region::kLeftLeg : sb::Region::kRightLeg;
+    sp[i].radius = 0.5;
+    sp[i].sequence = i / 2;
+    sp[i].root_distance = i < 2 ? 0.3 : 2.0;
+    sp[i].center = Vector3d(x[i], i < 2 ? 0.0 : -1.7, 0.0);
+  }
+  auto has = [](const std::vector<sb::SpherePair>& e, uint16_t a, uint16_t b) {
+    return std::find(e.begin(), e.end(), sb::SpherePair{a, b}) != e.end();
+  };
+  sb::ExclusionReasons why;
+  const auto ex = sb::BindExcludedPairs(sp, 0.05, &why, nullptr, sb::UpAxis::kY);
+  CHECK(has(ex, 0, 1));
+  CHECK(why.sibling_crease == 1);
+  CHECK_FALSE(has(ex, 2, 3));  // the lower spheres: two legs, not a crease
+  CHECK_FALSE(has(ex, 0, 3));  // a root sphere and the other leg's lower sphere (1.97 apart)
+  // A leg's root sphere and an arm's (both hang off the torso) far apart stay tested; at the crotch's
+  // distance they would be a crease too — the rule is by the tree, not by names.
+  sp[1].region = sb::Region::kRightArm;
+  sb::ExclusionReasons why_arm;
+  const auto ex_arm = sb::BindExcludedPairs(sp, 0.05, &why_arm, nullptr, sb::UpAxis::kY);
+  CHECK(has(ex_arm, 0, 1));
+  sp[1].center.x() = -2.0;
+  const auto ex_far = sb::BindExcludedPairs(sp, 0.05, &why_arm, nullptr, sb::UpAxis::kY);
+  CHECK_FALSE(has(ex_far, 0, 1));
+  CHECK(why_arm.sibling_crease == 0);
+  // A leg sphere and a torso sphere as close: the junction rule, not a sibling crease.
+  sp[1].region = sb::Region::kTorso;
+  sp[1].center.x() = -0.6;
+  sb::ExclusionReasons why_torso;
+  const auto ex_torso = sb::BindExcludedPairs(sp, 0.05, &why_torso, nullptr, sb::UpAxis::kY);
+  CHECK(has(ex_torso, 0, 1));
+  CHECK(why_torso.junction >= 1);
+  CHECK(why_torso.sibling_crease == 0);
+}
+
 TEST_CASE("exclusions from bind geometry: torso spheres side by side on one level, not across levels") {
   // Up is z. Two torso spheres of radius 1 and 0.6 whose heights differ by 0.9 (< the larger radius),
   // 2.5 apart sideways (beyond rA + rB + near = 1.65): one level, excluded as side by side. A third

@@ -80,13 +80,19 @@ struct ExclusionReasons {
                               ///< extended layout a hand's arm, a foot's leg: RegionInfo::parent) with
                               ///< ‖cA − cB‖ < 1.25 (rA + rB) + near: the crease of the hip, armpit, wrist or
                               ///< ankle, where flexing folds skin on skin
+  size_t sibling_crease = 0;  ///< spheres of two limbs hanging off the same region (both legs off the torso),
+                              ///< each within rA + rB of its limb's root (FittedSphere::root_distance), with
+                              ///< ‖cA − cB‖ < 1.25 (rA + rB) + near: the crotch, where closing the legs
+                              ///< presses the inner thighs' skin (MakeHuman's thigh-top spheres, 1.56 % of the
+                              ///< height apart at bind, met with nothing of the legs within 1 % as they crossed)
 };
 
 /// Adjacent pairs from bind-pose geometry and the limb sequences (the "cover" fit's rule): consecutive
 /// spheres of a tubular region's sequence, limb spheres side by side along the limb
 /// (FittedSphere::root_distance within rA + rB), torso spheres side by side on one level (heights along
 /// `up` within the larger radius: on CesiumMan's walk the hip-level torso spheres, 1.5–1.8 % of the
-/// height apart at bind, met in 5 of 40 frames with no skin within 1 %), and every pair whose spheres overlap or come within `near`
+/// height apart at bind, met in 5 of 40 frames with no skin within 1 %), the junction and sibling creases
+/// (ExclusionReasons), and every pair whose spheres overlap or come within `near`
 /// (source units, ≥ 0) of each other at the bind pose — at those places the skin folds onto itself
 /// when the joint bends, without anything meeting. No fixed ±k window: spheres of one region that are
 /// apart at bind pose are tested (a bending spine, an elbow folding the forearm onto the upper arm).
