@@ -96,9 +96,10 @@ struct Field {
   void Apply(size_t c, int delta) {
     ForBall(c, [&](size_t v) { count[v] = static_cast<uint16_t>(count[v] + delta); });
   }
-  // Counts a ball off the grid (centre [Units: source], radius [Units: voxels], the dilation added) as
-  // covering the interior voxels whose centres it holds: the skin pass's medial balls (6b) in 6c.
-  void ApplyBall(const Vector3d& centre, double radius, int delta) {
+  // Calls fn(voxel) for every interior voxel whose centre lies in a ball off the grid (centre [Units:
+  // source], radius [Units: voxels], the dilation added).
+  template <class Fn>
+  void ForWorldBall(const Vector3d& centre, double radius, Fn&& fn) const {
     const Vector3d g = (centre - origin) / h - Vector3d::Constant(0.5);
     const double r = radius + grow, r2 = r * r;
     const int64_t lo[3] = {int64_t(std::ceil(g.x() - r)), int64_t(std::ceil(g.y() - r)), int64_t(std::ceil(g.z() - r))};
@@ -108,8 +109,21 @@ struct Field {
         for (int64_t i = std::max<int64_t>(0, lo[0]); i <= std::min<int64_t>(int64_t(n[0]) - 1, hi[0]); ++i) {
           const Vector3d d = Vector3d(double(i), double(j), double(k)) - g;
           const size_t v = size_t(i) + size_t(j) * stride[1] + size_t(k) * stride[2];
-          if (d.squaredNorm() <= r2 && label[v] != kOutside) count[v] = static_cast<uint16_t>(count[v] + delta);
+          if (d.squaredNorm() <= r2 && label[v] != kOutside) fn(v);
         }
+  }
+  // Counts a ball off the grid as covering the interior voxels whose centres it holds: the skin pass's
+  // medial balls (6b) in 6c, every final ball in 6d.
+  void ApplyBall(const Vector3d& centre, double radius, int delta) {
+    ForWorldBall(centre, radius, [&](size_t v) { count[v] = static_cast<uint16_t>(count[v] + delta); });
+  }
+  // What removing a ball off the grid would lose (as Loss).
+  double LossBall(const Vector3d& centre, double radius) const {
+    std::array<uint32_t, kMaxRegions> g{};
+    ForWorldBall(centre, radius, [&](size_t v) { g[label[v]] += count[v] == 1; });
+    double sum = 0.0;
+    for (int r = 0; r < regions; ++r) sum += g[r] * weight[r];
+    return sum;
   }
 };
 
@@ -667,6 +681,7 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
                 std::to_string(params.skin_tolerance_rel) + " of the height, " + std::to_string(added) + " spheres added (" +
                 std::to_string(added_medial) + " medial balls of " + std::to_string(medial.size()) + " candidates)");
   }
+  const size_t skin_end = chosen.size();  // balls [volume_spheres, skin_end): the skin pass's
   // 6c. The budget the skin pass left goes back to the volume cover, the skin spheres counting as cover
   //     (CesiumMan's hands needed 6 of the 16 held back: 10 more spheres for its torso and limbs).
   if (const size_t before = chosen.size(); volume_budget < params.max_spheres && int(before) < params.max_spheres) {
@@ -679,6 +694,62 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
     }
     greedy(params.max_spheres);
     for (size_t k = before; k < chosen.size(); ++k) balls.push_back(off_grid(chosen[k])), ball_region.push_back(F.label[chosen[k]]);
+  }
+
+  // 6d. Off the grid, two volume balls may end where one would do: two voxel centres a voxel or two apart
+  //     climb to the same medial point (CesiumMan's chest: two balls 0.6 % of a radius apart). The counts
+  //     are rebuilt from the final balls; a volume ball that covers less than min_gain on its own (a
+  //     region's last one excepted) gives its place back to the greedy, whose new balls stay on the grid
+  //     when off it they would land within a quarter radius of another ball. At most 4 rounds.
+  if (params.min_gain > 0.0) {
+    Context::Timer t(ctx, "fit.cover.redundant");
+    std::vector<uint8_t> skin(chosen.size(), 0);  // the skin pass's balls cover skin, not volume: kept
+    for (size_t k = volume_spheres; k < skin_end; ++k) skin[k] = 1;
+    std::fill(F.count.begin(), F.count.end(), uint16_t{0});
+    for (const auto& b : balls) F.ApplyBall(b.first, b.second / F.h, +1);
+    size_t replaced = 0;
+    for (int round = 0; round < 4; ++round) {
+      std::vector<double> loss(balls.size(), std::numeric_limits<double>::infinity());
+      ParallelFor(0, balls.size(), [&](size_t k) {
+        if (!skin[k]) loss[k] = F.LossBall(balls[k].first, balls[k].second / F.h);
+      });
+      // The least useful first; ties: the lower index. Each removal changes the others' losses: one at a time.
+      std::vector<size_t> order(balls.size());
+      std::iota(order.begin(), order.end(), size_t{0});
+      std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return loss[a] < loss[b]; });
+      std::vector<uint8_t> drop(balls.size(), 0);
+      size_t dropped = 0;
+      for (size_t k : order) {
+        if (!(loss[k] < params.min_gain)) break;
+        if (per_region[ball_region[k]] <= 1) continue;
+        if (F.LossBall(balls[k].first, balls[k].second / F.h) >= params.min_gain) continue;  // others went first
+        F.ApplyBall(balls[k].first, balls[k].second / F.h, -1);
+        --per_region[ball_region[k]];
+        drop[k] = 1;
+        ++dropped;
+      }
+      if (dropped == 0) break;
+      size_t w = 0;
+      for (size_t k = 0; k < balls.size(); ++k)
+        if (!drop[k]) chosen[w] = chosen[k], balls[w] = balls[k], ball_region[w] = ball_region[k], skin[w] = skin[k], ++w;
+      chosen.resize(w), balls.resize(w), ball_region.resize(w), skin.resize(w);
+      const size_t before = chosen.size();
+      greedy(params.max_spheres);
+      for (size_t k = before; k < chosen.size(); ++k) {
+        // greedy() counted the voxel ball; count the ball where it ends instead.
+        F.Apply(chosen[k], -1);
+        std::pair<Vector3d, double> b = off_grid(chosen[k]);
+        for (size_t q = 0; q < balls.size(); ++q)
+          if ((b.first - balls[q].first).norm() < 0.25 * std::min(b.second, balls[q].second)) {
+            b = {iv.Centre(chosen[k]), double(F.dist[chosen[k]]) * F.h};
+            break;
+          }
+        F.ApplyBall(b.first, b.second / F.h, +1);
+        balls.push_back(b), ball_region.push_back(F.label[chosen[k]]), skin.push_back(0);
+      }
+      replaced += chosen.size() - before;
+    }
+    if (ctx && replaced) ctx->Info("fit cover: " + std::to_string(replaced) + " redundant ball(s) placed again");
   }
 
   // 7. Spheres, their order and labels.

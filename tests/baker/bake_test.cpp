@@ -115,6 +115,15 @@ TEST_CASE("bake: two bakes of one input are byte-identical") {
   CHECK(a->mesh.vertex_count() == 3273);
   CHECK(a->mesh.triangle_count() == 4672);
   CheckRoundTrip(a.value());
+  // No two balls where one would do: before FitCover's step 6d two of CesiumMan's chest balls, from voxels
+  // 1.4 apart, climbed to the same medial point (0.6 % of a radius apart).
+  const auto& sp = a->fit.spheres;
+  double closest = 1e300;
+  for (size_t i = 0; i < sp.size(); ++i)
+    for (size_t j = i + 1; j < sp.size(); ++j)
+      closest = std::min(closest, (sp[i].center - sp[j].center).norm() / std::min(sp[i].radius, sp[j].radius));
+  MESSAGE("closest two balls: " << closest << " of the smaller radius apart");
+  CHECK(closest > 0.05);
   // A different parameter gives a different asset.
   BakeConfig other;
   other.fit.penetration_depth = 0.2;

@@ -179,10 +179,13 @@ TEST_CASE("heavy: fit cover: the skin pass covers a thin hand the volume cover l
                u_skin = Uncovered(m, hand_first, skinned.value(), sb::Region::kLeftArm, tol);
   MESSAGE("hand: " << hand_vertices << " vertices, beyond tolerance without the skin pass " << u_bare << " ("
                    << bare->size() << " spheres), with it " << u_skin << " (" << skinned->size() << " spheres)");
-  CHECK(u_bare == hand_vertices);  // the volume cover leaves the whole hand bare
-  // All of it but the plate's knife edge where the rim meets the end caps (thinner than a voxel: no
-  // inner ball of at least one voxel brings it within tolerance).
-  CHECK(u_skin * 5 <= hand_vertices);
+  // The volume cover leaves most of the hand bare (its greedy, refilling the places of redundant balls,
+  // reaches part of the plate: 442 of 818 vertices stay bare).
+  CHECK(u_bare * 2 >= hand_vertices);
+  // With the skin pass all of it, the plate's knife edge too (thinner than a voxel: before the medial balls
+  // no inner ball of at least one voxel brought the 148 vertices where the rim meets the end caps within
+  // tolerance).
+  CHECK(u_skin * 50 <= hand_vertices);
   CHECK(skinned->size() <= 160);
   // The spheres added sit in the hand and inside it (no sphere sticks out of a flat side by more than
   // the dilation).

@@ -165,7 +165,12 @@ Result<std::vector<FittedSphere>> FitTorso(const Mesh& mesh, const std::vector<u
 ///    al. 2008; cf. Ma et al. 2012's medial points from normals). The extended layout's head gets at most
 ///    a quarter of the pass;
 /// 6c. the budget the skin pass leaves goes back to the volume cover (4, the skin spheres counting as
-///    cover).
+///    cover);
+/// 6d. redundant balls placed again: the coverage counts rebuilt from the final balls (off the grid), a
+///    volume ball that covers less than min_gain on its own (two voxel centres that climbed to one
+///    medial point in 6) gives its place back to the greedy, whose new ball stays on the grid when off it
+///    it would land within a quarter radius of another; at most 4 rounds, a region's last ball kept, the
+///    skin pass's balls kept; off when min_gain is 0.
 /// Radii = distance to the surface + dilation_rel × height: the spheres touch the skin from inside, so
 /// protrusion is only the dilation and the voxel sampling of the mesh. Order and labels: limbs from
 /// the torso outwards (distance from the centroid of the vertices the limb shares with the torso);
