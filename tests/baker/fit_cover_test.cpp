@@ -135,6 +135,13 @@ void AppendPart(sb::Mesh* m, sb::Segmentation* seg, const sb::Mesh& part, const 
   seg->triangle_regions.insert(seg->triangle_regions.end(), part.triangle_count(), uint8_t(region));
 }
 
+/// A torso (radius 1, 4 high, at the origin) and a left arm beside it (radius 0.3, 3 long, at x = 2.5), both
+/// along +Y: the body the skin-pass tests hang their hands and fingers on.
+void AppendTorsoAndArm(sb::Mesh* m, sb::Segmentation* seg) {
+  AppendPart(m, seg, ClosedTube(1.0, 1.0, 4.0, 48, 32), Vector3d::Zero(), sb::Region::kTorso);
+  AppendPart(m, seg, ClosedTube(0.3, 0.3, 3.0, 32, 24), Vector3d(2.5, 0.0, 0.0), sb::Region::kLeftArm);
+}
+
 /// Vertices of m[first, end) farther than `tol` outside every sphere of `region`.
 size_t Uncovered(const sb::Mesh& m, uint32_t first, const std::vector<sb::FittedSphere>& spheres, sb::Region region, double tol) {
   size_t n = 0;
@@ -156,8 +163,7 @@ TEST_CASE("heavy: fit cover: the skin pass covers a thin hand the volume cover l
   // greedy gives it no sphere, while all its skin lies beyond the tolerance.
   sb::Mesh m;
   sb::Segmentation seg;
-  AppendPart(&m, &seg, ClosedTube(1.0, 1.0, 4.0, 48, 32), Vector3d::Zero(), sb::Region::kTorso);
-  AppendPart(&m, &seg, ClosedTube(0.3, 0.3, 3.0, 32, 24), Vector3d(2.5, 0.0, 0.0), sb::Region::kLeftArm);
+  AppendTorsoAndArm(&m, &seg);
   const uint32_t hand_first = m.vertex_count();
   AppendPart(&m, &seg, ClosedTube(0.4, 0.05, 0.8, 48, 16), Vector3d(2.5, 3.1, 0.0), sb::Region::kLeftArm);
   m.up_axis = sb::UpAxis::kY;
@@ -206,8 +212,7 @@ TEST_CASE("fit cover: the skin pass's medial balls follow fingers thinner than a
   // finger's own inscribed ball (radius 0.025, centre on its axis).
   sb::Mesh m;
   sb::Segmentation seg;
-  AppendPart(&m, &seg, ClosedTube(1.0, 1.0, 4.0, 48, 32), Vector3d::Zero(), sb::Region::kTorso);
-  AppendPart(&m, &seg, ClosedTube(0.3, 0.3, 3.0, 32, 24), Vector3d(2.5, 0.0, 0.0), sb::Region::kLeftArm);
+  AppendTorsoAndArm(&m, &seg);
   const uint32_t fingers_first = m.vertex_count();
   constexpr double kFingerR = 0.025, kSpacing = 0.12;
   const double finger_x0 = 2.5 - 1.5 * kSpacing;
@@ -259,8 +264,7 @@ TEST_CASE("fit cover: the budget the skin pass leaves goes back to the volume co
   // without the return).
   sb::Mesh m;
   sb::Segmentation seg;
-  AppendPart(&m, &seg, ClosedTube(1.0, 1.0, 4.0, 48, 32), Vector3d::Zero(), sb::Region::kTorso);
-  AppendPart(&m, &seg, ClosedTube(0.3, 0.3, 3.0, 32, 24), Vector3d(2.5, 0.0, 0.0), sb::Region::kLeftArm);
+  AppendTorsoAndArm(&m, &seg);
   m.up_axis = sb::UpAxis::kY;
   sb::FitParams p;
   p.max_spheres = 48;
