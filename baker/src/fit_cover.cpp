@@ -620,14 +620,15 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
         if (seg.triangle_regions[tri_ids[exit]] != vreg[v]) return;  // it leaves through another region
         ball[i] = {c, r};
       });
-      // Uncovered vertices bucketed in cubes of 2 % of the height, for the balls' reach.
+      // Uncovered vertices bucketed in cubes of 2 % of the height (from the voxel grid's corner, so the
+      // cube coordinates are small and non-negative), for the balls' reach.
       const double cell = 0.02 * height;
       auto key = [&](int64_t i, int64_t j, int64_t k) {
         return (uint64_t(i + (1 << 20)) << 42) | (uint64_t(j + (1 << 20)) << 21) | uint64_t(k + (1 << 20));
       };
       std::unordered_map<uint64_t, std::vector<uint32_t>> bucket;
       for (uint32_t u = 0; u < uncovered.size(); ++u) {
-        const Vector3d g = fit_detail::Vertex(mesh, uncovered[u]) / cell;
+        const Vector3d g = (fit_detail::Vertex(mesh, uncovered[u]) - F.origin) / cell;
         bucket[key(int64_t(std::floor(g.x())), int64_t(std::floor(g.y())), int64_t(std::floor(g.z())))].push_back(u);
       }
       for (size_t i = 0; i < seeds.size(); ++i) {
@@ -635,7 +636,7 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
         const uint8_t reg = vreg[uncovered[seeds[i]]];
         const Vector3d& c = ball[i].first;
         const double R = ball[i].second + dilation + tol;
-        const Vector3d lo = (c - Vector3d::Constant(R)) / cell, hi = (c + Vector3d::Constant(R)) / cell;
+        const Vector3d lo = (c - Vector3d::Constant(R) - F.origin) / cell, hi = (c + Vector3d::Constant(R) - F.origin) / cell;
         std::vector<uint32_t> list;
         for (int64_t k = int64_t(std::floor(lo.z())); k <= int64_t(std::floor(hi.z())); ++k)
           for (int64_t j = int64_t(std::floor(lo.y())); j <= int64_t(std::floor(hi.y())); ++j)
