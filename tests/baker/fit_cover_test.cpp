@@ -256,6 +256,18 @@ TEST_CASE("fit cover: the skin pass's medial balls follow fingers thinner than a
   }
   CHECK(in_fingers >= 8);  // at least two a finger
   CHECK(fit->size() <= 96);
+
+  // Wound the other way (every triangle's corners swapped: the normals point in), the inward normals come
+  // from the enclosed volume's sign: the same balls.
+  sb::Mesh flipped = m;
+  for (size_t t = 0; t + 2 < flipped.indices.size(); t += 3) std::swap(flipped.indices[t + 1], flipped.indices[t + 2]);
+  auto fit_flipped = sb::FitCover(flipped, seg, p);
+  REQUIRE(fit_flipped.ok());
+  REQUIRE(fit_flipped->size() == fit->size());
+  for (size_t i = 0; i < fit->size(); ++i) {
+    CHECK((fit_flipped.value()[i].center - fit.value()[i].center).norm() < 1e-6 * height);  // rounding of the swapped corners
+    CHECK(fit_flipped.value()[i].radius == doctest::Approx(fit.value()[i].radius));
+  }
 }
 
 TEST_CASE("fit cover: the budget the skin pass leaves goes back to the volume cover") {
