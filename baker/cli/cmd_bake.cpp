@@ -5,6 +5,7 @@
 #include <spdlog/spdlog.h>
 
 #include "commands.h"
+#include "spherechain/baker/coverage.h"
 #include "spherechain/baker/bake.h"
 #include "spherechain/baker/debug_export.h"
 
@@ -53,6 +54,11 @@ void PrintSummary(const baker::BakeResult& r, const baker::Context& ctx) {
                 "reports them as errors):\n", r.plausibility.size());
     for (const auto& f : r.plausibility) std::printf("  %s: %s\n", f.code.c_str(), f.message.c_str());
   }
+  if (r.coverage)
+    std::printf("bind pose: coverage %.1f %% of the body volume, protrusion %.1f %% (outside: p95 %.2f %% of height); "
+                "skin outside the spheres: p95 %.2f %% of height, %.1f %% of its area within %.1f %%\n",
+                100 * r.coverage->coverage, 100 * r.coverage->protrusion, 100 * r.coverage->outside_p95_rel,
+                100 * r.coverage->skin_outside_p95_rel, 100 * r.coverage->skin_within_share, 100 * baker::kSkinWithinRel);
   std::printf("\naccuracy F = r - |c - v| over surrounding-region vertices\n");
   std::printf("%-14s %10s %10s %10s %10s\n", "method", "mean|F|", "RMS", "min", "max");
   auto row = [](const char* n, const baker::AccuracyStats& s) {

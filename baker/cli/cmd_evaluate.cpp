@@ -177,7 +177,9 @@ nlohmann::json SphereGapList(const std::map<SpherePairKey, float>& gaps, double 
 /// The exact-predicate coverage measure of one sphere set (bind pose).
 nlohmann::json CoverageJson(const baker::CoverageStats& c) {
   return {{"coverage", c.coverage},       {"protrusion", c.protrusion},       {"outside_p95_rel", c.outside_p95_rel},
-          {"outside_max_rel", c.outside_max_rel}, {"voxel_size", c.voxel_size}, {"voxels_undecided", c.voxels_undecided}};
+          {"outside_max_rel", c.outside_max_rel}, {"voxel_size", c.voxel_size}, {"voxels_undecided", c.voxels_undecided},
+          {"skin_outside_p50_rel", c.skin_outside_p50_rel}, {"skin_outside_p95_rel", c.skin_outside_p95_rel},
+          {"skin_outside_max_rel", c.skin_outside_max_rel}, {"skin_within_share", c.skin_within_share}};
 }
 
 int RunEvaluate(const EvaluateArgs& a) {
@@ -566,7 +568,7 @@ int RunEvaluate(const EvaluateArgs& a) {
   nlohmann::json refit_summary;
   std::string refit_line, stick_line;
   {
-    std::vector<double> cov, prot, p95;
+    std::vector<double> cov, prot, p95, skin95;
     double out_max = 0;
     std::map<uint32_t, std::pair<uint32_t, double>> stick;  // sphere -> (frames, max)
     for (const FrameEval& r : rows) {
@@ -574,6 +576,7 @@ int RunEvaluate(const EvaluateArgs& a) {
       cov.push_back(r.refit_coverage.coverage);
       prot.push_back(r.refit_coverage.protrusion);
       p95.push_back(r.refit_coverage.outside_p95_rel);
+      skin95.push_back(r.refit_coverage.skin_outside_p95_rel);
       out_max = std::max(out_max, r.refit_coverage.outside_max_rel);
       for (uint32_t s = 0; s < r.refit_coverage.sphere_outside_max_rel.size(); ++s)
         if (double o = r.refit_coverage.sphere_outside_max_rel[s]; o > kStickOut) {
@@ -593,14 +596,17 @@ int RunEvaluate(const EvaluateArgs& a) {
       refit_summary = {{"coverage_median", median(cov)}, {"coverage_min", *std::min_element(cov.begin(), cov.end())},
                        {"protrusion_median", median(prot)}, {"protrusion_max", *std::max_element(prot.begin(), prot.end())},
                        {"outside_p95_rel_median", median(p95)}, {"outside_p95_rel_max", *std::max_element(p95.begin(), p95.end())},
-                       {"outside_max_rel", out_max}, {"stick_out_rel", kStickOut}, {"spheres_sticking_out", sj}};
+                       {"outside_max_rel", out_max}, {"skin_outside_p95_rel_median", median(skin95)},
+                       {"skin_outside_p95_rel_max", *std::max_element(skin95.begin(), skin95.end())},
+                       {"stick_out_rel", kStickOut}, {"spheres_sticking_out", sj}};
       char buf[512];
       std::snprintf(buf, sizeof buf,
                     "refit spheres on the deformed mesh: coverage median %.1f %% (min %.1f %%), protrusion median %.1f %% "
-                    "(max %.1f %%), outside p95 median %.2f %% (max %.2f %%), max %.2f %% of height\n",
+                    "(max %.1f %%), outside p95 median %.2f %% (max %.2f %%), max %.2f %% of height; skin outside the "
+                    "spheres p95 median %.2f %% of height\n",
                     100 * median(cov), 100 * refit_summary["coverage_min"].get<double>(), 100 * median(prot),
                     100 * refit_summary["protrusion_max"].get<double>(), 100 * median(p95),
-                    100 * refit_summary["outside_p95_rel_max"].get<double>(), 100 * out_max);
+                    100 * refit_summary["outside_p95_rel_max"].get<double>(), 100 * out_max, 100 * median(skin95));
       refit_line = buf;
       std::snprintf(buf, sizeof buf, "spheres sticking out of the skin by > %.1f %% of height: %zu", 100 * kStickOut, worst_spheres.size());
       stick_line = buf;
@@ -658,11 +664,17 @@ int RunEvaluate(const EvaluateArgs& a) {
   if (a.coverage)
     for (const char* name : {"phi1", "phi1_adjusted", "phi2"})
       if (coverage_detail.contains(name))
-        std::printf("bind pose %-13s coverage %.1f %%, protrusion %.1f %% (outside: p95 %.2f %%, max %.2f %% of height)\n",
+        std::printf("bind pose %-13s coverage %.1f %%, protrusion %.1f %% (outside: p95 %.2f %%, max %.2f %% of height); "
+                    "skin outside the spheres: median %.2f %%, p95 %.2f %%, max %.2f %% of height, %.1f %% of its area "
+                    "within %.1f %%\n",
                     name, 100 * coverage_detail[name]["coverage"].get<double>(),
                     100 * coverage_detail[name]["protrusion"].get<double>(),
                     100 * coverage_detail[name]["outside_p95_rel"].get<double>(),
-                    100 * coverage_detail[name]["outside_max_rel"].get<double>());
+                    100 * coverage_detail[name]["outside_max_rel"].get<double>(),
+                    100 * coverage_detail[name]["skin_outside_p50_rel"].get<double>(),
+                    100 * coverage_detail[name]["skin_outside_p95_rel"].get<double>(),
+                    100 * coverage_detail[name]["skin_outside_max_rel"].get<double>(),
+                    100 * coverage_detail[name]["skin_within_share"].get<double>(), 100 * baker::kSkinWithinRel);
 
   std::fputs(refit_line.c_str(), stdout);
   std::fputs(stick_line.c_str(), stdout);

@@ -600,7 +600,11 @@ json MakeBakeReport(const BakeResult& r, const BakeConfig& config, const Context
                      {"outside_p95_rel", r.coverage->outside_p95_rel},
                      {"outside_max_rel", r.coverage->outside_max_rel},
                      {"voxel_rel", r.coverage_options.voxel_rel},
-                     {"undecided_voxels", r.coverage->voxels_undecided}};
+                     {"undecided_voxels", r.coverage->voxels_undecided},
+                     {"skin_outside_p50_rel", r.coverage->skin_outside_p50_rel},
+                     {"skin_outside_p95_rel", r.coverage->skin_outside_p95_rel},
+                     {"skin_outside_max_rel", r.coverage->skin_outside_max_rel},
+                     {"skin_within_share", r.coverage->skin_within_share}};
   j["excluded_pairs"] = r.excluded.size();
   if (config.fit.method == FitMethod::kPaper)
     j["exclusions"] = {{"rule", "paper: sequence neighbours up to 2 apart, torso levels up to 2 apart, bind overlap, "

@@ -257,6 +257,48 @@ Grid MakeGrid(const std::array<double, 3>& lo, const std::array<double, 3>& hi, 
   return g;
 }
 
+// How far the skin lies outside the spheres: per vertex used by a non-degenerate triangle, max(0, the least
+// ‖v − c‖ − r over the spheres), weighted by a third of the area of each triangle using it; the weighted
+// median, 95th percentile (the smallest distance with at least that share of the area at or below it) and
+// maximum, relative to the body height, and the area share within kSkinWithinRel of the height.
+void SkinOutside(const std::vector<float>& positions, const std::vector<uint32_t>& indices,
+                 const std::vector<Ball>& spheres, double height, CoverageStats* st) {
+  const size_t V = positions.size() / 3;
+  std::vector<double> area(V, 0.0);
+  for (size_t f = 0; f + 2 < indices.size(); f += 3) {
+    Eigen::Vector3d p[3];
+    for (int k = 0; k < 3; ++k)
+      p[k] = Eigen::Vector3d(positions[3 * size_t{indices[f + k]}], positions[3 * size_t{indices[f + k]} + 1],
+                             positions[3 * size_t{indices[f + k]} + 2]);
+    const double a = 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).norm();
+    for (int k = 0; k < 3; ++k) area[indices[f + k]] += a / 3.0;
+  }
+  std::vector<std::pair<double, double>> skin;  // (distance / height, area)
+  double total = 0.0;
+  for (size_t v = 0; v < V; ++v) {
+    if (!(area[v] > 0.0)) continue;
+    const Eigen::Vector3d x(positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]);
+    double d = std::numeric_limits<double>::infinity();
+    for (const Ball& b : spheres) d = std::min(d, (x - b.center).norm() - b.radius);
+    skin.emplace_back(std::max(0.0, d) / height, area[v]);
+    total += area[v];
+  }
+  if (skin.empty() || !(total > 0.0)) return;
+  std::sort(skin.begin(), skin.end());
+  auto quantile = [&](double q) {
+    double acc = 0.0;
+    for (const auto& [d, a] : skin)
+      if ((acc += a) >= q * total) return d;
+    return skin.back().first;
+  };
+  st->skin_outside_p50_rel = quantile(0.5);
+  st->skin_outside_p95_rel = quantile(0.95);
+  st->skin_outside_max_rel = skin.back().first;
+  double within = 0.0;
+  for (const auto& [d, a] : skin) within += d <= kSkinWithinRel ? a : 0.0;
+  st->skin_within_share = within / total;
+}
+
 Result<CoverageStats> Measure(const std::vector<float>& positions, const std::vector<uint32_t>& indices,
                               const std::vector<Ball>& spheres, const CoverageOptions& options) {
   // Bounding boxes: the mesh's (height), then with the spheres (grid).
@@ -336,6 +378,7 @@ Result<CoverageStats> Measure(const std::vector<float>& positions, const std::ve
     st.outside_p95_rel = dist[k95];
     st.outside_max_rel = *std::max_element(dist.begin() + k95, dist.end());
   }
+  SkinOutside(positions, indices, spheres, height, &st);
   return st;
 }
 

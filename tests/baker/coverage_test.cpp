@@ -163,6 +163,33 @@ TEST_CASE("heavy: coverage: a unit-sphere mesh in a concentric r = 1.2 sphere: f
   CHECK(s.outside_max_rel <= 0.1 + 0.01);  // never beyond the ball (plus the mesh's chord sag)
 }
 
+TEST_CASE("coverage: the skin outside the spheres — a sphere mesh around a concentric ball, and a box's corners") {
+  // Unit sphere mesh (vertices on the sphere), body height 2: a concentric ball of radius 0.9 leaves every
+  // vertex 0.1 outside (0.05 of the height; none within 0.5 %); of radius 1 none (all within).
+  const TestMesh sphere = UvSphere(1.0, 16, 32);
+  const CoverageStats in = Measure(sphere, {MakeBall(0, 0, 0, 0.9)}, 1.0f / 50);
+  CHECK(in.skin_outside_p50_rel == doctest::Approx(0.05).epsilon(1e-6));
+  CHECK(in.skin_outside_p95_rel == doctest::Approx(0.05).epsilon(1e-6));
+  CHECK(in.skin_outside_max_rel == doctest::Approx(0.05).epsilon(1e-6));
+  CHECK(in.skin_within_share == 0.0);
+  const CoverageStats full = Measure(sphere, {MakeBall(0, 0, 0, 1.0)}, 1.0f / 50);
+  CHECK(full.skin_outside_max_rel == doctest::Approx(0.0).epsilon(1e-6));
+  CHECK(full.skin_within_share == doctest::Approx(1.0));
+  // A 2×1×1 box and a ball of radius 0.5 at (0.7, 0, 0): the four corners at x = 1 lie √0.59 − 0.5 from
+  // it, those at x = −1 √3.39 − 0.5, each side holding half the area (a third of each triangle's area to
+  // each corner). p95 and max: the far corners (relative to the height 2); the near ones within nothing.
+  const TestMesh box = Box(1.0, 0.5, 0.5);
+  const CoverageStats corners = Measure(box, {MakeBall(0.7, 0, 0, 0.5)}, 1.0f / 50);
+  const double near = (std::sqrt(0.59) - 0.5) / 2, far = (std::sqrt(3.39) - 0.5) / 2;
+  CHECK(corners.skin_outside_p95_rel == doctest::Approx(far));
+  CHECK(corners.skin_outside_max_rel == doctest::Approx(far));
+  CHECK((corners.skin_outside_p50_rel == doctest::Approx(near) || corners.skin_outside_p50_rel == doctest::Approx(far)));
+  CHECK(corners.skin_within_share == 0.0);
+  // Grown to reach the near corners (radius √0.59 + 0.001), half the skin's area is within 0.5 %.
+  const CoverageStats half = Measure(box, {MakeBall(0.7, 0, 0, std::sqrt(0.59) + 0.001)}, 1.0f / 50);
+  CHECK(half.skin_within_share == doctest::Approx(0.5));
+}
+
 TEST_CASE("coverage: lines through shared edges and vertices are counted once (box diagonals, octahedron)") {
   // 51 voxels across [-1, 1]: the centre planes hold 0 exactly, diagonal columns have x = y exactly.
   const float rel = 1.0f / 51;
