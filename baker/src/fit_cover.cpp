@@ -89,8 +89,12 @@ struct Field {
   double Gain(size_t c) const {
     std::array<uint32_t, kMaxRegions> g{};
     ForBall(c, [&](size_t v) { g[label[v]] += count[v] == 0; });
+    return Weighted(g);
+  }
+  // Voxel counts per region, each weighted by its region's weight.
+  double Weighted(const std::array<uint32_t, kMaxRegions>& per_region) const {
     double sum = 0.0;
-    for (int r = 0; r < regions; ++r) sum += g[r] * weight[r];
+    for (int r = 0; r < regions; ++r) sum += per_region[r] * weight[r];
     return sum;
   }
   void Apply(size_t c, int delta) {
@@ -117,13 +121,11 @@ struct Field {
   void ApplyBall(const Vector3d& centre, double radius, int delta) {
     ForWorldBall(centre, radius, [&](size_t v) { count[v] = static_cast<uint16_t>(count[v] + delta); });
   }
-  // What removing a ball off the grid would lose (as Loss).
+  // What removing a ball off the grid would lose: the interior voxels only it covers, weighted as in Gain.
   double LossBall(const Vector3d& centre, double radius) const {
     std::array<uint32_t, kMaxRegions> g{};
     ForWorldBall(centre, radius, [&](size_t v) { g[label[v]] += count[v] == 1; });
-    double sum = 0.0;
-    for (int r = 0; r < regions; ++r) sum += g[r] * weight[r];
-    return sum;
+    return Weighted(g);
   }
 };
 
