@@ -11,7 +11,9 @@
 // apart. Since that truth follows the asset's exclusions and sphere ownership, a second one does not: the
 // intersecting pairs whose triangles' bind-pose centroids lie at least --crease apart (contacts by bind
 // distance), and how many of them M2's sphere and region pairs cover — the number to compare assets by.
-// Summary: the proxy's recall (region pairs and sphere pairs), its false alarms (a region pair reported where
+// Summary: the proxy's recall (region pairs and sphere pairs; per contact, the share the narrow phase finds
+// when restricted to the proxy's sphere pairs — NarrowPhaseJob::sphere_pairs, run here — and the share whose
+// meeting point lies within the margin of both spheres of a reported pair of its regions), its false alarms (a region pair reported where
 // no triangles of the two regions come within --margin), the sphere-pair precision (the share of M2's pairs
 // whose own surrounding regions — the triangles handed back for them — come within it), the narrow phase's
 // recall and precision (triangle pairs), bind-pose coverage / protrusion of φ1, φ1', φ2, and per frame the
@@ -143,6 +145,11 @@ struct FrameEval {
   std::set<RegionPair> false_m1, false_m2;
   uint32_t missed_contacts = 0;  // contacts in region pairs M2 did not report
   uint32_t missed_sphere_contacts = 0;  // contacts whose sphere pair M2 did not report
+  // Per contact (triangle pair), M1 / M2: behind a reported pair (its owning spheres' pair reported: what
+  // a NarrowPhaseJob restricted to DetectJob's pairs finds), and localised (the point where the two
+  // triangles meet lies inside both spheres of some reported pair of the same two regions, radii grown by
+  // the asset's margin: the pair found the contact's place, whichever spheres own its triangles).
+  uint32_t behind[2] = {0, 0}, localised[2] = {0, 0};
   // The asset-independent truth: intersecting triangle pairs whose bind-pose centroids lie at least --crease
   // apart, whatever the asset's exclusions and sphere ownership; and how many of them M2's sphere pairs and
   // region pairs cover (the pair of owning spheres reported, or their regions), or the asset excludes.
@@ -285,6 +292,7 @@ int RunEvaluate(const EvaluateArgs& a) {
   const bool tty = isatty(2);
   // M1 (m = 0) or M2 (m = 1) on the workspace's current spheres with contact margin `margin` (−1: the
   // asset's); the reported region pairs and sphere pairs are added to the sets.
+  uint32_t reported[2] = {0, 0};  // records of the last detect(m, −1, …): the asset's margin
   auto detect = [&](int m, float margin, std::set<RegionPair>* regions, std::set<SpherePairKey>* pairs) {
     auto& out = m == 0 ? out_m1 : out_m2;
     uint32_t n = 0;
@@ -298,6 +306,7 @@ int RunEvaluate(const EvaluateArgs& a) {
     det.count = &n;
     const runtime::Status s = det.Run();
     if (runtime::Failed(s)) return s;
+    if (margin < 0.0f) reported[m] = n;
     for (uint32_t i = 0; i < n; ++i) {
       regions->insert(region_pair(out[i].a, out[i].b));
       pairs->insert({out[i].a, out[i].b});
@@ -370,11 +379,28 @@ int RunEvaluate(const EvaluateArgs& a) {
       narrow_pairs.insert({std::min(c.triangle_a, c.triangle_b), std::max(c.triangle_a, c.triangle_b)});
       row.narrow_regions.insert(region_pair(c.sphere_a, c.sphere_b));
     }
+    // The narrow phase behind the proxy: restricted to M1's / M2's sphere pairs (what an engine running the
+    // spheres as its broad phase gets).
+    std::set<baker::TrianglePair> behind_pairs[2];
+    for (int m = 0; m < 2; ++m) {
+      runtime::NarrowPhaseJob restricted = job;
+      restricted.sphere_pairs = (m == 0 ? out_m1 : out_m2).data();
+      restricted.sphere_pair_count = reported[m];
+      restricted.stats = nullptr;
+      uint32_t n = 0;
+      restricted.count = &n;
+      if (runtime::Status rs = restricted.Run(); runtime::Failed(rs))
+        return Fail(std::string("narrow phase (behind the proxy): ") + runtime::ToString(rs));
+      for (uint32_t i = 0; i < n; ++i)
+        behind_pairs[m].insert({std::min(contacts[i].triangle_a, contacts[i].triangle_b),
+                                std::max(contacts[i].triangle_a, contacts[i].triangle_b)});
+    }
     // Ground truth.
     const auto t1 = Clock::now();
     auto exact = baker::ExactSelfIntersections(positions.data(), V, mesh.indices, weld, &row.degenerate);
     row.exact_ms = std::chrono::duration<double, std::milli>(Clock::now() - t1).count();
     if (!exact.ok()) return Fail(baker::Error{exact.error().code, "frame " + std::to_string(f) + ": " + exact.error().message});
+    std::vector<baker::TrianglePair> contact_pairs;  // this frame's contacts
     for (const baker::TrianglePair& p : exact.value()) {
       const uint32_t sa = narrow.triangle_sphere(p.a), sb = narrow.triangle_sphere(p.b);
       if ((bind_centroid[p.a] - bind_centroid[p.b]).norm() >= crease) {
@@ -405,6 +431,33 @@ int RunEvaluate(const EvaluateArgs& a) {
         row.narrow_true += narrow_pairs.count(p);
         row.missed_contacts += !row.m2_regions.count(rp);
         row.missed_sphere_contacts += !row.m2_spheres.count(key);
+        row.behind[0] += behind_pairs[0].count(p) > 0;
+        row.behind[1] += behind_pairs[1].count(p) > 0;
+        contact_pairs.push_back(p);
+      }
+    }
+    // Where each contact lies, against the reported pairs of its two regions.
+    if (!contact_pairs.empty()) {
+      auto points = baker::ContactPoints(positions.data(), V, mesh.indices, contact_pairs);
+      if (!points.ok()) return Fail(baker::Error{points.error().code, "frame " + std::to_string(f) + ": " + points.error().message});
+      const runtime::SphereArrays sp = ws.spheres();
+      const float grow = model.contact_margin();
+      auto inside = [&](uint32_t s, const Eigen::Vector3d& x) {
+        const double dx = x.x() - sp.x[s], dy = x.y() - sp.y[s], dz = x.z() - sp.z[s];
+        return std::sqrt(dx * dx + dy * dy + dz * dz) <= double(sp.r[s]) + grow;
+      };
+      for (size_t i = 0; i < contact_pairs.size(); ++i) {
+        const int ra = sphere_region(narrow.triangle_sphere(contact_pairs[i].a));
+        const int rb = sphere_region(narrow.triangle_sphere(contact_pairs[i].b));
+        const Eigen::Vector3d& x = points.value()[i];
+        for (int m = 0; m < 2; ++m)
+          for (const SpherePairKey& k : m == 0 ? row.m1_spheres : row.m2_spheres) {
+            const int ka = sphere_region(k.first), kb = sphere_region(k.second);
+            if (((ka == ra && kb == rb) || (ka == rb && kb == ra)) && inside(k.first, x) && inside(k.second, x)) {
+              ++row.localised[m];
+              break;
+            }
+          }
       }
     }
     // False alarms: region pairs the proxy reports with no contact, where nothing comes within the margin.
@@ -526,7 +579,7 @@ int RunEvaluate(const EvaluateArgs& a) {
   size_t exact_regions = 0, found_m1 = 0, found_m2 = 0, exact_spheres = 0, sfound_m1 = 0, sfound_m2 = 0;
   size_t false_m1 = 0, false_m2 = 0, gt = 0, narrow_total = 0, narrow_true = 0, excluded = 0, same = 0, unassigned = 0;
   nlohmann::json false_frames = nlohmann::json::array();
-  size_t imprecise_m2 = 0, reported_m2 = 0;
+  size_t imprecise_m2 = 0, reported_m2 = 0, behind[2] = {0, 0}, localised[2] = {0, 0};
   size_t apart = 0, apart_sphere = 0, apart_region = 0, apart_excluded = 0, apart_same = 0;
   std::vector<double> narrow_us;
   double exact_ms = 0;
@@ -539,6 +592,7 @@ int RunEvaluate(const EvaluateArgs& a) {
     exact_spheres += r.exact_spheres.size();
     sfound_m1 += CountIn(r.exact_spheres, r.m1_spheres);
     sfound_m2 += CountIn(r.exact_spheres, r.m2_spheres);
+    for (int m = 0; m < 2; ++m) behind[m] += r.behind[m], localised[m] += r.localised[m];
     false_m1 += r.false_m1.size();
     false_m2 += r.false_m2.size();
     if (!r.false_m1.empty() || !r.false_m2.empty()) false_frames.push_back(f);
@@ -642,6 +696,11 @@ int RunEvaluate(const EvaluateArgs& a) {
   std::printf("proxy recall, region pairs: M1 %.1f %% (%zu/%zu), M2 %.1f %% (%zu/%zu); sphere pairs: M1 %.1f %%, M2 %.1f %%\n",
               100 * recall_m1, found_m1, exact_regions, 100 * recall_m2, found_m2, exact_regions, 100 * srecall_m1,
               100 * srecall_m2);
+  std::printf("contacts behind the proxy's sphere pairs (found by the narrow phase restricted to them): M1 %.1f %%, "
+              "M2 %.1f %%; localised (where the triangles meet lies within the margin of both spheres of a reported "
+              "pair of their regions): M1 %.1f %%, M2 %.1f %%\n",
+              100 * Ratio(double(behind[0]), double(gt)), 100 * Ratio(double(behind[1]), double(gt)),
+              100 * Ratio(double(localised[0]), double(gt)), 100 * Ratio(double(localised[1]), double(gt)));
   std::printf("proxy false alarms (nothing within the margin): M1 %zu, M2 %zu, in %zu frames\n", false_m1, false_m2,
               false_frames.size());
   const double sphere_precision_m2 = Ratio(double(reported_m2 - imprecise_m2), double(reported_m2));
@@ -763,6 +822,8 @@ int RunEvaluate(const EvaluateArgs& a) {
                     {"false_alarms_m2", RegionList(r.false_m2)},
                     {"exact_sphere_pairs", r.exact_spheres.size()},
                     {"missed_contacts_m2", r.missed_contacts},
+                    {"contacts_behind_pairs_m2", r.behind[1]},
+                    {"contacts_localised_m2", r.localised[1]},
                     {"missed_sphere_pairs_m2", SphereGapList(r.missed_sphere_gaps, height)},
                     {"false_alarm_sphere_pairs_m2", SphereGapList(r.false_sphere_gaps, height)},
                     {"imprecise_sphere_pairs_m2", SphereGapList(r.imprecise_gaps, height)},
@@ -809,7 +870,11 @@ int RunEvaluate(const EvaluateArgs& a) {
         {"proxy", {{"recall_m1", recall_m1}, {"recall_m2", recall_m2}, {"sphere_recall_m1", srecall_m1},
                    {"sphere_recall_m2", srecall_m2}, {"false_alarms_m1", false_m1}, {"false_alarms_m2", false_m2},
                    {"false_alarm_frames", false_frames}, {"sphere_pairs_m2", reported_m2},
-                   {"sphere_precision_m2", sphere_precision_m2}}},
+                   {"sphere_precision_m2", sphere_precision_m2},
+                   {"contacts_behind_pairs_m1", Ratio(double(behind[0]), double(gt))},
+                   {"contacts_behind_pairs_m2", Ratio(double(behind[1]), double(gt))},
+                   {"contacts_localised_m1", Ratio(double(localised[0]), double(gt))},
+                   {"contacts_localised_m2", Ratio(double(localised[1]), double(gt))}}},
         {"contacts_by_bind_distance", {{"crease_rel", a.crease}, {"triangle_pairs", apart},
                                        {"covered_by_sphere_pairs_m2", apart_recall_sphere},
                                        {"covered_by_region_pairs_m2", apart_recall_region},

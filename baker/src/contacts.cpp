@@ -151,4 +151,61 @@ Result<bool> AnyTrianglesWithin(const float* positions, uint32_t vertex_count, c
   return false;
 }
 
+Result<std::vector<Eigen::Vector3d>> ContactPoints(const float* positions, uint32_t vertex_count,
+                                                   const std::vector<uint32_t>& indices,
+                                                   const std::vector<TrianglePair>& pairs) {
+  if (!positions && vertex_count) return MakeError(Error::Code::kInvalidMesh, "no positions");
+  const size_t T = indices.size() / 3;
+  auto corner = [&](uint32_t t, int k) -> Result<Eigen::Vector3d> {
+    const uint32_t v = indices[3 * size_t{t} + size_t(k)];
+    if (v >= vertex_count)
+      return MakeError(Error::Code::kInvalidMesh, "triangle " + std::to_string(t) + " references vertex " +
+                                                      std::to_string(v) + " of " + std::to_string(vertex_count));
+    const Eigen::Vector3d p(positions[3 * size_t{v}], positions[3 * size_t{v} + 1], positions[3 * size_t{v} + 2]);
+    if (!p.allFinite())
+      return MakeError(Error::Code::kInvalidMesh, "vertex " + std::to_string(v) + " has a non-finite coordinate");
+    return p;
+  };
+  std::vector<Eigen::Vector3d> out;
+  out.reserve(pairs.size());
+  try {
+    for (const TrianglePair& pr : pairs) {
+      if (pr.a >= T || pr.b >= T)
+        return MakeError(Error::Code::kInvalidMesh, "triangle pair (" + std::to_string(pr.a) + ", " +
+                                                        std::to_string(pr.b) + ") out of range of " + std::to_string(T));
+      K::Point_3 c[2][3];
+      Eigen::Vector3d centroid[2] = {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
+      for (int side = 0; side < 2; ++side)
+        for (int k = 0; k < 3; ++k) {
+          auto p = corner(side ? pr.b : pr.a, k);
+          if (!p.ok()) return p.error();
+          c[side][k] = K::Point_3(p.value().x(), p.value().y(), p.value().z());
+          centroid[side] += p.value() / 3.0;
+        }
+      const K::Triangle_3 ta(c[0][0], c[0][1], c[0][2]), tb(c[1][0], c[1][1], c[1][2]);
+      Eigen::Vector3d at = 0.5 * (centroid[0] + centroid[1]);
+      auto eig = [](const K::Point_3& p) { return Eigen::Vector3d(CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z())); };
+      if (!ta.is_degenerate() && !tb.is_degenerate()) {
+        if (const auto hit = CGAL::intersection(ta, tb)) {
+          if (const K::Segment_3* s = boost::get<K::Segment_3>(&*hit)) {
+            at = 0.5 * (eig(s->source()) + eig(s->target()));
+          } else if (const K::Point_3* p = boost::get<K::Point_3>(&*hit)) {
+            at = eig(*p);
+          } else if (const K::Triangle_3* t = boost::get<K::Triangle_3>(&*hit)) {
+            at = (eig(t->vertex(0)) + eig(t->vertex(1)) + eig(t->vertex(2))) / 3.0;
+          } else if (const auto* poly = boost::get<std::vector<K::Point_3>>(&*hit); poly && !poly->empty()) {
+            at = Eigen::Vector3d::Zero();
+            for (const K::Point_3& p : *poly) at += eig(p);
+            at /= double(poly->size());
+          }
+        }
+      }
+      out.push_back(at);
+    }
+  } catch (const std::exception& e) {
+    return MakeError(Error::Code::kInternal, std::string("CGAL: ") + e.what());
+  }
+  return out;
+}
+
 }  // namespace spherechain::baker

@@ -6,6 +6,8 @@
 #include <functional>
 #include <vector>
 
+#include <Eigen/Core>
+
 #include "spherechain/baker/types.h"
 
 namespace spherechain::baker {
@@ -38,5 +40,17 @@ Result<bool> AnyTrianglesWithin(const float* positions, uint32_t vertex_count, c
                                 const std::vector<uint32_t>& weld_ids, const std::vector<uint32_t>& set_a,
                                 const std::vector<uint32_t>& set_b, double distance,
                                 const std::function<bool(uint32_t, uint32_t)>& allow = {});
+
+/// Where each pair of `pairs` meets: the midpoint of the two triangles' intersection segment, the
+/// point itself when they touch at one point, the centroid of the overlap's corners when they are
+/// coplanar and overlap (CGAL::intersection(Triangle_3, Triangle_3), Epick: inexact constructions, a
+/// location to within float noise); for a pair that does not intersect (not a contact of these
+/// positions), the midpoint of the two centroids. `positions` #V×3 floats (any space, the result in the
+/// same), `indices` #T×3, `pairs` source triangle indices. One point per pair, in `pairs` order.
+/// Errors: kInvalidMesh (an index or a triangle out of range, a non-finite coordinate of a pair's
+/// triangle), kInternal (CGAL threw). Cost: ~1 µs per pair, no spatial search.
+Result<std::vector<Eigen::Vector3d>> ContactPoints(const float* positions, uint32_t vertex_count,
+                                                   const std::vector<uint32_t>& indices,
+                                                   const std::vector<TrianglePair>& pairs);
 
 }  // namespace spherechain::baker
