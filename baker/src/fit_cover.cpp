@@ -241,6 +241,16 @@ bool JunctionPlane(const Mesh& mesh, const Segmentation& seg, Region reg, Vector
   return true;
 }
 
+// One entry per sphere of the fit: the voxel it grew from, and (from step 6 on) the ball it became.
+struct CoverBall {
+  static constexpr uint32_t kMedial = std::numeric_limits<uint32_t>::max();  // no voxel: a medial ball (6b)
+  uint32_t voxel = kMedial;  ///< interior voxel index, or kMedial
+  uint8_t region = kOutside;
+  bool skin = false;         ///< placed by the skin pass (6b): it covers skin, not volume (6d keeps it)
+  Vector3d centre = Vector3d::Zero();  ///< [Units: source] off the grid (6); before the dilation
+  double radius = 0.0;                 ///< [Units: source] inscribed radius; before the dilation
+};
+
 }  // namespace
 
 Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation& seg, const FitParams& params,
@@ -426,7 +436,7 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
   //    region its second (a thin limb is never left without one).
   //    The same lazy greedy serves 6c (the budget the skin pass leaves): `greedy(budget)` adds spheres
   //    from `start` until `chosen` holds `budget` or the best adds less than min_gain.
-  std::vector<uint32_t> chosen;
+  std::vector<CoverBall> chosen;
   std::array<int, kMaxRegions> per_region{};
   auto greedy = [&](int budget) {
     using Entry = std::pair<double, uint32_t>;  // gain, candidate voxel (ties: the larger index — fixed)
@@ -451,7 +461,7 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
         continue;
       }
       F.Apply(c, +1);
-      chosen.push_back(c);
+      chosen.push_back({.voxel = c, .region = F.label[c]});
       ++per_region[F.label[c]];
     }
   };
@@ -479,7 +489,8 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
     Context::Timer t(ctx, "fit.cover.refine");
     for (int sweep = 0; sweep < params.refine_sweeps; ++sweep) {
       size_t moved = 0;
-      for (uint32_t& c : chosen) {
+      for (CoverBall& ball : chosen) {
+        uint32_t& c = ball.voxel;
         F.Apply(c, -1);
         const uint8_t reg = F.label[c];
         // The gains of c and of its 26 neighbours, computed on all cores, then compared in a fixed order.
@@ -513,7 +524,7 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
   // 6. Off the grid: each centre pushed away from its nearest surface point, half a voxel at a time
   //    while its inscribed radius grows (towards the medial axis: a voxel centre is up to half a voxel
   //    diagonal off it, which costs a thin limb a few % of its radius).
-  auto off_grid = [&](uint32_t c) {
+  auto off_grid = [&](uint32_t c) {  // → (centre, inscribed radius)
     Vector3d x = iv.Centre(c);
     Point3 q(x.x(), x.y(), x.z());
     Point3 near = tree.closest_point(q);
@@ -530,8 +541,8 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
     }
     return std::pair<Vector3d, double>(x, r);
   };
-  std::vector<std::pair<Vector3d, double>> balls;
-  for (uint32_t c : chosen) balls.push_back(off_grid(c));
+  auto place = [&](CoverBall& b) { std::tie(b.centre, b.radius) = off_grid(b.voxel); };
+  for (CoverBall& b : chosen) place(b);
 
   // 6b. Skin pass: the limb vertices farther than skin_tolerance_rel outside every sphere of their
   //     region (a hand's fingers and palm, a foot: too little volume for the cover above) are covered
@@ -540,9 +551,6 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
   //     candidates: the interior voxels' balls, and the medial ball behind each uncovered vertex (off the
   //     voxel grid: a finger or a toe a few voxels thick has almost no interior voxel of its own, yet its
   //     medial balls are the spheres that follow it).
-  std::vector<uint8_t> ball_region;  // region of balls[k]
-  for (uint32_t c : chosen) ball_region.push_back(F.label[c]);
-  constexpr uint32_t kMedial = std::numeric_limits<uint32_t>::max();  // chosen[k] of a medial ball: no voxel
   const double dilation = params.dilation_rel * height;
   if (int skin_left = params.max_spheres - int(chosen.size()); params.skin_spheres > 0 && skin_left > 0) {
     Context::Timer t(ctx, "fit.cover.skin");
@@ -562,8 +570,8 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
       if (vreg[v] >= nreg || vreg[v] == uint8_t(layout.trunk())) continue;
       const Vector3d p = fit_detail::Vertex(mesh, v);
       double best = std::numeric_limits<double>::infinity();
-      for (size_t k = 0; k < chosen.size(); ++k)
-        if (ball_region[k] == vreg[v]) best = std::min(best, (p - balls[k].first).norm() - balls[k].second - dilation);
+      for (const CoverBall& b : chosen)
+        if (b.region == vreg[v]) best = std::min(best, (p - b.centre).norm() - b.radius - dilation);
       if (best > tol) uncovered.push_back(v);
     }
     // Which candidate balls bring which uncovered vertices within tolerance. Candidate keys: an interior
@@ -673,9 +681,12 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
       const uint8_t reg = is_medial ? medial_region[v - total] : F.label[v];
       if (head >= 0 && int(reg) == head && head_added++ >= head_cap) continue;  // the head's share is spent
       for (uint32_t u : reach[v]) done[u] = 1;
-      chosen.push_back(is_medial ? kMedial : v);
-      balls.push_back(is_medial ? medial[v - total] : off_grid(v));
-      ball_region.push_back(reg);
+      CoverBall b{.voxel = is_medial ? CoverBall::kMedial : v, .region = reg, .skin = true};
+      if (is_medial)
+        std::tie(b.centre, b.radius) = medial[v - total];
+      else
+        place(b);
+      chosen.push_back(b);
       ++added;
       added_medial += is_medial;
     }
@@ -684,19 +695,18 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
                 std::to_string(params.skin_tolerance_rel) + " of the height, " + std::to_string(added) + " spheres added (" +
                 std::to_string(added_medial) + " medial balls of " + std::to_string(medial.size()) + " candidates)");
   }
-  const size_t skin_end = chosen.size();  // balls [volume_spheres, skin_end): the skin pass's
   // 6c. The budget the skin pass left goes back to the volume cover, the skin spheres counting as cover
   //     (CesiumMan's hands needed 6 of the 16 held back: 10 more spheres for its torso and limbs).
   if (const size_t before = chosen.size(); volume_budget < params.max_spheres && int(before) < params.max_spheres) {
     Context::Timer t(ctx, "fit.cover.leftover");  // its own name: the report keys timings by name
     for (size_t k = volume_spheres; k < before; ++k) {
-      if (chosen[k] == kMedial)
-        F.ApplyBall(balls[k].first, balls[k].second / F.h, +1);
+      if (chosen[k].voxel == CoverBall::kMedial)
+        F.ApplyBall(chosen[k].centre, chosen[k].radius / F.h, +1);
       else
-        F.Apply(chosen[k], +1);
+        F.Apply(chosen[k].voxel, +1);
     }
     greedy(params.max_spheres);
-    for (size_t k = before; k < chosen.size(); ++k) balls.push_back(off_grid(chosen[k])), ball_region.push_back(F.label[chosen[k]]);
+    for (size_t k = before; k < chosen.size(); ++k) place(chosen[k]);
   }
 
   // 6d. Off the grid, two volume balls may end where one would do: two voxel centres a voxel or two apart
@@ -706,49 +716,48 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
   //     when off it they would land within a quarter radius of another ball. At most 4 rounds.
   if (params.min_gain > 0.0) {
     Context::Timer t(ctx, "fit.cover.redundant");
-    std::vector<uint8_t> skin(chosen.size(), 0);  // the skin pass's balls cover skin, not volume: kept
-    for (size_t k = volume_spheres; k < skin_end; ++k) skin[k] = 1;
     std::fill(F.count.begin(), F.count.end(), uint16_t{0});
-    for (const auto& b : balls) F.ApplyBall(b.first, b.second / F.h, +1);
+    for (const CoverBall& b : chosen) F.ApplyBall(b.centre, b.radius / F.h, +1);
     size_t replaced = 0;
     for (int round = 0; round < 4; ++round) {
-      std::vector<double> loss(balls.size(), std::numeric_limits<double>::infinity());
-      ParallelFor(0, balls.size(), [&](size_t k) {
-        if (!skin[k]) loss[k] = F.LossBall(balls[k].first, balls[k].second / F.h);
+      std::vector<double> loss(chosen.size(), std::numeric_limits<double>::infinity());
+      ParallelFor(0, chosen.size(), [&](size_t k) {
+        if (!chosen[k].skin) loss[k] = F.LossBall(chosen[k].centre, chosen[k].radius / F.h);
       });
       // The least useful first; ties: the lower index. Each removal changes the others' losses: one at a time.
-      std::vector<size_t> order(balls.size());
+      std::vector<size_t> order(chosen.size());
       std::iota(order.begin(), order.end(), size_t{0});
       std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return loss[a] < loss[b]; });
-      std::vector<uint8_t> drop(balls.size(), 0);
+      std::vector<uint8_t> drop(chosen.size(), 0);
       size_t dropped = 0;
       for (size_t k : order) {
         if (!(loss[k] < params.min_gain)) break;
-        if (per_region[ball_region[k]] <= 1) continue;
-        if (F.LossBall(balls[k].first, balls[k].second / F.h) >= params.min_gain) continue;  // others went first
-        F.ApplyBall(balls[k].first, balls[k].second / F.h, -1);
-        --per_region[ball_region[k]];
+        const CoverBall& b = chosen[k];
+        if (per_region[b.region] <= 1) continue;
+        if (F.LossBall(b.centre, b.radius / F.h) >= params.min_gain) continue;  // others went first
+        F.ApplyBall(b.centre, b.radius / F.h, -1);
+        --per_region[b.region];
         drop[k] = 1;
         ++dropped;
       }
       if (dropped == 0) break;
       size_t w = 0;
-      for (size_t k = 0; k < balls.size(); ++k)
-        if (!drop[k]) chosen[w] = chosen[k], balls[w] = balls[k], ball_region[w] = ball_region[k], skin[w] = skin[k], ++w;
-      chosen.resize(w), balls.resize(w), ball_region.resize(w), skin.resize(w);
+      for (size_t k = 0; k < chosen.size(); ++k)
+        if (!drop[k]) chosen[w++] = chosen[k];
+      chosen.resize(w);
       const size_t before = chosen.size();
       greedy(params.max_spheres);
       for (size_t k = before; k < chosen.size(); ++k) {
         // greedy() counted the voxel ball; count the ball where it ends instead.
-        F.Apply(chosen[k], -1);
-        std::pair<Vector3d, double> b = off_grid(chosen[k]);
-        for (size_t q = 0; q < balls.size(); ++q)
-          if ((b.first - balls[q].first).norm() < 0.25 * std::min(b.second, balls[q].second)) {
-            b = {iv.Centre(chosen[k]), double(F.dist[chosen[k]]) * F.h};
+        CoverBall& b = chosen[k];
+        F.Apply(b.voxel, -1);
+        place(b);
+        for (size_t q = 0; q < k; ++q)
+          if ((b.centre - chosen[q].centre).norm() < 0.25 * std::min(b.radius, chosen[q].radius)) {
+            b.centre = iv.Centre(b.voxel), b.radius = double(F.dist[b.voxel]) * F.h;
             break;
           }
-        F.ApplyBall(b.first, b.second / F.h, +1);
-        balls.push_back(b), ball_region.push_back(F.label[chosen[k]]), skin.push_back(0);
+        F.ApplyBall(b.centre, b.radius / F.h, +1);
       }
       replaced += chosen.size() - before;
     }
@@ -780,11 +789,11 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
   for (int r = 0; r < nreg; ++r) {
     std::vector<FittedSphere> group;
     const Vector3d root = r == torso ? Vector3d::Zero() : LimbRoot(mesh, seg, Region(r), centroid[torso]);
-    for (size_t k = 0; k < chosen.size(); ++k) {
-      if (ball_region[k] != r) continue;
+    for (const CoverBall& b : chosen) {
+      if (b.region != r) continue;
       FittedSphere s;
-      s.center = s.center_phi1 = s.center_phi2 = balls[k].first;
-      s.radius = s.radius_phi1 = s.radius_phi2 = balls[k].second + dilation;
+      s.center = s.center_phi1 = s.center_phi2 = b.centre;
+      s.radius = s.radius_phi1 = s.radius_phi2 = b.radius + dilation;
       s.region = Region(r);
       group.push_back(std::move(s));
     }
