@@ -36,7 +36,10 @@
 // 10; 0 = off), 1 run each. CGAL reports every self-intersection; its pairs are split into what our
 // contact definition leaves out (degenerate faces, same region, excluded sphere pairs, no region) and
 // the rest, which is compared with our contacts (printed, never fails the run). --per-frame: one line
-// per frame (time, breakdown, counters).
+// per frame (time, breakdown, counters). "behind M2's pairs": per frame RefitJob + DetectJob M2, then
+// NarrowPhaseJob restricted to those pairs on the surrounding regions' and on the reach regions' model
+// (NarrowPhaseRegions), timed, with the share of the frame's contacts each finds (a contact the unrestricted
+// job did not report fails the run).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -386,6 +389,76 @@ CgalClasses Classify(const NarrowAsset& m, const CgalPeer& peer,
 }
 #endif
 
+// Prints the "narrow phase behind M2's pairs" rows: per frame RefitJob (kPivotFrame) + DetectJob M2, then
+// NarrowPhaseJob restricted to those pairs on the surrounding regions' model and on the reach regions'
+// (NarrowPhaseRegions::kReach); the fastest of `runs` passes per frame, and how many of the frame's
+// contacts (`all`, the unrestricted narrow phase's) each finds. False when a restricted job reports a
+// contact the unrestricted one does not.
+bool BehindTheProxy(const Workload& w, const sc::AssetView& view, int runs,
+                    const std::vector<std::vector<TrianglePair>>& all) {
+  sc::Model model;
+  sc::Workspace ws;
+  sc::NarrowPhaseModel np[2];
+  sc::NarrowPhaseWorkspace np_ws[2];
+  const sc::NarrowPhaseRegions kinds[2] = {sc::NarrowPhaseRegions::kSurrounding, sc::NarrowPhaseRegions::kReach};
+  for (int k = 0; k < 2; ++k)
+    if (np[k].Init(view, kinds[k]) != sc::Status::kOk || np_ws[k].Init(np[k]) != sc::Status::kOk) return true;
+  if (model.Init(view) != sc::Status::kOk || ws.Init(model) != sc::Status::kOk) return true;
+  const size_t F = w.frames.size();
+  std::vector<sc::Collision> pairs(sc::DetectBound(view, sc::DetectMethod::kM2));
+  std::vector<sc::TriangleContact> out(size_t{1} << 20);
+  double median[2] = {0, 0}, worst[2] = {0, 0};
+  size_t found[2] = {0, 0}, total = 0, reported = 0, tests[2] = {0, 0};
+  bool ok = true;
+  for (int k = 0; k < 2; ++k) {
+    std::vector<double> us(F, 1e300);
+    for (size_t f = 0; f < F; ++f) {
+      sc::RefitJob refit;
+      refit.model = &model;
+      refit.workspace = &ws;
+      refit.positions = {w.frames[f].data(), w.vertex_count, 12};
+      uint32_t n_pairs = 0, n = 0;
+      sc::DetectJob m2;
+      m2.model = &model;
+      m2.workspace = &ws;
+      m2.method = sc::DetectMethod::kM2;
+      m2.output = pairs.data();
+      m2.capacity = static_cast<uint32_t>(pairs.size());
+      m2.count = &n_pairs;
+      if (sc::Failed(refit.Run()) || sc::Failed(m2.Run())) return false;
+      sc::NarrowPhaseStats st;
+      sc::NarrowPhaseJob job;
+      job.model = &np[k];
+      job.workspace = &np_ws[k];
+      job.positions = refit.positions;
+      job.sphere_pairs = pairs.data();
+      job.sphere_pair_count = n_pairs;
+      job.output = out.data();
+      job.capacity = static_cast<uint32_t>(out.size());
+      job.count = &n;
+      job.stats = &st;
+      for (int r = 0; r < runs; ++r) us[f] = std::min(us[f], Micros([&] { (void)job.Run(); }));
+      tests[k] += st.triangle_tests;
+      for (uint32_t i = 0; i < n; ++i) {
+        const TrianglePair p{std::min(out[i].triangle_a, out[i].triangle_b), std::max(out[i].triangle_a, out[i].triangle_b)};
+        if (!std::binary_search(all[f].begin(), all[f].end(), p)) ok = false;
+      }
+      found[k] += n;
+      if (k == 0) total += all[f].size(), reported += n_pairs;
+    }
+    const Summary t = Summarize(us);
+    median[k] = t.median, worst[k] = t.max;
+  }
+  std::printf("behind M2's pairs (RefitJob + DetectJob M2, then NarrowPhaseJob restricted to the %.1f pairs a frame; "
+              "fastest of %d):\n", F ? double(reported) / F : 0.0, runs);
+  for (int k = 0; k < 2; ++k)
+    std::printf("  %-20s median %7.1f us, max %7.1f us; %6.1f exact tests a frame; contacts found %zu of %zu (%.1f %%)\n",
+                k == 0 ? "surrounding regions" : "reach regions", median[k], worst[k], F ? double(tests[k]) / F : 0.0,
+                found[k], total, total ? 100.0 * found[k] / total : 100.0);
+  if (!ok) std::fprintf(stderr, "MISMATCH: a restricted narrow phase reported a contact the unrestricted one did not\n");
+  return ok;
+}
+
 // Prints the "narrow phase" section; false when a cross-check failed.
 bool NarrowPhase(const Workload& w, const sc::AssetView& view, int runs, int cgal_frames, bool per_frame) {
   sc::NarrowPhaseModel np;
@@ -527,6 +600,7 @@ bool NarrowPhase(const Workload& w, const sc::AssetView& view, int runs, int cga
   }
   std::printf("replica (bench-side sweep over all triangle boxes): tested pairs and contacts %s on every frame\n",
               ok ? "equal" : "DIFFER (see stderr)");
+  ok = BehindTheProxy(w, view, runs, contacts) && ok;
 
 #if SPHERECHAIN_BENCH_CGAL
   const size_t G = std::min(F, size_t(std::max(0, cgal_frames)));

@@ -149,7 +149,7 @@ struct FrameEval {
   // a NarrowPhaseJob restricted to DetectJob's pairs finds), and localised (the point where the two
   // triangles meet lies inside both spheres of some reported pair of the same two regions, radii grown by
   // the asset's margin: the pair found the contact's place, whichever spheres own its triangles).
-  uint32_t behind[2] = {0, 0}, localised[2] = {0, 0};
+  uint32_t behind[2] = {0, 0}, behind_reach[2] = {0, 0}, localised[2] = {0, 0};
   // The asset-independent truth: intersecting triangle pairs whose bind-pose centroids lie at least --crease
   // apart, whatever the asset's exclusions and sphere ownership; and how many of them M2's sphere pairs and
   // region pairs cover (the pair of owning spheres reported, or their regions), or the asset excludes.
@@ -218,11 +218,14 @@ int RunEvaluate(const EvaluateArgs& a) {
   runtime::Workspace ws;
   if (runtime::Status s = model.Init(view); runtime::Failed(s) || runtime::Failed(s = ws.Init(model)))
     return Fail("'" + a.asset + "': runtime Model / Workspace::Init: " + runtime::ToString(s));
-  runtime::NarrowPhaseModel narrow;
-  runtime::NarrowPhaseWorkspace narrow_ws;
+  runtime::NarrowPhaseModel narrow, narrow_reach;  // surrounding regions (the truth's owners), reach regions
+  runtime::NarrowPhaseWorkspace narrow_ws, narrow_reach_ws;
   if (runtime::Status s = narrow.Init(view); runtime::Failed(s) || runtime::Failed(s = narrow_ws.Init(narrow)))
     return Fail("'" + a.asset + "': narrow phase: " + runtime::ToString(s) +
                 (s == runtime::Status::kErrorMissingField ? " (baked before the narrow phase existed: re-bake it)" : ""));
+  if (runtime::Status s = narrow_reach.Init(view, runtime::NarrowPhaseRegions::kReach);
+      runtime::Failed(s) || runtime::Failed(s = narrow_reach_ws.Init(narrow_reach)))
+    return Fail("'" + a.asset + "': narrow phase (reach regions): " + runtime::ToString(s));
 
   const uint32_t V = view.vertex_count, T = view.triangle_count;
   std::vector<uint32_t> weld(V);
@@ -381,20 +384,29 @@ int RunEvaluate(const EvaluateArgs& a) {
     }
     // The narrow phase behind the proxy: restricted to M1's / M2's sphere pairs (what an engine running the
     // spheres as its broad phase gets).
-    std::set<baker::TrianglePair> behind_pairs[2];
-    for (int m = 0; m < 2; ++m) {
-      runtime::NarrowPhaseJob restricted = job;
-      restricted.sphere_pairs = (m == 0 ? out_m1 : out_m2).data();
-      restricted.sphere_pair_count = reported[m];
-      restricted.stats = nullptr;
-      uint32_t n = 0;
-      restricted.count = &n;
-      if (runtime::Status rs = restricted.Run(); runtime::Failed(rs))
-        return Fail(std::string("narrow phase (behind the proxy): ") + runtime::ToString(rs));
-      for (uint32_t i = 0; i < n; ++i)
-        behind_pairs[m].insert({std::min(contacts[i].triangle_a, contacts[i].triangle_b),
-                                std::max(contacts[i].triangle_a, contacts[i].triangle_b)});
-    }
+    // With the surrounding regions (a contact behind its two owners only), and with the reach regions (behind
+    // every sphere that reaches its triangles: NarrowPhaseRegions::kReach).
+    std::set<baker::TrianglePair> behind_pairs[2], behind_reach_pairs[2];
+    for (int regions = 0; regions < 2; ++regions)
+      for (int m = 0; m < 2; ++m) {
+        runtime::NarrowPhaseJob restricted = job;
+        if (regions == 1) restricted.model = &narrow_reach, restricted.workspace = &narrow_reach_ws;
+        restricted.sphere_pairs = (m == 0 ? out_m1 : out_m2).data();
+        restricted.sphere_pair_count = reported[m];
+        restricted.stats = nullptr;
+        uint32_t n = 0;
+        restricted.count = &n;
+        if (runtime::Status rs = restricted.Run(); runtime::Failed(rs))
+          return Fail(std::string("narrow phase (behind the proxy): ") + runtime::ToString(rs));
+        std::set<baker::TrianglePair>& into = regions == 0 ? behind_pairs[m] : behind_reach_pairs[m];
+        for (uint32_t i = 0; i < n; ++i) {
+          const baker::TrianglePair tp{std::min(contacts[i].triangle_a, contacts[i].triangle_b),
+                                       std::max(contacts[i].triangle_a, contacts[i].triangle_b)};
+          if (!into.insert(tp).second)
+            return Fail("frame " + std::to_string(f) + ": the narrow phase reported triangles " + std::to_string(tp.a) +
+                        " and " + std::to_string(tp.b) + " twice");
+        }
+      }
     // Ground truth.
     const auto t1 = Clock::now();
     auto exact = baker::ExactSelfIntersections(positions.data(), V, mesh.indices, weld, &row.degenerate);
@@ -431,8 +443,8 @@ int RunEvaluate(const EvaluateArgs& a) {
         row.narrow_true += narrow_pairs.count(p);
         row.missed_contacts += !row.m2_regions.count(rp);
         row.missed_sphere_contacts += !row.m2_spheres.count(key);
-        row.behind[0] += behind_pairs[0].count(p) > 0;
-        row.behind[1] += behind_pairs[1].count(p) > 0;
+        for (int m = 0; m < 2; ++m)
+          row.behind[m] += behind_pairs[m].count(p) > 0, row.behind_reach[m] += behind_reach_pairs[m].count(p) > 0;
         contact_pairs.push_back(p);
       }
     }
@@ -579,7 +591,7 @@ int RunEvaluate(const EvaluateArgs& a) {
   size_t exact_regions = 0, found_m1 = 0, found_m2 = 0, exact_spheres = 0, sfound_m1 = 0, sfound_m2 = 0;
   size_t false_m1 = 0, false_m2 = 0, gt = 0, narrow_total = 0, narrow_true = 0, excluded = 0, same = 0, unassigned = 0;
   nlohmann::json false_frames = nlohmann::json::array();
-  size_t imprecise_m2 = 0, reported_m2 = 0, behind[2] = {0, 0}, localised[2] = {0, 0};
+  size_t imprecise_m2 = 0, reported_m2 = 0, behind[2] = {0, 0}, behind_reach[2] = {0, 0}, localised[2] = {0, 0};
   size_t apart = 0, apart_sphere = 0, apart_region = 0, apart_excluded = 0, apart_same = 0;
   std::vector<double> narrow_us;
   double exact_ms = 0;
@@ -592,7 +604,8 @@ int RunEvaluate(const EvaluateArgs& a) {
     exact_spheres += r.exact_spheres.size();
     sfound_m1 += CountIn(r.exact_spheres, r.m1_spheres);
     sfound_m2 += CountIn(r.exact_spheres, r.m2_spheres);
-    for (int m = 0; m < 2; ++m) behind[m] += r.behind[m], localised[m] += r.localised[m];
+    for (int m = 0; m < 2; ++m)
+      behind[m] += r.behind[m], behind_reach[m] += r.behind_reach[m], localised[m] += r.localised[m];
     false_m1 += r.false_m1.size();
     false_m2 += r.false_m2.size();
     if (!r.false_m1.empty() || !r.false_m2.empty()) false_frames.push_back(f);
@@ -696,9 +709,10 @@ int RunEvaluate(const EvaluateArgs& a) {
   std::printf("proxy recall, region pairs: M1 %.1f %% (%zu/%zu), M2 %.1f %% (%zu/%zu); sphere pairs: M1 %.1f %%, M2 %.1f %%\n",
               100 * recall_m1, found_m1, exact_regions, 100 * recall_m2, found_m2, exact_regions, 100 * srecall_m1,
               100 * srecall_m2);
-  std::printf("contacts behind the proxy's sphere pairs (found by the narrow phase restricted to them): M1 %.1f %%, "
-              "M2 %.1f %%; localised (where the triangles meet lies within the margin of both spheres of a reported "
-              "pair of their regions): M1 %.1f %%, M2 %.1f %%\n",
+  std::printf("contacts behind the proxy's sphere pairs (found by the narrow phase restricted to them): reach regions "
+              "M1 %.1f %%, M2 %.1f %%; surrounding regions M1 %.1f %%, M2 %.1f %%; localised (where the triangles meet "
+              "lies within the margin of both spheres of a reported pair of their regions): M1 %.1f %%, M2 %.1f %%\n",
+              100 * Ratio(double(behind_reach[0]), double(gt)), 100 * Ratio(double(behind_reach[1]), double(gt)),
               100 * Ratio(double(behind[0]), double(gt)), 100 * Ratio(double(behind[1]), double(gt)),
               100 * Ratio(double(localised[0]), double(gt)), 100 * Ratio(double(localised[1]), double(gt)));
   std::printf("proxy false alarms (nothing within the margin): M1 %zu, M2 %zu, in %zu frames\n", false_m1, false_m2,
@@ -823,6 +837,7 @@ int RunEvaluate(const EvaluateArgs& a) {
                     {"exact_sphere_pairs", r.exact_spheres.size()},
                     {"missed_contacts_m2", r.missed_contacts},
                     {"contacts_behind_pairs_m2", r.behind[1]},
+                    {"contacts_behind_reach_m2", r.behind_reach[1]},
                     {"contacts_localised_m2", r.localised[1]},
                     {"missed_sphere_pairs_m2", SphereGapList(r.missed_sphere_gaps, height)},
                     {"false_alarm_sphere_pairs_m2", SphereGapList(r.false_sphere_gaps, height)},
@@ -873,6 +888,8 @@ int RunEvaluate(const EvaluateArgs& a) {
                    {"sphere_precision_m2", sphere_precision_m2},
                    {"contacts_behind_pairs_m1", Ratio(double(behind[0]), double(gt))},
                    {"contacts_behind_pairs_m2", Ratio(double(behind[1]), double(gt))},
+                   {"contacts_behind_reach_m1", Ratio(double(behind_reach[0]), double(gt))},
+                   {"contacts_behind_reach_m2", Ratio(double(behind_reach[1]), double(gt))},
                    {"contacts_localised_m1", Ratio(double(localised[0]), double(gt))},
                    {"contacts_localised_m2", Ratio(double(localised[1]), double(gt))}}},
         {"contacts_by_bind_distance", {{"crease_rel", a.crease}, {"triangle_pairs", apart},

@@ -59,7 +59,7 @@ Result<BakeConfig> ParseBakeConfig(const std::string& text, const std::string& w
                                               "min_radius_rel", "min_gain", "region_balance", "refine_sweeps", "dilation_rel",
                                               "skin_spheres", "skin_tolerance_rel", "skin_min_vertices", "medial_min_rel",
                                               "contact_margin_rel", "near_rel", "vertices", "regions", "pivot_poses",
-                                              "pivot_pose_angle"};
+                                              "pivot_pose_angle", "reach_rel"};
   for (auto it = j.begin(); it != j.end(); ++it)
     if (!known.count(it.key())) return MakeError(Error::Code::kConfig, where + ": unknown key '" + it.key() + "'");
 
@@ -122,6 +122,7 @@ Result<BakeConfig> ParseBakeConfig(const std::string& text, const std::string& w
   if (s.ok()) s = ReadNumber(j, "medial_min_rel", 0.0001, 1.0, &c.fit.medial_min_rel, where);
   if (s.ok()) s = ReadNumber(j, "contact_margin_rel", 0.0, 0.05, &c.contact_margin_rel, where);
   if (s.ok()) s = ReadNumber(j, "near_rel", 0.0, 0.2, &c.near_rel, where);
+  if (s.ok()) s = ReadNumber(j, "reach_rel", 0.0, 0.05, &c.reach_rel, where);
   if (s.ok()) s = ReadNumber(j, "pivot_poses", 0u, 256u, &c.pivot_poses, where);
   if (s.ok()) s = ReadNumber(j, "pivot_pose_angle", 0.0, 90.0, &c.pivot_pose_angle, where);
   if (s.ok()) s = ReadNumber(j, "spheres_per_level", 2, 2, &c.fit.spheres_per_level, where);
@@ -182,6 +183,7 @@ std::string CanonicalConfig(const BakeConfig& c) {
   }
   j["contact_margin_rel"] = c.contact_margin_rel;
   j["near_rel"] = c.near_rel;
+  j["reach_rel"] = c.reach_rel;
   // Added after assets were cached on the hash: written only when on (the default is off).
   if (c.pivot_poses) j["pivot_poses"] = c.pivot_poses, j["pivot_pose_angle"] = c.pivot_pose_angle;
   j["rays"] = c.fit.rays;
@@ -382,6 +384,7 @@ Result<BakeResult> Bake(const std::string& input_path, const BakeConfig& config,
     if (!surr.ok()) return surr.error();
     r.surrounding = std::move(surr).value();
     r.unassigned_triangles = mesh.triangle_count() - r.surrounding.offsets.back();
+    AddReachRegions(mesh, r.segmentation, spheres, config.reach_rel * r.fit.body_height, &r.surrounding);
   }
   if (!r.segmentation.layout.paper && config.fit.method == FitMethod::kCover) {
     Context::Timer t(ctx, "creature_exclusions");
@@ -628,6 +631,9 @@ json MakeBakeReport(const BakeResult& r, const BakeConfig& config, const Context
     j["warnings"]["cross_region_bind_overlaps"] = w;
   }
   j["unassigned_triangles"] = r.unassigned_triangles;
+  if (!r.surrounding.reach_offsets.empty() && r.mesh.triangle_count() > 0)
+    j["reach_regions"] = {{"reach_rel", config.reach_rel},
+                          {"spheres_per_triangle", double(r.surrounding.reach_triangles.size()) / r.mesh.triangle_count()}};
   j["mesh_issues"] = {{"degenerate_triangles", r.mesh_issues.degenerate_triangles},
                       {"non_manifold_edges", r.mesh_issues.non_manifold_edges}};
   j["accuracy"] = {{"phi1", StatsJson(r.accuracy.phi1)},

@@ -282,6 +282,42 @@ Result<SurroundingRegions> BuildSurroundingRegions(const Mesh& mesh, const Segme
   return out;
 }
 
+void AddReachRegions(const Mesh& mesh, const Segmentation& seg, const std::vector<FittedSphere>& spheres, double reach,
+                     SurroundingRegions* regions) {
+  const uint32_t T = mesh.triangle_count();
+  const size_t S = spheres.size();
+  std::array<std::vector<uint32_t>, kMaxRegions> by_region;
+  for (size_t s = 0; s < S; ++s)
+    if (static_cast<int>(spheres[s].region) < kMaxRegions) by_region[static_cast<int>(spheres[s].region)].push_back(uint32_t(s));
+  std::vector<std::vector<uint32_t>> lists(S);
+  for (size_t s = 0; s < S; ++s)
+    for (uint32_t k = regions->offsets[s]; k < regions->offsets[s + 1]; ++k) lists[s].push_back(regions->triangles[k]);
+  for (uint32_t t = 0; t < T; ++t) {
+    const uint8_t r = t < seg.triangle_regions.size() ? seg.triangle_regions[t] : kNoRegion;
+    if (r >= kMaxRegions) continue;
+    const uint16_t own = regions->triangle_spheres[t];
+    for (uint32_t s : by_region[r]) {
+      if (s == own) continue;
+      const FittedSphere& S_ = spheres[s];
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t v = mesh.indices[3 * size_t{t} + size_t(k)];
+        const Eigen::Vector3d p(mesh.positions[3 * size_t{v}], mesh.positions[3 * size_t{v} + 1], mesh.positions[3 * size_t{v} + 2]);
+        if ((p - S_.center).norm() - S_.radius <= reach) {
+          lists[s].push_back(t);
+          break;
+        }
+      }
+    }
+  }
+  regions->reach_offsets.assign(1, 0);
+  regions->reach_triangles.clear();
+  for (size_t s = 0; s < S; ++s) {
+    std::sort(lists[s].begin(), lists[s].end());
+    regions->reach_triangles.insert(regions->reach_triangles.end(), lists[s].begin(), lists[s].end());
+    regions->reach_offsets.push_back(static_cast<uint32_t>(regions->reach_triangles.size()));
+  }
+}
+
 Result<Pivots> ChoosePivots(const Mesh& mesh, const std::vector<FittedSphere>& spheres,
                             const SurroundingRegions& surrounding, const Segmentation* segmentation,
                             const PivotTraining* training) {

@@ -119,6 +119,11 @@ std::vector<uint8_t> BuildAsset(const AssetInputs& in) {
   auto tri_spheres_v = b.CreateVector(in.surrounding->triangle_spheres);
   auto offsets_v = b.CreateVector(in.surrounding->offsets);
   auto surr_v = b.CreateVector(in.surrounding->triangles);
+  flatbuffers::Offset<flatbuffers::Vector<uint32_t>> reach_off_v, reach_tri_v;
+  if (!in.surrounding->reach_offsets.empty()) {
+    reach_off_v = b.CreateVector(in.surrounding->reach_offsets);
+    reach_tri_v = b.CreateVector(in.surrounding->reach_triangles);
+  }
   auto piv_t_v = b.CreateVector(in.pivots->triangles);
   auto piv_v_v = b.CreateVector(in.pivots->vertices);
   std::vector<fb::PivotFrame> frames;
@@ -203,6 +208,7 @@ std::vector<uint8_t> BuildAsset(const AssetInputs& in) {
   ab.add_triangle_spheres(tri_spheres_v);
   ab.add_surrounding_offsets(offsets_v);
   ab.add_surrounding_triangles(surr_v);
+  if (!reach_off_v.IsNull()) ab.add_reach_offsets(reach_off_v), ab.add_reach_triangles(reach_tri_v);
   ab.add_pivot_triangles(piv_t_v);
   ab.add_pivot_vertices(piv_v_v);
   ab.add_pivot_frames(frames_v);

@@ -110,6 +110,23 @@ Status Semantics(const Asset& a, AssetView* view) {
     if (offs->Get(i + 1) < offs->Get(i)) return Status::kErrorOffsets;
   for (uint32_t t : *surr)
     if (t >= T) return Status::kErrorIndexOutOfRange;
+  // Reach regions (optional, both or neither): offsets like the surrounding regions', triangles ascending
+  // within a sphere.
+  const auto* roffs = a.reach_offsets();
+  const auto* reach = a.reach_triangles();
+  if (bool(roffs) != bool(reach)) return Status::kErrorMissingField;
+  if (roffs) {
+    if (roffs->size() != S + 1) return Status::kErrorCountMismatch;
+    if (roffs->Get(0) != 0 || roffs->Get(S) != reach->size()) return Status::kErrorOffsets;
+    for (uint32_t i = 0; i < S; ++i) {
+      const uint32_t begin = roffs->Get(i), end = roffs->Get(i + 1);
+      if (end < begin) return Status::kErrorOffsets;
+      for (uint32_t k = begin; k < end; ++k) {
+        if (reach->Get(k) >= T) return Status::kErrorIndexOutOfRange;
+        if (k > begin && reach->Get(k) <= reach->Get(k - 1)) return Status::kErrorOffsets;
+      }
+    }
+  }
 
   // Narrow-phase topology (optional): the index buffer and the weld ids.
   if (const auto* tris = a.triangles()) {
@@ -205,6 +222,16 @@ TriangleSpan SurroundingTriangles(const AssetView& view, uint32_t sphere) {
   const uint32_t begin = offs->Get(sphere), end = offs->Get(sphere + 1);
   if (begin == end) return {};
   return {view.asset->surrounding_triangles()->data() + begin, end - begin};
+}
+
+TriangleSpan ReachTriangles(const AssetView& view, uint32_t sphere) {
+  assert(view.valid() && sphere < view.sphere_count);
+  if (!view.valid() || sphere >= view.sphere_count) return {};
+  const auto* offs = view.asset->reach_offsets();
+  if (!offs) return SurroundingTriangles(view, sphere);
+  const uint32_t begin = offs->Get(sphere), end = offs->Get(sphere + 1);
+  if (begin == end) return {};
+  return {view.asset->reach_triangles()->data() + begin, end - begin};
 }
 
 uint32_t RegionCount(const AssetView& view) {

@@ -449,6 +449,30 @@ struct NarrowPhaseInternal {
       ++st.adjacent_skipped;
       return;
     }
+    uint32_t ta = c.m.region_tri_[ka], tb = c.m.region_tri_[kb];
+    uint32_t sa = a, sb = b;
+    if (c.m.reach_) {
+      // Overlapping regions: a contact is the owners' (different, not excluded), reported under the
+      // listed candidate of lowest (a, b) that has the two triangles behind its two spheres.
+      const uint16_t oa = c.m.tri_sphere_[ta], ob = c.m.tri_sphere_[tb];
+      if (oa == ob) return;
+      if (job.exclusions == Exclusions::kAsset && c.m.IsExcluded(oa, ob)) return;
+      const uint32_t key = a << 16 | b;
+      const size_t words = (size_t{c.m.sphere_count_} + 63) / 64;
+      for (uint32_t i = c.m.behind_offsets_[ta]; i < c.m.behind_offsets_[ta + 1]; ++i)
+        for (uint32_t j = c.m.behind_offsets_[tb]; j < c.m.behind_offsets_[tb + 1]; ++j) {
+          const uint32_t x = c.m.behind_[i], y = c.m.behind_[j];
+          if (x == y) continue;
+          const uint32_t lo = std::min(x, y), hi = std::max(x, y);
+          if ((lo << 16 | hi) < key && (c.w.listed_[lo * words + hi / 64] >> (hi % 64) & 1)) return;
+        }
+      if (oa < ob) {
+        sa = oa, sb = ob;
+      } else {
+        sa = ob, sb = oa;
+        std::swap(ta, tb);
+      }
+    }
     uint32_t at[2] = {c.w.prepared_at_[ka], c.w.prepared_at_[kb]};
     if ((at[0] | at[1]) >= kDegenerate) {  // not both prepared already (the usual case once a pair is under way)
       for (int side = 0; side < 2; ++side) {
@@ -467,7 +491,7 @@ struct NarrowPhaseInternal {
     ++st.triangle_tests;
     if (!TrianglesIntersect(c.w.prepared_[at[0]], c.w.prepared_[at[1]])) return;
     if (st.contacts < job.capacity)
-      job.output[st.contacts] = {c.m.region_tri_[ka], c.m.region_tri_[kb], static_cast<uint16_t>(a), static_cast<uint16_t>(b)};
+      job.output[st.contacts] = {ta, tb, static_cast<uint16_t>(sa), static_cast<uint16_t>(sb)};
     ++st.contacts;
   }
 
@@ -582,9 +606,10 @@ struct NarrowPhaseInternal {
   }
 };
 
-Status NarrowPhaseModel::Init(const AssetView& view) {
+Status NarrowPhaseModel::Init(const AssetView& view, NarrowPhaseRegions regions) {
   *this = NarrowPhaseModel{};
   if (!view.valid()) return Status::kErrorNullArgument;
+  if (regions != NarrowPhaseRegions::kSurrounding && regions != NarrowPhaseRegions::kReach) return Status::kErrorInvalidJob;
   const schema::Asset& a = *view.asset;
   const auto* tris = a.triangles();
   const auto* weld = a.weld_ids();
@@ -597,17 +622,42 @@ Status NarrowPhaseModel::Init(const AssetView& view) {
     vert_offsets_.assign(1, 0);
     std::vector<uint32_t> verts;
     uint32_t largest_verts = 0;
+    // Reach regions overlap: the owners come from the surrounding regions first.
+    const bool reach = regions == NarrowPhaseRegions::kReach && a.reach_offsets();
+    if (reach) {
+      for (uint32_t s = 0; s < S; ++s) {
+        const TriangleSpan span = SurroundingTriangles(view, s);
+        for (uint32_t i = 0; i < span.count; ++i)
+          if (tri_sphere_[span.data[i]] == kNoSphere) tri_sphere_[span.data[i]] = static_cast<uint16_t>(s);
+      }
+      behind_offsets_.assign(size_t{T} + 1, 0);
+      for (uint32_t s = 0; s < S; ++s) {
+        const TriangleSpan span = ReachTriangles(view, s);
+        for (uint32_t i = 0; i < span.count; ++i) ++behind_offsets_[span.data[i] + 1];
+      }
+      for (uint32_t t = 0; t < T; ++t) behind_offsets_[t + 1] += behind_offsets_[t];
+      behind_.assign(behind_offsets_[T], 0);
+      std::vector<uint32_t> cursor(behind_offsets_.begin(), behind_offsets_.end() - 1);
+      for (uint32_t s = 0; s < S; ++s) {
+        const TriangleSpan span = ReachTriangles(view, s);
+        for (uint32_t i = 0; i < span.count; ++i) behind_[cursor[span.data[i]]++] = static_cast<uint16_t>(s);
+      }
+    }
     for (uint32_t s = 0; s < S; ++s) {
-      const TriangleSpan span = SurroundingTriangles(view, s);
+      const TriangleSpan span = reach ? ReachTriangles(view, s) : SurroundingTriangles(view, s);
       verts.clear();
       for (uint32_t i = 0; i < span.count; ++i) {
         const uint32_t t = span.data[i];
-        if (tri_sphere_[t] != kNoSphere) continue;  // listed twice: the first region owns it
-        tri_sphere_[t] = static_cast<uint16_t>(s);
+        if (reach) {
+          if (tri_sphere_[t] == kNoSphere) continue;  // no owner: in no contact
+        } else {
+          if (tri_sphere_[t] != kNoSphere) continue;  // listed twice: the first region owns it
+          tri_sphere_[t] = static_cast<uint16_t>(s);
+        }
         uint32_t v[3], w[3];
         for (int j = 0; j < 3; ++j) v[j] = tris->Get(3 * t + j), w[j] = weld_[v[j]];
         if (w[0] == w[1] || w[1] == w[2] || w[0] == w[2]) {
-          ++index_degenerate_;
+          index_degenerate_ += !reach || tri_sphere_[t] == s;  // counted once, in its owner's region
           continue;
         }
         region_tri_.push_back(t);
@@ -648,6 +698,7 @@ Status NarrowPhaseModel::Init(const AssetView& view) {
     sphere_count_ = S;
     vertex_count_ = V;
     triangle_count_ = T;
+    reach_ = reach;
     id_ = g_next_narrow_model_id.fetch_add(1, std::memory_order_relaxed);
   } SPHERECHAIN_CATCH_BAD_ALLOC {
     *this = NarrowPhaseModel{};
@@ -680,6 +731,7 @@ Status NarrowPhaseWorkspace::Init(const NarrowPhaseModel& model) {
     records_.assign(64, 0);
     hits_.assign(4 * records_.size(), 0);
     candidates_.assign(std::min(size_t{S} * (S - 1) / 2, 16 * size_t{S} + 64), 0);
+    if (model.reach_) listed_.assign(size_t{S} * ((S + 63) / 64), 0);
     for (Culled* l : {&list_a_, &list_b_}) {
       l->key.assign(largest, 0);
       l->start.assign(largest, 0.0f);
@@ -738,11 +790,14 @@ Status NarrowPhaseJob::Run() const {
   for (size_t i = 0; i < c.w.clip_.size(); ++i) c.w.clip_[i] = i % 8 < 4 ? kInf : -kInf;
   uint32_t n_cand = 0;
   const uint32_t cand_capacity = static_cast<uint32_t>(c.w.candidates_.size());
+  const bool reach = c.m.reach_;
+  const size_t words = (size_t{c.m.sphere_count_} + 63) / 64;
   NarrowPhaseInternal::ForEachCandidate(c, *this, [&](uint32_t a, uint32_t b) {
     NarrowPhaseInternal::GrowClip(c, a, &c.w.box_[8 * size_t{b}]);
     NarrowPhaseInternal::GrowClip(c, b, &c.w.box_[8 * size_t{a}]);
     if (n_cand < cand_capacity) c.w.candidates_[n_cand] = a << 16 | b;
     ++n_cand;
+    if (reach) c.w.listed_[a * words + b / 64] |= uint64_t{1} << (b % 64);
   });
   // Pass 2: the same candidates, in output order.
   auto pair = [&](uint32_t a, uint32_t b) {
@@ -753,6 +808,14 @@ Status NarrowPhaseJob::Run() const {
     for (uint32_t i = 0; i < n_cand; ++i) pair(c.w.candidates_[i] >> 16, c.w.candidates_[i] & 0xFFFFu);
   } else {
     NarrowPhaseInternal::ForEachCandidate(c, *this, pair);
+  }
+  if (reach) {  // the candidates' bits, cleared for the next Run
+    auto clear = [&](uint32_t a, uint32_t b) { c.w.listed_[a * words + b / 64] = 0; };
+    if (n_cand <= cand_capacity) {
+      for (uint32_t i = 0; i < n_cand; ++i) clear(c.w.candidates_[i] >> 16, c.w.candidates_[i] & 0xFFFFu);
+    } else {
+      NarrowPhaseInternal::ForEachCandidate(c, *this, clear);
+    }
   }
   *count = std::min(st.contacts, capacity);
   if (stats) *stats = st;

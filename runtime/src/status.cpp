@@ -25,7 +25,7 @@ const char* ToString(Status s) {
     case Status::kErrorTooManyChains: return "kErrorTooManyChains: more than kMaxChains chains, or more than kMaxChainPairs candidate pairs in them";
     case Status::kErrorCountMismatch: return "kErrorCountMismatch: array lengths disagree (#S, #T, 4#S, 12#S)";
     case Status::kErrorIndexOutOfRange: return "kErrorIndexOutOfRange: a sphere, triangle or vertex index is out of range";
-    case Status::kErrorOffsets: return "kErrorOffsets: surrounding_offsets malformed";
+    case Status::kErrorOffsets: return "kErrorOffsets: surrounding_offsets or reach_offsets malformed";
     case Status::kErrorNonFinite: return "kErrorNonFinite: NaN or infinite value in the asset";
     case Status::kErrorRadius: return "kErrorRadius: a sphere radius is <= 0";
     case Status::kErrorPivotFrame: return "kErrorPivotFrame: PivotFrame.mean_distance is <= 0";

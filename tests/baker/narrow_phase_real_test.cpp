@@ -1,6 +1,10 @@
 // The runtime narrow phase on real characters equals the exact ground truth, contact for contact:
 // MakeHuman (morph key frames) against CGAL box intersection + exact do_intersect (ExactSelfIntersections),
-// CesiumMan and BCN_Epileptic (clip frames) also against brute force over every triangle pair.
+// CesiumMan and BCN_Epileptic (clip frames) also against brute force over every triangle pair. The reach
+// regions' model (NarrowPhaseRegions::kReach) equals it unrestricted; restricted to a list of sphere pairs
+// it finds exactly the contacts whose triangles stand behind a listed pair (computed here from
+// ReachTriangles), each once, under their owners — where the surrounding regions' model finds only those
+// whose two owners are listed.
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -25,8 +29,8 @@ struct Baked {
   baker::BakeResult bake;
   std::vector<uint64_t> storage;
   runtime::AssetView view;
-  runtime::NarrowPhaseModel narrow;
-  runtime::NarrowPhaseWorkspace narrow_ws;
+  runtime::NarrowPhaseModel narrow, reach;
+  runtime::NarrowPhaseWorkspace narrow_ws, reach_ws;
   std::vector<uint32_t> weld;
 };
 
@@ -40,6 +44,9 @@ bool BakeAndLoad(const std::string& path, Baked* b) {
   REQUIRE(runtime::LoadAsset(b->storage.data(), b->bake.asset.size(), &b->view) == runtime::Status::kOk);
   REQUIRE(b->narrow.Init(b->view) == runtime::Status::kOk);
   REQUIRE(b->narrow_ws.Init(b->narrow) == runtime::Status::kOk);
+  REQUIRE(b->reach.Init(b->view, runtime::NarrowPhaseRegions::kReach) == runtime::Status::kOk);
+  REQUIRE(b->reach.regions() == runtime::NarrowPhaseRegions::kReach);
+  REQUIRE(b->reach_ws.Init(b->reach) == runtime::Status::kOk);
   b->weld = baker::ComputeWeldIds(b->bake.mesh.positions);
   for (uint32_t v = 0; v < b->view.vertex_count; ++v) REQUIRE(b->narrow.weld_id(v) == b->weld[v]);
   return true;
@@ -47,12 +54,14 @@ bool BakeAndLoad(const std::string& path, Baked* b) {
 
 using PairSet = std::set<baker::TrianglePair>;
 
-PairSet NarrowContacts(Baked* b, const std::vector<float>& pos, runtime::NarrowPhaseStats* stats) {
+PairSet NarrowContacts(Baked* b, const std::vector<float>& pos, runtime::NarrowPhaseStats* stats, bool reach = false,
+                       const std::vector<runtime::Collision>* pairs = nullptr) {
   std::vector<runtime::TriangleContact> out(1u << 20);
   uint32_t n = 0;
   runtime::NarrowPhaseJob job;
-  job.model = &b->narrow;
-  job.workspace = &b->narrow_ws;
+  job.model = reach ? &b->reach : &b->narrow;
+  job.workspace = reach ? &b->reach_ws : &b->narrow_ws;
+  if (pairs) job.sphere_pairs = pairs->data(), job.sphere_pair_count = static_cast<uint32_t>(pairs->size());
   job.positions = {pos.data(), b->view.vertex_count, 12};
   job.output = out.data();
   job.capacity = static_cast<uint32_t>(out.size());
@@ -64,6 +73,8 @@ PairSet NarrowContacts(Baked* b, const std::vector<float>& pos, runtime::NarrowP
     const auto& c = out[i];
     CHECK(b->narrow.triangle_sphere(c.triangle_a) == c.sphere_a);
     CHECK(b->narrow.triangle_sphere(c.triangle_b) == c.sphere_b);
+    CHECK(c.sphere_a < c.sphere_b);
+    CHECK_FALSE(b->narrow.IsExcluded(c.sphere_a, c.sphere_b));
     s.insert({std::min(c.triangle_a, c.triangle_b), std::max(c.triangle_a, c.triangle_b)});
   }
   CHECK(s.size() == n);  // no contact reported twice
@@ -111,6 +122,42 @@ void CheckFrame(Baked* b, const std::vector<float>& pos, bool brute_force, const
     const PairSet brute = CountedContacts(*b, BruteForce(*b, pos));
     CHECK_MESSAGE(narrow == brute, what << ": narrow " << narrow.size() << " vs brute force " << brute.size());
   }
+  CHECK_MESSAGE(NarrowContacts(b, pos, nullptr, true) == truth, what << ": reach regions, unrestricted");
+
+  // Restricted: for each contact, one sphere pair — a sphere its first triangle stands behind other than
+  // its owner (when there is one), with the owner of the second — plus every third contact's owner pair.
+  std::vector<std::vector<uint32_t>> behind(b->view.triangle_count);
+  for (uint32_t s = 0; s < b->view.sphere_count; ++s) {
+    const runtime::TriangleSpan span = runtime::ReachTriangles(b->view, s);
+    for (uint32_t i = 0; i < span.count; ++i) behind[span.data[i]].push_back(s);
+  }
+  std::set<std::pair<uint32_t, uint32_t>> listed;
+  size_t k = 0;
+  for (const baker::TrianglePair& p : truth) {
+    const uint32_t oa = b->narrow.triangle_sphere(p.a), ob = b->narrow.triangle_sphere(p.b);
+    uint32_t x = oa;
+    for (uint32_t s : behind[p.a])
+      if (s != oa && s != ob) x = s;
+    if (x != ob && !b->narrow.IsExcluded(x, ob)) listed.insert({std::min(x, ob), std::max(x, ob)});
+    if (k++ % 3 == 0) listed.insert({std::min(oa, ob), std::max(oa, ob)});
+  }
+  std::vector<runtime::Collision> list;
+  for (const auto& [x, y] : listed) list.push_back({uint16_t(x), uint16_t(y), 0.0f, 0u});
+  PairSet expect_reach, expect_owners;
+  for (const baker::TrianglePair& p : truth) {
+    const uint32_t oa = b->narrow.triangle_sphere(p.a), ob = b->narrow.triangle_sphere(p.b);
+    if (listed.count({std::min(oa, ob), std::max(oa, ob)})) expect_owners.insert(p);
+    for (uint32_t x : behind[p.a])
+      for (uint32_t y : behind[p.b])
+        if (x != y && listed.count({std::min(x, y), std::max(x, y)})) expect_reach.insert(p);
+  }
+  const PairSet got_reach = NarrowContacts(b, pos, nullptr, true, &list);
+  const PairSet got_owners = NarrowContacts(b, pos, nullptr, false, &list);
+  CHECK_MESSAGE(got_reach == expect_reach, what << ": reach regions, restricted: " << got_reach.size() << " vs " << expect_reach.size());
+  CHECK_MESSAGE(got_owners == expect_owners, what << ": surrounding regions, restricted: " << got_owners.size() << " vs " << expect_owners.size());
+  if (!truth.empty()) MESSAGE(what << ": restricted to " << list.size() << " pairs: surrounding regions find " << got_owners.size()
+                                   << ", reach regions " << got_reach.size() << " of " << truth.size());
+
   *total += truth.size();
   const double all_pairs = 0.5 * double(b->view.triangle_count) * double(b->view.triangle_count - 1);
   MESSAGE(what << ": " << truth.size() << " contacts, " << stats.candidate_pairs << " candidate sphere pairs, "

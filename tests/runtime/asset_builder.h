@@ -96,6 +96,7 @@ struct AssetData {
   std::vector<float> sphere_joint_weights;  // [opt] #S×4: empty = field absent
   std::vector<uint8_t> sphere_regions;      // [opt] #S: empty = field absent
   std::vector<uint8_t> triangle_regions;    // [opt] #T: empty = field absent
+  std::vector<uint32_t> reach_offsets, reach_triangles;  // [opt] Asset.reach_*: each empty = field absent
   /// [opt] Asset.regions (schema v4): names and kinds (true: Trunk); empty = field absent.
   std::vector<std::pair<std::string, bool>> regions;
 };
@@ -227,6 +228,9 @@ inline AlignedBytes Serialize(const AssetData& d) {
   flatbuffers::Offset<flatbuffers::Vector<uint8_t>> sr, tr;
   if (!d.sphere_regions.empty()) sr = b.CreateVector(d.sphere_regions);
   if (!d.triangle_regions.empty()) tr = b.CreateVector(d.triangle_regions);
+  flatbuffers::Offset<flatbuffers::Vector<uint32_t>> ro, rt;
+  if (!d.reach_offsets.empty()) ro = b.CreateVector(d.reach_offsets);
+  if (!d.reach_triangles.empty()) rt = b.CreateVector(d.reach_triangles);
   flatbuffers::Offset<flatbuffers::Vector<flatbuffers::Offset<schema::RegionInfo>>> regions;
   if (!d.regions.empty()) {
     std::vector<flatbuffers::Offset<schema::RegionInfo>> list;
@@ -260,6 +264,8 @@ inline AlignedBytes Serialize(const AssetData& d) {
   if (!d.sphere_regions.empty()) ab.add_sphere_regions(sr);
   if (!d.triangle_regions.empty()) ab.add_triangle_regions(tr);
   if (!d.regions.empty()) ab.add_regions(regions);
+  if (!d.reach_offsets.empty()) ab.add_reach_offsets(ro);
+  if (!d.reach_triangles.empty()) ab.add_reach_triangles(rt);
   b.Finish(ab.Finish(), d.identifier.c_str());
   AlignedBytes out;
   out.assign(b.GetBufferPointer(), b.GetSize());

@@ -165,6 +165,37 @@ TEST_CASE("LoadAsset: semantic errors each give their status") {
   expect([](test::AssetData& d) { d.surrounding_offsets.pop_back(); }, Status::kErrorCountMismatch);
   expect([](test::AssetData& d) { std::swap(d.surrounding_offsets[2], d.surrounding_offsets[3]); }, Status::kErrorOffsets);
   expect([](test::AssetData& d) { d.surrounding_offsets.back() += 1; }, Status::kErrorOffsets);
+  // Reach regions (optional, both arrays or neither): the surrounding regions plus sphere 0 reaching the
+  // first triangle of sphere 1's region.
+  auto with_reach = [](test::AssetData& d) {
+    d.reach_offsets = {0};
+    for (size_t s = 0; s + 1 < d.surrounding_offsets.size(); ++s) {
+      std::vector<uint32_t> list(d.surrounding_triangles.begin() + d.surrounding_offsets[s],
+                                 d.surrounding_triangles.begin() + d.surrounding_offsets[s + 1]);
+      if (s == 0) list.push_back(d.surrounding_triangles[d.surrounding_offsets[1]]);
+      std::sort(list.begin(), list.end());
+      d.reach_triangles.insert(d.reach_triangles.end(), list.begin(), list.end());
+      d.reach_offsets.push_back(uint32_t(d.reach_triangles.size()));
+    }
+  };
+  {
+    test::AssetData d = base;
+    with_reach(d);
+    REQUIRE(Load(d, &view) == Status::kOk);
+    const TriangleSpan r0 = ReachTriangles(view, 0), s0 = SurroundingTriangles(view, 0);
+    CHECK(r0.count == s0.count + 1);
+    CHECK(ReachTriangles(view, 1).count == SurroundingTriangles(view, 1).count);
+    test::AssetData plain = base;
+    REQUIRE(Load(plain, &view) == Status::kOk);  // no reach regions: the surrounding regions stand in
+    CHECK(ReachTriangles(view, 0).count == SurroundingTriangles(view, 0).count);
+    CHECK(ReachTriangles(view, 0).data == SurroundingTriangles(view, 0).data);
+  }
+  expect([&](test::AssetData& d) { with_reach(d); d.reach_triangles.clear(); }, Status::kErrorMissingField);
+  expect([&](test::AssetData& d) { with_reach(d); d.reach_offsets.pop_back(); }, Status::kErrorCountMismatch);
+  expect([&](test::AssetData& d) { with_reach(d); d.reach_offsets.back() += 1; }, Status::kErrorOffsets);
+  expect([&](test::AssetData& d) { with_reach(d); std::swap(d.reach_triangles[0], d.reach_triangles[1]); },
+         Status::kErrorOffsets);  // not ascending within sphere 0
+  expect([&](test::AssetData& d) { with_reach(d); d.reach_triangles[0] = 1u << 30; }, Status::kErrorIndexOutOfRange);
   expect([](test::AssetData& d) { std::swap(d.chains[1][0], d.chains[1][1]); }, Status::kErrorChainOrder);
   expect([](test::AssetData& d) { d.chains[1][1] = d.chains[1][0]; }, Status::kErrorChainOrder);
   expect([](test::AssetData& d) { std::swap(d.excluded[0], d.excluded[1]); }, Status::kErrorExcludedPairs);

@@ -26,7 +26,7 @@ namespace spherechain::baker {
 ///   "min_gain": 0.0002, "region_balance": 0.5, "refine_sweeps": 4, "dilation_rel": 0.003,
 ///   "skin_spheres": 16, "skin_tolerance_rel": 0.01, "skin_min_vertices": 8, "medial_min_rel": 0.001,
 ///   "contact_margin_rel": 0.004,
-///   "near_rel": 0.005, "pivot_poses": 0, "pivot_pose_angle": 30,
+///   "near_rel": 0.005, "reach_rel": 0.003, "pivot_poses": 0, "pivot_pose_angle": 30,
 ///   "segmentation": "auto"|"rig"|"geometry"|"skeleton"|"map", "region_map": "map.json", "rig": "x.mhskel",
 ///   "regions": "extended"|"paper",
 ///   "rays": 80, "spheres_per_level": 2, "disk_step": 0.25, "disk_step_rel": 0.015,
@@ -55,6 +55,11 @@ struct BakeConfig {
   /// height of each other at bind pose are adjacent (chains.h BindExcludedPairs) — so nothing the
   /// margin reaches at bind pose is ever reported.
   double near_rel = 0.005;
+  /// Reach regions (regions.h AddReachRegions, Asset.reach_offsets / reach_triangles): a triangle is
+  /// behind every sphere of its region whose surface one of its corners lies within reach_rel × body
+  /// height of at bind pose, besides its owner's. [Limit: 0..0.05; 0: corners inside the sphere]
+  /// 0.003 (0.3 % of the height): README "Behind the proxy's pairs" measures 0.002–0.005.
+  double reach_rel = 0.003;
   /// Pivot choice refined against random poses of the rig (regions.h PivotTraining, training_poses.h):
   /// how many poses ("pivot_poses" [Limit: 0..256]; 0, the default, keeps the geometric choice alone;
   /// ignored without a skin; 24 is what README "Pivots trained on poses" measures) and how far each joint

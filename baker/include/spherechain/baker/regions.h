@@ -22,6 +22,13 @@ struct SurroundingRegions {
   std::vector<uint32_t> triangles;         ///< triangle indices grouped by sphere, ascending in a group
   /// Vertex indices of sphere s's surrounding region (unique, ascending), for accuracy and φ2.
   std::vector<uint32_t> Vertices(const Mesh& mesh, size_t sphere) const;
+  /// Reach regions (AddReachRegions; empty when not built): per sphere, its surrounding region and every
+  /// other triangle of its region with a corner within the reach of its surface at bind pose — the
+  /// triangles behind the sphere when the proxy reports it (Asset.reach_offsets / reach_triangles: a
+  /// narrow phase restricted to the proxy's pairs tests them). They overlap: a triangle near two spheres
+  /// is behind both; `triangle_spheres` still names its one owner.
+  std::vector<uint32_t> reach_offsets;    ///< #S+1 into `reach_triangles`
+  std::vector<uint32_t> reach_triangles;  ///< triangle indices grouped by sphere, ascending in a group
 };
 
 /// Which sphere of its region a triangle belongs to: the nearest centre (the paper, §5.1) or the
@@ -34,6 +41,16 @@ enum class Ownership : uint8_t { kNearestCentre, kNearestSurface };
 Result<SurroundingRegions> BuildSurroundingRegions(const Mesh& mesh, const Segmentation& seg,
                                                    const std::vector<FittedSphere>& spheres,
                                                    Ownership ownership = Ownership::kNearestCentre);
+
+/// Fills `regions->reach_offsets / reach_triangles`: sphere s's reach region is its surrounding region
+/// plus the triangles of the same segmentation region with a corner v where ‖v − c_s‖ − r_s <= `reach`
+/// [Units: source, >= 0] at bind pose (the bake's reach_rel × body height). On a coarse mesh a triangle
+/// several centimetres across touches the skin of two or three spheres; owned by the one nearest its
+/// centroid, its contact is behind that sphere only, while another of them is the one that overlaps
+/// (CesiumMan's arms against the flank). Spheres with no region (kNoRegion) keep their surrounding
+/// region. Cost: O(#T · spheres per region). Deterministic.
+void AddReachRegions(const Mesh& mesh, const Segmentation& seg, const std::vector<FittedSphere>& spheres, double reach,
+                     SurroundingRegions* regions);
 
 /// Four pivot polygons per sphere (§5.1, Figure 9 right) and their bind-pose frame data.
 struct Pivots {

@@ -104,6 +104,15 @@ struct TriangleSpan {
 /// debug and returns an empty span]. Cost: O(1), no allocation. Lifetime: the asset bytes.
 TriangleSpan SurroundingTriangles(const AssetView& view, uint32_t sphere);
 
+/// The triangles behind sphere `sphere` when the proxy reports it: its reach region (Asset.reach_offsets /
+/// reach_triangles: its surrounding region and the other triangles of its region within the bake's
+/// reach of its surface at bind pose — baker regions.h AddReachRegions), ascending. Reach regions
+/// overlap (a triangle near two spheres is behind both; Asset.triangle_spheres keeps its one owner). An
+/// asset baked before them: the surrounding region (SurroundingTriangles). [Limit: sphere <
+/// view.sphere_count; otherwise asserts in debug and returns an empty span]. Cost: O(1), no allocation.
+/// Lifetime: the asset bytes.
+TriangleSpan ReachTriangles(const AssetView& view, uint32_t sphere);
+
 /// Regions of the asset (what Asset.sphere_regions / triangle_regions values mean): len(Asset.regions) for
 /// a creature (schema v4), else 5 — the paper's R0 left_arm, R1 right_arm, R2 left_leg, R3 right_leg,
 /// R4 torso. 0 for an invalid view. Cost O(1).

@@ -21,6 +21,9 @@
 // A contact is two triangles that share no (welded) corner and intersect (closed triangles: touching
 // counts), owned by different spheres that are not an excluded pair (Asset.surrounding_*): exactly
 // what `spherechain evaluate` counts as ground truth, so the two agree triangle pair for triangle pair.
+// Restricted to the proxy's sphere pairs (NarrowPhaseJob::sphere_pairs), a model built on the reach regions
+// (NarrowPhaseRegions::kReach: a triangle stands behind every sphere that reaches it at bind, not only its
+// owner) finds the contacts whose triangles stand behind a reported pair — same definition, each once.
 #pragma once
 
 #include <cstdint>
@@ -40,10 +43,25 @@ enum class Exclusions : uint8_t {
   kNone = 1,   ///< test every pair of different spheres (shows skinning artefacts at joints)
 };
 
+/// Which triangles stand behind a sphere in a NarrowPhaseModel.
+enum class NarrowPhaseRegions : uint8_t {
+  /// Its surrounding region (Asset.surrounding_*: each triangle behind its one owner). Unrestricted, the
+  /// exact answer; restricted to the proxy's pairs, the contacts whose two owners were reported.
+  kSurrounding = 0,
+  /// Its reach region (ReachTriangles: also the triangles of its region within the bake's reach of it,
+  /// so a triangle may stand behind two or three spheres). For a job restricted to the proxy's pairs
+  /// (NarrowPhaseJob::sphere_pairs): a contact is found when its triangles stand behind a reported pair,
+  /// whichever spheres own them — on a coarse mesh the sphere that overlaps is often a neighbour of the
+  /// owner (README "Behind the proxy's pairs"). Contacts are still defined by the owners (different, not
+  /// an excluded pair) and each is reported once, under the candidate pair of lowest (a, b) that covers
+  /// it. Unrestricted it gives the same contacts as kSurrounding, at more cost.
+  kReach = 1,
+};
+
 /// One contact: two intersecting triangles of different surrounding regions. POD, 12 bytes.
 struct TriangleContact {
-  uint32_t triangle_a;  ///< source triangle index (< #T), in sphere_a's surrounding region
-  uint32_t triangle_b;  ///< source triangle index (< #T), in sphere_b's surrounding region
+  uint32_t triangle_a;  ///< source triangle index (< #T), in sphere_a's surrounding region (owned by it)
+  uint32_t triangle_b;  ///< source triangle index (< #T), in sphere_b's surrounding region (owned by it)
   uint16_t sphere_a;    ///< sphere_a < sphere_b
   uint16_t sphere_b;
 };
@@ -82,13 +100,18 @@ class NarrowPhaseModel {
   NarrowPhaseModel(NarrowPhaseModel&&) noexcept = default;
   NarrowPhaseModel& operator=(NarrowPhaseModel&&) noexcept = default;
 
-  /// Builds the per-asset data of `view`. The only allocating call (catches std::bad_alloc).
+  /// Builds the per-asset data of `view`, the triangles behind each sphere per `regions` (kReach on an
+  /// asset without reach regions: the surrounding regions, and the model behaves as kSurrounding's). The
+  /// only allocating call (catches std::bad_alloc).
   /// Returns kOk; kErrorNullArgument when `!view.valid()`; kErrorMissingField when the asset has no
-  /// `triangles` or `weld_ids` (baked before the narrow phase existed: re-bake); kErrorOutOfMemory. The
-  /// model is empty (not initialised) after a failure. Cost: O(#T + #V + #S log) time; memory ~40 B per
-  /// triangle + 4 B per vertex + 4 B per (sphere, region vertex) + ~20 B per sphere.
+  /// `triangles` or `weld_ids` (baked before the narrow phase existed: re-bake); kErrorOutOfMemory;
+  /// kErrorInvalidJob for an unknown `regions`. The model is empty (not initialised) after a failure.
+  /// Cost: O(#T + #V + #S log) time; memory ~40 B per region triangle + 4 B per vertex + 4 B per
+  /// (sphere, region vertex) + ~20 B per sphere; kReach also 2 B per (triangle, sphere it stands behind).
   /// Not thread-safe on one object (nothing may use the model meanwhile).
-  Status Init(const AssetView& view);
+  Status Init(const AssetView& view, NarrowPhaseRegions regions = NarrowPhaseRegions::kSurrounding);
+  /// kReach when built from reach regions, else kSurrounding.
+  NarrowPhaseRegions regions() const { return reach_ ? NarrowPhaseRegions::kReach : NarrowPhaseRegions::kSurrounding; }
 
   /// True after a successful Init (false when moved from).
   bool initialized() const { return sphere_count_ != 0 && !vert_offsets_.empty(); }
@@ -115,7 +138,10 @@ class NarrowPhaseModel {
 
  private:
   uint64_t id_ = 0;
+  bool reach_ = false;  // regions from Asset.reach_*: overlapping, owners from the surrounding regions
   uint32_t sphere_count_ = 0, vertex_count_ = 0, triangle_count_ = 0;
+  std::vector<uint32_t> behind_offsets_;  // reach_ only: CSR #T+1, the spheres each triangle stands behind
+  std::vector<uint16_t> behind_;
   uint32_t index_degenerate_ = 0, unassigned_ = 0;
   uint32_t largest_region_ = 0, largest_region_vertices_ = 0;  // triangles / distinct vertices (scratch sizes)
   std::vector<uint32_t> weld_;                 // #V
@@ -202,6 +228,8 @@ class NarrowPhaseWorkspace {
   std::vector<uint64_t> records_;              // sweep steps with a hit: element << 32 | side << 31 | box << 4 | lanes
   std::vector<uint64_t> hits_;                 // records → exact tests: position in a's list << 32 | in b's
   std::vector<uint32_t> candidates_;           // candidate pairs a << 16 | b, up to min(#S(#S−1)/2, 16·#S + 64)
+  std::vector<uint64_t> listed_;               // reach models: #S rows of ⌈#S/64⌉ words, bit (a, b) set for
+                                               // this Run's candidates (a < b); cleared before it returns
   Culled list_a_, list_b_;
 };
 

@@ -55,8 +55,9 @@ enum class [[nodiscard]] Status : uint32_t {
   kErrorCountMismatch = 0x8000'0205u,    ///< An array's length disagrees with #S, #T or 4·#S / 12·#S.
   kErrorIndexOutOfRange = 0x8000'0206u,  ///< A sphere index >= #S, triangle index >= #T or vertex
                                          ///< index >= #V.
-  kErrorOffsets = 0x8000'0207u,          ///< surrounding_offsets not starting at 0, not monotone, or
-                                         ///< not ending at len(surrounding_triangles).
+  kErrorOffsets = 0x8000'0207u,          ///< surrounding_offsets (or reach_offsets) not starting at 0,
+                                         ///< not monotone, or not ending at len(surrounding_triangles)
+                                         ///< (reach_triangles); a sphere's reach triangles not ascending.
   kErrorNonFinite = 0x8000'0208u,        ///< A NaN or infinite float (centre, radius, pivot frame,
                                          ///< contact_margin).
   kErrorRadius = 0x8000'0209u,           ///< A sphere radius <= 0.

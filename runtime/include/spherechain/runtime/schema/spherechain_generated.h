@@ -765,7 +765,9 @@ struct Asset FLATBUFFERS_FINAL_CLASS : private flatbuffers::Table {
     VT_JOINED_VERTEX_COUNT = 70,
     VT_FORCED_FINDINGS = 72,
     VT_REGIONS = 74,
-    VT_BIPED = 76
+    VT_BIPED = 76,
+    VT_REACH_OFFSETS = 78,
+    VT_REACH_TRIANGLES = 80
   };
   uint32_t schema_version() const {
     return GetField<uint32_t>(VT_SCHEMA_VERSION, 0);
@@ -886,6 +888,12 @@ struct Asset FLATBUFFERS_FINAL_CLASS : private flatbuffers::Table {
   bool biped() const {
     return GetField<uint8_t>(VT_BIPED, 0) != 0;
   }
+  const flatbuffers::Vector<uint32_t> *reach_offsets() const {
+    return GetPointer<const flatbuffers::Vector<uint32_t> *>(VT_REACH_OFFSETS);
+  }
+  const flatbuffers::Vector<uint32_t> *reach_triangles() const {
+    return GetPointer<const flatbuffers::Vector<uint32_t> *>(VT_REACH_TRIANGLES);
+  }
   bool Verify(flatbuffers::Verifier &verifier) const {
     return VerifyTableStart(verifier) &&
            VerifyField<uint32_t>(verifier, VT_SCHEMA_VERSION, 4) &&
@@ -958,6 +966,10 @@ struct Asset FLATBUFFERS_FINAL_CLASS : private flatbuffers::Table {
            verifier.VerifyVector(regions()) &&
            verifier.VerifyVectorOfTables(regions()) &&
            VerifyField<uint8_t>(verifier, VT_BIPED, 1) &&
+           VerifyOffset(verifier, VT_REACH_OFFSETS) &&
+           verifier.VerifyVector(reach_offsets()) &&
+           VerifyOffset(verifier, VT_REACH_TRIANGLES) &&
+           verifier.VerifyVector(reach_triangles()) &&
            verifier.EndTable();
   }
 };
@@ -1077,6 +1089,12 @@ struct AssetBuilder {
   void add_biped(bool biped) {
     fbb_.AddElement<uint8_t>(Asset::VT_BIPED, static_cast<uint8_t>(biped), 0);
   }
+  void add_reach_offsets(flatbuffers::Offset<flatbuffers::Vector<uint32_t>> reach_offsets) {
+    fbb_.AddOffset(Asset::VT_REACH_OFFSETS, reach_offsets);
+  }
+  void add_reach_triangles(flatbuffers::Offset<flatbuffers::Vector<uint32_t>> reach_triangles) {
+    fbb_.AddOffset(Asset::VT_REACH_TRIANGLES, reach_triangles);
+  }
   explicit AssetBuilder(flatbuffers::FlatBufferBuilder &_fbb)
         : fbb_(_fbb) {
     start_ = fbb_.StartTable();
@@ -1126,8 +1144,12 @@ inline flatbuffers::Offset<Asset> CreateAsset(
     uint32_t joined_vertex_count = 0,
     flatbuffers::Offset<flatbuffers::Vector<flatbuffers::Offset<spherechain::schema::BakeFinding>>> forced_findings = 0,
     flatbuffers::Offset<flatbuffers::Vector<flatbuffers::Offset<spherechain::schema::RegionInfo>>> regions = 0,
-    bool biped = false) {
+    bool biped = false,
+    flatbuffers::Offset<flatbuffers::Vector<uint32_t>> reach_offsets = 0,
+    flatbuffers::Offset<flatbuffers::Vector<uint32_t>> reach_triangles = 0) {
   AssetBuilder builder_(_fbb);
+  builder_.add_reach_triangles(reach_triangles);
+  builder_.add_reach_offsets(reach_offsets);
   builder_.add_regions(regions);
   builder_.add_forced_findings(forced_findings);
   builder_.add_joined_vertex_count(joined_vertex_count);
@@ -1206,7 +1228,9 @@ inline flatbuffers::Offset<Asset> CreateAssetDirect(
     uint32_t joined_vertex_count = 0,
     const std::vector<flatbuffers::Offset<spherechain::schema::BakeFinding>> *forced_findings = nullptr,
     const std::vector<flatbuffers::Offset<spherechain::schema::RegionInfo>> *regions = nullptr,
-    bool biped = false) {
+    bool biped = false,
+    const std::vector<uint32_t> *reach_offsets = nullptr,
+    const std::vector<uint32_t> *reach_triangles = nullptr) {
   auto generator__ = generator ? _fbb.CreateString(generator) : 0;
   auto parts__ = parts ? _fbb.CreateVector<flatbuffers::Offset<spherechain::schema::MeshPart>>(*parts) : 0;
   auto units__ = units ? _fbb.CreateString(units) : 0;
@@ -1232,6 +1256,8 @@ inline flatbuffers::Offset<Asset> CreateAssetDirect(
   auto vertex_contract__ = vertex_contract ? _fbb.CreateString(vertex_contract) : 0;
   auto forced_findings__ = forced_findings ? _fbb.CreateVector<flatbuffers::Offset<spherechain::schema::BakeFinding>>(*forced_findings) : 0;
   auto regions__ = regions ? _fbb.CreateVector<flatbuffers::Offset<spherechain::schema::RegionInfo>>(*regions) : 0;
+  auto reach_offsets__ = reach_offsets ? _fbb.CreateVector<uint32_t>(*reach_offsets) : 0;
+  auto reach_triangles__ = reach_triangles ? _fbb.CreateVector<uint32_t>(*reach_triangles) : 0;
   return spherechain::schema::CreateAsset(
       _fbb,
       schema_version,
@@ -1270,7 +1296,9 @@ inline flatbuffers::Offset<Asset> CreateAssetDirect(
       joined_vertex_count,
       forced_findings__,
       regions__,
-      biped);
+      biped,
+      reach_offsets__,
+      reach_triangles__);
 }
 
 /// One region of a body (Asset.regions, schema v4).
