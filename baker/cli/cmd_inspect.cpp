@@ -73,6 +73,10 @@ nlohmann::json Describe(const runtime::AssetView& v) {
   // Schema v3: the refit from joint matrices (0 joints: not available — older schema or no skin).
   j["joint_refit"] = {{"available", a.sphere_joints() != nullptr}, {"joints", a.sphere_joints() ? a.joint_count() : 0}};
   j["unassigned_triangles"] = v.triangle_count - (a.surrounding_triangles() ? a.surrounding_triangles()->size() : 0);
+  // Reach regions (absent before them): how many spheres a triangle stands behind, on average.
+  j["reach_spheres_per_triangle"] =
+      a.reach_triangles() && v.triangle_count ? nlohmann::json(double(a.reach_triangles()->size()) / v.triangle_count)
+                                              : nlohmann::json(nullptr);
   if (const auto* p = a.params())
     j["params"] = {{"rays", p->rays()}, {"spheres_per_level", p->spheres_per_level()}, {"disk_step", p->disk_step()},
                    {"penetration_depth", p->penetration_depth()}, {"pivots_per_sphere", p->pivots_per_sphere()},
@@ -135,6 +139,9 @@ int RunInspect(const InspectArgs& args) {
   for (const auto& c : j["chains"]) std::printf(" %s=%zu", c["name"].get<std::string>().c_str(), c["spheres"].get<size_t>());
   std::printf(" (mean %.1f)\nexcluded pairs: %zu, unassigned triangles: %zu\n", j["mean_spheres_per_chain"].get<double>(),
               j["excluded_pairs"].get<size_t>(), j["unassigned_triangles"].get<size_t>());
+  if (!j["reach_spheres_per_triangle"].is_null())
+    std::printf("reach regions: a triangle stands behind %.2f spheres on average (the narrow phase behind the proxy's pairs)\n",
+                j["reach_spheres_per_triangle"].get<double>());
   if (j.contains("accuracy"))
     for (const char* m : {"phi1", "phi1_adjusted", "phi2"})
       if (!j["accuracy"][m].is_null())

@@ -30,6 +30,13 @@ message(STATUS "inspect: ${vertices} vertices, ${triangles} triangles, ${unassig
 if(NOT unassigned EQUAL 0)
   message(FATAL_ERROR "unassigned triangles: ${unassigned}")
 endif()
+# Reach regions: every triangle stands behind its owner, and some behind a neighbour too (the default
+# reach_rel is 0.3 % of the height), so the mean is above 1 and well under the spheres of a region.
+string(JSON reach GET "${out}" reach_spheres_per_triangle)
+message(STATUS "inspect: a triangle stands behind ${reach} spheres")
+if(NOT reach GREATER 1.0 OR reach GREATER 4.0)
+  message(FATAL_ERROR "reach_spheres_per_triangle ${reach}: expected in (1, 4]")
+endif()
 # The default bake is the cover fit; inspect shows its bind coverage and contact margin (schema v2).
 string(JSON fit GET "${out}" fit)
 string(JSON coverage GET "${out}" coverage coverage)
