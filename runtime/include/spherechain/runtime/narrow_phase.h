@@ -236,7 +236,9 @@ class NarrowPhaseWorkspace {
 /// ozz-style job: exact triangle contacts between the surrounding regions of different spheres
 /// (see the file comment for the three stages and the definition of a contact).
 /// Output order (deterministic, a pure function of the asset and the positions): by sphere pair (a, b)
-/// ascending (or in `sphere_pairs` order), then in the order the sweep meets the triangle pairs.
+/// ascending (or in `sphere_pairs` order), then in the order the sweep meets the triangle pairs. With a
+/// kReach model the order is that of the candidate pair that reported the contact, while its record names
+/// the owners (sphere_a < sphere_b, each with its own triangle), which need not be that pair.
 /// Cost: O(#V) for the region boxes, #S(#S−1)/2 box tests for the candidates (twice, four at a time),
 /// then once per sphere with a candidate its region's vertices (an outcode each) and triangles (culled
 /// by their corners' outcodes, boxes computed for those kept and for each run of 8), then per candidate
