@@ -25,6 +25,14 @@ Eigen::Vector3d Centroid(const Mesh& mesh, uint32_t t) {
          3.0;
 }
 
+// The spheres of each region, ascending (spheres of no region in none).
+std::array<std::vector<uint32_t>, kMaxRegions> SpheresByRegion(const std::vector<FittedSphere>& spheres) {
+  std::array<std::vector<uint32_t>, kMaxRegions> by_region;
+  for (size_t s = 0; s < spheres.size(); ++s)
+    if (static_cast<int>(spheres[s].region) < kMaxRegions) by_region[static_cast<int>(spheres[s].region)].push_back(uint32_t(s));
+  return by_region;
+}
+
 double Area(const Mesh& mesh, uint32_t t) {
   const Eigen::Vector3d a = Vertex(mesh, mesh.indices[3 * t]);
   return 0.5 * (Vertex(mesh, mesh.indices[3 * t + 1]) - a).cross(Vertex(mesh, mesh.indices[3 * t + 2]) - a).norm();
@@ -252,9 +260,7 @@ Result<SurroundingRegions> BuildSurroundingRegions(const Mesh& mesh, const Segme
                                                    const std::vector<FittedSphere>& spheres, Ownership ownership) {
   if (spheres.empty()) return MakeError(Error::Code::kFit, "no sphere to assign triangles to");
   const uint32_t T = mesh.triangle_count();
-  std::array<std::vector<uint32_t>, kMaxRegions> by_region;
-  for (size_t s = 0; s < spheres.size(); ++s)
-    if (static_cast<int>(spheres[s].region) < kMaxRegions) by_region[static_cast<int>(spheres[s].region)].push_back(uint32_t(s));
+  const std::array<std::vector<uint32_t>, kMaxRegions> by_region = SpheresByRegion(spheres);
   std::vector<uint32_t> all(spheres.size());
   std::iota(all.begin(), all.end(), 0u);
 
@@ -286,9 +292,7 @@ void AddReachRegions(const Mesh& mesh, const Segmentation& seg, const std::vecto
                      SurroundingRegions* regions) {
   const uint32_t T = mesh.triangle_count();
   const size_t S = spheres.size();
-  std::array<std::vector<uint32_t>, kMaxRegions> by_region;
-  for (size_t s = 0; s < S; ++s)
-    if (static_cast<int>(spheres[s].region) < kMaxRegions) by_region[static_cast<int>(spheres[s].region)].push_back(uint32_t(s));
+  const std::array<std::vector<uint32_t>, kMaxRegions> by_region = SpheresByRegion(spheres);
   std::vector<std::vector<uint32_t>> lists(S);
   for (size_t s = 0; s < S; ++s)
     for (uint32_t k = regions->offsets[s]; k < regions->offsets[s + 1]; ++k) lists[s].push_back(regions->triangles[k]);
@@ -296,17 +300,15 @@ void AddReachRegions(const Mesh& mesh, const Segmentation& seg, const std::vecto
     const uint8_t r = t < seg.triangle_regions.size() ? seg.triangle_regions[t] : kNoRegion;
     if (r >= kMaxRegions) continue;
     const uint16_t own = regions->triangle_spheres[t];
+    const Eigen::Vector3d corner[3] = {Vertex(mesh, mesh.indices[3 * t]), Vertex(mesh, mesh.indices[3 * t + 1]),
+                                       Vertex(mesh, mesh.indices[3 * t + 2])};
     for (uint32_t s : by_region[r]) {
       if (s == own) continue;
-      const FittedSphere& S_ = spheres[s];
-      for (int k = 0; k < 3; ++k) {
-        const uint32_t v = mesh.indices[3 * size_t{t} + size_t(k)];
-        const Eigen::Vector3d p(mesh.positions[3 * size_t{v}], mesh.positions[3 * size_t{v} + 1], mesh.positions[3 * size_t{v} + 2]);
-        if ((p - S_.center).norm() - S_.radius <= reach) {
+      for (const Eigen::Vector3d& p : corner)
+        if ((p - spheres[s].center).norm() - spheres[s].radius <= reach) {
           lists[s].push_back(t);
           break;
         }
-      }
     }
   }
   regions->reach_offsets.assign(1, 0);

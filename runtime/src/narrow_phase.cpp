@@ -135,6 +135,11 @@ struct NarrowPhaseInternal {
     NarrowPhaseWorkspace& w;
   };
 
+  /// The word of NarrowPhaseWorkspace::listed_ holding candidate (a, b)'s bit, a < b (reach models).
+  static uint64_t& ListedWord(const Frame& c, uint32_t a, uint32_t b) {
+    return c.w.listed_[a * ((size_t{c.m.sphere_count_} + 63) / 64) + b / 64];
+  }
+
   /// Region boxes of every sphere; false when a position of a region is not finite.
   static bool RegionBoxes(Frame& c, const char* base, size_t stride) {
     const uint32_t last = c.m.vertex_count_ - 1;
@@ -458,13 +463,12 @@ struct NarrowPhaseInternal {
       if (oa == ob) return;
       if (job.exclusions == Exclusions::kAsset && c.m.IsExcluded(oa, ob)) return;
       const uint32_t key = a << 16 | b;
-      const size_t words = (size_t{c.m.sphere_count_} + 63) / 64;
       for (uint32_t i = c.m.behind_offsets_[ta]; i < c.m.behind_offsets_[ta + 1]; ++i)
         for (uint32_t j = c.m.behind_offsets_[tb]; j < c.m.behind_offsets_[tb + 1]; ++j) {
           const uint32_t x = c.m.behind_[i], y = c.m.behind_[j];
           if (x == y) continue;
           const uint32_t lo = std::min(x, y), hi = std::max(x, y);
-          if ((lo << 16 | hi) < key && (c.w.listed_[lo * words + hi / 64] >> (hi % 64) & 1)) return;
+          if ((lo << 16 | hi) < key && (ListedWord(c, lo, hi) >> (hi % 64) & 1)) return;
         }
       if (oa < ob) {
         sa = oa, sb = ob;
@@ -791,13 +795,12 @@ Status NarrowPhaseJob::Run() const {
   uint32_t n_cand = 0;
   const uint32_t cand_capacity = static_cast<uint32_t>(c.w.candidates_.size());
   const bool reach = c.m.reach_;
-  const size_t words = (size_t{c.m.sphere_count_} + 63) / 64;
   NarrowPhaseInternal::ForEachCandidate(c, *this, [&](uint32_t a, uint32_t b) {
     NarrowPhaseInternal::GrowClip(c, a, &c.w.box_[8 * size_t{b}]);
     NarrowPhaseInternal::GrowClip(c, b, &c.w.box_[8 * size_t{a}]);
     if (n_cand < cand_capacity) c.w.candidates_[n_cand] = a << 16 | b;
     ++n_cand;
-    if (reach) c.w.listed_[a * words + b / 64] |= uint64_t{1} << (b % 64);
+    if (reach) NarrowPhaseInternal::ListedWord(c, a, b) |= uint64_t{1} << (b % 64);
   });
   // Pass 2: the same candidates, in output order.
   auto pair = [&](uint32_t a, uint32_t b) {
@@ -810,7 +813,7 @@ Status NarrowPhaseJob::Run() const {
     NarrowPhaseInternal::ForEachCandidate(c, *this, pair);
   }
   if (reach) {  // the candidates' bits, cleared for the next Run
-    auto clear = [&](uint32_t a, uint32_t b) { c.w.listed_[a * words + b / 64] = 0; };
+    auto clear = [&](uint32_t a, uint32_t b) { NarrowPhaseInternal::ListedWord(c, a, b) = 0; };
     if (n_cand <= cand_capacity) {
       for (uint32_t i = 0; i < n_cand; ++i) clear(c.w.candidates_[i] >> 16, c.w.candidates_[i] & 0xFFFFu);
     } else {
