@@ -615,7 +615,8 @@ json MakeBakeReport(const BakeResult& r, const BakeConfig& config, const Context
   else
     j["exclusions"] = {{"rule", "bind geometry: limb sequence neighbours, limb or torso spheres side by side, bind overlap, "
                                 "within near_rel + 2 contact_margin_rel of the height, limb-torso pairs within 1.25 (rA + rB) + that, "
-                                "two limbs' root spheres off one region within 1.25 (rA + rB) + that (the crotch)"},
+                                "two limbs' root spheres off one region within 1.25 (rA + rB) + that (the crotch), "
+                                "trunk spheres within 1.25 (rA + rB) + that when the head is a region of its own (the belly's fold)"},
                        {"limb_neighbour", r.exclusion_reasons.limb_neighbour},
                        {"limb_side_by_side", r.exclusion_reasons.limb_side_by_side},
                        {"torso_side_by_side", r.exclusion_reasons.torso_side_by_side},
@@ -623,6 +624,7 @@ json MakeBakeReport(const BakeResult& r, const BakeConfig& config, const Context
                        {"bind_near", r.exclusion_reasons.bind_near},
                        {"junction", r.exclusion_reasons.junction},
                        {"sibling_crease", r.exclusion_reasons.sibling_crease},
+                       {"trunk_fold", r.exclusion_reasons.trunk_fold},
                        {"bind_contact", r.bind_contact_exclusions},
                        {"limb_crease", r.limb_crease_exclusions}};
   if (!r.cross_region_bind_overlaps.empty()) {

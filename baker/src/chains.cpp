@@ -200,6 +200,8 @@ std::vector<SpherePair> BindExcludedPairs(const std::vector<FittedSphere>& spher
   auto siblings = [&](Region a, Region b) {
     return a != b && a != torso && b != torso && parent_of(a) == parent_of(b);
   };
+  // The head a region of its own (the extended layout): the trunk's levels meet only where it folds.
+  const bool head_apart = layout && layout->paper && !layout->IsPaperFive() && layout->Find("head") >= 0;
   const size_t n = spheres.size();
   for (size_t a = 0; a < n; ++a) {
     for (size_t b = a + 1; b < n; ++b) {
@@ -228,6 +230,10 @@ std::vector<SpherePair> BindExcludedPairs(const std::vector<FittedSphere>& spher
         // closing the limbs presses the skin between them, as at a junction. Only spheres within rA + rB
         // of their limb's root: further down, two legs standing close are two limbs, not a crease.
         ++why.sibling_crease;
+      } else if (same_region && A.region == torso && head_apart && d < 1.25 * rr + near) {
+        // Two levels of a trunk that does not carry the head: the belly or the small of the back, which a
+        // bending spine folds skin on skin (the crease rule of a junction, within the trunk).
+        ++why.trunk_fold;
       } else {
         continue;
       }

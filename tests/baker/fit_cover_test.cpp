@@ -442,6 +442,48 @@ TEST_CASE("exclusions from bind geometry: torso spheres side by side on one leve
   CHECK(why_limbs.torso_side_by_side == 0);
 }
 
+TEST_CASE("exclusions from bind geometry: the trunk's fold, only where the head is a region of its own") {
+  // Up is y. Two trunk spheres of radius 0.5 on two levels (1.0 apart in height, more than the larger
+  // radius: not side by side), 1.2 apart: beyond rA + rB + near = 1.05, within 1.25 (rA + rB) + near = 1.3.
+  // A third 2.4 above the first (1.55 from the second): beyond 1.3, tested in either layout.
+  std::vector<sb::FittedSphere> sp(3);
+  for (int i = 0; i < 3; ++i) sp[i].radius = 0.5;
+  sp[0].center = Vector3d(0, 0, 0);
+  sp[1].center = Vector3d(0, 1.0, std::sqrt(1.2 * 1.2 - 1.0));
+  sp[2].center = Vector3d(0, 2.4, 0.0);
+  auto has = [](const std::vector<sb::SpherePair>& e, uint16_t a, uint16_t b) {
+    return std::find(e.begin(), e.end(), sb::SpherePair{a, b}) != e.end();
+  };
+  // The paper's five: the torso carries the head (a chin meets the chest through such a pair): tested.
+  for (auto& s : sp) s.region = sb::Region::kTorso;
+  sb::ExclusionReasons why_paper;
+  const auto ex_paper = sb::BindExcludedPairs(sp, 0.05, &why_paper, nullptr, sb::UpAxis::kY);
+  CHECK_FALSE(has(ex_paper, 0, 1));
+  CHECK(why_paper.trunk_fold == 0);
+  // The extended layout (head, hands, feet of their own; trunk R9): the fold of the belly, excluded.
+  sb::RegionLayout ext;
+  const char* names[10] = {"left_arm", "right_arm", "left_leg", "right_leg", "head",
+                           "left_hand", "right_hand", "left_foot", "right_foot", "torso"};
+  ext.regions.assign(10, sb::RegionInfo{});
+  for (int k = 0; k < 10; ++k) ext.regions[size_t(k)].name = names[k];
+  ext.regions[9].kind = sb::RegionKind::kTrunk;
+  for (auto& s : sp) s.region = ext.trunk();
+  sb::ExclusionReasons why_ext;
+  const auto ex_ext = sb::BindExcludedPairs(sp, 0.05, &why_ext, nullptr, sb::UpAxis::kY, &ext);
+  CHECK(has(ex_ext, 0, 1));
+  CHECK(why_ext.trunk_fold == 1);
+  CHECK_FALSE(has(ex_ext, 0, 2));  // 2.4 apart
+  CHECK_FALSE(has(ex_ext, 1, 2));  // 1.55 apart
+  // A limb's spheres as close are no trunk fold (the limb rules decide; here: tested).
+  for (auto& s : sp) s.region = sb::Region::kLeftArm;
+  sp[0].root_distance = 0.0, sp[1].root_distance = 2.0, sp[2].root_distance = 4.0;
+  sp[0].sequence = 0, sp[1].sequence = 5, sp[2].sequence = 10;
+  sb::ExclusionReasons why_limb;
+  const auto ex_limb = sb::BindExcludedPairs(sp, 0.05, &why_limb, nullptr, sb::UpAxis::kY, &ext);
+  CHECK_FALSE(has(ex_limb, 0, 1));
+  CHECK(why_limb.trunk_fold == 0);
+}
+
 TEST_CASE("heavy: bake MakeHuman with the cover fit — coverage, protrusion, schema v2 asset and its contact margin") {
   const std::string path = spherechain::test::SharedData("makehuman/base.obj");
   if (!spherechain::test::Require(path)) return;

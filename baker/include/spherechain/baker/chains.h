@@ -80,6 +80,13 @@ struct ExclusionReasons {
                               ///< extended layout a hand's arm, a foot's leg: RegionInfo::parent) with
                               ///< ‖cA − cB‖ < 1.25 (rA + rB) + near: the crease of the hip, armpit, wrist or
                               ///< ankle, where flexing folds skin on skin
+  size_t trunk_fold = 0;      ///< two trunk spheres with ‖cA − cB‖ < 1.25 (rA + rB) + near when the head is a
+                              ///< region of its own (the extended layout): the belly or the small of the
+                              ///< back, which a bending spine folds skin on skin (MakeHuman's hip-level and
+                              ///< belly spheres, 1.4–2.6 % of the height apart at bind, overlap by up to
+                              ///< 1.2 % bent over the thighs with no skin meeting; BCN_Epileptic's belly
+                              ///< likewise). With the head in the torso (the paper's five) the chin meets
+                              ///< the chest through such pairs, so there they stay tested
   size_t sibling_crease = 0;  ///< spheres of two limbs hanging off the same region (both legs off the torso),
                               ///< each within rA + rB of its limb's root (FittedSphere::root_distance), with
                               ///< ‖cA − cB‖ < 1.25 (rA + rB) + near: the crotch, where closing the legs
@@ -92,7 +99,7 @@ struct ExclusionReasons {
 /// (FittedSphere::root_distance within rA + rB), torso spheres side by side on one level (heights along
 /// `up` within the larger radius: on CesiumMan's walk the hip-level torso spheres, 1.5–1.8 % of the
 /// height apart at bind, met in 5 of 40 frames with no skin within 1 %), the junction and sibling creases
-/// (ExclusionReasons), and every pair whose spheres overlap or come within `near`
+/// (ExclusionReasons), the trunk's folds where the head is a region of its own, and every pair whose spheres overlap or come within `near`
 /// (source units, ≥ 0) of each other at the bind pose — at those places the skin folds onto itself
 /// when the joint bends, without anything meeting. No fixed ±k window: spheres of one region that are
 /// apart at bind pose are tested (a bending spine, an elbow folding the forearm onto the upper arm).
