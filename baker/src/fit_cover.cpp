@@ -558,7 +558,13 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
     const uint32_t V = mesh.vertex_count();
     std::vector<uint8_t> vreg(V, kOutside);
     for (uint32_t t = 0; t < T; ++t)
-      for (int k = 0; k < 3; ++k) vreg[mesh.indices[3 * t + k]] = seg.triangle_regions[t];
+      for (int k = 0; k < 3; ++k) {
+        // A vertex on a border between the trunk and a limb (or the head) is the limb's skin: the pass
+        // leaves the trunk's own skin to the volume cover, not the rim of the parts cut from it
+        // (BCN_Epileptic's chin, on the head's border with the neck, lay 2.9 % of the height outside).
+        uint8_t& r = vreg[mesh.indices[3 * t + k]];
+        if (r >= nreg || r == uint8_t(layout.trunk())) r = seg.triangle_regions[t];
+      }
     // The head of the extended layout gets at most a quarter of the pass: a round part the volume cover
     // fills, whose face the pass would otherwise chase vertex by vertex (uncapped, CesiumMan's head ended with
     // 34 of its 128 spheres and each hand with 2–3); the face still gets some, for a hand laid on it.
@@ -566,13 +572,17 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
     const int head_cap = std::max(1, params.skin_spheres / 4);
     int head_added = 0;
     std::vector<uint32_t> uncovered;
+    std::vector<double> outside;
     for (uint32_t v = 0; v < V; ++v) {
       if (vreg[v] >= nreg || vreg[v] == uint8_t(layout.trunk())) continue;
       const Vector3d p = fit_detail::Vertex(mesh, v);
       double best = std::numeric_limits<double>::infinity();
       for (const CoverBall& b : chosen)
         if (b.region == vreg[v]) best = std::min(best, (p - b.centre).norm() - b.radius - dilation);
-      if (best > tol) uncovered.push_back(v);
+      if (best > tol) {
+        uncovered.push_back(v);
+        outside.push_back(best);
+      }
     }
     // Which candidate balls bring which uncovered vertices within tolerance. Candidate keys: an interior
     // voxel's index (< total), or total + m for the medial ball m.
@@ -663,20 +673,37 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
       }
     }
     std::vector<uint8_t> done(uncovered.size(), 0);
-    using Entry = std::pair<size_t, uint32_t>;  // vertices brought in, candidate key (ties: the larger key)
+    // A candidate's gain: the uncovered vertices it brings within tolerance, each counting 1 — the head's
+    // by how far outside it lies (in tolerances): its share of the pass is capped, so it goes where its
+    // skin lies farthest out (a chin, a nose) before where it has the most vertices (the scalp).
+    auto gain = [&](const std::vector<uint32_t>& list, size_t* count) {
+      double g = 0.0;
+      size_t c = 0;
+      for (uint32_t u : list) {
+        if (done[u]) continue;
+        g += int(vreg[uncovered[u]]) == head ? outside[u] / tol : 1.0;
+        ++c;
+      }
+      if (count) *count = c;
+      return g;
+    };
+    using Entry = std::pair<double, uint32_t>;  // gain, candidate key (ties: the larger key)
     std::priority_queue<Entry> queue;
-    for (const auto& [v, list] : reach) queue.emplace(list.size(), v);
+    for (const auto& [v, list] : reach) queue.emplace(gain(list, nullptr), v);
     int added = 0, added_medial = 0;
     while (!queue.empty() && added < skin_left) {
       const uint32_t v = queue.top().second;
       queue.pop();
-      size_t now = 0;
-      for (uint32_t u : reach[v]) now += !done[u];
+      size_t count = 0;
+      const double now = gain(reach[v], &count);
       if (!queue.empty() && now < queue.top().first) {
-        queue.emplace(now, v);  // stale: re-queue with its current count
+        queue.emplace(now, v);  // stale: re-queue with its current gain
         continue;
       }
-      if (now < size_t(params.skin_min_vertices)) break;
+      if (count < size_t(params.skin_min_vertices)) {
+        if (head < 0) break;  // gains are counts: every candidate left brings fewer
+        continue;             // a head's gain is no count: others may still bring enough
+      }
       const bool is_medial = v >= total;
       const uint8_t reg = is_medial ? medial_region[v - total] : F.label[v];
       if (head >= 0 && int(reg) == head && head_added++ >= head_cap) continue;  // the head's share is spent
