@@ -39,9 +39,10 @@ struct BakeConfig {
   SegmentMethod segmentation = SegmentMethod::kAuto;
   /// "regions": "paper" (default) or "extended". Extended applies to the cover fit of a standing biped
   /// (the paper fit and a creature keep their regions); parts a body lacks (HUMAN.blend's stump hands)
-  /// stay in their limb. Not yet the default: scored on the paper's regions (evaluate --regions paper) its
-  /// sphere-pair recall is 1.7–4.9 points lower on MakeHuman and CesiumMan and BCN_Epileptic's region-pair
-  /// recall 5 points lower (README "Head, hands and feet").
+  /// stay in their limb. Not yet the default: its sphere-pair recall is 1.2–1.7 points lower on MakeHuman and
+  /// 4.1 on CesiumMan (BCN_Epileptic: 2.4 higher), and on its own regions an elbow's or a knee's spheres meeting
+  /// before the skin in the joint's pit count as false alarms that the paper's five forgive (README "Head,
+  /// hands and feet").
   RegionSet regions = RegionSet::kPaper;
   std::string region_map;  ///< [opt] with segmentation "map" (or set alone: implies "map")
   ImportOptions import;
