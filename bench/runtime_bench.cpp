@@ -3,6 +3,7 @@
 //
 //   runtime_bench --synthetic [--frames N] [--reps R] [--runs K] [--narrow-only] [--cgal-frames N] [--per-frame]
 //   runtime_bench ASSET.sphc FRAMES [--reps R] [--runs K] [--narrow-only] [--cgal-frames N] [--per-frame]
+//                 [--behind-margins S,S,...]   ("behind M2's pairs" with DetectJob's margin S × the asset's; default 1)
 //   runtime_bench ASSET.sphc FRAMES --profile R   (refit + M1 over all frames R times, nothing else:
 //                                                   for valgrind --tool=callgrind instruction counts)
 //   runtime_bench ASSET.sphc FRAMES --batch-only [--characters N] [--runs K]   (only "many characters")
@@ -44,6 +45,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -392,10 +394,12 @@ CgalClasses Classify(const NarrowAsset& m, const CgalPeer& peer,
 // Prints the "narrow phase behind M2's pairs" rows: per frame RefitJob (kPivotFrame) + DetectJob M2, then
 // NarrowPhaseJob restricted to those pairs on the surrounding regions' model and on the reach regions'
 // (NarrowPhaseRegions::kReach); the fastest of `runs` passes per frame, and how many of the frame's
-// contacts (`all`, the unrestricted narrow phase's) each finds. False when a restricted job reports a
-// contact the unrestricted one does not.
+// contacts (`all`, the unrestricted narrow phase's) each finds. Once per entry of `margin_scales`: DetectJob's
+// margin that many times the asset's contact margin (the broad phase's margin an engine picks for the narrow
+// phase; evaluate --sweep-margin gives the recall it buys). False when a restricted job reports a contact the
+// unrestricted one does not.
 bool BehindTheProxy(const Workload& w, const sc::AssetView& view, int runs,
-                    const std::vector<std::vector<TrianglePair>>& all) {
+                    const std::vector<std::vector<TrianglePair>>& all, float margin_scale) {
   sc::Model model;
   sc::Workspace ws;
   sc::NarrowPhaseModel np[2];
@@ -422,6 +426,7 @@ bool BehindTheProxy(const Workload& w, const sc::AssetView& view, int runs,
       m2.model = &model;
       m2.workspace = &ws;
       m2.method = sc::DetectMethod::kM2;
+      m2.margin = margin_scale == 1.0f ? -1.0f : margin_scale * model.contact_margin();
       m2.output = pairs.data();
       m2.capacity = static_cast<uint32_t>(pairs.size());
       m2.count = &n_pairs;
@@ -449,8 +454,8 @@ bool BehindTheProxy(const Workload& w, const sc::AssetView& view, int runs,
     const Summary t = Summarize(us);
     median[k] = t.median, worst[k] = t.max;
   }
-  std::printf("behind M2's pairs (RefitJob + DetectJob M2, then NarrowPhaseJob restricted to the %.1f pairs a frame; "
-              "fastest of %d):\n", F ? double(reported) / F : 0.0, runs);
+  std::printf("behind M2's pairs (RefitJob + DetectJob M2 with %g x the asset's margin, then NarrowPhaseJob restricted "
+              "to the %.1f pairs a frame; fastest of %d):\n", double(margin_scale), F ? double(reported) / F : 0.0, runs);
   for (int k = 0; k < 2; ++k)
     std::printf("  %-20s median %7.1f us, max %7.1f us; %6.1f exact tests a frame; contacts found %zu of %zu (%.1f %%)\n",
                 k == 0 ? "surrounding regions" : "reach regions", median[k], worst[k], F ? double(tests[k]) / F : 0.0,
@@ -460,7 +465,8 @@ bool BehindTheProxy(const Workload& w, const sc::AssetView& view, int runs,
 }
 
 // Prints the "narrow phase" section; false when a cross-check failed.
-bool NarrowPhase(const Workload& w, const sc::AssetView& view, int runs, int cgal_frames, bool per_frame) {
+bool NarrowPhase(const Workload& w, const sc::AssetView& view, int runs, int cgal_frames, bool per_frame,
+                 const std::vector<float>& margin_scales) {
   sc::NarrowPhaseModel np;
   sc::NarrowPhaseWorkspace np_ws;
   if (sc::Status s = np.Init(view); s != sc::Status::kOk || (s = np_ws.Init(np)) != sc::Status::kOk) {
@@ -600,7 +606,7 @@ bool NarrowPhase(const Workload& w, const sc::AssetView& view, int runs, int cga
   }
   std::printf("replica (bench-side sweep over all triangle boxes): tested pairs and contacts %s on every frame\n",
               ok ? "equal" : "DIFFER (see stderr)");
-  ok = BehindTheProxy(w, view, runs, contacts) && ok;
+  for (float scale : margin_scales) ok = BehindTheProxy(w, view, runs, contacts, scale) && ok;
 
 #if SPHERECHAIN_BENCH_CGAL
   const size_t G = std::min(F, size_t(std::max(0, cgal_frames)));
@@ -790,6 +796,7 @@ int main(int argc, char** argv) {
   int reps = 200, runs = 1, profile = 0, cgal_frames = 10;
   uint32_t characters = 1000;
   uint32_t frame_count = 40;
+  std::vector<float> margin_scales = {1.0f};  // --behind-margins: the "behind M2's pairs" rows' DetectJob margins
   std::vector<std::string> positional;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -802,6 +809,20 @@ int main(int argc, char** argv) {
     else if (a == "--batch-only") batch_only = true;
     else if (a == "--characters" && i + 1 < argc) characters = uint32_t(std::max(1, std::atoi(argv[++i])));
     else if (a == "--per-frame") per_frame = true;
+    else if (a == "--behind-margins" && i + 1 < argc) {
+      margin_scales.clear();
+      for (std::string v = argv[++i]; !v.empty();) {
+        const size_t comma = v.find(',');
+        char* end = nullptr;
+        const std::string item = v.substr(0, comma);
+        const float x = std::strtof(item.c_str(), &end);
+        if (item.empty() || *end || !(x >= 0.0f && x <= 100.0f))
+          return std::fprintf(stderr, "--behind-margins: '%s' is not a multiple of the asset's margin in [0, 100]\n",
+                              item.c_str()), 2;
+        margin_scales.push_back(x);
+        v = comma == std::string::npos ? "" : v.substr(comma + 1);
+      }
+    }
     else if (a == "--cgal-frames" && i + 1 < argc) cgal_frames = std::max(0, std::atoi(argv[++i]));
     else positional.push_back(a);
   }
@@ -814,7 +835,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "usage: runtime_bench --synthetic [--frames N] [--reps R] [--runs K] [--narrow-only] "
                          "[--cgal-frames N] [--per-frame]\n"
                          "       runtime_bench ASSET.sphc FRAMES(.f32 file | folder) [--reps R] [--runs K] "
-                         "[--narrow-only] [--cgal-frames N] [--per-frame]\n"
+                         "[--narrow-only] [--cgal-frames N] [--per-frame] [--behind-margins S,S,...]\n"
                          "       runtime_bench ASSET.sphc FRAMES --profile R\n"
                          "       runtime_bench ASSET.sphc FRAMES --batch-only [--characters N] [--runs K]\n");
     return 2;
@@ -861,7 +882,7 @@ int main(int argc, char** argv) {
     std::printf("profile: %d × %zu frames of refit + M1\n", profile, w.frames.size());
     return 0;
   }
-  if (narrow_only) return NarrowPhase(w, view, runs, cgal_frames, per_frame) ? 0 : 1;
+  if (narrow_only) return NarrowPhase(w, view, runs, cgal_frames, per_frame, margin_scales) ? 0 : 1;
   if (batch_only) return ManyCharacters(w, model, characters, runs) ? 0 : 1;
 
   // Refitted spheres per frame (inputs of the peers) and the reference M2 counts.
@@ -1098,7 +1119,7 @@ int main(int argc, char** argv) {
   std::printf("\n%-22s %14s %14s\n", "ratio (peer / sc)", "/ sc M2 det.", "/ sc refit+M1");
   for (const Peer& p : peers) std::printf("%-22s %13.1fx %13.1fx\n", p.name, p.us / m2_us, p.us / m1_us);
   if (!ManyCharacters(w, model, characters, runs)) mismatch = true;
-  if (!NarrowPhase(w, view, runs, cgal_frames, per_frame)) mismatch = true;
+  if (!NarrowPhase(w, view, runs, cgal_frames, per_frame, margin_scales)) mismatch = true;
   if (mismatch) {
     std::fprintf(stderr, "MISMATCH: a pair count differs (see above)\n");
     return 1;

@@ -20,7 +20,11 @@
 // refit spheres' coverage of the deformed mesh and how far they stick out of its skin.
 // --sweep-margin re-runs M1 and M2 on the same refit spheres with other contact margins (DetectJob::margin)
 // and prints recall and false alarms against the margin: the trade a user picks the bake's
-// contact_margin_rel from.
+// contact_margin_rel from. Both the summary and each sweep row also give the region pairs that the narrow
+// phase behind M2's pairs finds contacts of (reach regions; JSON summary.proxy_then_narrow, per frame
+// then_narrow_region_pairs_m2, per sweep row recall_m2_then_narrow and its time): what an engine that runs the
+// spheres as its broad phase and the exact narrow phase behind them reports — no false alarm by construction, so
+// its margin trades recall against narrow-phase work instead of against false alarms.
 #include <unistd.h>
 
 #include <algorithm>
@@ -99,6 +103,10 @@ struct SweepPoint {
   size_t found_m1 = 0, found_m2 = 0, sfound_m1 = 0, sfound_m2 = 0, false_m1 = 0, false_m2 = 0, false_frames = 0;
   size_t pairs_m2 = 0;  // sphere pairs M2 reported (the narrow phase's work)
   size_t imprecise_m2 = 0;  // of those, pairs whose own surrounding regions come nowhere within the margin
+  // The narrow phase behind M2's pairs at this margin (reach regions): (frame, region pair)s of the truth it
+  // finds a contact of, and its time (µs, summed over the frames; it is exact, so it reports no false alarm).
+  size_t confirmed_m2 = 0;
+  double narrow_us_m2 = 0;
 };
 
 std::string RegionName(const RegionPair& p) { return "R" + std::to_string(p.first) + "-R" + std::to_string(p.second); }
@@ -150,6 +158,9 @@ struct FrameEval {
   // triangles meet lies inside both spheres of some reported pair of the same two regions, radii grown by
   // the asset's margin: the pair found the contact's place, whichever spheres own its triangles).
   uint32_t behind[2] = {0, 0}, behind_reach[2] = {0, 0}, localised[2] = {0, 0};
+  // The proxy and then the narrow phase behind its pairs (reach regions), M1 / M2: the region pairs of the
+  // triangle contacts it found — what an engine running the spheres as its broad phase reports.
+  std::set<RegionPair> confirmed_regions[2];
   // The asset-independent truth: intersecting triangle pairs whose bind-pose centroids lie at least --crease
   // apart, whatever the asset's exclusions and sphere ownership; and how many of them M2's sphere pairs and
   // region pairs cover (the pair of owning spheres reported, or their regions), or the asset excludes.
@@ -296,6 +307,7 @@ int RunEvaluate(const EvaluateArgs& a) {
   // M1 (m = 0) or M2 (m = 1) on the workspace's current spheres with contact margin `margin` (−1: the
   // asset's); the reported region pairs and sphere pairs are added to the sets.
   uint32_t reported[2] = {0, 0};  // records of the last detect(m, −1, …): the asset's margin
+  uint32_t last_reported[2] = {0, 0};  // records of the last detect(m, …), whatever its margin
   auto detect = [&](int m, float margin, std::set<RegionPair>* regions, std::set<SpherePairKey>* pairs) {
     auto& out = m == 0 ? out_m1 : out_m2;
     uint32_t n = 0;
@@ -310,6 +322,7 @@ int RunEvaluate(const EvaluateArgs& a) {
     const runtime::Status s = det.Run();
     if (runtime::Failed(s)) return s;
     if (margin < 0.0f) reported[m] = n;
+    last_reported[m] = n;
     for (uint32_t i = 0; i < n; ++i) {
       regions->insert(region_pair(out[i].a, out[i].b));
       pairs->insert({out[i].a, out[i].b});
@@ -400,6 +413,7 @@ int RunEvaluate(const EvaluateArgs& a) {
           return Fail(std::string("narrow phase (behind the proxy): ") + runtime::ToString(rs));
         std::set<baker::TrianglePair>& into = regions == 0 ? behind_pairs[m] : behind_reach_pairs[m];
         for (uint32_t i = 0; i < n; ++i) {
+          if (regions == 1) row.confirmed_regions[m].insert(region_pair(contacts[i].sphere_a, contacts[i].sphere_b));
           const baker::TrianglePair tp{std::min(contacts[i].triangle_a, contacts[i].triangle_b),
                                        std::max(contacts[i].triangle_a, contacts[i].triangle_b)};
           if (!into.insert(tp).second)
@@ -526,6 +540,25 @@ int RunEvaluate(const EvaluateArgs& a) {
       pt.sfound_m1 += CountIn(row.exact_spheres, pairs[0]);
       pt.sfound_m2 += CountIn(row.exact_spheres, pairs[1]);
       pt.pairs_m2 += pairs[1].size();
+      {  // the narrow phase behind M2's pairs at this margin
+        runtime::NarrowPhaseJob restricted;
+        restricted.model = &narrow_reach;
+        restricted.workspace = &narrow_reach_ws;
+        restricted.positions = refit.positions;
+        restricted.output = contacts.data();
+        restricted.capacity = static_cast<uint32_t>(contacts.size());
+        restricted.sphere_pairs = out_m2.data();
+        restricted.sphere_pair_count = last_reported[1];
+        uint32_t n = 0;
+        restricted.count = &n;
+        const auto t_narrow = Clock::now();
+        if (runtime::Status rs = restricted.Run(); runtime::Failed(rs))
+          return Fail(std::string("narrow phase (sweep): ") + runtime::ToString(rs));
+        pt.narrow_us_m2 += std::chrono::duration<double, std::micro>(Clock::now() - t_narrow).count();
+        std::set<RegionPair> confirmed;
+        for (uint32_t i = 0; i < n; ++i) confirmed.insert(region_pair(contacts[i].sphere_a, contacts[i].sphere_b));
+        pt.confirmed_m2 += CountIn(row.exact_regions, confirmed);
+      }
       for (const SpherePairKey& k : pairs[1]) {
         auto f = is_imprecise(k);
         if (!f.ok()) return Fail(f.error());
@@ -593,6 +626,7 @@ int RunEvaluate(const EvaluateArgs& a) {
   nlohmann::json false_frames = nlohmann::json::array();
   size_t imprecise_m2 = 0, reported_m2 = 0, behind[2] = {0, 0}, behind_reach[2] = {0, 0}, localised[2] = {0, 0};
   size_t apart = 0, apart_sphere = 0, apart_region = 0, apart_excluded = 0, apart_same = 0;
+  size_t confirmed_found[2] = {0, 0}, confirmed_false[2] = {0, 0}, confirmed_false_frames = 0;
   std::vector<double> narrow_us;
   double exact_ms = 0;
   uint32_t worst = 0;
@@ -606,6 +640,14 @@ int RunEvaluate(const EvaluateArgs& a) {
     sfound_m2 += CountIn(r.exact_spheres, r.m2_spheres);
     for (int m = 0; m < 2; ++m)
       behind[m] += r.behind[m], behind_reach[m] += r.behind_reach[m], localised[m] += r.localised[m];
+    bool confirmed_false_frame = false;
+    for (int m = 0; m < 2; ++m) {
+      confirmed_found[m] += CountIn(r.exact_regions, r.confirmed_regions[m]);
+      const size_t wrong = r.confirmed_regions[m].size() - CountIn(r.confirmed_regions[m], r.exact_regions);
+      confirmed_false[m] += wrong;
+      confirmed_false_frame |= wrong > 0;
+    }
+    confirmed_false_frames += confirmed_false_frame;
     false_m1 += r.false_m1.size();
     false_m2 += r.false_m2.size();
     if (!r.false_m1.empty() || !r.false_m2.empty()) false_frames.push_back(f);
@@ -717,6 +759,12 @@ int RunEvaluate(const EvaluateArgs& a) {
               100 * Ratio(double(localised[0]), double(gt)), 100 * Ratio(double(localised[1]), double(gt)));
   std::printf("proxy false alarms (nothing within the margin): M1 %zu, M2 %zu, in %zu frames\n", false_m1, false_m2,
               false_frames.size());
+  std::printf("proxy, then the narrow phase behind its pairs (reach regions; the region pairs of the contacts it finds): "
+              "region pairs M1 %.1f %% (%zu/%zu), M2 %.1f %% (%zu/%zu); region pairs with no exact contact: M1 %zu, M2 %zu, "
+              "in %zu frames\n",
+              100 * Ratio(double(confirmed_found[0]), double(exact_regions)), confirmed_found[0], exact_regions,
+              100 * Ratio(double(confirmed_found[1]), double(exact_regions)), confirmed_found[1], exact_regions,
+              confirmed_false[0], confirmed_false[1], confirmed_false_frames);
   const double sphere_precision_m2 = Ratio(double(reported_m2 - imprecise_m2), double(reported_m2));
   const double apart_recall_sphere = Ratio(double(apart_sphere), double(apart));
   const double apart_recall_region = Ratio(double(apart_region), double(apart));
@@ -755,16 +803,18 @@ int RunEvaluate(const EvaluateArgs& a) {
   if (!sweep.empty()) {
     std::printf("\ncontact margin sweep (same refit spheres; the asset's margin is %.4g = %.2f %% of height):\n",
                 double(model.contact_margin()), 100.0 * model.contact_margin() / height);
-    std::printf("%10s %8s  %18s  %18s  %18s  %11s  %14s  %14s  %16s\n", "margin %h", "margin", "region recall M1",
+    std::printf("%10s %8s  %18s  %18s  %18s  %11s  %14s  %14s  %16s  %22s\n", "margin %h", "margin", "region recall M1",
                 "region recall M2", "sphere recall M2", "false M1/M2", "false frames", "pairs/frame M2",
-                "sphere precision");
+                "sphere precision", "M2 + narrow: recall, us");
     for (const SweepPoint& pt : sweep)
-      std::printf("%10.2f %8.4g  %9.1f %% (%3zu)  %9.1f %% (%3zu)  %15.1f %%  %5zu/%-5zu  %6zu of %-4u  %14.1f  %14.1f %%\n",
+      std::printf("%10.2f %8.4g  %9.1f %% (%3zu)  %9.1f %% (%3zu)  %15.1f %%  %5zu/%-5zu  %6zu of %-4u  %14.1f  %14.1f %%  %9.1f %% %9.1f\n",
                   100 * pt.margin_rel, pt.margin_rel * height, 100 * Ratio(double(pt.found_m1), double(exact_regions)),
                   pt.found_m1, 100 * Ratio(double(pt.found_m2), double(exact_regions)), pt.found_m2,
                   100 * Ratio(double(pt.sfound_m2), double(exact_spheres)), pt.false_m1, pt.false_m2, pt.false_frames,
                   anim.frames, anim.frames ? double(pt.pairs_m2) / anim.frames : 0.0,
-                  100 * Ratio(double(pt.pairs_m2 - pt.imprecise_m2), double(pt.pairs_m2)));
+                  100 * Ratio(double(pt.pairs_m2 - pt.imprecise_m2), double(pt.pairs_m2)),
+                  100 * Ratio(double(pt.confirmed_m2), double(exact_regions)),
+                  anim.frames ? pt.narrow_us_m2 / anim.frames : 0.0);
   }
 
   // ---- outputs (nothing is written before every frame succeeded) ----------------------------------------
@@ -832,6 +882,7 @@ int RunEvaluate(const EvaluateArgs& a) {
                     {"narrow_region_pairs", RegionList(r.narrow_regions)},
                     {"proxy_region_pairs_m1", RegionList(r.m1_regions)},
                     {"proxy_region_pairs_m2", RegionList(r.m2_regions)},
+                    {"then_narrow_region_pairs_m2", RegionList(r.confirmed_regions[1])},
                     {"false_alarms_m1", RegionList(r.false_m1)},
                     {"false_alarms_m2", RegionList(r.false_m2)},
                     {"exact_sphere_pairs", r.exact_spheres.size()},
@@ -873,7 +924,9 @@ int RunEvaluate(const EvaluateArgs& a) {
                       {"false_alarms_m2", pt.false_m2},
                       {"false_alarm_frames", pt.false_frames},
                       {"sphere_pairs_per_frame_m2", anim.frames ? double(pt.pairs_m2) / anim.frames : 0.0},
-                      {"sphere_precision_m2", Ratio(double(pt.pairs_m2 - pt.imprecise_m2), double(pt.pairs_m2))}});
+                      {"sphere_precision_m2", Ratio(double(pt.pairs_m2 - pt.imprecise_m2), double(pt.pairs_m2))},
+                      {"recall_m2_then_narrow", Ratio(double(pt.confirmed_m2), double(exact_regions))},
+                      {"narrow_us_per_frame_m2", anim.frames ? pt.narrow_us_m2 / anim.frames : 0.0}});
       j["margin_sweep"] = sw;
     }
     j["summary"] = {
@@ -892,6 +945,11 @@ int RunEvaluate(const EvaluateArgs& a) {
                    {"contacts_behind_reach_m2", Ratio(double(behind_reach[1]), double(gt))},
                    {"contacts_localised_m1", Ratio(double(localised[0]), double(gt))},
                    {"contacts_localised_m2", Ratio(double(localised[1]), double(gt))}}},
+        {"proxy_then_narrow", {{"recall_m1", Ratio(double(confirmed_found[0]), double(exact_regions))},
+                               {"recall_m2", Ratio(double(confirmed_found[1]), double(exact_regions))},
+                               {"wrong_region_pairs_m1", confirmed_false[0]},
+                               {"wrong_region_pairs_m2", confirmed_false[1]},
+                               {"wrong_frames", confirmed_false_frames}}},
         {"contacts_by_bind_distance", {{"crease_rel", a.crease}, {"triangle_pairs", apart},
                                        {"covered_by_sphere_pairs_m2", apart_recall_sphere},
                                        {"covered_by_region_pairs_m2", apart_recall_region},
@@ -953,7 +1011,8 @@ void RegisterEvaluate(CLI::App& app, Commands* commands) {
   sub->add_flag("!--no-coverage", args->coverage, "Skip the coverage / protrusion measurements (bind pose, and the refit spheres on every frame)");
   sub->add_option("--sweep-margin", args->sweep,
                   "Also run M1 and M2 with other contact margins (fractions of the body height, comma-separated; "
-                  "alone: 0,0.001,...,0.015) and print recall and false alarms against the margin; JSON: margin_sweep")
+                  "alone: 0,0.001,...,0.015) and print recall and false alarms against the margin, and the recall of the "
+                  "narrow phase run behind M2's pairs at each margin (no false alarm: it is exact); JSON: margin_sweep")
       ->expected(0, 1)
       ->default_str("auto");
   commands->handlers.emplace_back(sub, [args] { return RunEvaluate(*args); });
