@@ -70,6 +70,7 @@ class Player {
     out_m1_.resize(runtime::DetectBound(view, runtime::DetectMethod::kM1));
     out_m2_.resize(runtime::DetectBound(view, runtime::DetectMethod::kM2));
     if (narrow_) contacts_.resize(o.contact_capacity);
+    if (narrow_ && o.narrow_behind_margin > 0.0f) out_behind_.resize(runtime::DetectBound(view, runtime::DetectMethod::kM2));
   }
 
   /// Fills the row's counters, timings, pairs and regions. With `joint_matrices` (#J × 12) the spheres
@@ -127,7 +128,25 @@ class Player {
       job.capacity = static_cast<uint32_t>(contacts_.size());
       job.count = &count_contacts_;
       job.stats = &row->narrow;
-      if (auto s = Time([&] { return job.Run(); }, &row->narrow_us); !s.ok()) return s;
+      // Behind the spheres' pairs: M2 with the wider margin, then the narrow phase on those pairs (timed together).
+      runtime::DetectJob broad;
+      broad.model = model_;
+      broad.workspace = ws_;
+      broad.method = runtime::DetectMethod::kM2;
+      broad.margin = o_.narrow_behind_margin * model_->contact_margin();
+      broad.output = out_behind_.data();
+      broad.capacity = static_cast<uint32_t>(out_behind_.size());
+      broad.count = &row->narrow_pairs;
+      const bool behind = o_.narrow_behind_margin > 0.0f;
+      if (behind) job.sphere_pairs = out_behind_.data();
+      auto run = [&] {
+        if (behind) {
+          if (const runtime::Status s = broad.Run(); runtime::Failed(s)) return s;
+          job.sphere_pair_count = row->narrow_pairs;
+        }
+        return job.Run();
+      };
+      if (auto s = Time(run, &row->narrow_us); !s.ok()) return s;
       std::set<std::pair<int, int>> cr;
       for (uint32_t i = 0; i < count_contacts_; ++i) {
         const int ra = sr ? sr->Get(contacts_[i].sphere_a) : -1, rb = sr ? sr->Get(contacts_[i].sphere_b) : -1;
@@ -188,7 +207,7 @@ class Player {
   const PlayOptions& o_;
   runtime::RefitMode mode_;
   uint32_t repeat_;
-  std::vector<runtime::Collision> out_m1_, out_m2_;
+  std::vector<runtime::Collision> out_m1_, out_m2_, out_behind_;
   uint32_t count_m1_ = 0, count_m2_ = 0;
   const runtime::NarrowPhaseModel* narrow_ = nullptr;
   runtime::NarrowPhaseWorkspace* narrow_ws_ = nullptr;
@@ -298,8 +317,13 @@ Result<PlayReport> Play(const Mesh& mesh, const runtime::AssetView& view, const 
     return MakeError(Error::Code::kInternal, std::string("runtime Workspace::Init: ") + runtime::ToString(s));
   runtime::NarrowPhaseModel narrow;
   runtime::NarrowPhaseWorkspace narrow_ws;
+  if (!std::isfinite(o.narrow_behind_margin) || o.narrow_behind_margin < 0.0f)
+    return MakeError(Error::Code::kConfig, "narrow_behind_margin " + std::to_string(o.narrow_behind_margin) +
+                                               ": expected a finite multiple of the contact margin >= 0");
   if (o.narrow_phase) {
-    if (runtime::Status s = narrow.Init(view); runtime::Failed(s) || runtime::Failed(s = narrow_ws.Init(narrow)))
+    const runtime::NarrowPhaseRegions kind =
+        o.narrow_behind_margin > 0.0f ? runtime::NarrowPhaseRegions::kReach : runtime::NarrowPhaseRegions::kSurrounding;
+    if (runtime::Status s = narrow.Init(view, kind); runtime::Failed(s) || runtime::Failed(s = narrow_ws.Init(narrow)))
       return MakeError(Error::Code::kConfig,
                        std::string("narrow phase: ") + runtime::ToString(s) +
                            (s == runtime::Status::kErrorMissingField ? " (baked before the narrow phase existed: re-bake it)" : ""));

@@ -84,7 +84,7 @@ TEST_CASE("play: tube B lowered onto tube A collides only in the last frame, wit
   CHECK(sc::playback::RegionPairsText(rep.frames[0].regions) == "-");
 }
 
-TEST_CASE("play: documented errors — joint refit without weights, wrong mesh, on_frame's error") {
+TEST_CASE("play: documented errors — joint refit without weights, a bad narrow_behind_margin, wrong mesh, on_frame's error") {
   Rig r;
   MakeRig(&r);
   const sc::playback::Animation anim = Open(r, 4);
@@ -97,6 +97,16 @@ TEST_CASE("play: documented errors — joint refit without weights, wrong mesh, 
   CHECK(a.error().message.find("no joint weights") != std::string::npos);
 
   o.refit = sc::playback::PlayRefit::kPivotFrame;
+  for (float bad : {-1.0f, std::nanf(""), INFINITY}) {  // the narrow phase behind M2's pairs: a margin scale >= 0
+    o.narrow_phase = true;
+    o.narrow_behind_margin = bad;
+    auto e = sc::playback::Play(r.mesh, r.view, anim, o);
+    REQUIRE(!e.ok());
+    CHECK(e.error().code == sc::baker::Error::Code::kConfig);
+    CHECK(e.error().message.find("narrow_behind_margin") != std::string::npos);
+  }
+  o.narrow_phase = false;
+  o.narrow_behind_margin = 0.0f;
   sc::baker::Mesh shorter = r.mesh;
   shorter.positions.resize(shorter.positions.size() - 3);
   auto b = sc::playback::Play(shorter, r.view, anim, o);

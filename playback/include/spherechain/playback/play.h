@@ -38,6 +38,12 @@ struct PlayOptions {
   PlayRefit refit = PlayRefit::kPivotFrame;
   uint32_t repeat = 5;                    ///< runs per job per frame; timings are the minimum [Limit: 0 counts as 1]
   bool narrow_phase = false;              ///< also NarrowPhaseJob (exact triangle contacts of the surrounding regions)
+  /// With narrow_phase: 0 (default) — the narrow phase over every surrounding region (the exact answer); > 0 —
+  /// only behind DetectJob M2's pairs found with this many times the asset's contact margin, on the reach regions
+  /// (NarrowPhaseRegions::kReach; what a game running the spheres as its broad phase gets: README "The spheres as
+  /// a broad phase"; 1.5 there). That M2 run is timed into FrameReport::narrow_us with the narrow phase.
+  /// [Limit: finite, >= 0; otherwise Play answers kConfig]
+  float narrow_behind_margin = 0.0f;
   uint32_t contact_capacity = 1u << 16;   ///< narrow-phase contacts kept per frame (more are counted, not kept)
   bool keep_spheres = false;              ///< fill FrameReport::spheres (#S×4 per frame)
   /// [opt] called after each animation frame (not the bind pose) is skinned and measured: the frame index,
@@ -64,6 +70,7 @@ struct FrameReport {
   double narrow_us = 0;                      ///< narrow_phase [Units: µs]
   std::vector<runtime::TriangleContact> contacts;   ///< narrow_phase: the frame's contacts (≤ contact_capacity)
   std::vector<std::pair<int, int>> contact_regions; ///< narrow_phase: region pairs of the contacts, sorted
+  uint32_t narrow_pairs = 0;                 ///< narrow_behind_margin > 0: M2's pairs the narrow phase ran behind
   std::vector<float> spheres;  ///< keep_spheres: the refit spheres, #S×4 (x, y, z, r), source units, model space
 };
 
@@ -95,7 +102,9 @@ struct PlayReport {
 /// the asset's; a skin] with `asset` (a loaded view; borrowed for the call) as described above.
 /// Errors: kConfig — the vertex count differs; kJoints without centre joint weights in the asset
 /// ("... has no joint weights ...: re-bake it") or with another joint count than the skin's; the
-/// narrow phase on an asset without its data (kErrorMissingField: "re-bake it"); kInternal — a runtime
+/// narrow phase on an asset without its data (kErrorMissingField: "re-bake it"), a narrow_behind_margin that is
+/// negative or not finite (an asset baked before reach regions runs behind its surrounding regions: runtime
+/// ReachTriangles); kInternal — a runtime
 /// job failed (the message names the job and its status); the skinning's errors; on_frame's errors.
 /// Cost: per frame one skinning (O(Σ influences)), (repeat ×) refit and detect runs, the tracking
 /// measure O(Σ surrounding-region vertices); allocates (report, runtime Model/Workspace, scratch); owns
