@@ -541,12 +541,8 @@ int RunEvaluate(const EvaluateArgs& a) {
       pt.sfound_m2 += CountIn(row.exact_spheres, pairs[1]);
       pt.pairs_m2 += pairs[1].size();
       {  // the narrow phase behind M2's pairs at this margin
-        runtime::NarrowPhaseJob restricted;
-        restricted.model = &narrow_reach;
-        restricted.workspace = &narrow_reach_ws;
-        restricted.positions = refit.positions;
-        restricted.output = contacts.data();
-        restricted.capacity = static_cast<uint32_t>(contacts.size());
+        runtime::NarrowPhaseJob restricted = job;  // this frame's positions and output buffer
+        restricted.model = &narrow_reach, restricted.workspace = &narrow_reach_ws, restricted.stats = nullptr;
         restricted.sphere_pairs = out_m2.data();
         restricted.sphere_pair_count = last_reported[1];
         uint32_t n = 0;
