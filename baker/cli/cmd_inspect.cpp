@@ -91,6 +91,7 @@ nlohmann::json Describe(const runtime::AssetView& v) {
   // Schema v2: the fit, the contact margin and the bake's bind-pose coverage measure.
   j["fit"] = a.fit_method() ? a.fit_method()->str() : "paper";
   j["contact_margin"] = a.contact_margin();
+  j["fold_margin"] = a.fold_margin() >= 0.0f ? nlohmann::json(a.fold_margin()) : nlohmann::json(nullptr);
   if (const auto* c = a.coverage())
     j["coverage"] = {{"coverage", c->coverage()},
                      {"protrusion", c->protrusion()},
@@ -151,8 +152,11 @@ int RunInspect(const InspectArgs& args) {
               j["joint_refit"]["available"].get<bool>()
                   ? ("yes, " + std::to_string(j["joint_refit"]["joints"].get<unsigned>()) + " joints").c_str()
                   : "no (schema v1/v2 or a mesh without a skin: vertex refit only)");
-  std::printf("fit: %s, contact margin %.4g (source units)\n", j["fit"].get<std::string>().c_str(),
+  std::printf("fit: %s, contact margin %.4g (source units)", j["fit"].get<std::string>().c_str(),
               j["contact_margin"].get<double>());
+  if (!j["fold_margin"].is_null())
+    std::printf(", fold margin %.4g (pairs of one region)", j["fold_margin"].get<double>());
+  std::printf("\n");
   if (j.contains("coverage")) {
     const auto& c = j["coverage"];
     std::printf("bind pose: coverage %.1f %% of the body volume, protrusion %.1f %% of the spheres' volume outside; "

@@ -43,6 +43,13 @@ Status ReadNumber(const json& j, const char* key, T lo, T hi, T* out, const std:
   return Ok{};
 }
 
+// The fold margin the bake writes, relative to the body height; < 0: none (BakeConfig::fold_margin_rel).
+double FoldMarginRel(const BakeConfig& config, const RegionLayout& layout) {
+  if (config.fold_margin_rel) return *config.fold_margin_rel;
+  const bool extended_biped = layout.paper && !layout.IsPaperFive();
+  return extended_biped ? 0.0015 : -1.0;
+}
+
 }  // namespace
 
 Result<BakeConfig> ParseBakeConfig(const std::string& text, const std::string& where) {
@@ -59,7 +66,7 @@ Result<BakeConfig> ParseBakeConfig(const std::string& text, const std::string& w
                                               "min_radius_rel", "min_gain", "region_balance", "refine_sweeps", "dilation_rel",
                                               "skin_spheres", "skin_tolerance_rel", "skin_min_vertices", "medial_min_rel",
                                               "contact_margin_rel", "near_rel", "vertices", "regions", "pivot_poses",
-                                              "pivot_pose_angle", "reach_rel"};
+                                              "pivot_pose_angle", "reach_rel", "fold_margin_rel"};
   for (auto it = j.begin(); it != j.end(); ++it)
     if (!known.count(it.key())) return MakeError(Error::Code::kConfig, where + ": unknown key '" + it.key() + "'");
 
@@ -122,6 +129,11 @@ Result<BakeConfig> ParseBakeConfig(const std::string& text, const std::string& w
   if (s.ok()) s = ReadNumber(j, "medial_min_rel", 0.0001, 1.0, &c.fit.medial_min_rel, where);
   if (s.ok()) s = ReadNumber(j, "contact_margin_rel", 0.0, 0.05, &c.contact_margin_rel, where);
   if (s.ok()) s = ReadNumber(j, "near_rel", 0.0, 0.2, &c.near_rel, where);
+  if (s.ok() && j.contains("fold_margin_rel")) {
+    double v = 0.0;
+    s = ReadNumber(j, "fold_margin_rel", -1.0, 0.05, &v, where);
+    if (s.ok()) c.fold_margin_rel = v < 0.0 ? -1.0 : v;
+  }
   if (s.ok()) s = ReadNumber(j, "reach_rel", 0.0, 0.05, &c.reach_rel, where);
   if (s.ok()) s = ReadNumber(j, "pivot_poses", 0u, 256u, &c.pivot_poses, where);
   if (s.ok()) s = ReadNumber(j, "pivot_pose_angle", 0.0, 90.0, &c.pivot_pose_angle, where);
@@ -184,6 +196,7 @@ std::string CanonicalConfig(const BakeConfig& c) {
   j["contact_margin_rel"] = c.contact_margin_rel;
   j["near_rel"] = c.near_rel;
   j["reach_rel"] = c.reach_rel;
+  if (c.fold_margin_rel) j["fold_margin_rel"] = *c.fold_margin_rel;  // added later: written only when set
   // Added after assets were cached on the hash: written only when on (the default is off).
   if (c.pivot_poses) j["pivot_poses"] = c.pivot_poses, j["pivot_pose_angle"] = c.pivot_pose_angle;
   j["rays"] = c.fit.rays;
@@ -504,6 +517,7 @@ Result<BakeResult> Bake(const std::string& input_path, const BakeConfig& config,
     const std::string canonical = CanonicalConfig(config);
     in.config_hash = Hash64(canonical.data(), canonical.size());
     in.contact_margin = config.contact_margin_rel * r.fit.body_height;
+    in.fold_margin = FoldMarginRel(config, r.segmentation.layout) * r.fit.body_height;
     if (r.coverage) in.coverage = &*r.coverage;
     in.coverage_voxel_rel = r.coverage_options.voxel_rel;
     in.forced_findings = &r.plausibility;
@@ -597,6 +611,8 @@ json MakeBakeReport(const BakeResult& r, const BakeConfig& config, const Context
   j["fit"] = FitMethodName(config.fit.method);
   j["contact_margin"] = config.contact_margin_rel * r.fit.body_height;
   j["contact_margin_rel"] = config.contact_margin_rel;
+  if (const double fold = FoldMarginRel(config, r.segmentation.layout); fold >= 0.0)
+    j["fold_margin"] = fold * r.fit.body_height, j["fold_margin_rel"] = fold;
   if (r.coverage)
     j["coverage"] = {{"coverage", r.coverage->coverage},
                      {"protrusion", r.coverage->protrusion},

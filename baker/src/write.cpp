@@ -178,6 +178,7 @@ std::vector<uint8_t> BuildAsset(const AssetInputs& in) {
   ab.add_schema_version(layout.IsPaperFive() ? spherechain::runtime::kPaperSchemaVersion : spherechain::runtime::kSchemaVersion);
   ab.add_generator(generator);
   ab.add_contact_margin(float(in.contact_margin));
+  if (in.fold_margin >= 0.0) ab.add_fold_margin(float(in.fold_margin));
   ab.add_fit_method(fit_method);
   if (in.coverage) ab.add_coverage(coverage);
   if (in.centre_weights) {

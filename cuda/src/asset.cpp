@@ -51,6 +51,7 @@ void DeviceAsset::Release() {
 Status DeviceAsset::Upload(const runtime::Model& model) {
   Release();
   if (!model.initialized()) return Status::kErrorNullArgument;
+  if (model.fold_margin() >= 0.0f) return Status::kErrorUnsupported;  // the kernels test one margin for every pair
   const runtime::ModelArrays& a = model.arrays();
   const uint32_t S = model.sphere_count(), C = model.chain_count();
   Packer pk;

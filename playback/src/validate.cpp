@@ -52,6 +52,7 @@ FindingLocation LocateRejection(const uint8_t* bytes, runtime::Status status, co
         if (!Finite(sp->radius())) return At(file, int32_t(s), -1, "spheres.radius");
       }
       if (!Finite(a->contact_margin())) return At(file, -1, -1, "contact_margin");
+      if (!Finite(a->fold_margin())) return At(file, -1, -1, "fold_margin");
       where.field = "pivot_frames";
       break;
     case runtime::Status::kErrorContactMargin:
@@ -79,6 +80,7 @@ FindingLocation LocateRejection(const uint8_t* bytes, runtime::Status status, co
       else if (!a->chains()) where.field = "chains";
       else if (!a->surrounding_offsets()) where.field = "surrounding_offsets";
       else if (!a->pivot_frames()) where.field = "pivot_frames";
+      else if (a->fold_margin() >= 0.0f && !a->sphere_regions()) where.field = "sphere_regions (a fold margin needs them)";
       break;
     case runtime::Status::kErrorCountMismatch:
       if (a->pivot_frames() && a->pivot_frames()->size() != S) where.field = "pivot_frames";

@@ -76,6 +76,9 @@ Status Semantics(const Asset& a, AssetView* view) {
   }
   if (!Finite(a.contact_margin())) return Status::kErrorNonFinite;  // NaN would silently detect nothing
   if (a.contact_margin() < 0.0f) return Status::kErrorContactMargin;
+  // The fold margin (optional; < 0: none) is tested per region pair, so it needs the spheres' regions.
+  if (!Finite(a.fold_margin())) return Status::kErrorNonFinite;
+  if (a.fold_margin() >= 0.0f && !a.sphere_regions()) return Status::kErrorMissingField;
 
   // Chains: present, sorted, unique, in range, and with a bounded number of candidate pairs (the M1
   // workspace and DetectBound grow with Σ|ζ|(|ζ|−1)/2: a small hostile asset must not ask for gigabytes).

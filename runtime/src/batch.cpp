@@ -40,6 +40,7 @@ void RunCharacter(const BatchJob& job, CharacterFrame& ch) {
     detect.count = ch.count;
     detect.stats = ch.stats;
     detect.margin = job.margin;
+    detect.fold_margin = job.fold_margin;
     s = detect.Run();
   }
   ch.status = s;
@@ -56,7 +57,8 @@ void BatchTask(void* data, uint32_t begin, uint32_t end) {
 
 Status BatchJob::Check() const {
   if (!model || (!characters && character_count > 0)) return Status::kErrorNullArgument;
-  if (!model->initialized() || parallel_grain == 0 || !std::isfinite(margin) ||
+  if (!model->initialized() || parallel_grain == 0 || !std::isfinite(margin) || !std::isfinite(fold_margin) ||
+      (fold_margin >= 0.0f && model->fold_margin() < 0.0f) ||
       (source != RefitSource::kVertices && source != RefitSource::kJoints) ||
       (mode != RefitMode::kPaper && mode != RefitMode::kPivotFrame) ||
       (method != DetectMethod::kM1 && method != DetectMethod::kM2))

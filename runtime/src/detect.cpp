@@ -12,6 +12,10 @@ namespace {
 
 // The margin a job tests with: its own when >= 0, else the asset's.
 float JobMargin(const DetectJob& job) { return job.margin < 0.0f ? job.model->contact_margin() : job.margin; }
+// The fold margin a job tests pairs of one region with: its own when >= 0, else the asset's; < 0: none.
+float JobFoldMargin(const DetectJob& job) {
+  return job.fold_margin < 0.0f ? job.model->fold_margin() : job.fold_margin;
+}
 
 struct DetectTaskData {
   const kernels::BroadPhaseArgs* args;
@@ -46,6 +50,10 @@ Status Model::Internal::Detect(const DetectJob& job) {
   const bool m1 = job.method == DetectMethod::kM1;
   const int method = m1 ? 0 : 1;
   const float m = JobMargin(job);
+  // With a fold margin the broad phase grows the radii by the larger of the two margins, and the hits of the
+  // kind whose margin is the smaller are tested again on their own margin below.
+  const float fold = JobFoldMargin(job);
+  const float grow = fold > m ? fold : m;
   const uint32_t B = c.blocks_, P = c.box_pitch_;
   const float *x = w.x_, *y = w.y_, *z = w.z_, *r = w.r_;
   const kernels::Table& kernel = kernels::Kernels(static_cast<kernels::Isa>(c.isa_));
@@ -55,7 +63,7 @@ Status Model::Internal::Detect(const DetectJob& job) {
   // BlockBoxes reduces each block's 8 lanes vertically.
   const size_t pitch = P + 8;
   float* box = w.box_;
-  if (!kernel.gather_boxes({x, y, z, r, c.sphere_count_, c.order_, B, m, w.gx_, w.gy_, w.gz_, w.gr_, box,
+  if (!kernel.gather_boxes({x, y, z, r, c.sphere_count_, c.order_, B, grow, w.gx_, w.gy_, w.gz_, w.gr_, box,
                             box + pitch, box + 2 * pitch, box + 3 * pitch, box + 4 * pitch, box + 5 * pitch,
                             box + 6 * pitch})) {
     const float* __restrict sx = x;
@@ -74,7 +82,7 @@ Status Model::Internal::Detect(const DetectJob& job) {
     for (uint32_t I = 0; I < B; ++I)  // padding slots read id #S: NaN
       for (uint32_t l = 0, g = 8 * I, t = I; l < 8; ++l, ++g, t += P) {
         const uint32_t s = order[g];
-        const float px = sx[s], py = sy[s], pz = sz[s], pr = sr[s] + m;
+        const float px = sx[s], py = sy[s], pz = sz[s], pr = sr[s] + grow;
         gx[g] = px, gy[g] = py, gz[g] = pz, gr[g] = pr;
         tx[t] = px, ty[t] = py, tz[t] = pz, tr[t] = pr;
       }
@@ -103,6 +111,19 @@ Status Model::Internal::Detect(const DetectJob& job) {
     } else {
       distinct = kernel.block_rows(args, 0, B, keys, &box_tests, &sphere_tests);
     }
+  }
+  if (fold >= 0.0f && fold != m) {  // each hit on its own kind's margin: one region (fold) or two (contact)
+    uint32_t kept = 0;
+    for (uint32_t k = 0; k < distinct; ++k) {
+      const uint32_t a = static_cast<uint32_t>(keys[k] >> 16) & 0xffffu, b = static_cast<uint32_t>(keys[k]) & 0xffffu;
+      const float mk = c.fold_region(a) == c.fold_region(b) ? fold : m;
+      // The broad phase's own test (formulas::OverlapLanes on radii grown by the margin, as the gather grows
+      // them), so a hit whose margin is `grow` is kept exactly as the broad phase found it.
+      if (mk == grow || formulas::OverlapLanes<formulas::ScalarOps>(x[a], y[a], z[a], r[a] + mk, x[b], y[b], z[b],
+                                                                    r[b] + mk))
+        keys[kept++] = keys[k];
+    }
+    distinct = kept;
   }
   if (distinct <= 32) {  // a handful of hits per frame: insertion sort
     for (uint32_t i = 1; i < distinct; ++i) {
@@ -165,8 +186,11 @@ uint32_t DetectBound(const AssetView& view, DetectMethod method) {
 Status DetectJob::Check() const {
   if (!count || (!output && capacity > 0)) return Status::kErrorNullArgument;
   if (Status s = Model::Internal::CheckPair(model, workspace); s != Status::kOk) return s;
-  if ((method != DetectMethod::kM1 && method != DetectMethod::kM2) || !std::isfinite(margin))
+  if ((method != DetectMethod::kM1 && method != DetectMethod::kM2) || !std::isfinite(margin) ||
+      !std::isfinite(fold_margin))
     return Status::kErrorInvalidJob;
+  // A fold margin of the job's own needs the regions of an asset that has one (Model::fold_margin() >= 0).
+  if (fold_margin >= 0.0f && model->fold_margin() < 0.0f) return Status::kErrorInvalidJob;
   return Status::kOk;
 }
 

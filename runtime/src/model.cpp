@@ -80,6 +80,7 @@ struct ModelSections {
   uint64_t* allowed[2] = {};
   uint8_t* live[2] = {};
   uint32_t* key_begin[2] = {};
+  uint8_t* fold_region = nullptr;  // #S: Asset.sphere_regions, only with a fold margin (Asset.fold_margin >= 0)
   size_t size = 0;
 
   ModelSections(const AssetView& view, uint32_t B, unsigned char* base) {
@@ -114,6 +115,7 @@ struct ModelSections {
       live[m] = k.Take<uint8_t>(size_t{B} * live_stride);
       key_begin[m] = k.Take<uint32_t>(B + 1);
     }
+    if (asset.fold_margin() >= 0.0f) fold_region = k.Take<uint8_t>(S);
     size = AlignUp(k.size);
     a = ModelArrays{bind[0], bind[1], bind[2], bind[3], pivot_vertices, local[0], local[1], local[2],
                     offset[0], offset[1], offset[2], radius_scale, chain_mask, chain_offsets, chain_spheres,
@@ -145,6 +147,8 @@ void Model::Release() {
   sphere_count_ = vertex_count_ = chain_count_ = joint_count_ = 0;
   m1_candidates_ = m2_candidates_ = m1_tests_ = 0;
   contact_margin_ = 0.0f;
+  fold_margin_ = -1.0f;
+  fold_region_ = nullptr;
   a_ = ModelArrays{};
   isa_ = 0;
   blocks_ = box_pitch_ = live_stride_ = key_slots_ = 0;
@@ -194,6 +198,8 @@ Status Model::Build(const AssetView& view, unsigned char* memory, size_t bytes) 
   if (k.size > bytes) return Status::kErrorBufferTooSmall;
   std::memset(memory, 0, k.size);
 
+  if (k.fold_region)  // LoadAsset: a fold margin comes with sphere_regions
+    for (uint32_t s = 0; s < S; ++s) k.fold_region[s] = a.sphere_regions()->Get(s);
   for (uint32_t s = 0; s < S; ++s) {
     const schema::Sphere* sp = a.spheres()->Get(s);
     k.bind[0][s] = sp->center().x();
@@ -349,6 +355,8 @@ Status Model::Build(const AssetView& view, unsigned char* memory, size_t bytes) 
   chain_count_ = C;
   joint_count_ = k.joints ? a.joint_count() : 0;
   contact_margin_ = a.contact_margin();
+  fold_margin_ = k.fold_region ? a.fold_margin() : -1.0f;
+  fold_region_ = k.fold_region;
   a_ = k.a;
   isa_ = static_cast<uint8_t>(kernels::Best());
   m1_tests_ = m1_tests;

@@ -190,6 +190,19 @@ TEST_CASE("bake: configuration errors name the key") {
   REQUIRE(trained.ok());
   CHECK(trained->pivot_poses == 24);
   CHECK(trained->pivot_pose_angle == 20.0);
+  // The fold margin: unset by default (the layout's default then), a fraction in [0, 0.05] or negative (none).
+  CHECK_FALSE(ok->fold_margin_rel.has_value());
+  for (const char* bad : {R"({"fold_margin_rel": 0.2})", R"({"fold_margin_rel": -3})", R"({"fold_margin_rel": "x"})"}) {
+    auto b = ParseBakeConfig(bad, "cfg.json");
+    REQUIRE_FALSE(b.ok());
+    CHECK(b.error().message.find("fold_margin_rel") != std::string::npos);
+  }
+  auto folded = ParseBakeConfig(R"({"fold_margin_rel": 0.002})", "cfg.json");
+  REQUIRE(folded.ok());
+  CHECK(folded->fold_margin_rel == 0.002);
+  auto none = ParseBakeConfig(R"({"fold_margin_rel": -0.5})", "cfg.json");
+  REQUIRE(none.ok());
+  CHECK(none->fold_margin_rel == -1.0);
 }
 
 TEST_CASE("bake: atomic write leaves the old file intact when the folder is missing, and replaces it otherwise") {

@@ -80,6 +80,7 @@ struct AssetData {
   uint32_t schema_version = runtime::kSchemaVersion;
   std::string identifier = "SPHC";
   float contact_margin = 0.0f;  ///< Asset.contact_margin (schema v2) [source units]; 0 = not written
+  float fold_margin = -1.0f;    ///< Asset.fold_margin [source units]; -1 (the schema default) = not written
   uint32_t vertex_count = 0, triangle_count = 0;
   uint64_t positions_hash = 0, indices_hash = 0;  ///< Asset.fingerprint hashes (0 = not written)
   std::vector<schema::Sphere> spheres;
@@ -258,6 +259,7 @@ inline AlignedBytes Serialize(const AssetData& d) {
   if (!d.triangles.empty()) ab.add_triangles(tris);
   if (!d.weld_ids.empty()) ab.add_weld_ids(weld);
   if (d.contact_margin != 0.0f) ab.add_contact_margin(d.contact_margin);
+  if (!(d.fold_margin == -1.0f)) ab.add_fold_margin(d.fold_margin);  // NaN written too (loader tests)
   if (d.joint_count != 0) ab.add_joint_count(d.joint_count);
   if (!d.sphere_joints.empty()) ab.add_sphere_joints(sj);
   if (!d.sphere_joint_weights.empty()) ab.add_sphere_joint_weights(sw);

@@ -31,8 +31,10 @@ struct Brute {
 // Every pair a < b, in the documented order, with the documented formulas: overlap when
 // ‖cA − cB‖² < ((rA + m) + (rB + m))²; depth rA + rB − ‖cA − cB‖ (M1) or, as M2 computes it,
 // ((rA + m) + (rB + m) − ‖cA − cB‖) − 2m when m ≠ 0. M1 keeps pairs sharing a chain, ordered by
-// (first common chain, a, b); raw_pairs counts a hit once per common chain.
-Brute BruteForce(test::Character& ctx, DetectMethod method, float m) {
+// (first common chain, a, b); raw_pairs counts a hit once per common chain. With a fold margin (>= 0) a
+// pair of two spheres of one region (Model::fold_region) overlaps on radii grown by it instead of m; the
+// depth keeps m.
+Brute BruteForce(test::Character& ctx, DetectMethod method, float m, float fold = -1.0f) {
   Brute out;
   const SphereArrays s = ctx.ws.spheres();
   const uint32_t S = s.count;
@@ -42,7 +44,9 @@ Brute BruteForce(test::Character& ctx, DetectMethod method, float m) {
       const uint32_t common = ctx.model.chain_mask(a) & ctx.model.chain_mask(b);
       if (ctx.model.IsExcluded(a, b) || (method == DetectMethod::kM1 && !common)) continue;
       const float dx = s.x[b] - s.x[a], dy = s.y[b] - s.y[a], dz = s.z[b] - s.z[a];
-      const float ra = s.r[a] + m, rb = s.r[b] + m, rr = rb + ra;
+      const float ra = s.r[a] + m, rb = s.r[b] + m;
+      const float mk = fold >= 0.0f && ctx.model.fold_region(a) == ctx.model.fold_region(b) ? fold : m;
+      const float rr = (s.r[b] + mk) + (s.r[a] + mk);
       const float d2 = dx * dx + dy * dy + dz * dz;
       if (!(d2 < rr * rr)) continue;
       float depth;
@@ -74,9 +78,11 @@ void ParallelChunks(void*, uint32_t count, ParallelFor::Task task, void* data) {
 
 // Runs the job serially and with both hooks, every run checked against the brute force; a half-size
 // buffer keeps the documented prefix. Returns the serial stats.
-DetectStats CheckAgainstBruteForce(test::Character& ctx, DetectMethod method, float job_margin) {
+DetectStats CheckAgainstBruteForce(test::Character& ctx, DetectMethod method, float job_margin,
+                                   float job_fold = -1.0f) {
   const float m = job_margin < 0.0f ? ctx.model.contact_margin() : job_margin;
-  const Brute ref = BruteForce(ctx, method, m);
+  const float fold = job_fold < 0.0f ? ctx.model.fold_margin() : job_fold;
+  const Brute ref = BruteForce(ctx, method, m, fold);
   const uint32_t S = ctx.model.sphere_count();
   DetectStats serial;
   for (int hook = 0; hook < 3; ++hook) {
@@ -85,6 +91,7 @@ DetectStats CheckAgainstBruteForce(test::Character& ctx, DetectMethod method, fl
     DetectStats st;
     DetectJob job = test::MakeDetectJob(ctx, method, out, &n, &st);
     job.margin = job_margin;
+    job.fold_margin = job_fold;
     if (hook == 1) job.parallel_for.run = &ParallelReverse;
     if (hook == 2) job.parallel_for.run = &ParallelChunks;
     REQUIRE(job.Run() == Status::kOk);
@@ -138,7 +145,7 @@ std::vector<uint8_t> ReadFile(const std::string& path) {
 
 }  // namespace
 
-TEST_CASE("DetectJob broad phase equals brute force on moving limb-like bodies, margins and parallel_for") {
+TEST_CASE("DetectJob broad phase equals brute force on moving limb-like bodies, margins, fold margins and parallel_for") {
   std::mt19937 rng(20240611);
   std::uniform_real_distribution<float> u(0.0f, 1.0f);
   uint64_t culled_runs = 0, runs = 0;
@@ -174,6 +181,18 @@ TEST_CASE("DetectJob broad phase equals brute force on moving limb-like bodies, 
       for (uint32_t b = a + 1; b < S; ++b)
         if (b - a <= 1 + static_cast<uint32_t>(trial % 2) || u(rng) < 0.02f) d.excluded.emplace_back(a, b);
     d.contact_margin = trial % 3 == 0 ? 0.0f : trial % 3 == 1 ? 0.05f : 0.4f;
+    // Every other trial a fold margin (Asset.fold_margin) on random regions of whole tubes: smaller or larger
+    // than the contact margin, so both kinds of pair get re-tested after the broad phase.
+    const bool fold = trial % 2 == 1;
+    if (fold) {
+      d.fold_margin = trial % 4 == 1 ? 0.0f : 0.6f;
+      d.sphere_regions.assign(S, 0);
+      for (size_t t = 0; t < tubes.size(); ++t) {
+        const uint32_t s1 = t + 1 < tubes.size() ? d.tube_first_sphere[t + 1] : S;
+        const uint8_t region = static_cast<uint8_t>(rng() % 3);
+        for (uint32_t s = d.tube_first_sphere[t]; s < s1; ++s) d.sphere_regions[s] = region;
+      }
+    }
     const test::AlignedBytes bytes = test::Serialize(d);
     AssetView view;
     REQUIRE(LoadAsset(bytes.data(), bytes.size, &view) == Status::kOk);
@@ -183,10 +202,12 @@ TEST_CASE("DetectJob broad phase equals brute force on moving limb-like bodies, 
     for (int pose = 0; pose < 4; ++pose) {
       PoseTubes(d, &ctx, &rng, pose == 0 ? 3.0f : 8.0f + 10.0f * static_cast<float>(pose));
       for (float job_margin : {-1.0f, 0.0f, 0.25f}) {
-        for (DetectMethod m : {DetectMethod::kM1, DetectMethod::kM2}) {
-          const DetectStats st = CheckAgainstBruteForce(ctx, m, job_margin);
-          ++runs;
-          culled_runs += st.sphere_tests < (m == DetectMethod::kM1 ? ctx.model.m1_candidate_pairs() : ctx.model.m2_candidate_pairs());
+        for (float job_fold : fold ? std::vector<float>{-1.0f, 0.1f} : std::vector<float>{-1.0f}) {
+          for (DetectMethod m : {DetectMethod::kM1, DetectMethod::kM2}) {
+            const DetectStats st = CheckAgainstBruteForce(ctx, m, job_margin, job_fold);
+            ++runs;
+            culled_runs += st.sphere_tests < (m == DetectMethod::kM1 ? ctx.model.m1_candidate_pairs() : ctx.model.m2_candidate_pairs());
+          }
         }
       }
     }

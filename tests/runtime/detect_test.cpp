@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <set>
 #include <utility>
 #include <vector>
@@ -187,6 +188,14 @@ TEST_CASE("DetectJob argument errors and the parallel_for path") {
   CHECK(job.Run() == Status::kErrorInvalidJob);
   CHECK(DetectBound(sc.view, static_cast<DetectMethod>(9)) == 0);
   CHECK(DetectBound(AssetView{}, DetectMethod::kM1) == 0);
+  job.method = DetectMethod::kM2;
+  CHECK(!Failed(job.Run()));  // capacity 0: kOkTruncated on these crossing tubes
+  job.fold_margin = std::numeric_limits<float>::quiet_NaN();
+  CHECK(job.Run() == Status::kErrorInvalidJob);
+  job.fold_margin = 0.1f;  // this asset has no fold margin, so no regions to tell one kind of pair from the other
+  CHECK(sc.ctx.model.fold_margin() < 0.0f);
+  CHECK(job.Run() == Status::kErrorInvalidJob);
+  job.fold_margin = -1.0f;
 
   const auto serial = sc.Detect(DetectMethod::kM1);
   ParallelFor pf;

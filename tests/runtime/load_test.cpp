@@ -131,6 +131,17 @@ TEST_CASE("LoadAsset: semantic errors each give their status") {
   expect([](test::AssetData& d) { d.contact_margin = std::numeric_limits<float>::quiet_NaN(); }, Status::kErrorNonFinite);
   expect([](test::AssetData& d) { d.contact_margin = INFINITY; }, Status::kErrorNonFinite);
   expect([](test::AssetData& d) { d.contact_margin = -0.01f; }, Status::kErrorContactMargin);
+  // The fold margin (optional): finite, and tested per region pair, so only with the spheres' regions; a
+  // negative one means none (what assets without the field hold).
+  expect([](test::AssetData& d) { d.fold_margin = std::numeric_limits<float>::quiet_NaN(); }, Status::kErrorNonFinite);
+  expect([](test::AssetData& d) { d.fold_margin = 0.01f; }, Status::kErrorMissingField);
+  for (float fold : {0.01f, -2.0f}) {
+    test::AssetData d = base;
+    d.fold_margin = fold;
+    if (fold >= 0.0f) d.sphere_regions.assign(d.spheres.size(), 1);
+    CHECK(Load(d, &view) == Status::kOk);
+    CHECK(view.valid());
+  }
   // Joint weights (schema v3): four influences per sphere, indices < joint_count, weights a partition of 1.
   auto with_joints = [](test::AssetData& d) {
     d.joint_count = 3;

@@ -25,7 +25,7 @@ namespace spherechain::baker {
 ///   "min_radius_rel": 0.003,
 ///   "min_gain": 0.0002, "region_balance": 0.5, "refine_sweeps": 4, "dilation_rel": 0.003,
 ///   "skin_spheres": 16, "skin_tolerance_rel": 0.01, "skin_min_vertices": 8, "medial_min_rel": 0.001,
-///   "contact_margin_rel": 0.004,
+///   "contact_margin_rel": 0.004, "fold_margin_rel": (layout default; -1 = none),
 ///   "near_rel": 0.005, "reach_rel": 0.003, "pivot_poses": 0, "pivot_pose_angle": 30,
 ///   "segmentation": "auto"|"rig"|"geometry"|"skeleton"|"map", "region_map": "map.json", "rig": "x.mhskel",
 ///   "regions": "extended"|"paper",
@@ -52,6 +52,14 @@ struct BakeConfig {
   /// Contact margin stored in the asset (schema Asset.contact_margin), relative to the body height:
   /// detection tests spheres with radii grown by it (physics engines' contact offset / skin width).
   double contact_margin_rel = 0.004;
+  /// Fold margin stored in the asset (Asset.fold_margin, runtime DetectJob::fold_margin), relative to the body
+  /// height: a pair of spheres of one region is reported within 2 × this instead of 2 × contact_margin_rel.
+  /// Unset: the layout's default — 0.0015 for a standing biped's extended regions (their elbows' and knees'
+  /// spheres meet before the skin in the joint's pit: false-alarm frames 2 / 22 / 5 / 0 → 0 / 2 / 1 / 0 on
+  /// MakeHuman 40 / 160 frames, CesiumMan, BCN_Epileptic; README "Head, hands and feet"), none for the paper's
+  /// five and creatures (where a limb region holds its hand or foot, and BCN_Epileptic's knee folds are found
+  /// through those pairs). Negative: none (every pair on contact_margin_rel). [Limit: < 0, or [0, 0.05]]
+  std::optional<double> fold_margin_rel;
   /// Exclusions (cover fit): pairs whose spheres come within (near_rel + 2·contact_margin_rel) × body
   /// height of each other at bind pose are adjacent (chains.h BindExcludedPairs) — so nothing the
   /// margin reaches at bind pose is ever reported.

@@ -54,6 +54,7 @@ struct AssetInputs {
   FitParams params;
   uint64_t config_hash = 0;
   double contact_margin = 0.0;                      ///< Asset.contact_margin [Units: source]
+  double fold_margin = -1.0;                        ///< Asset.fold_margin [Units: source]; < 0: left out
   const CoverageStats* coverage = nullptr;          ///< [opt] Asset.coverage
   float coverage_voxel_rel = 0.0f;                  ///< the voxel edge it was measured with / height
   /// [opt] Asset.forced_findings: plausibility checks the bake failed and was forced past (bake --force).

@@ -52,8 +52,10 @@ class DeviceAsset {
   /// scales, bind spheres, chains, excluded pairs) to the current device (one cudaMalloc, one synchronous
   /// cudaMemcpy) and keeps the asset's contact margin (Model::contact_margin()). Neither the model nor the
   /// asset bytes are needed afterwards.
-  /// Returns kOk; kErrorNullArgument (model not initialised); kErrorOutOfMemory (host/device
-  /// allocation); kErrorCuda (LastCudaError()). On failure the object is left empty.
+  /// Returns kOk; kErrorNullArgument (model not initialised); kErrorUnsupported (the model has a fold
+  /// margin, Model::fold_margin() >= 0: the device kernels test one margin for every pair, so they would not
+  /// match DetectJob); kErrorOutOfMemory (host/device allocation); kErrorCuda (LastCudaError()). On failure
+  /// the object is left empty.
   /// Cost: O(#S + Σ|chain| + #excluded) host work, ~100 B per sphere of device memory, synchronous.
   /// Must not be called while a Batch referencing this asset runs (it frees the old copy).
   Status Upload(const runtime::Model& model);

@@ -81,7 +81,8 @@ struct AssetView {
 ///     3·#T of them, else kErrorCountMismatch —, optional `weld_ids`: #V entries, weld_ids[v] <= v and
 ///     weld_ids[weld_ids[v]] == weld_ids[v], else kErrorIndexOutOfRange), kErrorOffsets, kErrorNonFinite,
 ///     kErrorRadius, kErrorPivotFrame, kErrorChainOrder, kErrorExcludedPairs, kErrorContactMargin
-///     (contact_margin < 0; NaN or inf: kErrorNonFinite), and the optional v3 joint weights:
+///     (contact_margin < 0; NaN or inf: kErrorNonFinite), the optional fold_margin (NaN or inf:
+///     kErrorNonFinite; >= 0 without sphere_regions: kErrorMissingField), and the optional v3 joint weights:
 ///     sphere_joints and sphere_joint_weights both present or both absent, 4·#S each
 ///     (kErrorCountMismatch), joint indices < joint_count (kErrorIndexOutOfRange), weights finite,
 ///     >= 0 and summing to 1 ± 1e-3 per sphere (kErrorSkinWeights); the optional v4 regions: 2 to

@@ -48,13 +48,15 @@ struct BatchJob {
   uint32_t joint_count = 0;                  ///< kJoints only: #J [Limit: == Model::joint_count()]
   DetectMethod method = DetectMethod::kM1;
   float margin = -1.0f;                      ///< see DetectJob::margin (< 0: the asset's)
+  float fold_margin = -1.0f;                 ///< see DetectJob::fold_margin (< 0: the asset's, if any)
   ParallelFor parallel_for;                  ///< [opt] over characters
   uint32_t parallel_grain = 4;               ///< [Limit: > 0] characters per task index
 
   /// True when Run() would not fail on the batch's own arguments.
   bool Validate() const { return Check() == Status::kOk; }
   /// kErrorNullArgument (model null, or characters null with character_count > 0), kErrorInvalidJob
-  /// (model not initialised, unknown source / mode / method, margin NaN or infinite, grain 0),
+  /// (model not initialised, unknown source / mode / method, margin or fold_margin NaN or infinite,
+  /// fold_margin >= 0 on a model without a fold margin, grain 0),
   /// kErrorMissingField / kErrorJointCount (kJoints: the model has no joint weights / joint_count
   /// differs), else kOk. Per-character arguments are checked per character (their `status`).
   Status Check() const;

@@ -90,11 +90,21 @@ struct DetectJob {
   /// < 0 (default): the asset's, Model::contact_margin() (Asset.contact_margin); NaN or +inf:
   /// kErrorInvalidJob. [Limit: finite]
   float margin = -1.0f;
+  /// Fold margin [Units: source units]: a pair of two spheres of one region (Asset.sphere_regions) is
+  /// reported when ‖cA − cB‖ < rA + rB + 2·fold_margin instead of 2·margin; pairs of two regions keep
+  /// `margin`. Inside a region spheres meet only where a joint folds, where the refit spheres do not follow
+  /// the skin the pit compresses (README "Head, hands and feet"). < 0 (default): the asset's,
+  /// Model::fold_margin() (Asset.fold_margin; assets without one test every pair with `margin`); >= 0 on a
+  /// model without a fold margin (no regions to tell the pairs apart), NaN or inf: kErrorInvalidJob.
+  /// Collision::depth stays computed with `margin`. Cost: one scalar overlap test per hit when the two
+  /// margins differ. [Limit: finite]
+  float fold_margin = -1.0f;
 
   /// True when Run() would not fail on arguments.
   bool Validate() const { return Check() == Status::kOk; }
   /// kErrorNullArgument (model, workspace or count null, or output null with capacity > 0),
-  /// kErrorInvalidJob (model or workspace not initialised, unknown method, margin NaN or infinite),
+  /// kErrorInvalidJob (model or workspace not initialised, unknown method, margin or fold_margin NaN or
+  /// infinite, fold_margin >= 0 on a model without a fold margin),
   /// kErrorWorkspaceModel (workspace made for another model), else kOk.
   Status Check() const;
   /// Returns Check()'s error (outputs and workspace untouched), kOk, or kOkTruncated when more pairs overlapped

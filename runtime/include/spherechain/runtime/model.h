@@ -119,6 +119,13 @@ class Model {
   /// The asset's contact margin (Asset.contact_margin, schema v2; 0 for v1 assets) [Units: source]:
   /// what DetectJob grows every radius by unless the job overrides it.
   float contact_margin() const { return contact_margin_; }
+  /// The asset's fold margin (Asset.fold_margin, added within schema v3) [Units: source]: DetectJob reports a
+  /// pair of two spheres of one region (Asset.sphere_regions) only when ‖cA − cB‖ < rA + rB + 2·fold_margin
+  /// unless the job overrides it; < 0 (assets without the field): such pairs are tested like any other.
+  float fold_margin() const { return fold_margin_; }
+  /// Region of sphere `s` (Asset.sphere_regions) when the asset has a fold margin, else 0 for every sphere.
+  /// [Limit: s < #S]
+  uint8_t fold_region(uint32_t s) const { return fold_region_ ? fold_region_[s] : uint8_t{0}; }
   size_t bytes() const { return bytes_; }  ///< size of the model's block
 
   /// The bind spheres (Asset.spheres), SoA; valid for the model's lifetime.
@@ -150,6 +157,8 @@ class Model {
   uint32_t sphere_count_ = 0, vertex_count_ = 0, chain_count_ = 0, joint_count_ = 0;
   uint32_t m1_candidates_ = 0, m2_candidates_ = 0;
   float contact_margin_ = 0.0f;
+  float fold_margin_ = -1.0f;              // Asset.fold_margin when set (>= 0), else -1
+  const uint8_t* fold_region_ = nullptr;   // #S sphere regions, only with a fold margin
   ModelArrays a_{};
   uint8_t isa_ = 0;  // kernels::Isa picked at Init (runtime dispatch: SSE2, AVX or AVX-512)
   uint32_t m1_tests_ = 0;  // Σ_chains n(n−1)/2 (DetectStats::tests of M1)

@@ -767,7 +767,8 @@ struct Asset FLATBUFFERS_FINAL_CLASS : private flatbuffers::Table {
     VT_REGIONS = 74,
     VT_BIPED = 76,
     VT_REACH_OFFSETS = 78,
-    VT_REACH_TRIANGLES = 80
+    VT_REACH_TRIANGLES = 80,
+    VT_FOLD_MARGIN = 82
   };
   uint32_t schema_version() const {
     return GetField<uint32_t>(VT_SCHEMA_VERSION, 0);
@@ -894,6 +895,9 @@ struct Asset FLATBUFFERS_FINAL_CLASS : private flatbuffers::Table {
   const flatbuffers::Vector<uint32_t> *reach_triangles() const {
     return GetPointer<const flatbuffers::Vector<uint32_t> *>(VT_REACH_TRIANGLES);
   }
+  float fold_margin() const {
+    return GetField<float>(VT_FOLD_MARGIN, -1.0f);
+  }
   bool Verify(flatbuffers::Verifier &verifier) const {
     return VerifyTableStart(verifier) &&
            VerifyField<uint32_t>(verifier, VT_SCHEMA_VERSION, 4) &&
@@ -970,6 +974,7 @@ struct Asset FLATBUFFERS_FINAL_CLASS : private flatbuffers::Table {
            verifier.VerifyVector(reach_offsets()) &&
            VerifyOffset(verifier, VT_REACH_TRIANGLES) &&
            verifier.VerifyVector(reach_triangles()) &&
+           VerifyField<float>(verifier, VT_FOLD_MARGIN, 4) &&
            verifier.EndTable();
   }
 };
@@ -1095,6 +1100,9 @@ struct AssetBuilder {
   void add_reach_triangles(flatbuffers::Offset<flatbuffers::Vector<uint32_t>> reach_triangles) {
     fbb_.AddOffset(Asset::VT_REACH_TRIANGLES, reach_triangles);
   }
+  void add_fold_margin(float fold_margin) {
+    fbb_.AddElement<float>(Asset::VT_FOLD_MARGIN, fold_margin, -1.0f);
+  }
   explicit AssetBuilder(flatbuffers::FlatBufferBuilder &_fbb)
         : fbb_(_fbb) {
     start_ = fbb_.StartTable();
@@ -1146,8 +1154,10 @@ inline flatbuffers::Offset<Asset> CreateAsset(
     flatbuffers::Offset<flatbuffers::Vector<flatbuffers::Offset<spherechain::schema::RegionInfo>>> regions = 0,
     bool biped = false,
     flatbuffers::Offset<flatbuffers::Vector<uint32_t>> reach_offsets = 0,
-    flatbuffers::Offset<flatbuffers::Vector<uint32_t>> reach_triangles = 0) {
+    flatbuffers::Offset<flatbuffers::Vector<uint32_t>> reach_triangles = 0,
+    float fold_margin = -1.0f) {
   AssetBuilder builder_(_fbb);
+  builder_.add_fold_margin(fold_margin);
   builder_.add_reach_triangles(reach_triangles);
   builder_.add_reach_offsets(reach_offsets);
   builder_.add_regions(regions);
@@ -1230,7 +1240,8 @@ inline flatbuffers::Offset<Asset> CreateAssetDirect(
     const std::vector<flatbuffers::Offset<spherechain::schema::RegionInfo>> *regions = nullptr,
     bool biped = false,
     const std::vector<uint32_t> *reach_offsets = nullptr,
-    const std::vector<uint32_t> *reach_triangles = nullptr) {
+    const std::vector<uint32_t> *reach_triangles = nullptr,
+    float fold_margin = -1.0f) {
   auto generator__ = generator ? _fbb.CreateString(generator) : 0;
   auto parts__ = parts ? _fbb.CreateVector<flatbuffers::Offset<spherechain::schema::MeshPart>>(*parts) : 0;
   auto units__ = units ? _fbb.CreateString(units) : 0;
@@ -1298,7 +1309,8 @@ inline flatbuffers::Offset<Asset> CreateAssetDirect(
       regions__,
       biped,
       reach_offsets__,
-      reach_triangles__);
+      reach_triangles__,
+      fold_margin);
 }
 
 /// One region of a body (Asset.regions, schema v4).
