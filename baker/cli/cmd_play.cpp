@@ -134,15 +134,15 @@ int RunPlay(const PlayArgs& a) {
     std::printf("  joint refit vs vertex refit (pivot frame), centre distance / radius over spheres x frames: "
                 "median %.2f %%, p95 %.2f %%, max %.2f %%\n",
                 sum.joint_error_median, sum.joint_error_p95, sum.joint_error_max);
-  if (opts.narrow_phase)
-    std::printf("  narrow phase%s: %llu contacts (triangle pairs) in %llu frames; median %.1f us, max %.1f us a frame\n",
-                opts.narrow_behind_margin > 0.0f
-                    ? (" behind M2's pairs at " + std::to_string(opts.narrow_behind_margin).substr(0, 4) +
-                       " x the contact margin (reach regions; the M2 run included)")
-                          .c_str()
-                    : "",
+  if (opts.narrow_phase) {
+    std::printf("  narrow phase");
+    if (opts.narrow_behind_margin > 0.0f)
+      std::printf(" behind M2's pairs at %g x the contact margin (reach regions; the M2 run included)",
+                  double(opts.narrow_behind_margin));
+    std::printf(": %llu contacts (triangle pairs) in %llu frames; median %.1f us, max %.1f us a frame\n",
                 static_cast<unsigned long long>(sum.contacts), static_cast<unsigned long long>(sum.frames_with_contacts),
                 sum.narrow_median_us, sum.narrow_max_us);
+  }
   std::printf("  regions touching (frames):");
   if (sum.region_frames.empty()) std::printf(" none");
   for (const auto& [p, c] : sum.region_frames) std::printf(" %s(%u)", RegionPairName(view, p.first, p.second).c_str(), c);

@@ -129,15 +129,9 @@ class Player {
       job.count = &count_contacts_;
       job.stats = &row->narrow;
       // Behind the spheres' pairs: M2 with the wider margin, then the narrow phase on those pairs (timed together).
-      runtime::DetectJob broad;
-      broad.model = model_;
-      broad.workspace = ws_;
-      broad.method = runtime::DetectMethod::kM2;
-      broad.margin = o_.narrow_behind_margin * model_->contact_margin();
-      broad.output = out_behind_.data();
-      broad.capacity = static_cast<uint32_t>(out_behind_.size());
-      broad.count = &row->narrow_pairs;
       const bool behind = o_.narrow_behind_margin > 0.0f;
+      runtime::DetectJob broad = MakeDetect(runtime::DetectMethod::kM2, &out_behind_, &row->narrow_pairs, nullptr);
+      broad.margin = o_.narrow_behind_margin * model_->contact_margin();
       if (behind) job.sphere_pairs = out_behind_.data();
       auto run = [&] {
         if (behind) {
@@ -188,8 +182,8 @@ class Player {
     return Ok{};
   }
 
-  Status Detect(runtime::DetectMethod method, std::vector<runtime::Collision>* out, uint32_t* count,
-                runtime::DetectStats* stats, double* us) {
+  runtime::DetectJob MakeDetect(runtime::DetectMethod method, std::vector<runtime::Collision>* out, uint32_t* count,
+                                runtime::DetectStats* stats) const {
     runtime::DetectJob job;
     job.model = model_;
     job.workspace = ws_;
@@ -198,6 +192,12 @@ class Player {
     job.capacity = static_cast<uint32_t>(out->size());
     job.count = count;
     job.stats = stats;
+    return job;
+  }
+
+  Status Detect(runtime::DetectMethod method, std::vector<runtime::Collision>* out, uint32_t* count,
+                runtime::DetectStats* stats, double* us) {
+    const runtime::DetectJob job = MakeDetect(method, out, count, stats);
     return Time([&] { return job.Run(); }, us);
   }
 
