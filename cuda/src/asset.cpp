@@ -51,11 +51,11 @@ void DeviceAsset::Release() {
 Status DeviceAsset::Upload(const runtime::Model& model) {
   Release();
   if (!model.initialized()) return Status::kErrorNullArgument;
-  if (model.fold_margin() >= 0.0f) return Status::kErrorUnsupported;  // the kernels test one margin for every pair
   const runtime::ModelArrays& a = model.arrays();
   const uint32_t S = model.sphere_count(), C = model.chain_count();
   Packer pk;
-  size_t o_pv, o_local, o_offset, o_bind, o_mask, o_coff, o_cs, o_eoff, o_en;
+  size_t o_pv, o_local, o_offset, o_bind, o_mask, o_coff, o_cs, o_eoff, o_en, o_reg = 0;
+  const bool fold = model.fold_margin() >= 0.0f;
   try {
     // The model's SoA arrays, packed as float4 rows (x, y, z, w) for the device's 16-byte loads: the same
     // floats, so the same arithmetic as the CPU jobs.
@@ -74,6 +74,11 @@ Status DeviceAsset::Upload(const runtime::Model& model) {
     o_cs = pk.Add(a.chain_spheres, a.chain_offsets[C]);
     o_eoff = pk.Add(a.excl_offsets, S + 1);
     o_en = pk.Add(a.excl_neighbors, a.excluded_count);
+    if (fold) {  // the regions tell a fold pair (one region) from a contact pair (two)
+      std::vector<uint8_t> regions(S);
+      for (uint32_t s = 0; s < S; ++s) regions[s] = model.fold_region(s);
+      o_reg = pk.Add(regions.data(), regions.size());
+    }
   } catch (const std::bad_alloc&) {
     return Status::kErrorOutOfMemory;
   }
@@ -103,6 +108,8 @@ Status DeviceAsset::Upload(const runtime::Model& model) {
   desc_.max_chain_length = a.max_chain_length;
   desc_.excluded_count = a.excluded_count;
   desc_.contact_margin = model.contact_margin();  // Asset.contact_margin (absent in v1 assets: 0)
+  desc_.sphere_regions = fold ? base + o_reg : nullptr;
+  desc_.fold_margin = fold ? model.fold_margin() : -1.0f;  // Asset.fold_margin (absent: none)
   return Status::kOk;
 }
 

@@ -7,7 +7,8 @@
 // Each refits the spheres it needs into shared memory (DevRefitSphere: runtime/formulas.h, the formulas
 // the CPU's scalar path and SIMD kernels compile), syncs, runs
 // the overlap tests on the radii grown by the instance's contact margin (FrameParams::margin, else its
-// asset's: DetectJob's JobMargin; the stored spheres keep their own radii), and appends hits (with the
+// asset's: DetectJob's JobMargin; the stored spheres keep their own radii) — by its fold margin instead for
+// two spheres of one region when the asset has one (PairMargin) — and appends hits (with the
 // spheres' own depth) to one device array with warp-aggregated atomicAdd
 // (cooperative_groups::coalesced_threads), counting per instance. When the spheres do not fit in
 // 48 KiB of shared memory the kernels keep them in the batch's global sphere buffer instead.
@@ -105,12 +106,31 @@ struct KernelParams {
   uint32_t shared_spheres;  // spheres per group slice of shared memory
   uint32_t chains_per_instance;
   uint32_t flags;
-  float margin;  // FrameParams::margin: >= 0 for every instance, < 0 each instance's asset's
+  float margin;       // FrameParams::margin: >= 0 for every instance, < 0 each instance's asset's
+  float fold_margin;  // FrameParams::fold_margin: >= 0 for every instance (each asset has one), < 0 the asset's
 };
 
 // The contact margin instance spheres of asset `A` are tested with (as DetectJob's JobMargin).
 __device__ __forceinline__ float InstanceMargin(const KernelParams& p, const DeviceAssetDesc& A) {
   return p.margin < 0.0f ? A.contact_margin : p.margin;
+}
+
+// The fold margin pairs of one region of asset `A` are tested with (as DetectJob's JobFoldMargin); < 0: none.
+__device__ __forceinline__ float InstanceFoldMargin(const KernelParams& p, const DeviceAssetDesc& A) {
+  return A.fold_margin < 0.0f ? -1.0f : (p.fold_margin < 0.0f ? A.fold_margin : p.fold_margin);
+}
+
+// The margin pair (a, b) is tested with: the fold margin when both spheres lie in one region (`region_a`
+// is a's) and the asset has one, else the contact margin m. The CPU's broad phase grows the radii by the
+// larger of the two and tests the other kind's hits again on their own margin, so its result is this test.
+__device__ __forceinline__ float PairMargin(const DeviceAssetDesc& A, float m, float fold, uint32_t region_a,
+                                            uint32_t b) {
+  return fold >= 0.0f && __ldg(A.sphere_regions + b) == region_a ? fold : m;
+}
+
+// Region of sphere a for PairMargin (0 when the asset has no fold margin: then no region is read).
+__device__ __forceinline__ uint32_t FoldRegion(const DeviceAssetDesc& A, float fold, uint32_t a) {
+  return fold >= 0.0f ? __ldg(A.sphere_regions + a) : 0u;
 }
 
 // Appends one pair: one atomicAdd per coalesced group of hitting threads. `grow`: see DevDepth (0 for
@@ -149,6 +169,7 @@ __global__ void GroupKernel(KernelParams p) {
   const uint32_t S = A.sphere_count;
   const bool frame_mode = p.flags & kFlagFrameMode, write = p.flags & kFlagWriteSpheres, m1 = p.flags & kFlagM1;
   const float m = InstanceMargin(p, A), grow = m1 ? 0.0f : m;  // depth rounding as DetectM1 / DetectM2
+  const float fold = InstanceFoldMargin(p, A);
   float4* sph = kShared ? smem + size_t{group} * p.shared_spheres : p.spheres + I.sphere_offset;
 
   for (uint32_t s = lane; s < S; s += G) {
@@ -166,11 +187,12 @@ __global__ void GroupKernel(KernelParams p) {
       const float4 SA = sph[a];
       const uint32_t ma = __ldg(mask + a);
       if (m1 && !ma) continue;  // uniform across the warp
+      const uint32_t ra = FoldRegion(A, fold, a);
       for (uint32_t b = a + 1 + lane; b < S; b += 32u) {
         const uint32_t common = ma & __ldg(mask + b);
         if (m1 && !common) continue;
         const float4 SB = sph[b];
-        if (detail::DevOverlap(SA, SB, m) && !detail::DevIsExcluded(A, a, b)) {
+        if (detail::DevOverlap(SA, SB, PairMargin(A, m, fold, ra, b)) && !detail::DevIsExcluded(A, a, b)) {
           ++hits;
           Emit(p, inst, a, b, SA, SB, common, grow);
         }
@@ -182,11 +204,12 @@ __global__ void GroupKernel(KernelParams p) {
       const float4 SA = sph[a];
       const uint32_t ma = __ldg(mask + a);
       if (m1 && !ma) continue;
+      const uint32_t ra = FoldRegion(A, fold, a);
       for (uint32_t b = a + 1; b < S; ++b) {
         const uint32_t common = ma & __ldg(mask + b);
         if (m1 && !common) continue;
         const float4 SB = sph[b];
-        if (detail::DevOverlap(SA, SB, m) && !detail::DevIsExcluded(A, a, b)) {
+        if (detail::DevOverlap(SA, SB, PairMargin(A, m, fold, ra, b)) && !detail::DevIsExcluded(A, a, b)) {
           ++hits;
           Emit(p, inst, a, b, SA, SB, common, grow);
         }
@@ -206,7 +229,7 @@ __global__ void ChainKernel(KernelParams p) {
   const DeviceAssetDesc& A = p.assets[I.asset];
   if (chain >= A.chain_count && chain != 0) return;  // whole block
   const bool frame_mode = p.flags & kFlagFrameMode, write = p.flags & kFlagWriteSpheres;
-  const float m = InstanceMargin(p, A);
+  const float m = InstanceMargin(p, A), fold = InstanceFoldMargin(p, A);
   const uint32_t* mask = A.chain_mask;
   uint32_t off = 0, n = 0;
   if (chain < A.chain_count) {
@@ -239,10 +262,11 @@ __global__ void ChainKernel(KernelParams p) {
     const uint32_t a = ids[i];
     const float4 SA = kShared ? smem[i] : global[a];
     const uint32_t ma = __ldg(mask + a);
+    const uint32_t ra = FoldRegion(A, fold, a);
     for (uint32_t j = i + 1; j < n; ++j) {
       const uint32_t b = ids[j];
       const float4 SB = kShared ? smem[j] : global[b];
-      if (!detail::DevOverlap(SA, SB, m)) continue;
+      if (!detail::DevOverlap(SA, SB, PairMargin(A, m, fold, ra, b))) continue;
       const uint32_t common = ma & __ldg(mask + b);
       // Reported once: by the first chain containing both (as the CPU DetectM1).
       if (uint32_t(__ffs(common) - 1) != chain || detail::DevIsExcluded(A, a, b)) continue;
@@ -427,7 +451,10 @@ Status Batch::Run(const FrameParams& params, cudaStream_t stream) const {
     return Status::kErrorInvalidJob;
   const bool m1 = params.method == runtime::DetectMethod::kM1;
   if (!m1 && params.method != runtime::DetectMethod::kM2) return Status::kErrorInvalidJob;
-  if (!std::isfinite(params.margin)) return Status::kErrorInvalidJob;  // as DetectJob::Check
+  if (!std::isfinite(params.margin) || !std::isfinite(params.fold_margin)) return Status::kErrorInvalidJob;  // as DetectJob::Check
+  if (params.fold_margin >= 0.0f)  // a fold margin of the frame's own needs regions: every asset must have one
+    for (uint32_t k = 0; k < asset_count_; ++k)
+      if (host_assets_[k]->fold_margin() < 0.0f) return Status::kErrorInvalidJob;
   Strategy strategy = params.strategy;
   const bool few = instance_count_ < 4 * sm_count_;
   if (strategy == Strategy::kAuto)
@@ -448,6 +475,7 @@ Status Batch::Run(const FrameParams& params, cudaStream_t stream) const {
   p.shared_spheres = max_spheres_;
   p.chains_per_instance = std::max(max_chains_, 1u);
   p.margin = params.margin;
+  p.fold_margin = params.fold_margin;
   p.flags = (params.mode == runtime::RefitMode::kPivotFrame ? kFlagFrameMode : 0u) |
             (params.write_spheres ? kFlagWriteSpheres : 0u) | (m1 ? kFlagM1 : 0u);
 

@@ -20,9 +20,6 @@ const char* ToString(Status s) {
   switch (s) {
     case Status::kErrorCuda: return "kErrorCuda: a CUDA runtime call failed (see LastCudaErrorString())";
     case Status::kErrorNoDevice: return "kErrorNoDevice: no CUDA device is available";
-    case Status::kErrorUnsupported:
-      return "kErrorUnsupported: the asset has a fold margin (Asset.fold_margin), which the CUDA batch does not "
-             "test yet: use the CPU jobs";
     case Status::kErrorOutOfMemory: return "kErrorOutOfMemory: host or device allocation failed";
     case Status::kOkTruncated: return "kOkTruncated: success, but more pairs overlapped than the output capacity";
     default: return runtime::ToString(static_cast<runtime::Status>(static_cast<uint32_t>(s)));

@@ -47,6 +47,7 @@ inline void LoadBytes(AssetSet* s) {
   REQUIRE(s->ws.Init(s->model) == runtime::Status::kOk);
   REQUIRE(s->device.Upload(s->model) == sc::Status::kOk);
   CHECK(s->device.contact_margin() == s->model.contact_margin());
+  CHECK(s->device.fold_margin() == s->model.fold_margin());
 }
 
 inline void LoadSet(AssetSet* s, AssetData d) {
@@ -62,7 +63,9 @@ inline void LoadFile(AssetSet* s, const std::string& path) {
 
 /// A "star" of tubes crossing near the origin (many crossing pairs), chains mixing tubes; its
 /// Asset.contact_margin is `contact_margin` (0: the field absent, as asset_builder.h writes it).
-inline void MakeStar(AssetSet* s, uint32_t tubes, uint32_t rings, float contact_margin = 0.0f) {
+/// With `fold_margin` >= 0 it also has Asset.fold_margin and Asset.sphere_regions: tube i is region i % 3.
+inline void MakeStar(AssetSet* s, uint32_t tubes, uint32_t rings, float contact_margin = 0.0f,
+                     float fold_margin = -1.0f) {
   std::vector<Tube> ts;
   for (uint32_t i = 0; i < tubes; ++i) {
     Tube t;
@@ -83,6 +86,14 @@ inline void MakeStar(AssetSet* s, uint32_t tubes, uint32_t rings, float contact_
   chains.push_back({0});
   AssetData d = MakeTubes(ts, chains, &s->mesh);
   d.contact_margin = contact_margin;
+  if (fold_margin >= 0.0f) {
+    d.fold_margin = fold_margin;
+    const uint32_t S = static_cast<uint32_t>(d.spheres.size());
+    d.sphere_regions.assign(S, 0);
+    for (uint32_t t = 0; t < tubes; ++t)
+      for (uint32_t k = d.tube_first_sphere[t], e = t + 1 < tubes ? d.tube_first_sphere[t + 1] : S; k < e; ++k)
+        d.sphere_regions[k] = static_cast<uint8_t>(t % 3);
+  }
   s->bytes = Serialize(d);
   LoadBytes(s);
 }
@@ -134,9 +145,15 @@ inline float FrameMargin(const AssetSet& a, const sc::FrameParams& fp) {
   return fp.margin < 0.0f ? a.model.contact_margin() : fp.margin;
 }
 
-/// Checks the GPU frame against the CPU runtime (DetectJob with fp.margin) for every instance. Pairs
-/// must be the same set with the same chains mask and depth (1e-4 rel); a pair may differ only when it
-/// is borderline on the CPU spheres (|d² − (ra+rb+2m)²| ≤ 1e-5 (ra+rb+2m)², m the instance's margin).
+/// The fold margin of `a` under `fp` (as DetectJob's: < 0 the asset's; < 0 result: none).
+inline float FrameFoldMargin(const AssetSet& a, const sc::FrameParams& fp) {
+  return a.model.fold_margin() < 0.0f ? -1.0f : fp.fold_margin < 0.0f ? a.model.fold_margin() : fp.fold_margin;
+}
+
+/// Checks the GPU frame against the CPU runtime (DetectJob with fp.margin and fp.fold_margin) for every
+/// instance. Pairs must be the same set with the same chains mask and depth (1e-4 rel); a pair may differ
+/// only when it is borderline on the CPU spheres (|d² − (ra+rb+2m)²| ≤ 1e-5 (ra+rb+2m)², m the pair's
+/// margin: the instance's, or its fold margin for two spheres of one region).
 /// Spheres (when written) equal within 1e-5 relative.
 inline void CompareWithCpu(const std::vector<AssetSet*>& assets, const DeviceInstances& inst, const sc::HostResults& gpu,
                            const sc::Batch& batch, const sc::FrameParams& fp) {
@@ -148,8 +165,9 @@ inline void CompareWithCpu(const std::vector<AssetSet*>& assets, const DeviceIns
   size_t borderline = 0, cpu_total = 0;
   for (size_t i = 0; i < inst.host.size(); ++i) {
     AssetSet& a = *assets[inst.table[i].asset];
-    const float m = FrameMargin(a, fp);
-    const CpuFrame cpu = CpuReference(a.model, a.ws, a.view, inst.host[i].data(), 12, fp.mode, fp.method, fp.margin);
+    const float m = FrameMargin(a, fp), fold = FrameFoldMargin(a, fp);
+    const CpuFrame cpu = CpuReference(a.model, a.ws, a.view, inst.host[i].data(), 12, fp.mode, fp.method, fp.margin,
+                                      a.model.fold_margin() < 0.0f ? -1.0f : fp.fold_margin);
     cpu_total += cpu.pairs.size();
     if (fp.write_spheres) {
       const uint32_t off = batch.sphere_offset(static_cast<uint32_t>(i));
@@ -166,7 +184,8 @@ inline void CompareWithCpu(const std::vector<AssetSet*>& assets, const DeviceIns
     CHECK(gpu.instance_counts[i] == by_inst[i].size());
     auto borderline_pair = [&](int pa, int pb) {
       const float dx = cpu.x[pb] - cpu.x[pa], dy = cpu.y[pb] - cpu.y[pa], dz = cpu.z[pb] - cpu.z[pa];
-      const float rr = (cpu.r[pa] + m) + (cpu.r[pb] + m);
+      const float mp = fold >= 0.0f && a.model.fold_region(pa) == a.model.fold_region(pb) ? fold : m;
+      const float rr = (cpu.r[pa] + mp) + (cpu.r[pb] + mp);
       return std::fabs(dx * dx + dy * dy + dz * dz - rr * rr) <= 1e-5f * rr * rr;
     };
     std::set<std::pair<int, int>> cpu_set;
@@ -190,7 +209,7 @@ inline void CompareWithCpu(const std::vector<AssetSet*>& assets, const DeviceIns
   CHECK(gpu.total == gpu.pairs.size());
   CHECK_FALSE(gpu.overflow);
   MESSAGE("compared " << inst.host.size() << " instances, " << cpu_total << " CPU pairs, " << borderline
-                      << " borderline differences (margin " << fp.margin << ")");
+                      << " borderline differences (margin " << fp.margin << ", fold margin " << fp.fold_margin << ")");
 }
 
 /// Recorded animation frames (`spherechain play ... --dump-frames DIR`: frame_NNNN.f32, #V×3 float32)

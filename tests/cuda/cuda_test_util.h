@@ -98,7 +98,7 @@ struct CpuFrame {
 
 inline CpuFrame CpuReference(const runtime::Model& model, runtime::Workspace& ws, const runtime::AssetView& view, const float* positions,
                              uint32_t stride_bytes, runtime::RefitMode mode, runtime::DetectMethod method,
-                             float margin = -1.0f) {
+                             float margin = -1.0f, float fold_margin = -1.0f) {
   CpuFrame f;
   runtime::RefitJob refit;
   refit.model = &model;
@@ -118,6 +118,7 @@ inline CpuFrame CpuReference(const runtime::Model& model, runtime::Workspace& ws
   det.workspace = &ws;
   det.method = method;
   det.margin = margin;
+  det.fold_margin = fold_margin;
   det.output = f.pairs.data();
   det.capacity = static_cast<uint32_t>(f.pairs.size());
   det.count = &n;

@@ -24,6 +24,8 @@ struct DeviceAssetDesc {
   const uint16_t* chain_spheres = nullptr;   ///< Σ|chain|, each chain ascending
   const uint32_t* excl_offsets = nullptr;    ///< #S+1 into excl_neighbors (CSR by the smaller index a)
   const uint16_t* excl_neighbors = nullptr;  ///< #excluded: partners b > a, ascending per a
+  const uint8_t* sphere_regions = nullptr;   ///< #S: each sphere's region (Asset.sphere_regions), only when the
+                                             ///< asset has a fold margin (fold_margin >= 0); else null
   uint32_t sphere_count = 0;                 ///< #S (1..65535)
   uint32_t vertex_count = 0;                 ///< #V the positions must have
   uint32_t chain_count = 0;                  ///< #C (0..32)
@@ -34,6 +36,11 @@ struct DeviceAssetDesc {
                                              ///< runtime::Model::contact_margin(): the margin
                                              ///< Batch::Run tests this asset's instances with when
                                              ///< FrameParams::margin < 0
+  float fold_margin = -1.0f;                 ///< the asset's fold margin [Units: source units] (Asset.fold_margin,
+                                             ///< added within schema v3), as runtime::Model::fold_margin():
+                                             ///< pairs of two spheres of one region are tested with it
+                                             ///< (FrameParams::fold_margin overrides it); < 0: none, every
+                                             ///< pair is tested with the contact margin
 };
 
 /// Owning device copy of what refit and detect need from one asset — its runtime::Model (built once on
@@ -49,13 +56,12 @@ class DeviceAsset {
   ~DeviceAsset();
 
   /// Copies `model`'s refit/detect arrays (ModelArrays: pivot vertices, pivot-frame coordinates, radius
-  /// scales, bind spheres, chains, excluded pairs) to the current device (one cudaMalloc, one synchronous
-  /// cudaMemcpy) and keeps the asset's contact margin (Model::contact_margin()). Neither the model nor the
-  /// asset bytes are needed afterwards.
-  /// Returns kOk; kErrorNullArgument (model not initialised); kErrorUnsupported (the model has a fold
-  /// margin, Model::fold_margin() >= 0: the device kernels test one margin for every pair, so they would not
-  /// match DetectJob); kErrorOutOfMemory (host/device allocation); kErrorCuda (LastCudaError()). On failure
-  /// the object is left empty.
+  /// scales, bind spheres, chains, excluded pairs; with a fold margin also the spheres' regions,
+  /// Model::fold_region) to the current device (one cudaMalloc, one synchronous cudaMemcpy) and keeps the
+  /// asset's contact margin (Model::contact_margin()) and fold margin (Model::fold_margin()). Neither the
+  /// model nor the asset bytes are needed afterwards.
+  /// Returns kOk; kErrorNullArgument (model not initialised); kErrorOutOfMemory (host/device allocation);
+  /// kErrorCuda (LastCudaError()). On failure the object is left empty.
   /// Cost: O(#S + Σ|chain| + #excluded) host work, ~100 B per sphere of device memory, synchronous.
   /// Must not be called while a Batch referencing this asset runs (it frees the old copy).
   Status Upload(const runtime::Model& model);
@@ -71,6 +77,8 @@ class DeviceAsset {
   uint32_t chain_count() const { return desc_.chain_count; }    ///< #C
   /// The asset's contact margin (DeviceAssetDesc::contact_margin) [Units: source units]; 0 when empty.
   float contact_margin() const { return desc_.contact_margin; }
+  /// The asset's fold margin (DeviceAssetDesc::fold_margin) [Units: source units]; < 0: none (also when empty).
+  float fold_margin() const { return desc_.fold_margin; }
   /// Device bytes held.
   size_t device_bytes() const { return bytes_; }
 

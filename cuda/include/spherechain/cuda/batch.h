@@ -69,6 +69,13 @@ struct FrameParams {
   /// (Asset.contact_margin; 0 for v1 assets); >= 0: this margin for every instance of the batch;
   /// NaN or ±inf: Run returns kErrorInvalidJob. [Limit: finite]
   float margin = -1.0f;
+  /// Fold margin [Units: source units], as DetectJob::fold_margin: a pair of two spheres of one region
+  /// (Asset.sphere_regions) is reported when ‖cA − cB‖ < rA + rB + 2·fold_margin instead of 2·margin; pairs of
+  /// two regions keep `margin`. < 0 (default): each instance uses its own asset's, DeviceAsset::fold_margin()
+  /// (an asset without one tests every pair with `margin`); >= 0: this fold margin for every instance, and
+  /// then every asset of the batch must have one (else kErrorInvalidJob, as DetectJob); NaN or ±inf:
+  /// kErrorInvalidJob. [Limit: finite]
+  float fold_margin = -1.0f;
 };
 
 /// Host copy of one frame's results (Batch::Download). Allocates; for tests and tools, not the
@@ -125,12 +132,15 @@ class Batch {
   /// Enqueues one frame on `stream` (0 = legacy default stream): zero the counters, then refit every
   /// instance's spheres from its positions and report overlapping non-excluded pairs. Overlap, as
   /// the CPU DetectJob (same float operations, so the same pair set): ‖cB − cA‖² < ((rB + m) + (rA + m))²,
-  /// m the instance's margin (FrameParams::margin, or its asset's when < 0); the reported depth is
+  /// m the instance's margin (FrameParams::margin, or its asset's when < 0) — for two spheres of one region of
+  /// an asset with a fold margin, m is the fold margin (FrameParams::fold_margin, or the asset's); the
+  /// reported depth is
   /// rounded as DetectJob's for the method (M1: rA + rB − ‖·‖; M2 with m ≠ 0: ((rA + m) + (rB + m) − ‖·‖)
   /// − 2m). Asynchronous, no allocation, no synchronisation: capturable (cudaStreamBeginCapture …
   /// EndCapture).
   /// Returns kOk (enqueued; read the overflow flag for truncation); kErrorInvalidJob (not initialised,
-  /// unknown mode/method/strategy, kBlockPerChain with M2, margin NaN or infinite; nothing enqueued,
+  /// unknown mode/method/strategy, kBlockPerChain with M2, margin or fold_margin NaN or infinite,
+  /// fold_margin >= 0 with an asset of the batch that has no fold margin; nothing enqueued,
   /// outputs untouched); kErrorCuda (launch failed: LastCudaError()). Non-finite positions give
   /// non-finite spheres, which never overlap.
   /// Cost: one kernel; per sphere 12 vertex reads (144 B) + ~120 flops; per tested pair 12 flops (the

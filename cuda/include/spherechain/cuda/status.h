@@ -25,8 +25,6 @@ enum class [[nodiscard]] Status : uint32_t {
   kErrorVertexCount = 0x8000'0004u,   ///< Instance::vertex_count != the asset's fingerprint.vertex_count.
   kErrorStride = 0x8000'0005u,        ///< Instance::stride_bytes < 12 or not a multiple of 4.
   kErrorOutOfMemory = 0x8000'0006u,   ///< Host or device allocation failed (setup calls only).
-  kErrorUnsupported = 0x8000'0303u,   ///< The model uses what the device path does not do yet: a fold margin
-                                      ///< (runtime::Model::fold_margin() >= 0, Asset.fold_margin).
 
   kErrorCuda = 0x8000'0301u,      ///< A CUDA runtime call failed; LastCudaError() / LastCudaErrorString()
                                   ///< give the cudaError_t of this thread's last failure.
