@@ -427,6 +427,8 @@ bool BehindTheProxy(const Workload& w, const sc::AssetView& view, int runs,
       m2.workspace = &ws;
       m2.method = sc::DetectMethod::kM2;
       m2.margin = margin_scale == 1.0f ? -1.0f : margin_scale * model.contact_margin();
+      // One margin for every pair in front of the exact narrow phase (as play --narrow-behind).
+      if (model.fold_margin() >= 0.0f) m2.fold_margin = margin_scale * model.contact_margin();
       m2.output = pairs.data();
       m2.capacity = static_cast<uint32_t>(pairs.size());
       m2.count = &n_pairs;

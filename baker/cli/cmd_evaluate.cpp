@@ -24,7 +24,9 @@
 // phase behind M2's pairs finds contacts of (reach regions; JSON summary.proxy_then_narrow, per frame
 // then_narrow_region_pairs_m2, per sweep row recall_m2_then_narrow and its time): what an engine that runs the
 // spheres as its broad phase and the exact narrow phase behind them reports — no false alarm by construction, so
-// its margin trades recall against narrow-phase work instead of against false alarms.
+// its margin trades recall against narrow-phase work instead of against false alarms. The sweep rows' narrow
+// phase runs behind an M2 with that one margin for every pair (an asset's fold margin set to it, as play
+// --narrow-behind); the summary's behind M1's and M2's own pairs at the asset's margins.
 #include <unistd.h>
 
 #include <algorithm>
@@ -308,7 +310,9 @@ int RunEvaluate(const EvaluateArgs& a) {
   // asset's); the reported region pairs and sphere pairs are added to the sets.
   uint32_t reported[2] = {0, 0};  // records of the last detect(m, −1, …): the asset's margin
   uint32_t last_reported[2] = {0, 0};  // records of the last detect(m, …), whatever its margin
-  auto detect = [&](int m, float margin, std::set<RegionPair>* regions, std::set<SpherePairKey>* pairs) {
+  // `fold`: DetectJob::fold_margin (−1: the asset's, if any).
+  auto detect = [&](int m, float margin, std::set<RegionPair>* regions, std::set<SpherePairKey>* pairs,
+                    float fold = -1.0f) {
     auto& out = m == 0 ? out_m1 : out_m2;
     uint32_t n = 0;
     runtime::DetectJob det;
@@ -316,6 +320,7 @@ int RunEvaluate(const EvaluateArgs& a) {
     det.workspace = &ws;
     det.method = m == 0 ? runtime::DetectMethod::kM1 : runtime::DetectMethod::kM2;
     det.margin = margin;
+    det.fold_margin = fold;
     det.output = out.data();
     det.capacity = static_cast<uint32_t>(out.size());
     det.count = &n;
@@ -541,6 +546,15 @@ int RunEvaluate(const EvaluateArgs& a) {
       pt.sfound_m2 += CountIn(row.exact_spheres, pairs[1]);
       pt.pairs_m2 += pairs[1].size();
       {  // the narrow phase behind M2's pairs at this margin
+        // One margin for every pair in front of the exact narrow phase (as play --narrow-behind): an asset's
+        // fold margin only keeps the spheres alone from crying wolf at a folding joint.
+        if (model.fold_margin() >= 0.0f) {
+          std::set<RegionPair> unused_regions;
+          std::set<SpherePairKey> unused_pairs;
+          const float mg = static_cast<float>(pt.margin_rel * height);
+          if (runtime::Status st = detect(1, mg, &unused_regions, &unused_pairs, mg); runtime::Failed(st))
+            return Fail(std::string("detect (sweep, one margin): ") + runtime::ToString(st));
+        }
         runtime::NarrowPhaseJob restricted = job;  // this frame's positions and output buffer
         restricted.model = &narrow_reach, restricted.workspace = &narrow_reach_ws, restricted.stats = nullptr;
         restricted.sphere_pairs = out_m2.data();

@@ -132,6 +132,9 @@ class Player {
       const bool behind = o_.narrow_behind_margin > 0.0f;
       runtime::DetectJob broad = MakeDetect(runtime::DetectMethod::kM2, &out_behind_, &row->narrow_pairs, nullptr);
       broad.margin = o_.narrow_behind_margin * model_->contact_margin();
+      // One margin for every pair: the fold margin only keeps the spheres alone from crying wolf at a folding
+      // joint, and the exact narrow phase behind them cannot cry wolf (README "The spheres as a broad phase").
+      if (model_->fold_margin() >= 0.0f) broad.fold_margin = broad.margin;
       if (behind) job.sphere_pairs = out_behind_.data();
       auto run = [&] {
         if (behind) {

@@ -41,7 +41,8 @@ struct PlayOptions {
   /// With narrow_phase: 0 (default) — the narrow phase over every surrounding region (the exact answer); > 0 —
   /// only behind DetectJob M2's pairs found with this many times the asset's contact margin, on the reach regions
   /// (NarrowPhaseRegions::kReach; what a game running the spheres as its broad phase gets: README "The spheres as
-  /// a broad phase"; 1.5 there). That M2 run is timed into FrameReport::narrow_us with the narrow phase.
+  /// a broad phase"; 1.5 there), with every pair on that margin (an asset's fold margin set to it: the exact
+  /// narrow phase cannot cry wolf). That M2 run is timed into FrameReport::narrow_us with the narrow phase.
   /// [Limit: finite, >= 0; otherwise Play answers kConfig]
   float narrow_behind_margin = 0.0f;
   uint32_t contact_capacity = 1u << 16;   ///< narrow-phase contacts kept per frame (more are counted, not kept)

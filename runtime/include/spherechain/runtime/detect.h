@@ -96,8 +96,10 @@ struct DetectJob {
   /// the skin the pit compresses (README "Head, hands and feet"). < 0 (default): the asset's,
   /// Model::fold_margin() (Asset.fold_margin; assets without one test every pair with `margin`); >= 0 on a
   /// model without a fold margin (no regions to tell the pairs apart), NaN or inf: kErrorInvalidJob.
-  /// Collision::depth stays computed with `margin`. Cost: one scalar overlap test per hit when the two
-  /// margins differ. [Limit: finite]
+  /// Collision::depth stays computed with `margin`. In front of the exact narrow phase (NarrowPhaseJob on
+  /// these pairs), set it to `margin` (when the model has one): the narrow phase cannot cry wolf, so the fold
+  /// margin would only lose a joint's fold contacts (what `play --narrow-behind` and evaluate's sweep do).
+  /// Cost: one scalar overlap test per hit when the two margins differ. [Limit: finite]
   float fold_margin = -1.0f;
 
   /// True when Run() would not fail on arguments.
