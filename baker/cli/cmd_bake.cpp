@@ -14,7 +14,7 @@ namespace spherechain::cli {
 namespace {
 
 struct BakeArgs {
-  std::string input, output, report, config, rig, segmentation, region_map, ray_csv, png, vertices;
+  std::string input, output, report, config, rig, segmentation, region_map, ray_csv, png, vertices, regions;
   double disk_step = 0.0;
   bool force = false;
 };
@@ -87,6 +87,8 @@ int RunBake(const BakeArgs& a) {
   if (a.vertices == "joined") config.import.vertices = baker::VertexContract::kJoined;
   if (a.vertices == "source") config.import.vertices = baker::VertexContract::kSource;
   if (!a.region_map.empty()) config.region_map = a.region_map;
+  if (a.regions == "paper") config.regions = baker::RegionSet::kPaper;
+  if (a.regions == "extended") config.regions = baker::RegionSet::kExtended;
   if (a.disk_step > 0) config.fit.disk_step = a.disk_step;
   config.force = a.force;
   if (a.segmentation == "rig") config.segmentation = baker::SegmentMethod::kRig;
@@ -145,6 +147,12 @@ void RegisterBake(CLI::App& app, Commands* commands) {
                   "auto (rig when rigged, else geometry; a rigged creature that is no standing body: skeleton), rig, "
                   "geometry, skeleton (the any-skeleton path: limbs branching off the trunk of the bone tree), map")
       ->check(CLI::IsMember({"auto", "rig", "geometry", "skeleton", "map"}));
+  sub->add_option("--regions", args->regions,
+                  "Regions of a standing biped: extended (default: arms, legs, head, hands, feet and the torso, "
+                  "ten regions whose chains let a hand meet the face and a foot the other leg) or paper (the "
+                  "paper's five: arms, legs, torso with the head; Table 1's six chains); overrides the config's "
+                  "\"regions\". Creatures keep their own")
+      ->check(CLI::IsMember({"paper", "extended"}));
   sub->add_option("--vertices", args->vertices,
                   "Vertex contract for assimp formats (.x .fbx .dae ...): joined (default; what engines' importers "
                   "give: aiProcess_JoinIdenticalVertices) or source (the importer's own buffer); recorded in the "

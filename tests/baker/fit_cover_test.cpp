@@ -484,7 +484,7 @@ TEST_CASE("exclusions from bind geometry: the trunk's fold, only where the head 
   CHECK(why_limb.trunk_fold == 0);
 }
 
-TEST_CASE("heavy: bake MakeHuman with the cover fit — coverage, protrusion, schema v2 asset and its contact margin") {
+TEST_CASE("heavy: bake MakeHuman with the cover fit — coverage, protrusion, the default (extended) asset and its margins") {
   const std::string path = spherechain::test::SharedData("makehuman/base.obj");
   if (!spherechain::test::Require(path)) return;
   sb::Context ctx;
@@ -498,18 +498,23 @@ TEST_CASE("heavy: bake MakeHuman with the cover fit — coverage, protrusion, sc
   CHECK(r->coverage->coverage >= 0.90);
   CHECK(r->coverage->protrusion <= 0.05);
   CHECK(r->coverage->outside_p95_rel <= 0.005);
-  for (int k = 0; k < sb::kRegionCount; ++k) {
+  // The default layout for a standing biped: the extended one — arms, legs, head, both hands, both feet, the
+  // torso last — each region with spheres of its own.
+  const sb::RegionLayout& layout = r->segmentation.layout;
+  REQUIRE(layout.count() == 10);
+  CHECK(std::string(layout.Name(layout.trunk())) == "torso");
+  for (int k = 0; k < layout.count(); ++k) {
     size_t n = 0;
     for (const auto& s : r->fit.spheres) n += int(s.region) == k;
-    CHECK_MESSAGE(n >= 2, "region " << k << " has " << n << " spheres");
+    CHECK_MESSAGE(n >= 2, "region " << layout.Name(sb::Region(k)) << " has " << n << " spheres");
   }
 
-  // The asset: v2, the margin stored, bind pose quiet with it, pairs within a larger override.
+  // The asset: v4 (Asset.regions), the margins stored, bind pose quiet with them, pairs within a larger override.
   std::vector<uint64_t> storage((r->asset.size() + 7) / 8);
   std::memcpy(storage.data(), r->asset.data(), r->asset.size());
   rt::AssetView view;
   REQUIRE(rt::LoadAsset(storage.data(), r->asset.size(), &view) == rt::Status::kOk);
-  CHECK(view.asset->schema_version() == rt::kPaperSchemaVersion);
+  CHECK(view.asset->schema_version() == rt::kSchemaVersion);
   REQUIRE(view.asset->coverage() != nullptr);
   CHECK(view.asset->coverage()->coverage() == doctest::Approx(r->coverage->coverage).epsilon(1e-6));
   CHECK(std::string(view.asset->fit_method()->c_str()) == "cover");
@@ -519,6 +524,7 @@ TEST_CASE("heavy: bake MakeHuman with the cover fit — coverage, protrusion, sc
   REQUIRE(ws.Init(c) == rt::Status::kOk);
   const float margin = float(0.004 * r->fit.body_height);
   CHECK(c.contact_margin() == doctest::Approx(margin).epsilon(1e-5));
+  CHECK(c.fold_margin() == doctest::Approx(0.0015 * r->fit.body_height).epsilon(1e-5));
   std::vector<rt::Collision> out(rt::DetectBound(view, rt::DetectMethod::kM2));
   uint32_t n = 0;
   rt::DetectJob job;

@@ -44,6 +44,28 @@ if(NOT rc EQUAL 0 OR NOT ins MATCHES "right_hand")
   message(FATAL_ERROR "inspect of the extended asset (${rc}) does not name its regions:\n${ins}${err}")
 endif()
 
+# The extended layout is the default: a bake without a config writes the same bytes. `--regions paper` (over the
+# config's "extended") gives the paper's five regions: schema v3, no head region, no fold margin.
+execute_process(COMMAND ${CLI} -q bake ${MESH} -o ${WORK}/mh_default.sphc RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+file(SHA256 ${WORK}/mh.sphc h_ext)
+file(SHA256 ${WORK}/mh_default.sphc h_default)
+if(NOT rc EQUAL 0 OR NOT h_ext STREQUAL h_default)
+  message(FATAL_ERROR "the default bake (${rc}) differs from regions extended:\n${out}${err}")
+endif()
+execute_process(COMMAND ${CLI} -q bake ${MESH} -o ${WORK}/mh_paper.sphc --config ${WORK}/extended.json --regions paper
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+execute_process(COMMAND ${CLI} inspect ${WORK}/mh_paper.sphc --json RESULT_VARIABLE rc2 OUTPUT_VARIABLE pins ERROR_VARIABLE err2)
+if(NOT rc EQUAL 0 OR NOT rc2 EQUAL 0)
+  message(FATAL_ERROR "bake --regions paper (${rc}) / inspect (${rc2}):\n${out}${err}${err2}")
+endif()
+string(JSON p_schema GET "${pins}" schema_version)
+string(JSON p_fold GET "${pins}" fold_margin)
+string(JSON p_regions LENGTH "${pins}" regions)
+string(JSON p_head ERROR_VARIABLE no_head GET "${pins}" regions head)
+if(NOT p_schema EQUAL 3 OR NOT (p_fold STREQUAL "" OR p_fold STREQUAL "null") OR NOT p_regions EQUAL 5 OR NOT no_head)
+  message(FATAL_ERROR "--regions paper: schema ${p_schema}, fold margin ${p_fold}, ${p_regions} regions, head '${p_head}'")
+endif()
+
 # The fold margin (Asset.fold_margin: pairs of one region within 2 x 0.15 % of the height, not 2 x the contact
 # margin): the extended layout's default, in the report and the asset. On the default 40-frame morph it removes
 # the elbows' and knees' false alarms (their spheres meet before the skin in the joint's pit): none with it, some

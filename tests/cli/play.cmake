@@ -16,8 +16,10 @@ string(JSON bind_pairs GET "${json}" bind pairs_m2)
 if(NOT bind_pairs EQUAL 0)
   message(FATAL_ERROR "the bind pose reports ${bind_pairs} pairs")
 endif()
-# key frame → a pair of regions that must touch there
-set(expect "4:R0-R1" "12:R1-R4" "20:R0-R2" "20:R1-R3" "28:R2-R4" "36:R2-R3")
+# key frame → a pair of regions that must touch there. The default bake is the extended layout (R4 head,
+# R5/R6 hands, R7/R8 feet, R9 torso): arms crossed, the right hand on the torso at the shoulder, each hand on
+# its thigh, the left knee on the chest, legs crossed with the left foot on the right shin.
+set(expect "4:R0-R1" "12:R6-R9" "20:R2-R5" "20:R3-R6" "28:R2-R9" "36:R2-R3" "36:R3-R7")
 foreach(e ${expect})
   string(REPLACE ":" ";" parts ${e})
   list(GET parts 0 frame)

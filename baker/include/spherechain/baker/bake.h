@@ -37,14 +37,15 @@ enum class RegionSet : uint8_t { kPaper, kExtended };
 
 struct BakeConfig {
   SegmentMethod segmentation = SegmentMethod::kAuto;
-  /// "regions": "paper" (default) or "extended". Extended applies to the cover fit of a standing biped
-  /// (the paper fit and a creature keep their regions); parts a body lacks (HUMAN.blend's stump hands)
-  /// stay in their limb. It comes with a fold margin (fold_margin_rel), which keeps an elbow's or a knee's
-  /// spheres from crying wolf before the skin in the joint's pit meets: fewer false-alarm frames than the paper
-  /// layout (0 / 2 / 1 / 0 against 0 / 2 / 5 / 0 on MakeHuman 40 / 160 frames, CesiumMan, BCN_Epileptic). Not yet
-  /// the default: on its own regions MakeHuman 160's region recall is 94.5 % (hands), its sphere-pair recall is
-  /// 0.8–4.1 points lower, and the CUDA batch refuses the fold margin (README "Head, hands and feet").
-  RegionSet regions = RegionSet::kPaper;
+  /// "regions": "extended" (default since 2026-11-24) or "paper" (the paper's five; CLI `bake --regions`).
+  /// Extended applies to the cover fit of a standing biped (the paper fit and a creature keep their regions);
+  /// parts a body lacks (HUMAN.blend's stump hands) stay in their limb. It comes with a fold margin
+  /// (fold_margin_rel), which keeps an elbow's or a knee's spheres from crying wolf before the skin in the
+  /// joint's pit meets: fewer false-alarm frames than the paper layout (0 / 2 / 1 / 0 against 0 / 2 / 5 / 0 on
+  /// MakeHuman 40 / 160 frames, CesiumMan, BCN_Epileptic), at 1.1 and 1.9 points of region recall on MakeHuman 160
+  /// and BCN_Epileptic scored on the paper's five, and 0.8–4.1 points of sphere-pair recall (README "Head, hands
+  /// and feet").
+  RegionSet regions = RegionSet::kExtended;
   std::string region_map;  ///< [opt] with segmentation "map" (or set alone: implies "map")
   ImportOptions import;
   FitParams fit;
