@@ -170,7 +170,7 @@ Result<BakeConfig> LoadBakeConfig(const std::string& path) {
   return ParseBakeConfig(std::string(bytes->begin(), bytes->end()), path);
 }
 
-std::string CanonicalConfig(const BakeConfig& c) {
+std::string CanonicalConfig(const BakeConfig& c, const RegionLayout* layout) {
   json j;  // nlohmann::json objects are key-sorted: stable
   j["segmentation"] = c.region_map.empty() ? MethodName(c.segmentation) : "map";
   j["fit"] = FitMethodName(c.fit.method);
@@ -188,7 +188,7 @@ std::string CanonicalConfig(const BakeConfig& c) {
     j["refine_sweeps"] = c.fit.refine_sweeps;
     j["region_balance"] = c.fit.region_balance;
     j["dilation_rel"] = c.fit.dilation_rel;
-    j["skin_spheres"] = c.fit.skin_spheres;
+    j["skin_spheres"] = layout ? SkinSpheres(c.fit, *layout) : c.fit.skin_spheres;
     j["skin_tolerance_rel"] = c.fit.skin_tolerance_rel;
     j["skin_min_vertices"] = c.fit.skin_min_vertices;
     j["medial_min_rel"] = c.fit.medial_min_rel;
@@ -514,7 +514,7 @@ Result<BakeResult> Bake(const std::string& input_path, const BakeConfig& config,
     if (r.centre_weights) in.centre_weights = &*r.centre_weights;
     in.accuracy = r.accuracy;
     in.params = config.fit;
-    const std::string canonical = CanonicalConfig(config);
+    const std::string canonical = CanonicalConfig(config, &r.segmentation.layout);
     in.config_hash = Hash64(canonical.data(), canonical.size());
     in.contact_margin = config.contact_margin_rel * r.fit.body_height;
     in.fold_margin = FoldMarginRel(config, r.segmentation.layout) * r.fit.body_height;
@@ -705,7 +705,7 @@ json MakeBakeReport(const BakeResult& r, const BakeConfig& config, const Context
   // Every check passed, or (forced) the failed ones: a refused bake writes no report.
   j["plausibility"] = {{"passed", r.plausibility.empty()}, {"forced", config.force && !r.plausibility.empty()},
                        {"errors", plaus}};
-  j["params"] = json::parse(CanonicalConfig(config));
+  j["params"] = json::parse(CanonicalConfig(config, &r.segmentation.layout));
   json timings = json::object();
   double sum = 0;
   for (const auto& [name, ms] : ctx.timings_ms) {

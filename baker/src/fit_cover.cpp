@@ -253,6 +253,11 @@ struct CoverBall {
 
 }  // namespace
 
+int SkinSpheres(const FitParams& params, const RegionLayout& layout) {
+  if (params.skin_spheres >= 0) return params.skin_spheres;
+  return layout.paper && !layout.IsPaperFive() ? 24 : 16;
+}
+
 Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation& seg, const FitParams& params,
                                            Context* ctx) {
   Context::Timer timer(ctx, "fit.cover");
@@ -267,8 +272,11 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
   if (params.max_spheres < std::max(kRegionCount, nreg) || params.max_spheres > 4096)
     return MakeError(Error::Code::kFit, "fit cover: max_spheres must be in [" + std::to_string(std::max(kRegionCount, nreg)) +
                                             ", 4096] (at least one sphere a region)");
-  if (params.skin_spheres < 0 || params.skin_min_vertices < 1 || !(params.skin_tolerance_rel >= 0.0 && params.skin_tolerance_rel <= 0.2))
-    return MakeError(Error::Code::kFit, "fit cover: skin_spheres must be >= 0, skin_min_vertices >= 1, skin_tolerance_rel in [0, 0.2]");
+  if (params.skin_spheres < FitParams::kSkinSpheresByLayout || params.skin_min_vertices < 1 ||
+      !(params.skin_tolerance_rel >= 0.0 && params.skin_tolerance_rel <= 0.2))
+    return MakeError(Error::Code::kFit, "fit cover: skin_spheres must be >= 0 (or -1: the layout's), skin_min_vertices >= 1, "
+                                        "skin_tolerance_rel in [0, 0.2]");
+  const int skin_spheres = SkinSpheres(params, layout);
   if (!(params.cover_voxel_rel >= 1e-3 && params.cover_voxel_rel <= 0.1))
     return MakeError(Error::Code::kFit, "fit cover: cover_voxel_rel must be in [0.001, 0.1]");
   if (params.cover_max_voxels < 0)
@@ -469,7 +477,7 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
   bool has_limb = false;
   for (int r = 0; r < nreg; ++r) has_limb = has_limb || (layout.IsLimb(Region(r)) && F.volume[r] > 0.0);
   const int volume_budget =
-      has_limb ? std::max(std::max(kRegionCount, nreg), params.max_spheres - params.skin_spheres) : params.max_spheres;
+      has_limb ? std::max(std::max(kRegionCount, nreg), params.max_spheres - skin_spheres) : params.max_spheres;
   {
     Context::Timer t(ctx, "fit.cover.greedy");
     greedy(volume_budget);
@@ -552,7 +560,7 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
   //     voxel grid: a finger or a toe a few voxels thick has almost no interior voxel of its own, yet its
   //     medial balls are the spheres that follow it).
   const double dilation = params.dilation_rel * height;
-  if (int skin_left = params.max_spheres - int(chosen.size()); params.skin_spheres > 0 && skin_left > 0) {
+  if (int skin_left = params.max_spheres - int(chosen.size()); skin_spheres > 0 && skin_left > 0) {
     Context::Timer t(ctx, "fit.cover.skin");
     const double tol = params.skin_tolerance_rel * height;
     const uint32_t V = mesh.vertex_count();
@@ -569,7 +577,7 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
     // fills, whose face the pass would otherwise chase vertex by vertex (uncapped, CesiumMan's head ended with
     // 34 of its 128 spheres and each hand with 2–3); the face still gets some, for a hand laid on it.
     const int head = layout.paper && !layout.IsPaperFive() ? layout.Find("head") : -1;
-    const int head_cap = std::max(1, params.skin_spheres / 4);
+    const int head_cap = std::max(1, skin_spheres / 4);
     int head_added = 0;
     std::vector<uint32_t> uncovered;
     std::vector<double> outside;

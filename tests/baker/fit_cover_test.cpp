@@ -296,7 +296,7 @@ TEST_CASE("fit cover: bad parameters and a mesh without volume are clear errors"
   auto r = sb::FitCover(m, AllTorso(m), p);
   REQUIRE_FALSE(r.ok());
   CHECK(r.error().message.find("max_spheres") != std::string::npos);
-  for (auto bad : {+[](sb::FitParams* q) { q->skin_spheres = -1; }, +[](sb::FitParams* q) { q->skin_min_vertices = 0; },
+  for (auto bad : {+[](sb::FitParams* q) { q->skin_spheres = -2; }, +[](sb::FitParams* q) { q->skin_min_vertices = 0; },
                    +[](sb::FitParams* q) { q->skin_tolerance_rel = std::nan(""); }}) {
     sb::FitParams q;
     bad(&q);
@@ -495,9 +495,24 @@ TEST_CASE("heavy: bake MakeHuman with the cover fit — coverage, protrusion, th
   MESSAGE("MakeHuman cover fit: " << r->fit.spheres.size() << " spheres, coverage " << r->coverage->coverage
                                   << ", protrusion " << r->coverage->protrusion << ", p95 outside "
                                   << r->coverage->outside_p95_rel);
-  CHECK(r->coverage->coverage >= 0.90);
+  // The extended layout's skin pass takes 24 of the 128 spheres (the paper's five: 16), for the hands', feet's
+  // and face's skin: 0.5 points of MakeHuman's volume (89.6 %, paper layout 90.1 %) for 3 points of region recall.
+  CHECK(r->coverage->coverage >= 0.89);
   CHECK(r->coverage->protrusion <= 0.05);
   CHECK(r->coverage->outside_p95_rel <= 0.005);
+  {
+    sb::BakeConfig paper;
+    paper.regions = sb::RegionSet::kPaper;
+    sb::Context pctx;
+    auto rp = sb::Bake(path, paper, &pctx);
+    REQUIRE_MESSAGE(rp.ok(), (rp.ok() ? "" : rp.error().message));
+    REQUIRE(rp->coverage.has_value());
+    CHECK(rp->segmentation.layout.IsPaperFive());
+    CHECK(sb::SkinSpheres(sb::FitParams{}, rp->segmentation.layout) == 16);
+    CHECK(sb::SkinSpheres(sb::FitParams{}, r->segmentation.layout) == 24);
+    CHECK(rp->coverage->coverage >= 0.90);
+    CHECK(rp->coverage->coverage > r->coverage->coverage);  // the bigger skin pass costs volume
+  }
   // The default layout for a standing biped: the extended one — arms, legs, head, both hands, both feet, the
   // torso last — each region with spheres of its own.
   const sb::RegionLayout& layout = r->segmentation.layout;
