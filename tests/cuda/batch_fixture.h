@@ -212,6 +212,28 @@ inline void CompareWithCpu(const std::vector<AssetSet*>& assets, const DeviceIns
                       << " borderline differences (margin " << fp.margin << ", fold margin " << fp.fold_margin << ")");
 }
 
+/// Every (method, strategy) a batch runs: M1 with each strategy, M2 with all but kBlockPerChain (M1 only).
+inline std::vector<std::pair<runtime::DetectMethod, sc::Strategy>> MethodStrategies() {
+  std::vector<std::pair<runtime::DetectMethod, sc::Strategy>> out;
+  for (runtime::DetectMethod method : {runtime::DetectMethod::kM1, runtime::DetectMethod::kM2})
+    for (sc::Strategy strategy : {sc::Strategy::kThreadPerSphere, sc::Strategy::kBlockPerChain, sc::Strategy::kWarpPerInstance})
+      if (strategy != sc::Strategy::kBlockPerChain || method == runtime::DetectMethod::kM1) out.push_back({method, strategy});
+  return out;
+}
+
+/// Runs one frame of `batch` with `fp` (spheres written), downloads it and checks it against the CPU
+/// (CompareWithCpu: DetectJob with fp's margins for each instance). Returns the frame.
+inline sc::HostResults RunCompared(const std::vector<AssetSet*>& assets, const DeviceInstances& inst,
+                                   const sc::Batch& batch, sc::FrameParams fp) {
+  fp.write_spheres = true;
+  const sc::Status st = batch.Run(fp, 0);
+  REQUIRE_MESSAGE(st == sc::Status::kOk, std::string(sc::ToString(st)) << " / " << std::string(sc::LastCudaErrorString()));
+  sc::HostResults res;
+  REQUIRE(batch.Download(0, &res, true) == sc::Status::kOk);
+  CompareWithCpu(assets, inst, res, batch, fp);
+  return res;
+}
+
 /// Recorded animation frames (`spherechain play ... --dump-frames DIR`: frame_NNNN.f32, #V×3 float32)
 /// named by SPHERECHAIN_GPU_FRAMES="a.sphc=framesdir;b.sphc=framesdir2" (scripts/gpu-carry.sh prepares
 /// the MakeHuman morph and the CesiumMan walk): calls `fn(set, frames)` per readable item, the asset

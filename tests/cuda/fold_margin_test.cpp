@@ -66,18 +66,13 @@ TEST_CASE("cuda: Asset.fold_margin below and above the contact margin, mixed bat
   const sc::DeviceAsset* dev[] = {&below.device, &above.device, &none.device};
   sc::Batch batch;
   REQUIRE(batch.Init(dev, 3, inst.table.data(), static_cast<uint32_t>(inst.table.size())) == sc::Status::kOk);
-  for (DetectMethod method : {DetectMethod::kM1, DetectMethod::kM2})
-    for (sc::Strategy strategy : {sc::Strategy::kThreadPerSphere, sc::Strategy::kBlockPerChain, sc::Strategy::kWarpPerInstance}) {
-      if (strategy == sc::Strategy::kBlockPerChain && method == DetectMethod::kM2) continue;
-      CAPTURE(int(method));
-      CAPTURE(int(strategy));
-      sc::FrameParams fp{RefitMode::kPivotFrame, method, strategy, true};
-      REQUIRE(fp.fold_margin < 0.0f);
-      REQUIRE(batch.Run(fp, 0) == sc::Status::kOk);
-      sc::HostResults res;
-      REQUIRE(batch.Download(0, &res, true) == sc::Status::kOk);
-      CompareWithCpu(assets, inst, res, batch, fp);  // per instance: DetectJob with its asset's margins
-    }
+  for (const auto& [method, strategy] : MethodStrategies()) {
+    CAPTURE(int(method));
+    CAPTURE(int(strategy));
+    const sc::FrameParams fp{RefitMode::kPivotFrame, method, strategy, true};
+    REQUIRE(fp.fold_margin < 0.0f);
+    (void)RunCompared(assets, inst, batch, fp);  // per instance: DetectJob with its asset's margins
+  }
 }
 
 // FrameParams::fold_margin >= 0 replaces every asset's (as DetectJob::fold_margin), on a batch whose assets
@@ -96,24 +91,19 @@ TEST_CASE("cuda: FrameParams::fold_margin overrides the assets', CPU == GPU") {
   const sc::DeviceAsset* dev[] = {&a.device, &b.device};
   sc::Batch batch;
   REQUIRE(batch.Init(dev, 2, inst.table.data(), static_cast<uint32_t>(inst.table.size())) == sc::Status::kOk);
-  for (DetectMethod method : {DetectMethod::kM1, DetectMethod::kM2})
-    for (sc::Strategy strategy : {sc::Strategy::kThreadPerSphere, sc::Strategy::kBlockPerChain, sc::Strategy::kWarpPerInstance}) {
-      if (strategy == sc::Strategy::kBlockPerChain && method == DetectMethod::kM2) continue;
-      uint32_t previous = 0;
-      for (float fold : {0.0f, 0.3f * r, 0.9f * r}) {
-        CAPTURE(int(method));
-        CAPTURE(int(strategy));
-        CAPTURE(fold);
-        sc::FrameParams fp{RefitMode::kPivotFrame, method, strategy, true};
-        fp.fold_margin = fold;
-        REQUIRE(batch.Run(fp, 0) == sc::Status::kOk);
-        sc::HostResults res;
-        REQUIRE(batch.Download(0, &res, true) == sc::Status::kOk);
-        CompareWithCpu(assets, inst, res, batch, fp);
-        CHECK(res.total >= previous);
-        previous = res.total;
-      }
+  for (const auto& [method, strategy] : MethodStrategies()) {
+    uint32_t previous = 0;
+    for (float fold : {0.0f, 0.3f * r, 0.9f * r}) {
+      CAPTURE(int(method));
+      CAPTURE(int(strategy));
+      CAPTURE(fold);
+      sc::FrameParams fp{RefitMode::kPivotFrame, method, strategy, true};
+      fp.fold_margin = fold;
+      const sc::HostResults res = RunCompared(assets, inst, batch, fp);
+      CHECK(res.total >= previous);
+      previous = res.total;
     }
+  }
 }
 
 TEST_CASE("cuda: FrameParams::fold_margin NaN, infinite, or on an asset without one gives kErrorInvalidJob") {

@@ -155,28 +155,20 @@ TEST_CASE("cuda: FrameParams::margin < 0 uses each instance's asset margin in a 
   const sc::DeviceAsset* dev[] = {&s0.device, &s1.device, &s2.device};
   sc::Batch batch;
   REQUIRE(batch.Init(dev, 3, inst.table.data(), static_cast<uint32_t>(inst.table.size())) == sc::Status::kOk);
-  for (DetectMethod method : {DetectMethod::kM1, DetectMethod::kM2})
-    for (sc::Strategy strategy : {sc::Strategy::kThreadPerSphere, sc::Strategy::kBlockPerChain, sc::Strategy::kWarpPerInstance}) {
-      if (strategy == sc::Strategy::kBlockPerChain && method == DetectMethod::kM2) continue;
-      CAPTURE(int(method));
-      CAPTURE(int(strategy));
-      sc::FrameParams fp{RefitMode::kPivotFrame, method, strategy, true};
-      REQUIRE(fp.margin < 0.0f);
-      REQUIRE(batch.Run(fp, 0) == sc::Status::kOk);
-      sc::HostResults per_asset;
-      REQUIRE(batch.Download(0, &per_asset, true) == sc::Status::kOk);
-      CompareWithCpu(assets, inst, per_asset, batch, fp);  // per instance: DetectJob with margin -1
-      for (int k = 0; k < 3; ++k) {
-        CAPTURE(k);
-        fp.margin = own[k];
-        REQUIRE(batch.Run(fp, 0) == sc::Status::kOk);
-        sc::HostResults fixed;
-        REQUIRE(batch.Download(0, &fixed, true) == sc::Status::kOk);
-        CompareWithCpu(assets, inst, fixed, batch, fp);  // every instance with margin own[k]
-        for (size_t i = static_cast<size_t>(k); i < inst.table.size(); i += 3)
-          CHECK(per_asset.instance_counts[i] == fixed.instance_counts[i]);
-      }
+  for (const auto& [method, strategy] : MethodStrategies()) {
+    CAPTURE(int(method));
+    CAPTURE(int(strategy));
+    sc::FrameParams fp{RefitMode::kPivotFrame, method, strategy, true};
+    REQUIRE(fp.margin < 0.0f);
+    const sc::HostResults per_asset = RunCompared(assets, inst, batch, fp);  // per instance: DetectJob, margin -1
+    for (int k = 0; k < 3; ++k) {
+      CAPTURE(k);
+      fp.margin = own[k];
+      const sc::HostResults fixed = RunCompared(assets, inst, batch, fp);  // every instance with margin own[k]
+      for (size_t i = static_cast<size_t>(k); i < inst.table.size(); i += 3)
+        CHECK(per_asset.instance_counts[i] == fixed.instance_counts[i]);
     }
+  }
 }
 
 // The MakeHuman asset (a fresh bake is schema v2 with a contact margin) on randomised instances, in
