@@ -17,6 +17,8 @@
 //   sc refit+M1         RefitJob + DetectJob M1
 //   sc M2 detect        DetectJob M2 (all spheres) on stored spheres
 //   sc refit+M2         RefitJob + DetectJob M2
+//   sc M1/M2 det. fold mrg  the same detections with the asset's fold margin (only for an asset with one; the rows
+//                       above then test every pair on the contact margin, as the peers do)
 //   naive M2            AoS double loop + exclusion matrix over the refitted spheres
 //   FCL DynAABBTree M2  fcl::DynamicAABBTreeCollisionManager, spheres updated, collide + sphere test
 //   Bullet btDbvt M2    btDbvtBroadphase, AABBs updated, overlapping pairs then the sphere test
@@ -872,6 +874,10 @@ int main(int argc, char** argv) {
   m1.count = &count;
   sc::DetectJob m2 = m1;
   m2.method = sc::DetectMethod::kM2;
+  // The peers and the naive loops test every pair on one margin (the asset's contact margin), so the compared jobs
+  // do too; an asset's fold margin (pairs of one region on a smaller one) is timed in rows of its own below.
+  const bool has_fold = model.fold_margin() >= 0.0f;
+  if (has_fold) m1.fold_margin = m2.fold_margin = model.contact_margin();
   auto set_frame = [&](size_t f) { refit.positions = {w.frames[f].data(), w.vertex_count, 12}; };
   if (profile) {  // callgrind: Ir(RefitJob::Run + DetectJob::Run) / (profile × #F) = instructions per frame
     for (int r = 0; r < profile; ++r)
@@ -985,6 +991,20 @@ int main(int argc, char** argv) {
     g_sink = g_sink + count;
   });
   (void)refit_us;
+  if (has_fold) {  // what the asset's fold margin costs: the broad phase's hits of one region tested again
+    sc::DetectJob m1_fold = m1, m2_fold = m2;
+    m1_fold.fold_margin = m2_fold.fold_margin = -1.0f;  // the asset's
+    measure("sc M1 det. fold mrg", [&](size_t f) {
+      load_spheres(f);
+      (void)m1_fold.Run();
+      g_sink = g_sink + count;
+    });
+    measure("sc M2 det. fold mrg", [&](size_t f) {
+      load_spheres(f);
+      (void)m2_fold.Run();
+      g_sink = g_sink + count;
+    });
+  }
   if (w.joints.size() == F) {
     sc::JointRefitJob joints;
     joints.model = &model;
