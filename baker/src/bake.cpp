@@ -174,9 +174,12 @@ std::string CanonicalConfig(const BakeConfig& c, const RegionLayout* layout) {
   json j;  // nlohmann::json objects are key-sorted: stable
   j["segmentation"] = c.region_map.empty() ? MethodName(c.segmentation) : "map";
   j["fit"] = FitMethodName(c.fit.method);
-  // Added with the extended layout: written only for it, so `regions: paper` (the default) bakes hash
-  // exactly as every asset before it did.
-  if (c.regions == RegionSet::kExtended && c.fit.method == FitMethod::kCover) j["regions"] = "extended";
+  // Added with the extended layout: written only for it, so paper-layout and creature bakes hash exactly as
+  // every asset before it did. With the bake's layout: only when the extended regions were made (a creature or a
+  // paper fit asked for them keeps its own); without: as configured.
+  const bool extended = layout ? layout->paper && !layout->IsPaperFive()
+                               : c.regions == RegionSet::kExtended && c.fit.method == FitMethod::kCover;
+  if (extended) j["regions"] = "extended";
   if (c.import.vertices != VertexContract::kAuto) j["vertices"] = ToString(c.import.vertices);
   if (c.fit.method == FitMethod::kCover) {
     j["max_spheres"] = c.fit.max_spheres;

@@ -301,6 +301,7 @@ Batch& Batch::operator=(Batch&& o) noexcept {
     max_chain_length_ = std::exchange(o.max_chain_length_, 0);
     sm_count_ = std::exchange(o.sm_count_, 1);
     frame_position_bytes_ = std::exchange(o.frame_position_bytes_, 0);
+    every_asset_folds_ = std::exchange(o.every_asset_folds_, false);
     sphere_offsets_ = std::move(o.sphere_offsets_);
     table_ = std::exchange(o.table_, nullptr);
     asset_table_ = std::exchange(o.asset_table_, nullptr);
@@ -322,6 +323,7 @@ void Batch::Release() {
   max_spheres_ = max_chains_ = max_chain_length_ = 0;
   sm_count_ = 1;
   frame_position_bytes_ = 0;
+  every_asset_folds_ = false;
   sphere_offsets_.clear();
   table_ = asset_table_ = instance_table_ = nullptr;
   pairs_ = nullptr;
@@ -415,6 +417,8 @@ Status Batch::Init(const DeviceAsset* const* assets, uint32_t asset_count, const
   max_chain_length_ = max_len;
   sm_count_ = static_cast<uint32_t>(sms);
   frame_position_bytes_ = pos_bytes;
+  every_asset_folds_ = true;
+  for (uint32_t k = 0; k < asset_count; ++k) every_asset_folds_ = every_asset_folds_ && assets[k]->fold_margin() >= 0.0f;
   instance_count_ = instance_count;
   if (st = Upload(instances, instance_count); st != Status::kOk) Release();
   return st;
@@ -452,9 +456,8 @@ Status Batch::Run(const FrameParams& params, cudaStream_t stream) const {
   const bool m1 = params.method == runtime::DetectMethod::kM1;
   if (!m1 && params.method != runtime::DetectMethod::kM2) return Status::kErrorInvalidJob;
   if (!std::isfinite(params.margin) || !std::isfinite(params.fold_margin)) return Status::kErrorInvalidJob;  // as DetectJob::Check
-  if (params.fold_margin >= 0.0f)  // a fold margin of the frame's own needs regions: every asset must have one
-    for (uint32_t k = 0; k < asset_count_; ++k)
-      if (host_assets_[k]->fold_margin() < 0.0f) return Status::kErrorInvalidJob;
+  // A fold margin of the frame's own needs regions: every asset of the batch must have one (checked at Init).
+  if (params.fold_margin >= 0.0f && !every_asset_folds_) return Status::kErrorInvalidJob;
   Strategy strategy = params.strategy;
   const bool few = instance_count_ < 4 * sm_count_;
   if (strategy == Strategy::kAuto)

@@ -290,6 +290,14 @@ TEST_CASE("bake: the synthetic creature — a schema v4 asset naming its regions
   std::set<int> with_spheres;
   for (const sc::FittedSphere& s : r->fit.spheres) with_spheres.insert(int(s.region));
   CHECK(with_spheres.size() == 6);
+  // The extended regions are a standing biped's (the default); a creature keeps its own, and its asset is the
+  // same byte for byte whichever `regions` the configuration names (the config hash included).
+  REQUIRE(config.regions == sc::RegionSet::kExtended);
+  sc::BakeConfig paper_regions = config;
+  paper_regions.regions = sc::RegionSet::kPaper;
+  auto rp = sc::Bake(Creature(), paper_regions);
+  REQUIRE(rp.ok());
+  CHECK(rp->asset == r->asset);
   // Limb sequences run from the trunk outwards: a leg's first sphere is its highest.
   for (const sc::FittedSphere& a : r->fit.spheres)
     for (const sc::FittedSphere& b : r->fit.spheres)

@@ -178,6 +178,7 @@ class Batch {
   uint32_t instance_count_ = 0, capacity_ = 0, total_spheres_ = 0;
   uint32_t max_spheres_ = 0, max_chains_ = 0, max_chain_length_ = 0, sm_count_ = 1;
   uint64_t frame_position_bytes_ = 0;
+  bool every_asset_folds_ = false;  // every asset of Init has a fold margin (FrameParams::fold_margin >= 0 allowed)
   std::vector<uint32_t> sphere_offsets_;
   void* table_ = nullptr;          // device: DeviceAssetDesc[asset_count] + internal instance table
   void* asset_table_ = nullptr;    // into table_
