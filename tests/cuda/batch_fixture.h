@@ -212,6 +212,13 @@ inline void CompareWithCpu(const std::vector<AssetSet*>& assets, const DeviceIns
                       << " borderline differences (margin " << fp.margin << ", fold margin " << fp.fold_margin << ")");
 }
 
+/// Mean bind radius of an asset (a scale for margins of synthetic assets, whose own margin is 0).
+inline float MeanBindRadius(const AssetSet& a) {
+  double sum = 0.0;
+  for (uint32_t s = 0; s < a.view.sphere_count; ++s) sum += a.view.asset->spheres()->Get(s)->radius();
+  return static_cast<float>(sum / a.view.sphere_count);
+}
+
 /// Every (method, strategy) a batch runs: M1 with each strategy, M2 with all but kBlockPerChain (M1 only).
 inline std::vector<std::pair<runtime::DetectMethod, sc::Strategy>> MethodStrategies() {
   std::vector<std::pair<runtime::DetectMethod, sc::Strategy>> out;

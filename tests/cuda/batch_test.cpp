@@ -204,15 +204,9 @@ TEST_CASE("cuda: MakeHuman asset, CPU == GPU over randomised instances") {
   sc::Batch batch;
   REQUIRE(batch.Init(dev, 1, inst.table.data(), 200) == sc::Status::kOk);
   for (RefitMode mode : {RefitMode::kPaper, RefitMode::kPivotFrame})
-    for (DetectMethod method : {DetectMethod::kM1, DetectMethod::kM2})
-      for (sc::Strategy strategy : {sc::Strategy::kThreadPerSphere, sc::Strategy::kBlockPerChain, sc::Strategy::kWarpPerInstance}) {
-        if (strategy == sc::Strategy::kBlockPerChain && method == DetectMethod::kM2) continue;
-        const sc::FrameParams fp{mode, method, strategy, true};
-        REQUIRE(batch.Run(fp, 0) == sc::Status::kOk);
-        sc::HostResults res;
-        REQUIRE(batch.Download(0, &res, true) == sc::Status::kOk);
-        CompareWithCpu({&mh}, inst, res, batch, fp);
-      }
+    for (const auto& [method, strategy] : MethodStrategies()) {
+      (void)RunCompared({&mh}, inst, batch, sc::FrameParams{mode, method, strategy, true});
+    }
 }
 
 // Recorded animation frames (`spherechain play ... --dump-frames DIR`), each frame one instance of one

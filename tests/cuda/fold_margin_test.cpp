@@ -14,12 +14,6 @@ namespace sc = spherechain::cuda;
 
 namespace {
 
-float MeanRadius(const AssetSet& a) {
-  double sum = 0.0;
-  for (uint32_t s = 0; s < a.view.sphere_count; ++s) sum += a.view.asset->spheres()->Get(s)->radius();
-  return static_cast<float>(sum / a.view.sphere_count);
-}
-
 /// CPU pairs of one instance, as a set, with the asset's margins or a fold margin of the job's own.
 std::set<std::pair<int, int>> CpuPairs(AssetSet& a, const std::vector<float>& positions, DetectMethod method,
                                        float fold_margin) {
@@ -39,7 +33,7 @@ TEST_CASE("cuda: Asset.fold_margin below and above the contact margin, mixed bat
   if (!RequireDevice()) return;
   AssetSet probe;
   MakeStar(&probe, 6, 12);
-  const float r = MeanRadius(probe), contact = 0.2f * r;
+  const float r = MeanBindRadius(probe), contact = 0.2f * r;
   AssetSet below, above, none;
   MakeStar(&below, 6, 12, contact, 0.0f);
   MakeStar(&above, 6, 12, contact, 0.6f * r);
@@ -81,7 +75,7 @@ TEST_CASE("cuda: FrameParams::fold_margin overrides the assets', CPU == GPU") {
   if (!RequireDevice()) return;
   AssetSet probe;
   MakeStar(&probe, 6, 12);
-  const float r = MeanRadius(probe);
+  const float r = MeanBindRadius(probe);
   AssetSet a, b;
   MakeStar(&a, 6, 12, 0.2f * r, 0.1f * r);
   MakeStar(&b, 5, 10, 0.1f * r, 0.0f);

@@ -13,13 +13,6 @@ namespace sc = spherechain::cuda;
 
 namespace {
 
-/// Mean bind radius of an asset (a scale for margins of synthetic assets, whose own margin is 0).
-float MeanBindRadius(const AssetSet& a) {
-  double sum = 0.0;
-  for (uint32_t s = 0; s < a.view.sphere_count; ++s) sum += a.view.asset->spheres()->Get(s)->radius();
-  return static_cast<float>(sum / a.view.sphere_count);
-}
-
 /// Properties of one GPU frame `big` (margin `m_big` for every instance, spheres written) against the
 /// same frame `small` with a smaller margin: every pair of `small` is in `big` (float rounding is
 /// monotonic, so growing the radii never loses a pair), and every depth of `big` is > −2·m_big (up to
@@ -50,28 +43,22 @@ size_t CheckGrowth(const sc::HostResults& small, const sc::HostResults& big, flo
 size_t CompareMargins(const std::vector<AssetSet*>& assets, const DeviceInstances& inst, const sc::Batch& batch,
                       RefitMode mode, const std::vector<float>& margins) {
   size_t negative = 0;
-  for (DetectMethod method : {DetectMethod::kM1, DetectMethod::kM2})
-    for (sc::Strategy strategy : {sc::Strategy::kThreadPerSphere, sc::Strategy::kBlockPerChain, sc::Strategy::kWarpPerInstance}) {
-      if (strategy == sc::Strategy::kBlockPerChain && method == DetectMethod::kM2) continue;
-      sc::HostResults previous;
-      for (size_t k = 0; k < margins.size(); ++k) {
-        CAPTURE(int(method));
-        CAPTURE(int(strategy));
-        CAPTURE(margins[k]);
-        sc::FrameParams fp{mode, method, strategy, true};
-        fp.margin = margins[k];
-        const sc::Status st = batch.Run(fp, 0);
-        REQUIRE_MESSAGE(st == sc::Status::kOk, std::string(sc::ToString(st)) << " / " << std::string(sc::LastCudaErrorString()));
-        sc::HostResults res;
-        REQUIRE(batch.Download(0, &res, true) == sc::Status::kOk);
-        CompareWithCpu(assets, inst, res, batch, fp);
-        if (k > 0) {
-          const size_t n = CheckGrowth(previous, res, margins[k], batch);
-          if (k + 1 == margins.size()) negative = std::max(negative, n);
-        }
-        previous = std::move(res);
+  for (const auto& [method, strategy] : MethodStrategies()) {
+    sc::HostResults previous;
+    for (size_t k = 0; k < margins.size(); ++k) {
+      CAPTURE(int(method));
+      CAPTURE(int(strategy));
+      CAPTURE(margins[k]);
+      sc::FrameParams fp{mode, method, strategy, true};
+      fp.margin = margins[k];
+      sc::HostResults res = RunCompared(assets, inst, batch, fp);
+      if (k > 0) {
+        const size_t n = CheckGrowth(previous, res, margins[k], batch);
+        if (k + 1 == margins.size()) negative = std::max(negative, n);
       }
+      previous = std::move(res);
     }
+  }
   return negative;
 }
 
@@ -201,21 +188,16 @@ TEST_CASE("cuda: FrameParams::margin on the MakeHuman asset mixed with a synthet
   const sc::DeviceAsset* dev[] = {&mh.device, &star.device};
   sc::Batch batch;
   REQUIRE(batch.Init(dev, 2, inst.table.data(), static_cast<uint32_t>(inst.table.size())) == sc::Status::kOk);
-  for (DetectMethod method : {DetectMethod::kM1, DetectMethod::kM2})
-    for (sc::Strategy strategy : {sc::Strategy::kThreadPerSphere, sc::Strategy::kBlockPerChain, sc::Strategy::kWarpPerInstance}) {
-      if (strategy == sc::Strategy::kBlockPerChain && method == DetectMethod::kM2) continue;
-      for (float margin : {-1.0f, 0.0f, 2.0f * unit}) {
-        CAPTURE(int(method));
-        CAPTURE(int(strategy));
-        CAPTURE(margin);
-        sc::FrameParams fp{RefitMode::kPivotFrame, method, strategy, true};
-        fp.margin = margin;
-        REQUIRE(batch.Run(fp, 0) == sc::Status::kOk);
-        sc::HostResults res;
-        REQUIRE(batch.Download(0, &res, true) == sc::Status::kOk);
-        CompareWithCpu(assets, inst, res, batch, fp);  // per instance: DetectJob with the same fp.margin
-      }
+  for (const auto& [method, strategy] : MethodStrategies()) {
+    for (float margin : {-1.0f, 0.0f, 2.0f * unit}) {
+      CAPTURE(int(method));
+      CAPTURE(int(strategy));
+      CAPTURE(margin);
+      sc::FrameParams fp{RefitMode::kPivotFrame, method, strategy, true};
+      fp.margin = margin;
+      (void)RunCompared(assets, inst, batch, fp);  // per instance: DetectJob with the same fp.margin
     }
+  }
 }
 
 TEST_CASE("cuda: FrameParams::margin NaN or infinite gives kErrorInvalidJob and enqueues nothing") {
