@@ -10,7 +10,6 @@
 #include <unistd.h>
 
 #include <flatbuffers/flatbuffers.h>
-#include <xxhash.h>
 
 #include "spherechain/runtime/asset.h"
 
@@ -20,37 +19,6 @@ namespace spherechain::baker {
 
 namespace fb = spherechain::schema;
 
-uint64_t Hash64(const void* data, size_t size) { return XXH3_64bits(data, size); }
-
-Fingerprint ComputeFingerprint(const Mesh& mesh) {
-  Fingerprint f;
-  f.vertex_count = mesh.vertex_count();
-  f.triangle_count = mesh.triangle_count();
-  f.positions_hash = Hash64(mesh.positions.data(), mesh.positions.size() * sizeof(float));
-  f.indices_hash = Hash64(mesh.indices.data(), mesh.indices.size() * sizeof(uint32_t));
-  return f;
-}
-
-std::vector<uint32_t> ComputeWeldIds(const std::vector<float>& positions) {
-  const uint32_t n = static_cast<uint32_t>(positions.size() / 3);
-  std::vector<uint32_t> order(n);
-  std::iota(order.begin(), order.end(), 0u);
-  const auto key = [&](uint32_t v) {
-    return std::array<float, 3>{positions[3 * size_t{v}], positions[3 * size_t{v} + 1], positions[3 * size_t{v} + 2]};
-  };
-  // Sort by position, then index: each run of equal positions starts with its lowest index.
-  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
-    const auto ka = key(a), kb = key(b);
-    return ka != kb ? ka < kb : a < b;
-  });
-  std::vector<uint32_t> weld(n);
-  for (uint32_t i = 0; i < n;) {
-    uint32_t j = i;
-    while (j < n && key(order[j]) == key(order[i])) weld[order[j++]] = order[i];
-    i = j;
-  }
-  return weld;
-}
 
 namespace {
 
@@ -218,50 +186,6 @@ std::vector<uint8_t> BuildAsset(const AssetInputs& in) {
   ab.add_weld_ids(weld_v);
   fb::FinishAssetBuffer(b, ab.Finish());
   return {b.GetBufferPointer(), b.GetBufferPointer() + b.GetSize()};
-}
-
-Status WriteFileAtomic(const std::string& path, const void* bytes, size_t size) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  const fs::path target(path);
-  const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
-  if (!fs::is_directory(dir, ec))
-    return MakeError(Error::Code::kIo, "cannot write '" + path + "': folder '" + dir.string() + "' does not exist");
-  const fs::path tmp = dir / ("." + target.filename().string() + ".tmp" + std::to_string(::getpid()));
-  {
-    std::FILE* f = std::fopen(tmp.c_str(), "wb");
-    if (!f) return MakeError(Error::Code::kIo, "cannot create '" + tmp.string() + "'");
-    const bool ok = std::fwrite(bytes, 1, size, f) == size && std::fflush(f) == 0 && ::fsync(::fileno(f)) == 0;
-    const bool closed = std::fclose(f) == 0;
-    if (!ok || !closed) {
-      fs::remove(tmp, ec);
-      return MakeError(Error::Code::kIo, "cannot write '" + tmp.string() + "' (disk full?)");
-    }
-  }
-  fs::rename(tmp, target, ec);
-  if (ec) {
-    fs::remove(tmp, ec);
-    return MakeError(Error::Code::kIo, "cannot rename the temporary file onto '" + path + "': " + ec.message());
-  }
-  return Ok{};
-}
-
-Result<std::vector<uint8_t>> ReadFileBytes(const std::string& path, size_t max_size) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  if (!fs::exists(path, ec)) return MakeError(Error::Code::kIo, "'" + path + "': no such file");
-  if (fs::is_directory(path, ec)) return MakeError(Error::Code::kIo, "'" + path + "' is a folder, not a file");
-  const auto size = fs::file_size(path, ec);
-  if (ec) return MakeError(Error::Code::kIo, "'" + path + "': " + ec.message());
-  if (size > max_size)
-    return MakeError(Error::Code::kIo, "'" + path + "' is " + std::to_string(size) + " bytes, over the limit of " +
-                                           std::to_string(max_size));
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return MakeError(Error::Code::kIo, "'" + path + "': cannot open for reading");
-  std::vector<uint8_t> bytes(size);
-  if (size && !in.read(reinterpret_cast<char*>(bytes.data()), std::streamsize(size)))
-    return MakeError(Error::Code::kIo, "'" + path + "': read failed");
-  return bytes;
 }
 
 }  // namespace spherechain::baker

@@ -9,8 +9,8 @@
 
 #include <tiny_gltf.h>
 
-#include "spherechain/baker/debug_export.h"
-#include "spherechain/baker/write.h"
+#include "spherechain/playback/debug_export.h"
+#include "spherechain/import/file_io.h"
 #include "spherechain/runtime/runtime.h"
 
 namespace spherechain::playback {
@@ -194,9 +194,9 @@ Status ExportAnimatedGltf(const Mesh& mesh, const runtime::AssetView& asset, con
   m.materials.push_back(body);
   const int region_count = int(runtime::RegionCount(asset));  // 5, or a creature's (schema v4)
   for (int r = 0; r < region_count; ++r) {
-    const auto c = baker::RegionColor(asset, uint32_t(r));
+    const auto c = RegionColor(asset, uint32_t(r));
     tinygltf::Material glass;
-    glass.name = std::string("spheres_") + baker::RegionSymbol(static_cast<baker::Region>(r));
+    glass.name = std::string("spheres_") + import::RegionSymbol(static_cast<import::Region>(r));
     glass.alphaMode = "BLEND";
     glass.pbrMetallicRoughness.baseColorFactor = {c[0], c[1], c[2], 0.35};
     glass.pbrMetallicRoughness.metallicFactor = 0.0;
@@ -207,7 +207,7 @@ Status ExportAnimatedGltf(const Mesh& mesh, const runtime::AssetView& asset, con
   std::vector<float> colors(size_t(V) * 3, 0.5f);
   if (const auto* tri_regions = asset.asset->triangle_regions())
     for (uint32_t t = 0; t < mesh.triangle_count() && t < tri_regions->size(); ++t) {
-      const auto c = baker::RegionColor(asset, tri_regions->Get(t));
+      const auto c = RegionColor(asset, tri_regions->Get(t));
       for (int k = 0; k < 3; ++k)
         for (int j = 0; j < 3; ++j) colors[3 * size_t(mesh.indices[3 * size_t(t) + k]) + j] = c[j];
     }
@@ -292,7 +292,7 @@ Status ExportAnimatedGltf(const Mesh& mesh, const runtime::AssetView& asset, con
     p.mode = TINYGLTF_MODE_TRIANGLES;
     p.material = 1 + r;
     tinygltf::Mesh sm;
-    sm.name = std::string("sphere_") + baker::RegionSymbol(static_cast<baker::Region>(r));
+    sm.name = std::string("sphere_") + import::RegionSymbol(static_cast<import::Region>(r));
     sm.primitives.push_back(p);
     m.meshes.push_back(sm);
   }
@@ -364,7 +364,7 @@ Status ExportAnimatedGltf(const Mesh& mesh, const runtime::AssetView& asset, con
   if (!writer.WriteGltfSceneToStream(&m, text, /*prettyPrint=*/false, /*writeBinary=*/false))
     return Fail(Error::Code::kIo, "tinygltf could not serialise the scene");
   const std::string bytes = text.str();
-  if (auto s = baker::WriteFileAtomic(out_path, bytes); !s.ok()) return s;
+  if (auto s = import::WriteFileAtomic(out_path, bytes); !s.ok()) return s;
   if (stats) {
     stats->frames = F;
     stats->skeleton_nodes = N;

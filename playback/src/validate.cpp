@@ -5,9 +5,9 @@
 #include <cstring>
 #include <memory>
 
-#include "spherechain/baker/import.h"
-#include "spherechain/baker/vertex_contract.h"
-#include "spherechain/baker/write.h"
+#include "spherechain/import/import.h"
+#include "spherechain/import/vertex_contract.h"
+#include "spherechain/import/file_io.h"
 #include "spherechain/runtime/runtime.h"
 
 namespace spherechain::playback {
@@ -138,9 +138,9 @@ void CheckAsset(const runtime::AssetView& view, const std::string& file, std::ve
 }
 
 /// Fingerprint, then the bind pose through the runtime (refit + M2 detect).
-void CheckMesh(const runtime::AssetView& view, const baker::Mesh& mesh, const ValidateNames& names,
+void CheckMesh(const runtime::AssetView& view, const import::Mesh& mesh, const ValidateNames& names,
                std::vector<Finding>* out) {
-  const baker::Fingerprint fp = baker::ComputeFingerprint(mesh);
+  const import::Fingerprint fp = import::ComputeFingerprint(mesh);
   const auto* f = view.asset->fingerprint();
   if (fp.vertex_count != f->vertex_count() || fp.triangle_count != f->triangle_count()) {
     out->push_back(Make("FP-COUNTS", Severity::kError, At(names.mesh, -1, -1, "fingerprint"),
@@ -148,7 +148,7 @@ void CheckMesh(const runtime::AssetView& view, const baker::Mesh& mesh, const Va
                             std::to_string(fp.triangle_count) + " triangles, the asset was baked from " +
                             std::to_string(f->vertex_count()) + " / " + std::to_string(f->triangle_count()) +
                             (fp.vertex_count != f->vertex_count()
-                                 ? " (" + baker::DescribeVertexMismatch(view, fp.vertex_count) + ")"
+                                 ? " (" + import::DescribeVertexMismatch(view, fp.vertex_count) + ")"
                                  : std::string())));
     return;
   }
@@ -211,7 +211,7 @@ size_t CountErrors(const std::vector<Finding>& findings) {
   return n;
 }
 
-std::vector<Finding> ValidateAsset(const runtime::AssetView& view, const baker::Mesh* mesh, const ValidateNames& names) {
+std::vector<Finding> ValidateAsset(const runtime::AssetView& view, const import::Mesh* mesh, const ValidateNames& names) {
   std::vector<Finding> out;
   if (!view.valid()) {
     out.push_back(Make("SPHC-LOAD", Severity::kError, At(names.asset),
@@ -223,47 +223,38 @@ std::vector<Finding> ValidateAsset(const runtime::AssetView& view, const baker::
   return out;
 }
 
-std::vector<Finding> ValidateAssetBytes(const uint8_t* bytes, size_t size, const baker::Mesh* mesh,
+std::vector<Finding> ValidateAssetBytes(const uint8_t* bytes, size_t size, const import::Mesh* mesh,
                                         const ValidateNames& names) {
-  std::unique_ptr<uint64_t[]> storage(new uint64_t[(size + 7) / 8 + 1]);
-  if (size && bytes) std::memcpy(storage.get(), bytes, size);
-  const uint8_t* aligned = reinterpret_cast<const uint8_t*>(storage.get());
-  runtime::AssetView view;
-  const runtime::Status s = runtime::LoadAsset(aligned, size, &view);
-  if (runtime::Failed(s)) {
-    return {Make("SPHC-LOAD", Severity::kError, LocateRejection(aligned, s, names.asset),
-                 "'" + names.asset + "' is not a loadable .sphc asset: " + runtime::ToString(s))};
-  }
-  return ValidateAsset(view, mesh, names);
+  import::LoadedAsset asset;
+  if (auto s = import::LoadAssetBytes(size ? bytes : nullptr, size, "'" + names.asset + "'", &asset); !s.ok())
+    return {Make("SPHC-LOAD", Severity::kError, LocateRejection(asset.bytes(), asset.status, names.asset),
+                 s.error().message)};
+  return ValidateAsset(asset.view, mesh, names);
 }
 
 std::vector<Finding> ValidateAssetFile(const std::string& asset_path, const std::string& mesh_path,
-                                       const std::string& rig_path, baker::Context* log,
-                                       baker::VertexContract vertices) {
+                                       const std::string& rig_path, import::Context* log,
+                                       import::VertexContract vertices) {
   ValidateNames names{asset_path, mesh_path};
-  auto bytes = baker::ReadFileBytes(asset_path, runtime::kMaxAssetBytes);
+  auto bytes = import::ReadFileBytes(asset_path, runtime::kMaxAssetBytes);
   if (!bytes.ok()) return {Make("SPHC-LOAD", Severity::kError, At(asset_path), bytes.error().message)};
   if (mesh_path.empty()) return ValidateAssetBytes(bytes->data(), bytes->size(), nullptr, names);
   // The asset first: an unloadable asset is reported without importing the mesh.
-  std::vector<Finding> out = ValidateAssetBytes(bytes->data(), bytes->size(), nullptr, names);
-  if (!out.empty() && out.front().code == "SPHC-LOAD") return out;
-  baker::ImportOptions opts;
+  import::LoadedAsset asset;
+  if (!import::LoadAssetBytes(bytes->data(), bytes->size(), "'" + asset_path + "'", &asset).ok())
+    return ValidateAssetBytes(bytes->data(), bytes->size(), nullptr, names);
+  std::vector<Finding> out = ValidateAsset(asset.view, nullptr, names);
+  import::ImportOptions opts;
   opts.rig_path = rig_path;
   opts.read_clips = false;
-  opts.vertices = vertices;
-  if (vertices == baker::VertexContract::kAuto) {  // the asset's own contract
-    runtime::AssetView view;
-    std::unique_ptr<uint64_t[]> storage(new uint64_t[(bytes->size() + 7) / 8 + 1]);
-    std::memcpy(storage.get(), bytes->data(), bytes->size());
-    if (runtime::Succeeded(runtime::LoadAsset(reinterpret_cast<const uint8_t*>(storage.get()), bytes->size(), &view)))
-      opts.vertices = baker::ContractForReimport(view, mesh_path);
-  }
-  auto mesh = baker::ImportMesh(mesh_path, opts, log);
+  opts.vertices = vertices == import::VertexContract::kAuto ? import::ContractForReimport(asset.view, mesh_path)  // the asset's own
+                                                            : vertices;
+  auto mesh = import::ImportMesh(mesh_path, opts, log);
   if (!mesh.ok()) {
     out.push_back(Make("MESH-IMPORT", Severity::kError, At(mesh_path), mesh.error().message));
     return out;
   }
-  return ValidateAssetBytes(bytes->data(), bytes->size(), &mesh.value(), names);
+  return ValidateAsset(asset.view, &mesh.value(), names);
 }
 
 }  // namespace spherechain::playback

@@ -10,8 +10,8 @@
 #include <fstream>
 #include <vector>
 
-#include "spherechain/baker/import.h"
-#include "spherechain/baker/vertex_contract.h"
+#include "spherechain/import/import.h"
+#include "spherechain/import/vertex_contract.h"
 #include "spherechain/runtime/runtime.h"
 
 using namespace spherechain;
@@ -44,9 +44,9 @@ int main(int argc, char** argv) {
   }
 
   // 2. The game's vertex buffer (bind pose here), then the left arm pushed towards the chest.
-  baker::ImportOptions import;
-  import.vertices = baker::ContractForReimport(asset, argv[2]);  // the vertex buffer the asset was baked from
-  auto mesh = baker::ImportMesh(argv[2], import);
+  import::ImportOptions import;
+  import.vertices = import::ContractForReimport(asset, argv[2]);  // the vertex buffer the asset was baked from
+  auto mesh = import::ImportMesh(argv[2], import);
   if (!mesh.ok()) {
     std::fprintf(stderr, "error: %s\n", mesh.error().message.c_str());
     return 1;

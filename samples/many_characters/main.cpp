@@ -13,12 +13,12 @@
 #include <fstream>
 #include <vector>
 
-#include "spherechain/baker/import.h"
-#include "spherechain/baker/vertex_contract.h"
+#include "spherechain/import/import.h"
+#include "spherechain/import/vertex_contract.h"
 #include "spherechain/runtime/runtime.h"
 
 namespace runtime = spherechain::runtime;
-namespace baker = spherechain::baker;
+namespace import = spherechain::import;
 
 // The ParallelFor hook on TBB: the runtime hands over `count` task indices, TBB spreads them.
 void TbbParallelFor(void*, uint32_t count, runtime::ParallelFor::Task task, void* data) {
@@ -52,9 +52,9 @@ int main(int argc, char** argv) {
 
   // 2. Each character's vertex buffer: the bind pose with its left arm swung by its own angle (a game
   //    hands over what its skinning produced).
-  baker::ImportOptions import;
-  import.vertices = baker::ContractForReimport(asset, argv[2]);  // the vertex buffer the asset was baked from
-  auto mesh = baker::ImportMesh(argv[2], import);
+  import::ImportOptions options;
+  options.vertices = import::ContractForReimport(asset, argv[2]);  // the vertex buffer the asset was baked from
+  auto mesh = import::ImportMesh(argv[2], options);
   if (!mesh.ok()) return std::fprintf(stderr, "error: %s\n", mesh.error().message.c_str()), 1;
   const uint32_t V = asset.vertex_count;
   if (mesh->positions.size() != size_t{V} * 3)

@@ -8,7 +8,7 @@
 #include <string>
 
 #include "spherechain/baker/chains.h"
-#include "spherechain/baker/import.h"
+#include "spherechain/import/import.h"
 #include "spherechain/baker/segment.h"
 #include "synthetic_body.h"
 #include "test_data.h"

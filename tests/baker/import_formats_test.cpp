@@ -12,7 +12,7 @@
 #include <unistd.h>
 
 #include "spherechain/baker/bake.h"
-#include "spherechain/baker/import.h"
+#include "spherechain/import/import.h"
 #include "test_data.h"
 
 using namespace spherechain;

@@ -18,7 +18,7 @@
 
 #include "spherechain/baker/bake.h"
 #include "spherechain/baker/chains.h"
-#include "spherechain/baker/import.h"
+#include "spherechain/import/import.h"
 #include "spherechain/baker/plausibility.h"
 #include "spherechain/baker/segment.h"
 #include "spherechain/playback/animation_source.h"

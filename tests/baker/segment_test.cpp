@@ -20,7 +20,7 @@
 #include <unordered_map>
 #include <vector>
 
-#include "spherechain/baker/import.h"
+#include "spherechain/import/import.h"
 #include "spherechain/baker/plausibility.h"
 #include "spherechain/baker/segment.h"
 #include "synthetic_body.h"

@@ -11,7 +11,7 @@
 #include <unordered_map>
 #include <vector>
 
-#include "spherechain/baker/types.h"
+#include "spherechain/import/types.h"
 
 namespace spherechain::test {
 

@@ -19,8 +19,8 @@
 #include <unistd.h>
 
 #include "spherechain/baker/bake.h"
-#include "spherechain/baker/import.h"
-#include "spherechain/baker/vertex_contract.h"
+#include "spherechain/import/import.h"
+#include "spherechain/import/vertex_contract.h"
 #include "spherechain/playback/validate.h"
 #include "spherechain/runtime/asset.h"
 #include "test_data.h"

@@ -13,7 +13,7 @@ function(run what)
 endfunction()
 run("install" ${CMAKE_COMMAND} --install ${BUILD} --prefix ${WORK}/prefix)
 foreach(f lib/libspherechain_playback.a lib/libspherechain_baker.a include/spherechain/playback/play.h
-          include/spherechain/baker/types.h)
+          include/spherechain/import/types.h)
   if(NOT EXISTS ${WORK}/prefix/${f})
     message(FATAL_ERROR "not installed: ${f}")
   endif()

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "spherechain/baker/import.h"
+#include "spherechain/import/import.h"
 #include "spherechain/playback/animation.h"
 #include "spherechain/playback/morph.h"
 #include "test_data.h"
@@ -69,7 +69,7 @@ std::vector<float> Skinned(const sb::Mesh& mesh, const std::vector<sb::Transform
 /// Imports `path` and checks that skinning at the rest pose (rest locals, and a clip with no channels)
 /// gives back Mesh::positions, and that every clip samples to finite positions of a sane size.
 void CheckRestPoseReproducesBind(const std::string& path, float tolerance_rel) {
-  auto r = spherechain::baker::ImportMesh(path);
+  auto r = spherechain::import::ImportMesh(path);
   REQUIRE_MESSAGE(r.ok(), (r.ok() ? "" : r.error().message));
   const sb::Mesh& mesh = r.value();
   REQUIRE(mesh.skin.has_value());
@@ -218,7 +218,7 @@ TEST_CASE("animation: MakeHuman morph hits each key pose exactly at its mid fram
   if (!spherechain::test::Require(obj)) return;
   const std::string poses_dir = spherechain::test::SourceFile("data/poses/makehuman");
   REQUIRE(spherechain::test::Require(poses_dir));
-  auto r = spherechain::baker::ImportMesh(obj);
+  auto r = spherechain::import::ImportMesh(obj);
   REQUIRE_MESSAGE(r.ok(), (r.ok() ? "" : r.error().message));
   const sb::Mesh& mesh = r.value();
   REQUIRE(mesh.skin.has_value());

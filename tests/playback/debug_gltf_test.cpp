@@ -14,7 +14,7 @@
 
 #include "playback/rig.h"
 #include "spherechain/baker/bake.h"
-#include "spherechain/baker/import.h"
+#include "spherechain/import/import.h"
 #include "spherechain/playback/debug_gltf.h"
 #include "spherechain/playback/play.h"
 #include "spherechain/runtime/runtime.h"
@@ -72,7 +72,7 @@ void CheckAnimatedExport(const std::string& input, sc::playback::AnimationReques
   sc::runtime::AssetView view;
   REQUIRE(sc::runtime::LoadAsset(reinterpret_cast<const uint8_t*>(storage.data()), baked->asset.size(), &view) ==
           sc::runtime::Status::kOk);
-  auto mesh = sc::baker::ImportMesh(input);  // with its clips
+  auto mesh = sc::import::ImportMesh(input);  // with its clips
   REQUIRE(mesh.ok());
   request.mesh_name = input;
   auto anim = sc::playback::OpenAnimation(mesh.value(), request);
@@ -247,11 +247,11 @@ TEST_CASE("animated debug glTF of a synthetic rig: one animation, 3 channels a n
     CHECK(rd.At(smp.output, 3)[2] == doctest::Approx(r.data.spheres[12].center().z() - 9.0f).epsilon(1e-4));
   }
   // Errors: a mesh that does not match, a missing folder (nothing written).
-  sc::baker::Mesh shorter = r.mesh;
+  sc::import::Mesh shorter = r.mesh;
   shorter.positions.resize(shorter.positions.size() - 3);
   CHECK(!sc::playback::ExportAnimatedGltf(shorter, r.view, anim.value(), out).ok());
   auto missing = sc::playback::ExportAnimatedGltf(r.mesh, r.view, anim.value(), "/nonexistent/dir/x.gltf");
   REQUIRE(!missing.ok());
-  CHECK(missing.error().code == sc::baker::Error::Code::kIo);
+  CHECK(missing.error().code == sc::import::Error::Code::kIo);
   std::filesystem::remove(out);
 }

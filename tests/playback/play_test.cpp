@@ -42,7 +42,7 @@ TEST_CASE("play: tube B lowered onto tube A collides only in the last frame, wit
     CHECK(f == calls++);
     CHECK(positions.size() == r.mesh.positions.size());
     CHECK(joints == nullptr);  // the synthetic asset holds no centre joint weights
-    return sc::baker::Status(sc::baker::Ok{});
+    return sc::import::Status(sc::import::Ok{});
   };
   auto played = sc::playback::Play(r.mesh, r.view, anim, o);
   REQUIRE_MESSAGE(played.ok(), (played.ok() ? "" : played.error().message));
@@ -93,7 +93,7 @@ TEST_CASE("play: documented errors — joint refit without weights, a bad narrow
   o.refit = sc::playback::PlayRefit::kJoints;
   auto a = sc::playback::Play(r.mesh, r.view, anim, o);
   REQUIRE(!a.ok());
-  CHECK(a.error().code == sc::baker::Error::Code::kConfig);
+  CHECK(a.error().code == sc::import::Error::Code::kConfig);
   CHECK(a.error().message.find("no joint weights") != std::string::npos);
 
   o.refit = sc::playback::PlayRefit::kPivotFrame;
@@ -102,20 +102,20 @@ TEST_CASE("play: documented errors — joint refit without weights, a bad narrow
     o.narrow_behind_margin = bad;
     auto e = sc::playback::Play(r.mesh, r.view, anim, o);
     REQUIRE(!e.ok());
-    CHECK(e.error().code == sc::baker::Error::Code::kConfig);
+    CHECK(e.error().code == sc::import::Error::Code::kConfig);
     CHECK(e.error().message.find("narrow_behind_margin") != std::string::npos);
   }
   o.narrow_phase = false;
   o.narrow_behind_margin = 0.0f;
-  sc::baker::Mesh shorter = r.mesh;
+  sc::import::Mesh shorter = r.mesh;
   shorter.positions.resize(shorter.positions.size() - 3);
   auto b = sc::playback::Play(shorter, r.view, anim, o);
   REQUIRE(!b.ok());
-  CHECK(b.error().code == sc::baker::Error::Code::kConfig);
+  CHECK(b.error().code == sc::import::Error::Code::kConfig);
 
-  o.on_frame = [](uint32_t f, const std::vector<float>&, const std::vector<float>*) -> sc::baker::Status {
-    if (f == 2) return sc::baker::MakeError(sc::baker::Error::Code::kIo, "disk full");
-    return sc::baker::Ok{};
+  o.on_frame = [](uint32_t f, const std::vector<float>&, const std::vector<float>*) -> sc::import::Status {
+    if (f == 2) return sc::import::MakeError(sc::import::Error::Code::kIo, "disk full");
+    return sc::import::Ok{};
   };
   auto c = sc::playback::Play(r.mesh, r.view, anim, o);
   REQUIRE(!c.ok());

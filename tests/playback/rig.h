@@ -6,14 +6,14 @@
 #include <doctest/doctest.h>
 
 #include "runtime/asset_builder.h"
-#include "spherechain/baker/types.h"
+#include "spherechain/import/types.h"
 
 namespace spherechain::test {
 
 struct Rig {
   spherechain::test::AlignedBytes bytes;
   spherechain::runtime::AssetView view;
-  spherechain::baker::Mesh mesh;
+  spherechain::import::Mesh mesh;
   spherechain::test::AssetData data;
 };
 
@@ -24,7 +24,7 @@ inline void MakeRig(Rig* r) {
   r->data = spherechain::test::TwoTubes(false, &m);
   r->mesh.positions = m.positions;
   r->mesh.indices = m.triangles;
-  spherechain::baker::Skin skin;
+  spherechain::import::Skin skin;
   skin.source = "test";
   skin.nodes.resize(3);
   skin.nodes[0].name = "root";
@@ -43,12 +43,12 @@ inline void MakeRig(Rig* r) {
   }
   skin.weight_offsets.push_back(V);
   r->mesh.skin = skin;
-  spherechain::baker::Clip clip;
+  spherechain::import::Clip clip;
   clip.name = "lower";
   clip.duration_s = 1.0f;
-  spherechain::baker::Channel ch;
+  spherechain::import::Channel ch;
   ch.node = 2;
-  ch.path = spherechain::baker::Channel::Path::kTranslation;
+  ch.path = spherechain::import::Channel::Path::kTranslation;
   ch.times = {0.0f, 1.0f};
   ch.values = {0, 0, 0, 0, 0, -12};
   clip.channels.push_back(ch);

@@ -8,7 +8,7 @@
 #include <utility>
 
 #include "runtime/asset_builder.h"
-#include "spherechain/baker/write.h"
+#include "spherechain/import/file_io.h"
 #include "spherechain/playback/validate.h"
 
 namespace sc = spherechain;
@@ -17,25 +17,25 @@ using sc::playback::Severity;
 
 namespace {
 
-sc::baker::Mesh ToMesh(const sc::test::Mesh& m) {
-  sc::baker::Mesh mesh;
+sc::import::Mesh ToMesh(const sc::test::Mesh& m) {
+  sc::import::Mesh mesh;
   mesh.positions = m.positions;
   mesh.indices = m.triangles;
   return mesh;
 }
 
 /// Two tubes (crossing or apart), fingerprint hashes of their mesh recorded, and that mesh.
-sc::test::AssetData Tubes(bool crossing, sc::baker::Mesh* mesh) {
+sc::test::AssetData Tubes(bool crossing, sc::import::Mesh* mesh) {
   sc::test::Mesh m;
   sc::test::AssetData d = sc::test::TwoTubes(crossing, &m);
   *mesh = ToMesh(m);
-  const sc::baker::Fingerprint fp = sc::baker::ComputeFingerprint(*mesh);
+  const sc::import::Fingerprint fp = sc::import::ComputeFingerprint(*mesh);
   d.positions_hash = fp.positions_hash;
   d.indices_hash = fp.indices_hash;
   return d;
 }
 
-std::vector<Finding> Validate(const sc::test::AssetData& d, const sc::baker::Mesh* mesh) {
+std::vector<Finding> Validate(const sc::test::AssetData& d, const sc::import::Mesh* mesh) {
   const sc::test::AlignedBytes bytes = sc::test::Serialize(d);
   return sc::playback::ValidateAssetBytes(bytes.data(), bytes.size, mesh, {"tubes.sphc", "tubes.obj"});
 }
@@ -50,7 +50,7 @@ std::vector<Finding> WithCode(const std::vector<Finding>& all, const std::string
 }  // namespace
 
 TEST_CASE("validate: a correct asset against its own mesh has only the documented warnings") {
-  sc::baker::Mesh mesh;
+  sc::import::Mesh mesh;
   const auto d = Tubes(false, &mesh);
   const auto findings = Validate(d, &mesh);
   CHECK(sc::playback::CountErrors(findings) == 0);
@@ -68,7 +68,7 @@ TEST_CASE("validate: a correct asset against its own mesh has only the documente
 }
 
 TEST_CASE("validate: crossing tubes report every overlapping bind pair, located by sphere pair") {
-  sc::baker::Mesh mesh;
+  sc::import::Mesh mesh;
   const auto d = Tubes(true, &mesh);
   const auto found = WithCode(Validate(d, &mesh), "BIND-COLLISION");
   // Known answer: every (tube A sphere, tube B sphere) whose bind spheres overlap (margin 0); pairs
@@ -96,7 +96,7 @@ TEST_CASE("validate: crossing tubes report every overlapping bind pair, located 
 }
 
 TEST_CASE("validate: a negative radius is SPHC-LOAD located at that sphere's radius") {
-  sc::baker::Mesh mesh;
+  sc::import::Mesh mesh;
   auto d = Tubes(false, &mesh);
   d.spheres[5] = sc::schema::Sphere(d.spheres[5].center(), -1.0f);
   const auto findings = Validate(d, &mesh);
@@ -110,7 +110,7 @@ TEST_CASE("validate: a negative radius is SPHC-LOAD located at that sphere's rad
 }
 
 TEST_CASE("validate: a NaN centre is SPHC-LOAD located at that sphere's centre") {
-  sc::baker::Mesh mesh;
+  sc::import::Mesh mesh;
   auto d = Tubes(false, &mesh);
   const float nan = std::numeric_limits<float>::quiet_NaN();
   d.spheres[2] = sc::schema::Sphere(sc::schema::Vec3(nan, 0, 0), d.spheres[2].radius());
@@ -123,7 +123,7 @@ TEST_CASE("validate: a NaN centre is SPHC-LOAD located at that sphere's centre")
 }
 
 TEST_CASE("validate: an unsorted chain is SPHC-LOAD located at that chain") {
-  sc::baker::Mesh mesh;
+  sc::import::Mesh mesh;
   auto d = Tubes(false, &mesh);
   std::swap(d.chains[1][2], d.chains[1][3]);
   const auto findings = Validate(d, nullptr);
@@ -148,10 +148,10 @@ TEST_CASE("validate: spheres in no chain are SPHERE-NO-CHAIN warnings, one per s
 }
 
 TEST_CASE("validate: mesh mismatches give FP-COUNTS, FP-INDICES, FP-POSITIONS") {
-  sc::baker::Mesh mesh;
+  sc::import::Mesh mesh;
   const auto d = Tubes(false, &mesh);
   {
-    sc::baker::Mesh more = mesh;
+    sc::import::Mesh more = mesh;
     more.indices.insert(more.indices.end(), {0, 1, 2});
     const auto f = WithCode(Validate(d, &more), "FP-COUNTS");
     REQUIRE(f.size() == 1);
@@ -160,7 +160,7 @@ TEST_CASE("validate: mesh mismatches give FP-COUNTS, FP-INDICES, FP-POSITIONS") 
     CHECK(f[0].message.find("triangles, the asset was baked from") != std::string::npos);
   }
   {
-    sc::baker::Mesh flipped = mesh;
+    sc::import::Mesh flipped = mesh;
     std::swap(flipped.indices[0], flipped.indices[1]);
     const auto all = Validate(d, &flipped);
     CHECK(WithCode(all, "FP-INDICES").size() == 1);
@@ -168,7 +168,7 @@ TEST_CASE("validate: mesh mismatches give FP-COUNTS, FP-INDICES, FP-POSITIONS") 
     CHECK(sc::playback::CountErrors(all) == 1);
   }
   {
-    sc::baker::Mesh moved = mesh;
+    sc::import::Mesh moved = mesh;
     moved.positions[0] += 1e-3f;
     const auto all = Validate(d, &moved);
     const auto f = WithCode(all, "FP-POSITIONS");
@@ -179,7 +179,7 @@ TEST_CASE("validate: mesh mismatches give FP-COUNTS, FP-INDICES, FP-POSITIONS") 
 }
 
 TEST_CASE("validate: truncated bytes and a missing file are SPHC-LOAD errors") {
-  sc::baker::Mesh mesh;
+  sc::import::Mesh mesh;
   const auto d = Tubes(false, &mesh);
   const sc::test::AlignedBytes bytes = sc::test::Serialize(d);
   for (size_t n : {size_t(0), size_t(4), bytes.size / 2}) {

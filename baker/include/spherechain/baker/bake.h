@@ -12,7 +12,7 @@
 #include "spherechain/baker/contacts.h"
 #include "spherechain/baker/coverage.h"
 #include "spherechain/baker/fit.h"
-#include "spherechain/baker/import.h"
+#include "spherechain/import/import.h"
 #include "spherechain/baker/plausibility.h"
 #include "spherechain/baker/regions.h"
 #include "spherechain/baker/segment.h"

@@ -11,28 +11,10 @@
 #include "spherechain/baker/plausibility.h"
 #include "spherechain/baker/regions.h"
 #include "spherechain/baker/segment.h"
+#include "spherechain/import/file_io.h"
 #include "spherechain/baker/types.h"
 
 namespace spherechain::baker {
-
-/// Source fingerprint (schema Fingerprint): counts and XXH3-64 of the bind positions (#V×3 float32)
-/// and indices (#T×3 uint32) as read.
-struct Fingerprint {
-  uint32_t vertex_count = 0;
-  uint32_t triangle_count = 0;
-  uint64_t positions_hash = 0;
-  uint64_t indices_hash = 0;
-};
-Fingerprint ComputeFingerprint(const Mesh& mesh);
-
-/// Weld ids (schema Asset.weld_ids) of bind positions `positions` (#V×3): for every vertex the lowest
-/// vertex index whose position compares equal (==, so +0 and −0 weld) — UV seams and triangle soups
-/// get the adjacency a narrow phase needs to skip triangles that share a corner. Nothing is merged:
-/// the index buffer keeps the source's vertices. Cost O(#V log #V), deterministic.
-std::vector<uint32_t> ComputeWeldIds(const std::vector<float>& positions);
-
-/// XXH3-64 of arbitrary bytes (the canonical bake configuration, ...).
-uint64_t Hash64(const void* data, size_t size);
 
 /// Overall accuracy (schema Accuracy).
 struct AccuracySummary {
@@ -68,15 +50,5 @@ struct AssetInputs {
 /// layout (RegionLayout::paper false) runtime::kSchemaVersion (4) with Asset.regions from
 /// Segmentation::layout (names, kinds, mirrors, first bones).
 std::vector<uint8_t> BuildAsset(const AssetInputs& in);
-
-/// Writes `bytes` to `path` atomically: a temporary file in the same folder, flushed, then renamed over
-/// `path`. On any failure the temporary is removed and `path` is untouched. Errors: kIo.
-Status WriteFileAtomic(const std::string& path, const void* bytes, size_t size);
-inline Status WriteFileAtomic(const std::string& path, const std::string& text) {
-  return WriteFileAtomic(path, text.data(), text.size());
-}
-
-/// Reads a whole file. Errors: kIo. `max_size` caps what is read (kIo "file too large").
-Result<std::vector<uint8_t>> ReadFileBytes(const std::string& path, size_t max_size = size_t(1) << 31);
 
 }  // namespace spherechain::baker

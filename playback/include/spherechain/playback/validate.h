@@ -29,8 +29,8 @@
 #include <string>
 #include <vector>
 
-#include "spherechain/baker/import.h"
-#include "spherechain/baker/types.h"
+#include "spherechain/import/import.h"
+#include "spherechain/import/types.h"
 #include "spherechain/runtime/asset.h"
 
 namespace spherechain::playback {
@@ -74,7 +74,7 @@ struct ValidateNames {
 /// Ownership: reads `view` and `mesh` during the call only. Cost: O(#S + #chains·#S + Σ region sizes)
 /// plus, with a mesh, one fingerprint hash (O(#V + #T)), one runtime Model + Workspace Init and one refit/detect
 /// (allocates; thread-safe for distinct arguments). Never throws except std::bad_alloc.
-std::vector<Finding> ValidateAsset(const runtime::AssetView& view, const baker::Mesh* mesh,
+std::vector<Finding> ValidateAsset(const runtime::AssetView& view, const import::Mesh* mesh,
                                    const ValidateNames& names = {});
 
 /// As above from raw asset bytes (any alignment: copied into aligned storage): a LoadAsset failure is
@@ -83,7 +83,7 @@ std::vector<Finding> ValidateAsset(const runtime::AssetView& view, const baker::
 /// chain or field found by re-checking the arrays (kErrorRadius, kErrorNonFinite of a sphere,
 /// kErrorChainOrder, kErrorIndexOutOfRange in a chain, kErrorContactMargin, kErrorMissingField,
 /// kErrorCountMismatch name what they can). `bytes` may be null only with `size` 0.
-std::vector<Finding> ValidateAssetBytes(const uint8_t* bytes, size_t size, const baker::Mesh* mesh,
+std::vector<Finding> ValidateAssetBytes(const uint8_t* bytes, size_t size, const import::Mesh* mesh,
                                         const ValidateNames& names = {});
 
 /// What `spherechain validate` does: reads `asset_path` (SPHC-LOAD with the reader's message when it
@@ -93,8 +93,8 @@ std::vector<Finding> ValidateAssetBytes(const uint8_t* bytes, size_t size, const
 /// (the buffer the game feeds); kAuto = the one the asset records (baker vertex_contract.h
 /// ContractForReimport). A buffer of the other contract is an FP-COUNTS error saying so.
 std::vector<Finding> ValidateAssetFile(const std::string& asset_path, const std::string& mesh_path = {},
-                                       const std::string& rig_path = {}, baker::Context* log = nullptr,
-                                       baker::VertexContract vertices = baker::VertexContract::kAuto);
+                                       const std::string& rig_path = {}, import::Context* log = nullptr,
+                                       import::VertexContract vertices = import::VertexContract::kAuto);
 
 /// Number of findings of severity kError (the asset is valid when 0).
 size_t CountErrors(const std::vector<Finding>& findings);

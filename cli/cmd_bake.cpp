@@ -1,0 +1,176 @@
+// spherechain bake INPUT -o OUT.sphc [--report R.json] [--config C.json] ...
+#include <cstdio>
+#include <filesystem>
+
+#include <spdlog/spdlog.h>
+
+#include "commands.h"
+#include "spherechain/baker/coverage.h"
+#include "spherechain/baker/bake.h"
+#include "spherechain/playback/debug_export.h"
+
+namespace spherechain::cli {
+
+namespace {
+
+struct BakeArgs {
+  std::string input, output, report, config, rig, segmentation, region_map, ray_csv, png, vertices, regions;
+  double disk_step = 0.0;
+  bool force = false;
+};
+
+void PrintSummary(const baker::BakeResult& r, const import::Context& ctx) {
+  using import::Region;
+  const import::RegionLayout& layout = r.segmentation.layout;
+  std::printf("\n%-10s %10s %8s\n", "region", "triangles", "spheres");
+  for (int k = 0; k < layout.count(); ++k) {
+    const Region reg = static_cast<Region>(k);
+    size_t tris = 0, sph = 0;
+    for (uint8_t t : r.segmentation.triangle_regions) tris += t == k;
+    for (const auto& s : r.fit.spheres) sph += s.region == reg;
+    std::printf("%-3s %-6s %10zu %8zu", import::RegionSymbol(reg), layout.Name(reg), tris, sph);
+    if (!layout.paper)
+      std::printf("   %s, from bone %s", layout.IsTrunk(reg) ? "trunk" : "limb", layout.regions[size_t(k)].bone.c_str());
+    std::printf("\n");
+  }
+  std::printf("%-10s %10u %8zu   (unassigned triangles: %u)\n", "total", r.mesh.triangle_count(), r.fit.spheres.size(),
+              r.unassigned_triangles);
+  std::printf("vertices: %u (contract %s", r.mesh.vertex_count(), r.mesh.vertex_contract.c_str());
+  if (r.mesh.source_vertex_count) std::printf("; source %u, joined %u", r.mesh.source_vertex_count, r.mesh.joined_vertex_count);
+  std::printf(")\n");
+  std::printf("\nchains:");
+  for (const auto& c : r.chains) std::printf(" %s=%zu", c.name.c_str(), c.spheres.size());
+  std::printf("   excluded pairs: %zu\n", r.excluded.size());
+  if (r.agreement)
+    std::printf("segmentation: %s; agreement with %s: %.1f%% of triangles, %.1f%% of area\n",
+                r.segmentation.method.c_str(), r.other_segmentation->method.c_str(),
+                100.0 * r.agreement->triangle_fraction, 100.0 * r.agreement->area_fraction);
+  else
+    std::printf("segmentation: %s\n", r.segmentation.method.c_str());
+  if (r.plausibility.empty()) {
+    std::printf("plausibility: every check passed\n");
+  } else {
+    std::printf("plausibility: %zu check(s) FAILED, written anyway (--force; recorded in the asset, validate "
+                "reports them as errors):\n", r.plausibility.size());
+    for (const auto& f : r.plausibility) std::printf("  %s: %s\n", f.code.c_str(), f.message.c_str());
+  }
+  if (r.coverage)
+    std::printf("bind pose: coverage %.1f %% of the body volume, protrusion %.1f %% (outside: p95 %.2f %% of height); "
+                "skin outside the spheres: p95 %.2f %% of height, %.1f %% of its area within %.1f %%\n",
+                100 * r.coverage->coverage, 100 * r.coverage->protrusion, 100 * r.coverage->outside_p95_rel,
+                100 * r.coverage->skin_outside_p95_rel, 100 * r.coverage->skin_within_share, 100 * baker::kSkinWithinRel);
+  std::printf("\naccuracy F = r - |c - v| over surrounding-region vertices\n");
+  std::printf("%-14s %10s %10s %10s %10s\n", "method", "mean|F|", "RMS", "min", "max");
+  auto row = [](const char* n, const baker::AccuracyStats& s) {
+    std::printf("%-14s %10.4f %10.4f %10.4f %10.4f\n", n, s.mean_abs_f, s.rms_f, s.min_f, s.max_f);
+  };
+  row("phi1", r.accuracy.phi1);
+  row("phi1' (adj.)", r.accuracy.phi1_adjusted);
+  row("phi2 (MEB)", r.accuracy.phi2);
+  std::printf("\ntimings (ms):");
+  double total = 0;
+  for (const auto& [n, ms] : ctx.timings_ms) {
+    std::printf(" %s=%.1f", n.c_str(), ms);
+    if (n.find('.') == std::string::npos) total += ms;  // "a.b" is a sub-stage of "a"
+  }
+  std::printf("  total=%.1f\n", total);
+}
+
+int RunBake(const BakeArgs& a) {
+  baker::BakeConfig config;
+  if (!a.config.empty()) {
+    auto c = baker::LoadBakeConfig(a.config);
+    if (!c.ok()) return Fail(c.error());
+    config = std::move(c).value();
+  }
+  if (!a.rig.empty()) config.import.rig_path = a.rig;
+  if (a.vertices == "joined") config.import.vertices = import::VertexContract::kJoined;
+  if (a.vertices == "source") config.import.vertices = import::VertexContract::kSource;
+  if (!a.region_map.empty()) config.region_map = a.region_map;
+  if (a.regions == "paper") config.regions = baker::RegionSet::kPaper;
+  if (a.regions == "extended") config.regions = baker::RegionSet::kExtended;
+  if (a.disk_step > 0) config.fit.disk_step = a.disk_step;
+  config.force = a.force;
+  if (a.segmentation == "rig") config.segmentation = baker::SegmentMethod::kRig;
+  else if (a.segmentation == "geometry") config.segmentation = baker::SegmentMethod::kGeometry;
+  else if (a.segmentation == "skeleton") config.segmentation = baker::SegmentMethod::kSkeleton;
+  else if (a.segmentation == "map" && config.region_map.empty()) return Fail("--segmentation map needs --region-map");
+
+  // Fail before the work when an output cannot be written.
+  for (const std::string* out : {&a.output, &a.report, &a.ray_csv, &a.png}) {
+    if (out->empty()) continue;
+    const std::filesystem::path dir = std::filesystem::path(*out).parent_path();
+    if (!dir.empty() && !std::filesystem::is_directory(dir))
+      return Fail("cannot write '" + *out + "': folder '" + dir.string() + "' does not exist");
+  }
+  import::Context ctx = MakeLoggingContext();
+  auto result = baker::Bake(a.input, config, &ctx);
+  if (!result.ok()) return Fail(result.error());
+  const baker::BakeResult& r = result.value();
+
+  // Everything is in memory; write each output atomically (a failure leaves no partial file).
+  if (auto s = import::WriteFileAtomic(a.output, r.asset.data(), r.asset.size()); !s.ok()) return Fail(s.error());
+  if (!a.report.empty()) {
+    const std::string text = baker::MakeBakeReport(r, config, ctx).dump(2) + "\n";
+    if (auto s = import::WriteFileAtomic(a.report, text); !s.ok()) return Fail(s.error());
+  }
+  if (!a.ray_csv.empty())
+    if (auto s = import::WriteFileAtomic(a.ray_csv, baker::TorsoRayCsv(r)); !s.ok()) return Fail(s.error());
+  if (!a.png.empty()) {
+    runtime::AssetView view;
+    if (runtime::Failed(runtime::LoadAsset(r.asset.data(), r.asset.size(), &view)))
+      return Fail("internal: the baked asset does not load");
+    if (auto s = playback::RenderDebugPng(r.mesh, view, a.png); !s.ok()) return Fail(s.error());
+  }
+  PrintSummary(r, ctx);
+  std::printf("\nwrote %s (%zu bytes)", a.output.c_str(), r.asset.size());
+  if (!a.report.empty()) std::printf(", %s", a.report.c_str());
+  if (!a.ray_csv.empty()) std::printf(", %s", a.ray_csv.c_str());
+  if (!a.png.empty()) std::printf(", %s", a.png.c_str());
+  std::printf("\n");
+  return 0;
+}
+
+}  // namespace
+
+void RegisterBake(CLI::App& app, Commands* commands) {
+  auto args = std::make_shared<BakeArgs>();
+  CLI::App* sub = app.add_subcommand("bake", "Bake a character into a .sphc sphere-chain asset (paper §3-§5.1)");
+  sub->add_option("input", args->input, "Character file: .gltf/.glb (tinygltf); .obj .fbx .dae .x .blend ... (assimp)")
+      ->required()->check(CLI::ExistingFile);
+  sub->add_option("-o,--output", args->output, "Asset to write (.sphc); written atomically")->required();
+  sub->add_option("--report", args->report, "JSON bake report to write");
+  sub->add_option("--config", args->config, "JSON bake configuration (parameters, chains, segmentation)")
+      ->check(CLI::ExistingFile);
+  sub->add_option("--rig", args->rig, "MakeHuman rig (.mhskel) for an OBJ; default: default.mhskel beside the OBJ");
+  sub->add_option("--segmentation", args->segmentation,
+                  "auto (rig when rigged, else geometry; a rigged creature that is no standing body: skeleton), rig, "
+                  "geometry, skeleton (the any-skeleton path: limbs branching off the trunk of the bone tree), map")
+      ->check(CLI::IsMember({"auto", "rig", "geometry", "skeleton", "map"}));
+  sub->add_option("--regions", args->regions,
+                  "Regions of a standing biped: extended (default: arms, legs, head, hands, feet and the torso, "
+                  "ten regions whose chains let a hand meet the face and a foot the other leg) or paper (the "
+                  "paper's five: arms, legs, torso with the head; Table 1's six chains); overrides the config's "
+                  "\"regions\". Creatures keep their own")
+      ->check(CLI::IsMember({"paper", "extended"}));
+  sub->add_option("--vertices", args->vertices,
+                  "Vertex contract for assimp formats (.x .fbx .dae ...): joined (default; what engines' importers "
+                  "give: aiProcess_JoinIdenticalVertices) or source (the importer's own buffer); recorded in the "
+                  "asset. glTF/OBJ: no-op with a warning (their buffer is the engine's)")
+      ->check(CLI::IsMember({"joined", "source"}));
+  sub->add_flag("--force", args->force,
+                "Write the asset even when a plausibility check fails (a limb in pieces or detached from the "
+                "torso, left/right imbalance, the head in a limb, a lying trunk, spheres outside the body, rig "
+                "and geometry segmentations disagreeing). Without it such a bake exits 1 naming each failed "
+                "check (PLAUS-... code, what and where) and writes nothing; with it the findings are printed, "
+                "go to the report as errors and into the asset, where `validate` reports them as errors");
+  sub->add_option("--region-map", args->region_map,
+                  "JSON region map {\"triangle_regions\": [...]} of region values or names (implies map); "
+                  "\"regions\": [names] makes a creature's layout (limbs, the trunk last)");
+  sub->add_option("--disk-step", args->disk_step, "Torso disk step delta in source units (default: relative to height)");
+  sub->add_option("--ray-csv", args->ray_csv, "CSV of the paper's per-ray comparison for the torso spheres");
+  sub->add_option("--png", args->png, "PNG views (front and side) of regions and spheres (needs rsvg-convert)");
+  commands->handlers.emplace_back(sub, [args] { return RunBake(*args); });
+}
+
+}  // namespace spherechain::cli

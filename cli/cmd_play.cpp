@@ -1,0 +1,269 @@
+// spherechain play ASSET --mesh INPUT [--clip NAME | --morph POSES...] [--frames N] [--method m1|m2|both]
+//                  [--refit paper|frame|joints] [--json OUT] [--poses-dir DIR] [--rig MHSKEL] [--repeat R]
+//
+// Plays an animation of the character the asset was baked from — a skinned clip, or the paper's
+// Bézier morph through key poses (§5.1, §6: 40 frames) — and runs the runtime on every frame: refit
+// the spheres to the skinned vertices, detect overlapping sphere pairs with M1 (chains) and/or M2 (all
+// spheres) (§5.2). Prints a per-frame table (pairs, timings, which regions touch) and a summary.
+// Thin: the playing is playback::Play (spherechain/playback/play.h); this parses, prints and writes JSON.
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+
+#include <nlohmann/json.hpp>
+
+#include "animation_source.h"
+#include "commands.h"
+#include "spherechain/baker/write.h"
+#include "spherechain/playback/play.h"
+
+namespace spherechain::cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct PlayArgs {
+  std::string asset, json, rig, dump_frames, method = "both", refit = "frame";
+  AnimationArgs anim;  // --mesh, --clip, --morph, --poses-dir, --frames
+  uint32_t repeat = 5;
+  bool narrow_phase = false;
+  float narrow_behind = 0.0f;  // --narrow-behind: the narrow phase behind M2's pairs at this × the asset's margin
+};
+
+nlohmann::json RegionsJson(const std::vector<std::pair<int, int>>& pairs) {
+  nlohmann::json a = nlohmann::json::array();
+  for (const auto& [ra, rb] : pairs) a.push_back("R" + std::to_string(ra) + "-R" + std::to_string(rb));
+  return a;
+}
+
+int RunPlay(const PlayArgs& a) {
+  LoadedAsset asset;
+  import::Mesh mesh;
+  std::string error;
+  if (!OpenAssetAndMesh(a.asset, a.anim.mesh, a.rig, &asset, &mesh, &error)) return Fail(error);
+  const runtime::AssetView& view = asset.view;
+  AnimationSource anim;
+  if (!OpenAnimation(mesh, a.anim, &anim, &error)) return Fail(error);
+  const uint32_t frames = anim.frames;
+
+  playback::PlayOptions opts;
+  opts.m1 = a.method != "m2";
+  opts.m2 = a.method != "m1";
+  opts.refit = a.refit == "paper" ? playback::PlayRefit::kPaper
+               : a.refit == "joints" ? playback::PlayRefit::kJoints
+                                     : playback::PlayRefit::kPivotFrame;
+  opts.repeat = a.repeat;
+  opts.narrow_phase = a.narrow_phase || a.narrow_behind > 0.0f;
+  opts.narrow_behind_margin = a.narrow_behind;
+  const bool joints = opts.refit == playback::PlayRefit::kJoints;
+  if (joints && !view.asset->sphere_joints())
+    return Fail("'" + a.asset + "' has no joint weights (schema v" + std::to_string(view.asset->schema_version()) +
+                ", or baked from a mesh without a skin): --refit joints needs an asset baked by this version from a "
+                "rigged character; re-bake it");
+  if (joints && view.asset->joint_count() != mesh.skin->joints.size())
+    return Fail("'" + a.asset + "' was baked for " + std::to_string(view.asset->joint_count()) + " joints, '" + a.anim.mesh +
+                "' has " + std::to_string(mesh.skin->joints.size()));
+  if (!a.dump_frames.empty()) {
+    // One raw frame per file: #V×3 little-endian float32, for bench/runtime_bench and the CUDA bench; and
+    // its joint matrices (frame_NNNN.joints: #J × 12 float32, JointRefitJob's layout) when the asset can
+    // refit from them.
+    opts.on_frame = [&a](uint32_t f, const std::vector<float>& positions, const std::vector<float>* joint_matrices) {
+      char name[32];
+      std::snprintf(name, sizeof name, "frame_%04u.f32", f);
+      if (auto s = import::WriteFileAtomic((fs::path(a.dump_frames) / name).string(), positions.data(),
+                                          positions.size() * sizeof(float));
+          !s.ok())
+        return s;
+      if (joint_matrices) {
+        std::snprintf(name, sizeof name, "frame_%04u.joints", f);
+        return import::WriteFileAtomic((fs::path(a.dump_frames) / name).string(), joint_matrices->data(),
+                                      joint_matrices->size() * sizeof(float));
+      }
+      return import::Status(import::Ok{});
+    };
+  }
+  auto played = playback::Play(mesh, view, anim, opts);
+  if (!played.ok()) return Fail(played.error());
+  const playback::PlayReport& report = played.value();
+  const playback::PlaySummary& sum = report.summary;
+  const std::vector<playback::FrameReport>& rows = report.frames;
+  const playback::FrameReport& bind = report.bind;
+
+  // ---- report ------------------------------------------------------------------------------------
+  std::printf("play: %s + %s — %s, %u frames, %u spheres, %u chains, refit %s, timings = min of %u runs\n",
+              a.asset.c_str(), a.anim.mesh.c_str(), report.animation.c_str(), frames, view.sphere_count,
+              view.chain_count, a.refit.c_str(), std::max(1u, a.repeat));
+  if (const std::string legend = RegionLegendLine(view); !legend.empty()) std::printf("%s\n", legend.c_str());
+  if (!anim.clip) {
+    std::printf("key poses:");
+    for (size_t k = 0; k < anim.poses.size(); ++k)
+      std::printf(" %s@%u", anim.poses[k].name.c_str(),
+                  playback::MorphKeyFrame(uint32_t(k), frames, uint32_t(anim.poses.size())));
+    std::printf("\n");
+  }
+  std::printf("\n%5s  %-26s %7s %7s %8s %7s %8s %8s %9s %9s", "frame", "pose", "testsM1", "M1 raw", "M1 dist", "M2",
+              "testsM2", "refit us", "M1 us", "M2 us");
+  if (opts.narrow_phase) std::printf(" %8s %8s %9s", "contacts", "tri tests", "narrow us");
+  std::printf("  %s%s\n", "regions touching", opts.narrow_phase ? " | regions in contact (narrow phase)" : "");
+  auto print_row = [&](const playback::FrameReport& r, const std::string& frame) {
+    std::printf("%5s  %-26s %7u %7u %8u %7u %8u %8.1f %9.1f %9.1f", frame.c_str(), r.label.c_str(), r.m1.tests,
+                r.m1.raw_pairs, r.m1.distinct_pairs, r.m2.distinct_pairs, r.m2.tests, r.refit_us, r.detect_m1_us,
+                r.detect_m2_us);
+    if (opts.narrow_phase) std::printf(" %8u %8u %9.1f", r.narrow.contacts, r.narrow.triangle_tests, r.narrow_us);
+    std::printf("  %s", playback::RegionPairsText(r.regions).c_str());
+    if (opts.narrow_phase) std::printf(" | %s", playback::RegionPairsText(r.contact_regions).c_str());
+    std::printf("\n");
+  };
+  print_row(bind, "bind");
+  for (const playback::FrameReport& r : rows) print_row(r, std::to_string(r.frame));
+
+  std::printf("\nsummary: %u frames, %u with collisions; bind pose: M1 %u pairs, M2 %u pairs\n", frames,
+              sum.frames_with_pairs, bind.m1.distinct_pairs, bind.m2.distinct_pairs);
+  if (opts.m1)
+    std::printf("  M1: mean %.1f raw / %.1f distinct pairs (max raw %u), %u tests, detect mean %.1f us\n",
+                sum.mean_pairs_m1_raw, sum.mean_pairs_m1, sum.max_pairs_m1_raw, rows.empty() ? 0u : rows[0].m1.tests,
+                sum.mean_detect_m1_us);
+  if (opts.m2)
+    std::printf("  M2: mean %.1f pairs (max %u), %u tests, detect mean %.1f us\n", sum.mean_pairs_m2, sum.max_pairs_m2,
+                rows.empty() ? 0u : rows[0].m2.tests, sum.mean_detect_m2_us);
+  std::printf("  refit (%s): mean %.1f us; tracking |dF| vs bind over surrounding-region vertices: mean %.4f, max %.4f\n",
+              a.refit.c_str(), sum.mean_refit_us, sum.tracking_mean, sum.tracking_max);
+  if (joints)
+    std::printf("  joint refit vs vertex refit (pivot frame), centre distance / radius over spheres x frames: "
+                "median %.2f %%, p95 %.2f %%, max %.2f %%\n",
+                sum.joint_error_median, sum.joint_error_p95, sum.joint_error_max);
+  if (opts.narrow_phase) {
+    std::printf("  narrow phase");
+    if (opts.narrow_behind_margin > 0.0f)
+      std::printf(" behind M2's pairs at %g x the contact margin (reach regions; the M2 run included)",
+                  double(opts.narrow_behind_margin));
+    std::printf(": %llu contacts (triangle pairs) in %llu frames; median %.1f us, max %.1f us a frame\n",
+                static_cast<unsigned long long>(sum.contacts), static_cast<unsigned long long>(sum.frames_with_contacts),
+                sum.narrow_median_us, sum.narrow_max_us);
+  }
+  std::printf("  regions touching (frames):");
+  if (sum.region_frames.empty()) std::printf(" none");
+  for (const auto& [p, c] : sum.region_frames) std::printf(" %s(%u)", RegionPairName(view, p.first, p.second).c_str(), c);
+  std::printf("\n");
+
+  if (!a.json.empty()) {
+    nlohmann::json j;
+    j["asset"] = a.asset;
+    if (view.asset->regions()) {  // a creature (schema v4): what R0..R(n-1) are
+      nlohmann::json names = nlohmann::json::array();
+      for (uint32_t r = 0; r < runtime::RegionCount(view); ++r) names.push_back(runtime::RegionName(view, r));
+      j["regions"] = names;
+    }
+    j["mesh"] = a.anim.mesh;
+    j["method"] = a.method;
+    j["refit"] = a.refit;
+    j["repeat"] = std::max(1u, a.repeat);
+    if (anim.clip) {
+      j["animation"] = {{"kind", "clip"}, {"name", anim.clip->name}, {"duration_s", anim.clip->duration_s}};
+    } else {
+      nlohmann::json keys = nlohmann::json::array();
+      for (size_t k = 0; k < anim.poses.size(); ++k)
+        keys.push_back({{"name", anim.poses[k].name},
+                        {"frame", playback::MorphKeyFrame(uint32_t(k), frames, uint32_t(anim.poses.size()))}});
+      j["animation"] = {{"kind", "morph"}, {"poses_from", anim.poses_from}, {"keys", keys}};
+    }
+    const auto* sr = view.asset->sphere_regions();
+    auto row_json = [&](const playback::FrameReport& r) {
+      nlohmann::json o = {{"label", r.label},
+                          {"tests_m1", r.m1.tests},
+                          {"pairs_m1_raw", r.m1.raw_pairs},
+                          {"pairs_m1", r.m1.distinct_pairs},
+                          {"tests_m2", r.m2.tests},
+                          {"pairs_m2", r.m2.distinct_pairs},
+                          {"refit_us", r.refit_us},
+                          {"detect_m1_us", r.detect_m1_us},
+                          {"detect_m2_us", r.detect_m2_us},
+                          {"tracking_mean_abs_dF", r.tracking_mean},
+                          {"tracking_max_abs_dF", r.tracking_max},
+                          {"regions_touching", RegionsJson(r.regions)}};
+      if (opts.narrow_phase)
+        o["narrow_phase"] = {{"contacts", r.narrow.contacts},
+                             {"candidate_pairs", r.narrow.candidate_pairs},
+                             {"triangle_tests", r.narrow.triangle_tests},
+                             {"degenerate_triangles", r.narrow.degenerate_triangles},
+                             {"us", r.narrow_us},
+                             {"regions_in_contact", RegionsJson(r.contact_regions)}};
+      if (opts.narrow_behind_margin > 0.0f) {
+        o["narrow_phase"]["behind_m2_pairs"] = r.narrow_pairs;
+        o["narrow_phase"]["behind_margin_scale"] = opts.narrow_behind_margin;
+      }
+      nlohmann::json pairs = nlohmann::json::array();
+      for (const runtime::Collision& c : r.pairs)
+        pairs.push_back({{"a", c.a}, {"b", c.b}, {"region_a", sr ? int(sr->Get(c.a)) : -1},
+                         {"region_b", sr ? int(sr->Get(c.b)) : -1}, {"depth", c.depth}});
+      o["pairs"] = pairs;  // M2's when run, else M1's
+      return o;
+    };
+    j["bind"] = row_json(bind);
+    nlohmann::json fr = nlohmann::json::array();
+    for (const playback::FrameReport& r : rows) {
+      nlohmann::json o = row_json(r);
+      o["frame"] = r.frame;
+      fr.push_back(o);
+    }
+    j["frames"] = fr;
+    nlohmann::json rf = nlohmann::json::object();
+    for (const auto& [p, c] : sum.region_frames) rf["R" + std::to_string(p.first) + "-R" + std::to_string(p.second)] = c;
+    j["summary"] = {{"frames", frames},
+                    {"frames_with_collisions", sum.frames_with_pairs},
+                    {"mean_pairs_m1_raw", sum.mean_pairs_m1_raw},
+                    {"mean_pairs_m1", sum.mean_pairs_m1},
+                    {"mean_pairs_m2", sum.mean_pairs_m2},
+                    {"mean_refit_us", sum.mean_refit_us},
+                    {"tracking_mean_abs_dF", sum.tracking_mean},
+                    {"tracking_max_abs_dF", sum.tracking_max},
+                    {"joint_vs_vertex_centre_error_pct",
+                     joints ? nlohmann::json{{"median", sum.joint_error_median},
+                                             {"p95", sum.joint_error_p95},
+                                             {"max", sum.joint_error_max}}
+                            : nlohmann::json()},
+                    {"mean_detect_m1_us", sum.mean_detect_m1_us},
+                    {"mean_detect_m2_us", sum.mean_detect_m2_us},
+                    {"regions_touching_frames", rf}};
+    const std::string text = j.dump(2) + "\n";
+    if (auto s = import::WriteFileAtomic(a.json, text); !s.ok()) return Fail(s.error());
+    std::printf("wrote %s\n", a.json.c_str());
+  }
+  return 0;
+}
+
+}  // namespace
+
+void RegisterPlay(CLI::App& app, Commands* commands) {
+  auto args = std::make_shared<PlayArgs>();
+  CLI::App* sub = app.add_subcommand(
+      "play", "Play an animation (skinned clip or the paper's Bezier morph of key poses, §5.1/§6) and report "
+              "sphere collisions per frame with M1 and M2 (§5.2)");
+  AddAnimationOptions(sub, &args->asset, &args->rig, &args->anim);
+  sub->add_option("--method", args->method, "Broad phase: m1 (chains), m2 (all spheres), both")
+      ->check(CLI::IsMember({"m1", "m2", "both"}));
+  sub->add_option("--refit", args->refit,
+                  "Refit: paper (centre = mean pivot displacement), frame (pivot frame, default) or joints (linear "
+                  "blend skinning of the centres from the joint matrices, JointRefitJob; reports its centre error "
+                  "against the pivot-frame refit)")
+      ->check(CLI::IsMember({"paper", "frame", "joints"}));
+  sub->add_option("--repeat", args->repeat, "Runs per job per frame; timings are the minimum (default 5)");
+  sub->add_option("--dump-frames", args->dump_frames,
+                  "Folder to write each frame's deformed positions to (frame_NNNN.f32: #V×3 float32), for bench/; "
+                  "with a v3 asset also its joint matrices (frame_NNNN.joints: #J×12 float32, JointRefitJob's layout)")
+      ->check(CLI::ExistingDirectory);
+  sub->add_option("--json", args->json, "Write the per-frame table and summary as JSON");
+  sub->add_flag("--narrow-phase", args->narrow_phase,
+                "Also find the exact triangle contacts between surrounding regions (runtime NarrowPhaseJob): "
+                "contacts per frame in the table and the JSON");
+  sub->add_option("--narrow-behind", args->narrow_behind,
+                  "The narrow phase only behind M2's sphere pairs found with SCALE times the asset's contact margin "
+                  "(reach regions: the spheres as a game's broad phase; 1.5 finds 96-100 % of the region pairs in "
+                  "contact on the reference animations); implies --narrow-phase; its time includes that M2 run")
+      ->check(CLI::Range(0.0f, 100.0f))
+      ->type_name("SCALE");
+  commands->handlers.emplace_back(sub, [args] { return RunPlay(*args); });
+}
+
+}  // namespace spherechain::cli

@@ -1,0 +1,338 @@
+// spherechain view ASSET --mesh INPUT [--clip NAME | --morph POSES...] [--frames N] [--method m1|m2] -o OUT.html
+//                  [--three DIR] [--poses-dir DIR] [--rig MHSKEL]
+//
+// Writes one self-contained HTML file that shows the animation as the runtime sees it: the mesh coloured
+// by region, the refit spheres (RefitJob, §5.1), the colliding sphere pairs (DetectJob, M1 or M2, §5.2)
+// and the triangles in contact (NarrowPhaseJob) frame by frame, with a timeline of the per-frame counts,
+// play / pause / step and an orbit camera. three.js (viewer/package.json, `npm ci` there) is embedded in
+// the file, so it opens offline from disk. The page itself is viewer/page.html, compiled in.
+//
+// Size: per-frame positions are quantised to int16 over the animation's bounding box and base64-encoded
+// (#V × 3 × 2 bytes × 4/3 a frame); spheres are float32; contacts are triangle index pairs.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "animation_source.h"
+#include "commands.h"
+#include "spherechain/playback/animation.h"
+#include "spherechain/playback/debug_export.h"
+#include "spherechain/import/import.h"
+#include "spherechain/baker/write.h"
+#include "spherechain/runtime/narrow_phase.h"
+#include "spherechain/runtime/runtime.h"
+#include "view_page.h"  // generated from viewer/page.html: kViewPage
+
+namespace spherechain::cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct ViewArgs {
+  std::string asset, output, rig, three, method = "m2";
+  AnimationArgs anim;  // --mesh, --clip, --morph, --poses-dir, --frames
+};
+
+constexpr const char* kThreeModule = "build/three.module.min.js";
+constexpr const char* kOrbitControls = "examples/jsm/controls/OrbitControls.js";
+
+/// The three.js package folder (holding kThreeModule and kOrbitControls), the first that has both of:
+/// --three; the installed copy, <executable's folder>/SPHERECHAIN_BIN_TO_DATA/three (bin/ →
+/// share/spherechain/); the source tree's viewer/node_modules/three (`npm ci` in viewer/). Empty when
+/// none has them; `*looked` lists where it looked.
+std::string FindThree(const std::string& explicit_dir, std::string* looked) {
+  std::vector<fs::path> candidates;
+  if (!explicit_dir.empty()) {
+    candidates.push_back(explicit_dir);
+  } else {
+    std::error_code ec;
+    const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+    if (!ec) candidates.push_back((exe.parent_path() / SPHERECHAIN_BIN_TO_DATA / "three").lexically_normal());
+    candidates.push_back(fs::path(SPHERECHAIN_SOURCE_VIEWER_DIR) / "node_modules" / "three");
+  }
+  for (const fs::path& c : candidates) {
+    std::error_code ec;
+    if (fs::is_regular_file(c / kThreeModule, ec) && fs::is_regular_file(c / kOrbitControls, ec)) return c.string();
+    if (!looked->empty()) *looked += ", ";
+    *looked += c.string();
+  }
+  return {};
+}
+
+bool ReadText(const fs::path& path, std::string* out) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return false;
+  std::ostringstream s;
+  s << in.rdbuf();
+  *out = s.str();
+  return static_cast<bool>(in) || in.eof();
+}
+
+std::string Base64(const void* data, size_t size) {
+  static const char* kAlphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  const auto* p = static_cast<const unsigned char*>(data);
+  std::string out;
+  out.reserve((size + 2) / 3 * 4);
+  size_t i = 0;
+  for (; i + 2 < size; i += 3) {
+    const uint32_t v = (uint32_t(p[i]) << 16) | (uint32_t(p[i + 1]) << 8) | p[i + 2];
+    out += kAlphabet[v >> 18];
+    out += kAlphabet[(v >> 12) & 63];
+    out += kAlphabet[(v >> 6) & 63];
+    out += kAlphabet[v & 63];
+  }
+  if (i < size) {
+    const uint32_t v = (uint32_t(p[i]) << 16) | (i + 1 < size ? uint32_t(p[i + 1]) << 8 : 0u);
+    out += kAlphabet[v >> 18];
+    out += kAlphabet[(v >> 12) & 63];
+    out += i + 1 < size ? kAlphabet[(v >> 6) & 63] : '=';
+    out += '=';
+  }
+  return out;
+}
+
+template <class T>
+std::string Base64(const std::vector<T>& v) {
+  return Base64(v.data(), v.size() * sizeof(T));  // little endian: the hosts we build on (and the browsers)
+}
+
+/// JSON that may sit inside <script>: "</" and "<!--" cannot end or confuse the element.
+std::string ScriptSafeJson(const nlohmann::json& j) {
+  std::string s = j.dump();
+  std::string out;
+  out.reserve(s.size());
+  for (size_t i = 0; i < s.size(); ++i) {
+    if (s[i] == '<') {
+      out += "\\u003c";  // only inside strings: JSON has no '<' elsewhere
+    } else {
+      out += s[i];
+    }
+  }
+  return out;
+}
+
+bool ReplaceOnce(std::string* page, const std::string& marker, const std::string& with) {
+  const size_t at = page->find(marker);
+  if (at == std::string::npos) return false;
+  page->replace(at, marker.size(), with);
+  return true;
+}
+
+int RunView(const ViewArgs& a) {
+  // three.js first: without it nothing can be written, and the message says how to get it.
+  std::string looked;
+  const std::string three_dir = FindThree(a.three, &looked);
+  if (three_dir.empty())
+    return Fail("view: three.js not found (looked in " + looked + " for " + kThreeModule + " and " + kOrbitControls +
+                "): run `npm ci` in " + SPHERECHAIN_SOURCE_VIEWER_DIR +
+                " (npm registry; three is pinned in viewer/package.json), or pass --three DIR (a three package folder)");
+  std::string three_src, orbit_src, three_pkg;
+  if (!ReadText(fs::path(three_dir) / kThreeModule, &three_src) ||
+      !ReadText(fs::path(three_dir) / kOrbitControls, &orbit_src))
+    return Fail("view: cannot read three.js from " + three_dir);
+  std::string three_version = "unknown";
+  if (ReadText(fs::path(three_dir) / "package.json", &three_pkg)) {
+    const nlohmann::json pkg = nlohmann::json::parse(three_pkg, nullptr, false);
+    if (pkg.is_object() && pkg.contains("version") && pkg["version"].is_string()) three_version = pkg["version"];
+  }
+
+  LoadedAsset asset;
+  import::Mesh mesh;
+  std::string error;
+  if (!OpenAssetAndMesh(a.asset, a.anim.mesh, a.rig, &asset, &mesh, &error)) return Fail(error);
+  const runtime::AssetView& view = asset.view;
+
+  const AnimationArgs& anim_args = a.anim;
+  AnimationSource anim;
+  if (!OpenAnimation(mesh, anim_args, &anim, &error)) return Fail(error);
+
+  runtime::Model model;
+  runtime::Workspace ws;
+  if (runtime::Status s = model.Init(view); runtime::Failed(s) || runtime::Failed(s = ws.Init(model)))
+    return Fail(std::string("runtime Model / Workspace::Init: ") + runtime::ToString(s));
+  runtime::NarrowPhaseModel narrow;
+  runtime::NarrowPhaseWorkspace narrow_ws;
+  if (runtime::Status s = narrow.Init(view); runtime::Failed(s) || runtime::Failed(s = narrow_ws.Init(narrow)))
+    return Fail("'" + a.asset + "': narrow phase: " + runtime::ToString(s) +
+                (s == runtime::Status::kErrorMissingField ? " (baked before the narrow phase existed: re-bake it)" : ""));
+  const runtime::DetectMethod method = a.method == "m1" ? runtime::DetectMethod::kM1 : runtime::DetectMethod::kM2;
+  std::vector<runtime::Collision> pairs(runtime::DetectBound(view, method));
+  std::vector<runtime::TriangleContact> contacts(1u << 14);
+
+  const uint32_t V = view.vertex_count, T = view.triangle_count, S = view.sphere_count, F = anim.frames;
+  std::vector<std::vector<float>> frames(F);
+  std::vector<std::string> labels(F);
+  playback::SkinningScratch scratch;
+  float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  for (uint32_t f = 0; f < F; ++f) {
+    if (auto s = anim.Frame(mesh, f, &scratch, &frames[f], &labels[f]); !s.ok()) return Fail(s.error());
+    for (uint32_t v = 0; v < V; ++v)
+      for (int k = 0; k < 3; ++k) {
+        const float x = frames[f][3 * v + k];
+        if (!std::isfinite(x)) return Fail("view: frame " + std::to_string(f) + " has a non-finite vertex position");
+        lo[k] = std::min(lo[k], x);
+        hi[k] = std::max(hi[k], x);
+      }
+  }
+
+  nlohmann::json frames_json = nlohmann::json::array();
+  const auto* sr = view.asset->sphere_regions();
+  uint64_t total_contacts = 0;
+  uint32_t max_pairs = 0, max_contacts = 0;
+  for (uint32_t f = 0; f < F; ++f) {
+    const runtime::PositionsView positions{frames[f].data(), V, 12};
+    runtime::RefitJob refit;
+    refit.model = &model;
+    refit.workspace = &ws;
+    refit.positions = positions;
+    if (runtime::Status s = refit.Run(); runtime::Failed(s))
+      return Fail("view: frame " + std::to_string(f) + ": refit: " + runtime::ToString(s));
+    const runtime::SphereArrays sp = ws.spheres();
+    std::vector<float> spheres(4 * size_t(S));
+    for (uint32_t s = 0; s < S; ++s) {
+      spheres[4 * s] = sp.x[s];
+      spheres[4 * s + 1] = sp.y[s];
+      spheres[4 * s + 2] = sp.z[s];
+      spheres[4 * s + 3] = sp.r[s];
+    }
+    uint32_t pair_count = 0;
+    runtime::DetectJob detect;
+    detect.model = &model;
+    detect.workspace = &ws;
+    detect.method = method;
+    detect.output = pairs.data();
+    detect.capacity = static_cast<uint32_t>(pairs.size());
+    detect.count = &pair_count;
+    if (runtime::Status s = detect.Run(); runtime::Failed(s))
+      return Fail("view: frame " + std::to_string(f) + ": detect: " + runtime::ToString(s));
+    uint32_t contact_count = 0;
+    runtime::NarrowPhaseStats stats;
+    runtime::NarrowPhaseJob job;
+    job.model = &narrow;
+    job.workspace = &narrow_ws;
+    job.positions = positions;
+    job.count = &contact_count;
+    job.stats = &stats;
+    for (;;) {  // no useful bound exists: grow the buffer until every contact fits
+      job.output = contacts.data();
+      job.capacity = static_cast<uint32_t>(contacts.size());
+      const runtime::Status s = job.Run();
+      if (runtime::Failed(s)) return Fail("view: frame " + std::to_string(f) + ": narrow phase: " + runtime::ToString(s));
+      if (!runtime::IsTruncated(s)) break;
+      contacts.resize(std::max<size_t>(2 * contacts.size(), stats.contacts));
+    }
+    nlohmann::json pj = nlohmann::json::array(), cj = nlohmann::json::array();
+    for (uint32_t i = 0; i < pair_count; ++i) pj.push_back(pairs[i].a), pj.push_back(pairs[i].b);
+    for (uint32_t i = 0; i < contact_count; ++i) cj.push_back(contacts[i].triangle_a), cj.push_back(contacts[i].triangle_b);
+    std::vector<int16_t> q(3 * size_t(V));
+    for (uint32_t v = 0; v < V; ++v)
+      for (int k = 0; k < 3; ++k) {
+        const float ext = hi[k] - lo[k];
+        const double t = ext > 0 ? (frames[f][3 * v + k] - lo[k]) / ext : 0.0;
+        q[3 * v + k] = static_cast<int16_t>(std::lround(t * 65535.0) - 32768);
+      }
+    frames_json.push_back({{"label", labels[f]},
+                           {"positions", Base64(q)},
+                           {"spheres", Base64(spheres)},
+                           {"pairs", pj},
+                           {"contacts", cj}});
+    total_contacts += contact_count;
+    max_pairs = std::max(max_pairs, pair_count);
+    max_contacts = std::max(max_contacts, contact_count);
+  }
+
+  std::vector<uint8_t> tri_regions(T, 255), sphere_regions(S, 255);
+  if (const auto* tr = view.asset->triangle_regions(); tr && tr->size() == T)
+    for (uint32_t t = 0; t < T; ++t) tri_regions[t] = tr->Get(t);
+  if (sr && sr->size() == S)
+    for (uint32_t s = 0; s < S; ++s) sphere_regions[s] = sr->Get(s);
+  const bool wide = V > 65535;
+  std::string indices;
+  if (wide) {
+    indices = Base64(mesh.indices);
+  } else {
+    std::vector<uint16_t> idx(mesh.indices.begin(), mesh.indices.end());
+    indices = Base64(idx);
+  }
+  const char* up = "y";
+  if (view.asset->up_axis() == schema::UpAxis::Z) up = "z";
+  if (view.asset->up_axis() == schema::UpAxis::X) up = "x";
+  // The page names files, not the machine's folders: the poses folder by its last component.
+  std::string animation = anim.Describe();
+  if (const size_t at = animation.find(anim.poses_from); !anim.poses_from.empty() && at != std::string::npos)
+    animation.replace(at, anim.poses_from.size(), fs::path(anim.poses_from).filename().string());
+  nlohmann::json data = {
+      {"format", "spherechain-view 1"},
+      {"asset", fs::path(a.asset).filename().string()},
+      {"mesh", fs::path(a.anim.mesh).filename().string()},
+      {"animation", animation},
+      {"method", a.method},
+      {"vertex_count", V},
+      {"triangle_count", T},
+      {"sphere_count", S},
+      {"units", view.asset->units() ? view.asset->units()->str() : std::string()},
+      {"up_axis", up},
+      {"box_min", {lo[0], lo[1], lo[2]}},
+      {"box_max", {hi[0], hi[1], hi[2]}},
+      {"index_bytes", wide ? 4 : 2},
+      {"indices", indices},
+      {"triangle_regions", Base64(tri_regions)},
+      {"sphere_regions", Base64(sphere_regions)},
+      {"frames", frames_json}};
+  if (view.asset->regions()) {  // a creature (schema v4): its regions' names and the PNGs' colours
+    nlohmann::json names = nlohmann::json::array(), colors = nlohmann::json::array();
+    for (uint32_t r = 0; r < runtime::RegionCount(view); ++r) {
+      names.push_back("R" + std::to_string(r) + " " + runtime::RegionName(view, r));
+      const auto c = playback::RegionColor(view, r);
+      auto q = [](float x) { return int(std::clamp(x, 0.0f, 1.0f) * 255.0f + 0.5f); };
+      colors.push_back((q(c[0]) << 16) | (q(c[1]) << 8) | q(c[2]));
+    }
+    data["region_names"] = names;
+    data["region_colors"] = colors;
+  }
+
+  // three.js and OrbitControls as data: URLs behind an import map: ES modules that import each other
+  // ("three") and load from file:// with no server and no network.
+  const std::string importmap =
+      "<!-- three.js " + three_version + " (MIT, https://threejs.org), embedded -->\n"
+      "<script type=\"importmap\">{\"imports\":{\"three\":\"data:text/javascript;base64," + Base64(three_src.data(), three_src.size()) +
+      "\",\"three/addons/controls/OrbitControls.js\":\"data:text/javascript;base64," +
+      Base64(orbit_src.data(), orbit_src.size()) + "\"}}</script>";
+  std::string page = kViewPage;
+  if (!ReplaceOnce(&page, "<!--SPHERECHAIN_IMPORTMAP-->", importmap) ||
+      !ReplaceOnce(&page, "<!--SPHERECHAIN_DATA-->", ScriptSafeJson(data)))
+    return Fail("view: the compiled-in page (viewer/page.html) lacks its markers");
+  if (auto s = import::WriteFileAtomic(a.output, page); !s.ok()) return Fail(s.error());
+  std::printf("view: %s + %s — %s, %u frames, %u spheres; %s pairs max %u, contacts %llu (max %u a frame)\n",
+              a.asset.c_str(), a.anim.mesh.c_str(), anim.Describe().c_str(), F, S, a.method == "m1" ? "M1" : "M2", max_pairs,
+              static_cast<unsigned long long>(total_contacts), max_contacts);
+  std::printf("wrote %s (%.2f MB, three.js %s embedded; open it from disk, #frame=N shows frame N)\n", a.output.c_str(),
+              double(page.size()) / (1024.0 * 1024.0), three_version.c_str());
+  return 0;
+}
+
+}  // namespace
+
+void RegisterView(CLI::App& app, Commands* commands) {
+  auto args = std::make_shared<ViewArgs>();
+  CLI::App* sub = app.add_subcommand(
+      "view", "Write a self-contained HTML viewer (three.js embedded, opens offline): the animated mesh by region, "
+              "refit spheres, colliding sphere pairs and contact triangles (narrow phase) per frame, with a timeline");
+  AddAnimationOptions(sub, &args->asset, &args->rig, &args->anim);
+  sub->add_option("-o,--output", args->output, "HTML file to write")->required();
+  sub->add_option("--method", args->method, "Broad phase whose sphere pairs are shown: m1 (chains) or m2 (all, default)")
+      ->check(CLI::IsMember({"m1", "m2"}));
+  sub->add_option("--three", args->three,
+                  "three.js package folder (build/three.module.min.js, examples/jsm/controls/OrbitControls.js); "
+                  "default: the installed share/spherechain/three, else viewer/node_modules/three (npm ci in viewer/)");
+  commands->handlers.emplace_back(sub, [args] { return RunView(*args); });
+}
+
+}  // namespace spherechain::cli

@@ -1,0 +1,45 @@
+#include "commands.h"
+
+#include <spdlog/spdlog.h>
+
+namespace spherechain::cli {
+
+void Register(CLI::App& app, Commands* commands) {
+  RegisterBake(app, commands);
+  RegisterInspect(app, commands);
+  RegisterExportDebug(app, commands);
+  RegisterPlay(app, commands);
+  RegisterValidate(app, commands);
+  RegisterEvaluate(app, commands);
+  RegisterView(app, commands);
+}
+
+int Dispatch(const Commands& commands) {
+  for (const auto& [sub, handler] : commands.handlers)
+    if (sub->parsed()) return handler();
+  return 2;
+}
+
+import::Context MakeLoggingContext() {
+  import::Context ctx;
+  ctx.sink = [](import::Context::Level level, const std::string& m) {
+    switch (level) {
+      case import::Context::Level::kDebug: spdlog::debug("{}", m); break;
+      case import::Context::Level::kInfo: spdlog::info("{}", m); break;
+      case import::Context::Level::kWarn: spdlog::warn("{}", m); break;
+    }
+  };
+  return ctx;
+}
+
+int Fail(const import::Error& error) {
+  spdlog::error("{}: {}", import::ToString(error.code), error.message);
+  return 1;
+}
+
+int Fail(const std::string& message) {
+  spdlog::error("{}", message);
+  return 1;
+}
+
+}  // namespace spherechain::cli

@@ -1,0 +1,42 @@
+// spherechain CLI — subcommand registration and handlers (one file per subcommand).
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "spherechain/import/types.h"
+#include "spherechain/playback/debug_export.h"
+#include "spherechain/runtime/asset.h"
+
+namespace spherechain::cli {
+
+/// Every subcommand registers its options and a handler returning the process exit code.
+struct Commands {
+  std::vector<std::pair<CLI::App*, std::function<int()>>> handlers;
+};
+
+void Register(CLI::App& app, Commands* commands);
+int Dispatch(const Commands& commands);
+
+void RegisterBake(CLI::App& app, Commands* commands);
+void RegisterInspect(CLI::App& app, Commands* commands);
+void RegisterExportDebug(CLI::App& app, Commands* commands);
+void RegisterPlay(CLI::App& app, Commands* commands);
+void RegisterValidate(CLI::App& app, Commands* commands);
+void RegisterEvaluate(CLI::App& app, Commands* commands);
+void RegisterView(CLI::App& app, Commands* commands);
+
+/// A import::Context whose log lines go to spdlog.
+import::Context MakeLoggingContext();
+/// Logs `error` as "error: <code>: <message>" and returns exit code 1.
+int Fail(const import::Error& error);
+int Fail(const std::string& message);
+
+/// Region names in the tables (playback/debug_export.h).
+using playback::RegionLegendLine;
+using playback::RegionPairName;
+
+}  // namespace spherechain::cli

@@ -1,0 +1,66 @@
+// spherechain import — files and identities: whole-file reads with a size cap, atomic writes (nothing
+// half-written on failure), the mesh fingerprint an asset records (schema Fingerprint), weld ids
+// (schema Asset.weld_ids), XXH3-64 hashes, and a .sphc read into aligned memory and verified.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "spherechain/import/types.h"
+#include "spherechain/runtime/asset.h"
+
+namespace spherechain::import {
+
+/// Source fingerprint (schema Fingerprint): counts and XXH3-64 of the bind positions (#V×3 float32)
+/// and indices (#T×3 uint32) as read.
+struct Fingerprint {
+  uint32_t vertex_count = 0;
+  uint32_t triangle_count = 0;
+  uint64_t positions_hash = 0;
+  uint64_t indices_hash = 0;
+};
+Fingerprint ComputeFingerprint(const Mesh& mesh);
+
+/// Weld ids (schema Asset.weld_ids) of bind positions `positions` (#V×3): for every vertex the lowest
+/// vertex index whose position compares equal (==, so +0 and −0 weld) — UV seams and triangle soups
+/// get the adjacency a narrow phase needs to skip triangles that share a corner. Nothing is merged:
+/// the index buffer keeps the source's vertices. Cost O(#V log #V), deterministic.
+std::vector<uint32_t> ComputeWeldIds(const std::vector<float>& positions);
+
+/// XXH3-64 of arbitrary bytes (the canonical bake configuration, ...).
+uint64_t Hash64(const void* data, size_t size);
+
+/// Writes `bytes` to `path` atomically: a temporary file in the same folder, flushed, then renamed over
+/// `path`. On any failure the temporary is removed and `path` is untouched. Errors: kIo.
+Status WriteFileAtomic(const std::string& path, const void* bytes, size_t size);
+inline Status WriteFileAtomic(const std::string& path, const std::string& text) {
+  return WriteFileAtomic(path, text.data(), text.size());
+}
+
+/// Reads a whole file. Errors: kIo. `max_size` caps what is read (kIo "file too large").
+Result<std::vector<uint8_t>> ReadFileBytes(const std::string& path, size_t max_size = size_t(1) << 31);
+
+/// A .sphc asset in memory: the file's bytes, 8-byte aligned as runtime::LoadAsset requires, and the
+/// verified view into them. Owns the bytes; the view points into them (stable when the struct moves).
+struct LoadedAsset {
+  std::unique_ptr<uint64_t[]> storage;
+  size_t size = 0;  ///< bytes of the file
+  runtime::AssetView view;
+  runtime::Status status = runtime::Status::kOk;  ///< what runtime::LoadAsset said (the reason when it failed)
+  const uint8_t* bytes() const { return reinterpret_cast<const uint8_t*>(storage.get()); }
+};
+
+/// Copies `size` bytes into aligned storage owned by `out` and verifies them (runtime::LoadAsset).
+/// Errors: kFormat "<name> is not a loadable .sphc asset: <runtime status>" (`name` says where the
+/// bytes came from, for the message). Cost: one copy and the FlatBuffers verifier, O(size).
+Status LoadAssetBytes(const uint8_t* bytes, size_t size, const std::string& name, LoadedAsset* out);
+
+/// Reads `path` (at most runtime::kMaxAssetBytes) and loads it as LoadAssetBytes does. Errors: kIo
+/// (missing, a folder, too large, unreadable), kFormat (not a loadable asset). The one way the offline
+/// tools read an asset file.
+Status LoadAssetFile(const std::string& path, LoadedAsset* out);
+
+}  // namespace spherechain::import

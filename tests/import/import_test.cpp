@@ -1,0 +1,396 @@
+// import: real characters (MakeHuman base.obj + rig, CesiumMan glTF, BCN_Epileptic.X) and the
+// documented error codes on broken inputs.
+#include <doctest/doctest.h>
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "spherechain/import/import.h"
+#include "test_data.h"
+
+namespace {
+
+using spherechain::import::Error;
+using spherechain::import::ImportMesh;
+using spherechain::import::Mesh;
+using spherechain::import::Skin;
+using spherechain::import::UpAxis;
+namespace fs = std::filesystem;
+
+/// A fresh per-test temp directory (removed at scope exit).
+struct TempDir {
+  fs::path dir;
+  explicit TempDir(const std::string& name) {
+    dir = fs::temp_directory_path() / ("spherechain_import_test_" + name);
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(dir, ec);
+  }
+  std::string Write(const std::string& file, const std::string& bytes) const {
+    const fs::path p = dir / file;
+    std::ofstream(p, std::ios::binary) << bytes;
+    return p.string();
+  }
+};
+
+/// Axis-aligned extent of the positions: max − min per axis.
+std::array<float, 3> Extent(const Mesh& m) {
+  std::array<float, 3> lo{1e30f, 1e30f, 1e30f}, hi{-1e30f, -1e30f, -1e30f};
+  for (size_t i = 0; i < m.positions.size(); ++i) {
+    lo[i % 3] = std::min(lo[i % 3], m.positions[i]);
+    hi[i % 3] = std::max(hi[i % 3], m.positions[i]);
+  }
+  return {hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]};
+}
+
+int AxisIndex(UpAxis a) { return a == UpAxis::kX ? 0 : a == UpAxis::kY ? 1 : 2; }
+
+/// Rest-pose globals of Skin::nodes (parents-first).
+std::vector<Eigen::Matrix4d> RestGlobals(const Skin& s) {
+  std::vector<Eigen::Matrix4d> g(s.nodes.size());
+  for (size_t n = 0; n < s.nodes.size(); ++n) {
+    const auto& node = s.nodes[n];
+    Eigen::Affine3d a = Eigen::Affine3d::Identity();
+    a.translate(Eigen::Vector3d(node.translation[0], node.translation[1], node.translation[2]));
+    a.rotate(Eigen::Quaterniond(node.rotation[3], node.rotation[0], node.rotation[1], node.rotation[2]).normalized());
+    a.scale(Eigen::Vector3d(node.scale[0], node.scale[1], node.scale[2]));
+    g[n] = node.parent < 0 ? a.matrix() : Eigen::Matrix4d(g[static_cast<size_t>(node.parent)] * a.matrix());
+  }
+  return g;
+}
+
+/// Largest ‖Σ w·Global(node_j)·inverse_bind_j·p − p‖ over the vertices that have influences;
+/// `unweighted` counts vertices with none.
+double MaxRestSkinningError(const Mesh& m, size_t* unweighted) {
+  const Skin& s = *m.skin;
+  const auto g = RestGlobals(s);
+  std::vector<Eigen::Matrix4d> skinning(s.joints.size());
+  for (size_t j = 0; j < s.joints.size(); ++j) {
+    Eigen::Matrix4d ib;
+    for (int c = 0; c < 4; ++c)
+      for (int r = 0; r < 4; ++r) ib(r, c) = s.joints[j].inverse_bind[static_cast<size_t>(c * 4 + r)];
+    skinning[j] = g[static_cast<size_t>(s.joints[j].node)] * ib;
+  }
+  double worst = 0.0;
+  *unweighted = 0;
+  for (uint32_t v = 0; v < m.vertex_count(); ++v) {
+    const Eigen::Vector4d p(m.positions[v * 3], m.positions[v * 3 + 1], m.positions[v * 3 + 2], 1.0);
+    Eigen::Vector4d q = Eigen::Vector4d::Zero();
+    if (s.weight_offsets[v] == s.weight_offsets[v + 1]) {
+      ++*unweighted;
+      continue;
+    }
+    for (uint32_t k = s.weight_offsets[v]; k < s.weight_offsets[v + 1]; ++k)
+      q += s.weights[k] * (skinning[s.weight_joints[k]] * p);
+    worst = std::max(worst, (q - p).head<3>().norm());
+  }
+  return worst;
+}
+
+/// Largest |Σ weights − 1| over weighted vertices.
+double MaxWeightSumError(const Skin& s) {
+  double worst = 0.0;
+  for (size_t v = 0; v + 1 < s.weight_offsets.size(); ++v) {
+    if (s.weight_offsets[v] == s.weight_offsets[v + 1]) continue;
+    double sum = 0.0;
+    for (uint32_t k = s.weight_offsets[v]; k < s.weight_offsets[v + 1]; ++k) sum += s.weights[k];
+    worst = std::max(worst, std::abs(sum - 1.0));
+  }
+  return worst;
+}
+
+}  // namespace
+
+TEST_CASE("import: MakeHuman base.obj keeps group body in file order with the default rig") {
+  const std::string path = spherechain::test::SharedData("makehuman/base.obj");
+  if (!spherechain::test::Require(path)) return;
+  auto r = ImportMesh(path);
+  REQUIRE_MESSAGE(r.ok(), r.error().message);
+  const Mesh& m = r.value();
+  CHECK(m.vertex_count() == 13380);
+  CHECK(m.triangle_count() == 26756);
+  CHECK(m.units == "dm");
+  CHECK(m.unit_scale_m == doctest::Approx(0.1f));
+  CHECK(m.up_axis == UpAxis::kY);
+  REQUIRE(m.parts.size() == 1);
+  CHECK(m.parts[0].name == "body");
+  // Source order: the first vertex of the file is the first vertex of the mesh.
+  CHECK(m.positions[0] == doctest::Approx(-0.3492f));
+  CHECK(m.positions[1] == doctest::Approx(7.3299f));
+  CHECK(m.positions[2] == doctest::Approx(1.4076f));
+  const auto e = Extent(m);
+  CHECK(e[1] > e[0]);
+  CHECK(e[1] > e[2]);
+  CHECK(e[1] == doctest::Approx(16.7).epsilon(0.05));  // DESIGN.md: a 16.7-unit-tall body
+  REQUIRE(m.skin.has_value());
+  const Skin& s = *m.skin;
+  CHECK(s.source == "mhskel");
+  CHECK(s.nodes.size() == 163);
+  CHECK(s.joints.size() == 163);
+  for (size_t n = 0; n < s.nodes.size(); ++n) CHECK(s.nodes[n].parent < static_cast<int32_t>(n));
+  CHECK(s.weight_offsets.size() == m.vertex_count() + 1);
+  CHECK(MaxWeightSumError(s) < 1e-5);
+  size_t unweighted = 0;
+  CHECK(MaxRestSkinningError(m, &unweighted) < 1e-4);
+  CHECK(unweighted == 0);
+  CHECK(m.clips.empty());
+}
+
+TEST_CASE("import: CesiumMan glTF assembles a +Y standing walker with 19 joints and one clip") {
+  const std::string path = spherechain::test::SharedData("gltf/CesiumMan.gltf");
+  if (!spherechain::test::Require(path)) return;
+  auto r = ImportMesh(path);
+  REQUIRE_MESSAGE(r.ok(), r.error().message);
+  const Mesh& m = r.value();
+  CHECK(m.vertex_count() == 3273);
+  CHECK(m.triangle_count() == 4672);
+  CHECK(m.source_format == "gltf");
+  CHECK(m.units == "m");
+  CHECK(m.unit_scale_m == 1.0f);
+  CHECK(m.up_axis == UpAxis::kY);
+  // Stands along +Y: taller than its arm span (X) and much taller than deep (Z). Before assembly the
+  // mesh data is Z-up, so an importer that skips the root node's matrix fails here.
+  const auto e = Extent(m);
+  CHECK(e[1] > e[0]);
+  CHECK(e[1] > 2.0f * e[2]);
+  CHECK(e[1] == doctest::Approx(1.5).epsilon(0.1));
+  REQUIRE(m.skin.has_value());
+  const Skin& s = *m.skin;
+  CHECK(s.source == "gltf");
+  CHECK(s.joints.size() == 19);
+  CHECK(MaxWeightSumError(s) < 1e-5);
+  size_t unweighted = 0;
+  CHECK(MaxRestSkinningError(m, &unweighted) < 1e-3 * e[1]);
+  CHECK(unweighted == 0);
+  // Head above feet: the mean of the top tenth of vertices is narrower (a head) than the bottom tenth
+  // would be, and +Y is up: the skeleton's highest joint lies above its lowest one and above the
+  // centre of the body.
+  const auto g = RestGlobals(s);
+  double top = -1e30, bottom = 1e30;
+  for (const auto& j : s.joints) {
+    top = std::max(top, g[static_cast<size_t>(j.node)](1, 3));
+    bottom = std::min(bottom, g[static_cast<size_t>(j.node)](1, 3));
+  }
+  CHECK(top - bottom > 0.6 * e[1]);
+  REQUIRE(m.clips.size() == 1);
+  // Keys run from 1/24 s to 1.9167 s: the walk spans 1.875 s; duration_s is the last key time.
+  CHECK(m.clips[0].duration_s == doctest::Approx(1.9167f).epsilon(0.001));
+  float first_key = 1e30f;
+  for (const auto& ch : m.clips[0].channels) first_key = std::min(first_key, ch.times.front());
+  CHECK(m.clips[0].duration_s - first_key == doctest::Approx(1.875f).epsilon(0.001));
+  CHECK(m.clips[0].channels.size() >= 19);
+  for (const auto& ch : m.clips[0].channels) {
+    CHECK(ch.node >= 0);
+    CHECK(ch.node < static_cast<int32_t>(s.nodes.size()));
+  }
+}
+
+TEST_CASE("import: BCN_Epileptic.X joins three meshes into one standing body with one clip") {
+  const std::string path = spherechain::test::AssimpModel("X/BCN_Epileptic.X");
+  if (!spherechain::test::Require(path)) return;
+  auto r = ImportMesh(path);
+  REQUIRE_MESSAGE(r.ok(), r.error().message);
+  const Mesh& m = r.value();
+  CHECK(m.source_format == "x");
+  REQUIRE(m.parts.size() == 3);
+  uint32_t v = 0, t = 0;
+  for (const auto& p : m.parts) {
+    CHECK(p.first_vertex == v);
+    CHECK(p.first_triangle == t);
+    v += p.vertex_count;
+    t += p.triangle_count;
+  }
+  CHECK(v == m.vertex_count());
+  CHECK(t == m.triangle_count());
+  const auto e = Extent(m);
+  const int up = AxisIndex(m.up_axis);
+  CHECK(m.up_axis == UpAxis::kY);
+  CHECK(e[up] > 1.5f * e[(up + 1) % 3]);
+  CHECK(e[up] > 1.5f * e[(up + 2) % 3]);
+  // assimp's .x reader gives one vertex per face corner (--vertices source: 15,378); the default joined
+  // contract reads what a game's aiProcess_JoinIdenticalVertices gives (vertex_contract_test.cpp).
+  CHECK(m.vertex_contract == "joined");
+  CHECK(m.source_vertex_count == 15378);
+  CHECK(m.vertex_count() == m.joined_vertex_count);
+  CHECK(m.vertex_count() < 15378);
+  CHECK(m.triangle_count() == 5126);
+  REQUIRE(m.skin.has_value());
+  CHECK(m.skin->nodes.size() == 58);
+  CHECK(m.skin->joints.size() == 54);
+  // Joined: each part's range along the up axis touches the others' (the mesh frames' own transforms,
+  // which skinning ignores, would push the head 0.5 units off the torso).
+  for (size_t p = 0; p < m.parts.size(); ++p) {
+    float lo = 1e30f, hi = -1e30f, olo = 1e30f, ohi = -1e30f;
+    for (size_t q = 0; q < m.parts.size(); ++q) {
+      const auto& part = m.parts[q];
+      for (uint32_t i = part.first_vertex; i < part.first_vertex + part.vertex_count; ++i) {
+        const float y = m.positions[i * 3 + static_cast<uint32_t>(up)];
+        if (q == p) lo = std::min(lo, y), hi = std::max(hi, y);
+        else olo = std::min(olo, y), ohi = std::max(ohi, y);
+      }
+    }
+    CHECK_MESSAGE(hi >= olo - 0.02f * e[up], "part " << m.parts[p].name);
+    CHECK_MESSAGE(lo <= ohi + 0.02f * e[up], "part " << m.parts[p].name);
+  }
+  REQUIRE(m.skin.has_value());
+  CHECK(MaxWeightSumError(*m.skin) < 1e-5);
+  size_t unweighted = 0;
+  CHECK(MaxRestSkinningError(m, &unweighted) < 1e-3 * e[up]);
+  REQUIRE(m.clips.size() == 1);
+  CHECK(m.clips[0].name == "Epileptisch");
+  CHECK(m.clips[0].duration_s == doctest::Approx(3.3f).epsilon(0.001));  // 15,840 ticks at 4,800/s
+  MESSAGE("BCN_Epileptic: " << m.vertex_count() << " vertices, " << m.triangle_count() << " triangles, up axis "
+                            << up << ", extent " << e[0] << " " << e[1] << " " << e[2] << ", "
+                            << m.skin->nodes.size() << " nodes, " << m.skin->joints.size() << " joints, clip "
+                            << m.clips[0].duration_s << " s, rest skinning error " << MaxRestSkinningError(m, &unweighted));
+}
+
+TEST_CASE("import: simple_skin glTF has a skin whose rest pose reproduces the positions") {
+  const std::string path = spherechain::test::AssimpModel("glTF2/simple_skin/simple_skin.gltf");
+  if (!spherechain::test::Require(path)) return;
+  auto r = ImportMesh(path);
+  REQUIRE_MESSAGE(r.ok(), r.error().message);
+  const Mesh& m = r.value();
+  CHECK(m.triangle_count() > 0);
+  REQUIRE(m.skin.has_value());
+  CHECK(m.skin->joints.size() == 2);
+  size_t unweighted = 0;
+  CHECK(MaxRestSkinningError(m, &unweighted) < 1e-4);
+  CHECK(m.clips.size() == 1);
+}
+
+TEST_CASE("import: a missing file is kIo") {
+  auto r = ImportMesh("/nonexistent/dir/character.gltf");
+  REQUIRE(!r.ok());
+  CHECK(r.error().code == Error::Code::kIo);
+  CHECK(r.error().message.find("character.gltf") != std::string::npos);
+}
+
+TEST_CASE("import: an unsupported extension is kFormat") {
+  TempDir tmp("ext");
+  const std::string p = tmp.Write("character.notamesh", "hello");
+  auto r = ImportMesh(p);
+  REQUIRE(!r.ok());
+  CHECK(r.error().code == Error::Code::kFormat);
+  CHECK(r.error().message.find("character.notamesh") != std::string::npos);
+}
+
+TEST_CASE("import: truncated and garbage glTF/GLB files are kFormat, never a crash") {
+  TempDir tmp("gltf");
+  static const char kGarbage[] = "\x00\xff\x13garbage{{[[\x7f\x80";  // 16 bytes, a NUL first
+  const std::string garbage(kGarbage, sizeof kGarbage - 1);
+  for (const char* name : {"garbage.gltf", "garbage.glb"}) {
+    auto r = ImportMesh(tmp.Write(name, garbage));
+    REQUIRE(!r.ok());
+    CHECK(r.error().code == Error::Code::kFormat);
+    CHECK(r.error().message.find(name) != std::string::npos);
+  }
+  // Every 1/64 prefix of a real glTF file: an error (never a crash); the full file imports.
+  const std::string cesium = spherechain::test::SharedData("gltf/CesiumMan.gltf");
+  if (!spherechain::test::Require(cesium)) return;
+  std::ifstream in(cesium, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  REQUIRE(bytes.size() > 1000);
+  for (int k = 0; k < 64; ++k) {
+    const size_t n = bytes.size() * static_cast<size_t>(k) / 64;
+    auto r = ImportMesh(tmp.Write("truncated.gltf", bytes.substr(0, n)));
+    CHECK_MESSAGE(!r.ok(), "prefix of " << n << " bytes imported");
+    if (!r.ok()) CHECK(r.error().code == Error::Code::kFormat);
+  }
+}
+
+TEST_CASE("import: OBJ with a NaN coordinate, no faces, or an out-of-range index is kInvalidMesh") {
+  TempDir tmp("obj");
+  SUBCASE("NaN coordinate names the vertex") {
+    auto r = ImportMesh(tmp.Write("nan.obj", "v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n"));
+    REQUIRE(!r.ok());
+    CHECK(r.error().code == Error::Code::kInvalidMesh);
+    CHECK(r.error().message.find("vertex 2") != std::string::npos);
+    CHECK(r.error().message.find("nan.obj") != std::string::npos);
+  }
+  SUBCASE("Inf coordinate") {
+    auto r = ImportMesh(tmp.Write("inf.obj", "v 0 0 0\nv 1 inf 0\nv 0 1 0\nf 1 2 3\n"));
+    REQUIRE(!r.ok());
+    CHECK(r.error().code == Error::Code::kInvalidMesh);
+  }
+  SUBCASE("no faces") {
+    auto r = ImportMesh(tmp.Write("nofaces.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n"));
+    REQUIRE(!r.ok());
+    CHECK(r.error().code == Error::Code::kInvalidMesh);
+    CHECK(r.error().message.find("no triangles") != std::string::npos);
+  }
+  SUBCASE("index past the end") {
+    auto r = ImportMesh(tmp.Write("range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n"));
+    REQUIRE(!r.ok());
+    CHECK(r.error().code == Error::Code::kInvalidMesh);
+    CHECK(r.error().message.find("vertex 4") != std::string::npos);
+  }
+  SUBCASE("index 0 and a relative index before the first vertex") {
+    auto r0 = ImportMesh(tmp.Write("zero.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n"));
+    REQUIRE(!r0.ok());
+    CHECK(r0.error().code == Error::Code::kInvalidMesh);
+    auto r1 = ImportMesh(tmp.Write("neg.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -1 -2 -4\n"));
+    REQUIRE(!r1.ok());
+    CHECK(r1.error().code == Error::Code::kInvalidMesh);
+  }
+  SUBCASE("unparsable number is kFormat") {
+    auto r = ImportMesh(tmp.Write("bad.obj", "v 0 0 zero\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"));
+    REQUIRE(!r.ok());
+    CHECK(r.error().code == Error::Code::kFormat);
+    CHECK(r.error().message.find("line 1") != std::string::npos);
+  }
+}
+
+TEST_CASE("import: small OBJ keeps vertex order, fan-triangulates quads and honours group body") {
+  TempDir tmp("objok");
+  const std::string p = tmp.Write("quad.obj",
+                                  "v 9 9 9\n"
+                                  "g helper\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 2 3 4\n"
+                                  "g body\nf 2/1/1 3/2/2 4/3/3 5/4/4\n");
+  auto r = ImportMesh(p);
+  REQUIRE_MESSAGE(r.ok(), r.error().message);
+  // Only group body: its 4 referenced vertices (file vertices 2..5), in file order.
+  CHECK(r->vertex_count() == 4);
+  CHECK(r->triangle_count() == 2);
+  CHECK(r->positions[0] == 0.0f);
+  CHECK(r->positions[3] == 1.0f);
+  CHECK(r->indices == std::vector<uint32_t>{0, 1, 2, 0, 2, 3});
+  CHECK(!r->skin.has_value());
+
+  spherechain::import::ImportOptions all;
+  all.obj_group.clear();
+  auto r2 = ImportMesh(p, all);
+  REQUIRE(r2.ok());
+  CHECK(r2->vertex_count() == 5);
+  CHECK(r2->triangle_count() == 3);
+}
+
+TEST_CASE("import: ValidateMesh names the first offending vertex and triangle") {
+  Mesh m;
+  m.positions = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  m.indices = {0, 1, 2};
+  CHECK(spherechain::import::ValidateMesh(m).ok());
+  m.indices = {0, 1, 3};
+  auto r = spherechain::import::ValidateMesh(m);
+  REQUIRE(!r.ok());
+  CHECK(r.error().code == Error::Code::kInvalidMesh);
+  CHECK(r.error().message.find("triangle 0") != std::string::npos);
+  m.indices = {0, 1, 2};
+  m.positions[4] = std::numeric_limits<float>::quiet_NaN();
+  r = spherechain::import::ValidateMesh(m);
+  REQUIRE(!r.ok());
+  CHECK(r.error().message.find("vertex 1") != std::string::npos);
+  m.positions[4] = 0.0f;
+  m.indices.clear();
+  CHECK(!spherechain::import::ValidateMesh(m).ok());
+}
