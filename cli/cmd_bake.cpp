@@ -22,58 +22,58 @@ struct BakeArgs {
 void PrintSummary(const baker::BakeResult& r, const import::Context& ctx) {
   using import::Region;
   const import::RegionLayout& layout = r.segmentation.layout;
-  std::printf("\n%-10s %10s %8s\n", "region", "triangles", "spheres");
+  Out("\n%-10s %10s %8s\n", "region", "triangles", "spheres");
   for (int k = 0; k < layout.count(); ++k) {
     const Region reg = static_cast<Region>(k);
     size_t tris = 0, sph = 0;
     for (uint8_t t : r.segmentation.triangle_regions) tris += t == k;
     for (const auto& s : r.fit.spheres) sph += s.region == reg;
-    std::printf("%-3s %-6s %10zu %8zu", import::RegionSymbol(reg), layout.Name(reg), tris, sph);
+    Out("%-3s %-6s %10zu %8zu", import::RegionSymbol(reg), layout.Name(reg), tris, sph);
     if (!layout.paper)
-      std::printf("   %s, from bone %s", layout.IsTrunk(reg) ? "trunk" : "limb", layout.regions[size_t(k)].bone.c_str());
-    std::printf("\n");
+      Out("   %s, from bone %s", layout.IsTrunk(reg) ? "trunk" : "limb", layout.regions[size_t(k)].bone.c_str());
+    Out("\n");
   }
-  std::printf("%-10s %10u %8zu   (unassigned triangles: %u)\n", "total", r.mesh.triangle_count(), r.fit.spheres.size(),
+  Out("%-10s %10u %8zu   (unassigned triangles: %u)\n", "total", r.mesh.triangle_count(), r.fit.spheres.size(),
               r.unassigned_triangles);
-  std::printf("vertices: %u (contract %s", r.mesh.vertex_count(), r.mesh.vertex_contract.c_str());
-  if (r.mesh.source_vertex_count) std::printf("; source %u, joined %u", r.mesh.source_vertex_count, r.mesh.joined_vertex_count);
-  std::printf(")\n");
-  std::printf("\nchains:");
-  for (const auto& c : r.chains) std::printf(" %s=%zu", c.name.c_str(), c.spheres.size());
-  std::printf("   excluded pairs: %zu\n", r.excluded.size());
+  Out("vertices: %u (contract %s", r.mesh.vertex_count(), r.mesh.vertex_contract.c_str());
+  if (r.mesh.source_vertex_count) Out("; source %u, joined %u", r.mesh.source_vertex_count, r.mesh.joined_vertex_count);
+  Out(")\n");
+  Out("\nchains:");
+  for (const auto& c : r.chains) Out(" %s=%zu", c.name.c_str(), c.spheres.size());
+  Out("   excluded pairs: %zu\n", r.excluded.size());
   if (r.agreement)
-    std::printf("segmentation: %s; agreement with %s: %.1f%% of triangles, %.1f%% of area\n",
+    Out("segmentation: %s; agreement with %s: %.1f%% of triangles, %.1f%% of area\n",
                 r.segmentation.method.c_str(), r.other_segmentation->method.c_str(),
                 100.0 * r.agreement->triangle_fraction, 100.0 * r.agreement->area_fraction);
   else
-    std::printf("segmentation: %s\n", r.segmentation.method.c_str());
+    Out("segmentation: %s\n", r.segmentation.method.c_str());
   if (r.plausibility.empty()) {
-    std::printf("plausibility: every check passed\n");
+    Out("plausibility: every check passed\n");
   } else {
-    std::printf("plausibility: %zu check(s) FAILED, written anyway (--force; recorded in the asset, validate "
+    Out("plausibility: %zu check(s) FAILED, written anyway (--force; recorded in the asset, validate "
                 "reports them as errors):\n", r.plausibility.size());
-    for (const auto& f : r.plausibility) std::printf("  %s: %s\n", f.code.c_str(), f.message.c_str());
+    for (const auto& f : r.plausibility) Out("  %s: %s\n", f.code.c_str(), f.message.c_str());
   }
   if (r.coverage)
-    std::printf("bind pose: coverage %.1f %% of the body volume, protrusion %.1f %% (outside: p95 %.2f %% of height); "
+    Out("bind pose: coverage %.1f %% of the body volume, protrusion %.1f %% (outside: p95 %.2f %% of height); "
                 "skin outside the spheres: p95 %.2f %% of height, %.1f %% of its area within %.1f %%\n",
                 100 * r.coverage->coverage, 100 * r.coverage->protrusion, 100 * r.coverage->outside_p95_rel,
                 100 * r.coverage->skin_outside_p95_rel, 100 * r.coverage->skin_within_share, 100 * baker::kSkinWithinRel);
-  std::printf("\naccuracy F = r - |c - v| over surrounding-region vertices\n");
-  std::printf("%-14s %10s %10s %10s %10s\n", "method", "mean|F|", "RMS", "min", "max");
+  Out("\naccuracy F = r - |c - v| over surrounding-region vertices\n");
+  Out("%-14s %10s %10s %10s %10s\n", "method", "mean|F|", "RMS", "min", "max");
   auto row = [](const char* n, const baker::AccuracyStats& s) {
-    std::printf("%-14s %10.4f %10.4f %10.4f %10.4f\n", n, s.mean_abs_f, s.rms_f, s.min_f, s.max_f);
+    Out("%-14s %10.4f %10.4f %10.4f %10.4f\n", n, s.mean_abs_f, s.rms_f, s.min_f, s.max_f);
   };
   row("phi1", r.accuracy.phi1);
   row("phi1' (adj.)", r.accuracy.phi1_adjusted);
   row("phi2 (MEB)", r.accuracy.phi2);
-  std::printf("\ntimings (ms):");
+  Out("\ntimings (ms):");
   double total = 0;
   for (const auto& [n, ms] : ctx.timings_ms) {
-    std::printf(" %s=%.1f", n.c_str(), ms);
+    Out(" %s=%.1f", n.c_str(), ms);
     if (n.find('.') == std::string::npos) total += ms;  // "a.b" is a sub-stage of "a"
   }
-  std::printf("  total=%.1f\n", total);
+  Out("  total=%.1f\n", total);
 }
 
 int RunBake(const BakeArgs& a) {
@@ -123,11 +123,11 @@ int RunBake(const BakeArgs& a) {
     if (auto s = playback::RenderDebugPng(r.mesh, view, a.png); !s.ok()) return Fail(s.error());
   }
   PrintSummary(r, ctx);
-  std::printf("\nwrote %s (%zu bytes)", a.output.c_str(), r.asset.size());
-  if (!a.report.empty()) std::printf(", %s", a.report.c_str());
-  if (!a.ray_csv.empty()) std::printf(", %s", a.ray_csv.c_str());
-  if (!a.png.empty()) std::printf(", %s", a.png.c_str());
-  std::printf("\n");
+  Out("\nwrote %s (%zu bytes)", a.output.c_str(), r.asset.size());
+  if (!a.report.empty()) Out(", %s", a.report.c_str());
+  if (!a.ray_csv.empty()) Out(", %s", a.ray_csv.c_str());
+  if (!a.png.empty()) Out(", %s", a.png.c_str());
+  Out("\n");
   return 0;
 }
 

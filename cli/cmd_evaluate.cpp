@@ -54,7 +54,7 @@ int RunEvaluate(const EvaluateArgs& a) {
   options.coverage = a.coverage;
   options.png_path = a.png;
   const bool tty = isatty(2);
-  options.progress = [tty](uint32_t done, uint32_t frames, double elapsed) {
+  if (!Quiet()) options.progress = [tty](uint32_t done, uint32_t frames, double elapsed) {
     if (tty) {
       std::fprintf(stderr, "\revaluate: frame %u/%u  %.1f s", done, frames, elapsed);
       if (done == frames) std::fprintf(stderr, "\n");
@@ -66,11 +66,11 @@ int RunEvaluate(const EvaluateArgs& a) {
   auto result = evaluate::Evaluate(asset.view, mesh, anim, options, &log);
   if (!result.ok()) return Fail(result.error().message);
   const evaluate::Evaluation& e = result.value();
-  std::fputs(e.text.c_str(), stdout);
-  if (e.png_frame >= 0) std::printf("wrote %s (frame %d)\n", a.png.c_str(), e.png_frame);
+  if (!Quiet()) std::fputs(e.text.c_str(), stdout);
+  if (e.png_frame >= 0) Out("wrote %s (frame %d)\n", a.png.c_str(), e.png_frame);
   if (!a.json.empty()) {
     if (auto s = import::WriteFileAtomic(a.json, e.report.dump(2) + "\n"); !s.ok()) return Fail(s.error());
-    std::printf("wrote %s\n", a.json.c_str());
+    Out("wrote %s\n", a.json.c_str());
   }
   if (!std::isnan(a.min_recall)) {
     const double recall = std::min(e.recall_m1, e.recall_m2);
@@ -79,7 +79,7 @@ int RunEvaluate(const EvaluateArgs& a) {
                    a.min_recall);
       return 1;
     }
-    std::printf("proxy recall %.3f >= --min-recall %.3f\n", recall, a.min_recall);
+    Out("proxy recall %.3f >= --min-recall %.3f\n", recall, a.min_recall);
   }
   return 0;
 }

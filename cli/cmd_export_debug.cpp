@@ -45,7 +45,7 @@ int RunExport(const ExportArgs& a) {
     const runtime::RefitMode mode = a.refit == "paper" ? runtime::RefitMode::kPaper : runtime::RefitMode::kPivotFrame;
     if (auto s = playback::ExportAnimatedGltf(mesh, asset.view, anim, a.output, mode, &stats); !s.ok())
       return Fail(s.error());
-    std::printf("wrote %s (animated glTF: %s, %u frames; skinned mesh coloured by region, %u joints' nodes, %u "
+    Out("wrote %s (animated glTF: %s, %u frames; skinned mesh coloured by region, %u joints' nodes, %u "
                 "spheres as animated nodes; %u channels, %.1f MB)\n",
                 a.output.c_str(), anim.Describe().c_str(), stats.frames, stats.skeleton_nodes, stats.spheres,
                 stats.channels, double(stats.bytes) / 1e6);
@@ -56,9 +56,9 @@ int RunExport(const ExportArgs& a) {
   if (png.empty()) png = std::filesystem::path(a.output).replace_extension(".png").string();
   if (auto s = playback::RenderDebugPng(mesh, asset.view, png); !s.ok()) return Fail(s.error());
   if (animated)
-    std::printf("wrote %s (front and side views, bind pose)\n", png.c_str());
+    Out("wrote %s (front and side views, bind pose)\n", png.c_str());
   else
-    std::printf("wrote %s (glTF: mesh coloured by region + %u spheres) and %s (front and side views)\n",
+    Out("wrote %s (glTF: mesh coloured by region + %u spheres) and %s (front and side views)\n",
                 a.output.c_str(), asset.view.sphere_count, png.c_str());
   return 0;
 }

@@ -91,61 +91,61 @@ int RunPlay(const PlayArgs& a) {
   const playback::FrameReport& bind = report.bind;
 
   // ---- report ------------------------------------------------------------------------------------
-  std::printf("play: %s + %s — %s, %u frames, %u spheres, %u chains, refit %s, timings = min of %u runs\n",
+  Out("play: %s + %s — %s, %u frames, %u spheres, %u chains, refit %s, timings = min of %u runs\n",
               a.asset.c_str(), a.anim.mesh.c_str(), report.animation.c_str(), frames, view.sphere_count,
               view.chain_count, a.refit.c_str(), std::max(1u, a.repeat));
-  if (const std::string legend = RegionLegendLine(view); !legend.empty()) std::printf("%s\n", legend.c_str());
+  if (const std::string legend = RegionLegendLine(view); !legend.empty()) Out("%s\n", legend.c_str());
   if (!anim.clip) {
-    std::printf("key poses:");
+    Out("key poses:");
     for (size_t k = 0; k < anim.poses.size(); ++k)
-      std::printf(" %s@%u", anim.poses[k].name.c_str(),
+      Out(" %s@%u", anim.poses[k].name.c_str(),
                   playback::MorphKeyFrame(uint32_t(k), frames, uint32_t(anim.poses.size())));
-    std::printf("\n");
+    Out("\n");
   }
-  std::printf("\n%5s  %-26s %7s %7s %8s %7s %8s %8s %9s %9s", "frame", "pose", "testsM1", "M1 raw", "M1 dist", "M2",
+  Out("\n%5s  %-26s %7s %7s %8s %7s %8s %8s %9s %9s", "frame", "pose", "testsM1", "M1 raw", "M1 dist", "M2",
               "testsM2", "refit us", "M1 us", "M2 us");
-  if (opts.narrow_phase) std::printf(" %8s %8s %9s", "contacts", "tri tests", "narrow us");
-  std::printf("  %s%s\n", "regions touching", opts.narrow_phase ? " | regions in contact (narrow phase)" : "");
+  if (opts.narrow_phase) Out(" %8s %8s %9s", "contacts", "tri tests", "narrow us");
+  Out("  %s%s\n", "regions touching", opts.narrow_phase ? " | regions in contact (narrow phase)" : "");
   auto print_row = [&](const playback::FrameReport& r, const std::string& frame) {
-    std::printf("%5s  %-26s %7u %7u %8u %7u %8u %8.1f %9.1f %9.1f", frame.c_str(), r.label.c_str(), r.m1.tests,
+    Out("%5s  %-26s %7u %7u %8u %7u %8u %8.1f %9.1f %9.1f", frame.c_str(), r.label.c_str(), r.m1.tests,
                 r.m1.raw_pairs, r.m1.distinct_pairs, r.m2.distinct_pairs, r.m2.tests, r.refit_us, r.detect_m1_us,
                 r.detect_m2_us);
-    if (opts.narrow_phase) std::printf(" %8u %8u %9.1f", r.narrow.contacts, r.narrow.triangle_tests, r.narrow_us);
-    std::printf("  %s", playback::RegionPairsText(r.regions).c_str());
-    if (opts.narrow_phase) std::printf(" | %s", playback::RegionPairsText(r.contact_regions).c_str());
-    std::printf("\n");
+    if (opts.narrow_phase) Out(" %8u %8u %9.1f", r.narrow.contacts, r.narrow.triangle_tests, r.narrow_us);
+    Out("  %s", playback::RegionPairsText(r.regions).c_str());
+    if (opts.narrow_phase) Out(" | %s", playback::RegionPairsText(r.contact_regions).c_str());
+    Out("\n");
   };
   print_row(bind, "bind");
   for (const playback::FrameReport& r : rows) print_row(r, std::to_string(r.frame));
 
-  std::printf("\nsummary: %u frames, %u with collisions; bind pose: M1 %u pairs, M2 %u pairs\n", frames,
+  Out("\nsummary: %u frames, %u with collisions; bind pose: M1 %u pairs, M2 %u pairs\n", frames,
               sum.frames_with_pairs, bind.m1.distinct_pairs, bind.m2.distinct_pairs);
   if (opts.m1)
-    std::printf("  M1: mean %.1f raw / %.1f distinct pairs (max raw %u), %u tests, detect mean %.1f us\n",
+    Out("  M1: mean %.1f raw / %.1f distinct pairs (max raw %u), %u tests, detect mean %.1f us\n",
                 sum.mean_pairs_m1_raw, sum.mean_pairs_m1, sum.max_pairs_m1_raw, rows.empty() ? 0u : rows[0].m1.tests,
                 sum.mean_detect_m1_us);
   if (opts.m2)
-    std::printf("  M2: mean %.1f pairs (max %u), %u tests, detect mean %.1f us\n", sum.mean_pairs_m2, sum.max_pairs_m2,
+    Out("  M2: mean %.1f pairs (max %u), %u tests, detect mean %.1f us\n", sum.mean_pairs_m2, sum.max_pairs_m2,
                 rows.empty() ? 0u : rows[0].m2.tests, sum.mean_detect_m2_us);
-  std::printf("  refit (%s): mean %.1f us; tracking |dF| vs bind over surrounding-region vertices: mean %.4f, max %.4f\n",
+  Out("  refit (%s): mean %.1f us; tracking |dF| vs bind over surrounding-region vertices: mean %.4f, max %.4f\n",
               a.refit.c_str(), sum.mean_refit_us, sum.tracking_mean, sum.tracking_max);
   if (joints)
-    std::printf("  joint refit vs vertex refit (pivot frame), centre distance / radius over spheres x frames: "
+    Out("  joint refit vs vertex refit (pivot frame), centre distance / radius over spheres x frames: "
                 "median %.2f %%, p95 %.2f %%, max %.2f %%\n",
                 sum.joint_error_median, sum.joint_error_p95, sum.joint_error_max);
   if (opts.narrow_phase) {
-    std::printf("  narrow phase");
+    Out("  narrow phase");
     if (opts.narrow_behind_margin > 0.0f)
-      std::printf(" behind M2's pairs at %g x the contact margin (reach regions; the M2 run included)",
+      Out(" behind M2's pairs at %g x the contact margin (reach regions; the M2 run included)",
                   double(opts.narrow_behind_margin));
-    std::printf(": %llu contacts (triangle pairs) in %llu frames; median %.1f us, max %.1f us a frame\n",
+    Out(": %llu contacts (triangle pairs) in %llu frames; median %.1f us, max %.1f us a frame\n",
                 static_cast<unsigned long long>(sum.contacts), static_cast<unsigned long long>(sum.frames_with_contacts),
                 sum.narrow_median_us, sum.narrow_max_us);
   }
-  std::printf("  regions touching (frames):");
-  if (sum.region_frames.empty()) std::printf(" none");
-  for (const auto& [p, c] : sum.region_frames) std::printf(" %s(%u)", RegionPairName(view, p.first, p.second).c_str(), c);
-  std::printf("\n");
+  Out("  regions touching (frames):");
+  if (sum.region_frames.empty()) Out(" none");
+  for (const auto& [p, c] : sum.region_frames) Out(" %s(%u)", RegionPairName(view, p.first, p.second).c_str(), c);
+  Out("\n");
 
   if (!a.json.empty()) {
     nlohmann::json j;
@@ -228,7 +228,7 @@ int RunPlay(const PlayArgs& a) {
                     {"regions_touching_frames", rf}};
     const std::string text = j.dump(2) + "\n";
     if (auto s = import::WriteFileAtomic(a.json, text); !s.ok()) return Fail(s.error());
-    std::printf("wrote %s\n", a.json.c_str());
+    Out("wrote %s\n", a.json.c_str());
   }
   return 0;
 }

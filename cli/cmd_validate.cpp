@@ -26,7 +26,7 @@ int RunValidate(const ValidateArgs& a) {
   for (const playback::Finding& f : findings)
     std::printf("%-7s %-15s %s: %s\n", playback::ToString(f.severity), f.code.c_str(), f.location.ToString().c_str(),
                 f.message.c_str());
-  if (findings.empty()) std::printf("%s: valid%s\n", a.asset.c_str(), a.mesh.empty() ? "" : ", matches its mesh, bind pose collision-free");
+  if (findings.empty()) Out("%s: valid%s\n", a.asset.c_str(), a.mesh.empty() ? "" : ", matches its mesh, bind pose collision-free");
   if (!a.json.empty()) {
     nlohmann::json j = {{"asset", a.asset}, {"mesh", a.mesh}, {"valid", errors == 0}, {"findings", nlohmann::json::array()}};
     for (const playback::Finding& f : findings) {

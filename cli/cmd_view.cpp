@@ -310,10 +310,10 @@ int RunView(const ViewArgs& a) {
       !ReplaceOnce(&page, "<!--SPHERECHAIN_DATA-->", ScriptSafeJson(data)))
     return Fail("view: the compiled-in page (viewer/page.html) lacks its markers");
   if (auto s = import::WriteFileAtomic(a.output, page); !s.ok()) return Fail(s.error());
-  std::printf("view: %s + %s — %s, %u frames, %u spheres; %s pairs max %u, contacts %llu (max %u a frame)\n",
+  Out("view: %s + %s — %s, %u frames, %u spheres; %s pairs max %u, contacts %llu (max %u a frame)\n",
               a.asset.c_str(), a.anim.mesh.c_str(), anim.Describe().c_str(), F, S, a.method == "m1" ? "M1" : "M2", max_pairs,
               static_cast<unsigned long long>(total_contacts), max_contacts);
-  std::printf("wrote %s (%.2f MB, three.js %s embedded; open it from disk, #frame=N shows frame N)\n", a.output.c_str(),
+  Out("wrote %s (%.2f MB, three.js %s embedded; open it from disk, #frame=N shows frame N)\n", a.output.c_str(),
               double(page.size()) / (1024.0 * 1024.0), three_version.c_str());
   return 0;
 }

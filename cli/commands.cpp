@@ -2,6 +2,9 @@
 
 #include <spdlog/spdlog.h>
 
+#include <cstdarg>
+#include <cstdio>
+
 namespace spherechain::cli {
 
 void Register(CLI::App& app, Commands* commands) {
@@ -30,6 +33,21 @@ import::Context MakeLoggingContext() {
     }
   };
   return ctx;
+}
+
+namespace {
+bool g_quiet = false;
+}  // namespace
+
+void SetQuiet(bool quiet) { g_quiet = quiet; }
+bool Quiet() { return g_quiet; }
+
+void Out(const char* format, ...) {
+  if (g_quiet) return;
+  va_list args;
+  va_start(args, format);
+  std::vprintf(format, args);
+  va_end(args);
 }
 
 int Fail(const import::Error& error) {

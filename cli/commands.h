@@ -35,6 +35,13 @@ import::Context MakeLoggingContext();
 int Fail(const import::Error& error);
 int Fail(const std::string& message);
 
+/// -q/--quiet: commands print warnings and errors only — no summaries, tables, progress or "wrote" lines
+/// (`inspect` still prints the asset: that is what it is asked for; `validate` still prints its findings).
+void SetQuiet(bool quiet);
+bool Quiet();
+/// std::printf to stdout unless -q (Quiet()).
+void Out(const char* format, ...) __attribute__((format(printf, 1, 2)));
+
 /// Region names in the tables (playback/debug_export.h).
 using playback::RegionLegendLine;
 using playback::RegionPairName;

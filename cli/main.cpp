@@ -25,5 +25,6 @@ int main(int argc, char** argv) {
   spdlog::set_default_logger(spdlog::stderr_color_mt("spherechain"));
   spdlog::set_pattern("%^%l%$: %v");
   spdlog::set_level(verbose ? spdlog::level::debug : quiet ? spdlog::level::warn : spdlog::level::info);
+  spherechain::cli::SetQuiet(quiet);
   return spherechain::cli::Dispatch(commands);
 }

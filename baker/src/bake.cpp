@@ -330,26 +330,42 @@ Result<BakeResult> Bake(const std::string& input_path, const BakeConfig& config,
     Context::Timer t(ctx, "plausibility");
     r.plausibility = CheckPlausibility(mesh, r.segmentation, nullptr, r.agreement ? &*r.agreement : nullptr,
                                        config.plausibility);
-    // A horizontal trunk is no standing body: with segmentation auto, a rigged body takes the
-    // any-skeleton path (a quadruped whose bones carry humanoid names), whose own checks then decide.
-    if (config.segmentation == SegmentMethod::kAuto && config.region_map.empty() && mesh.skin &&
-        r.segmentation.layout.paper && HasFinding(r.plausibility, "PLAUS-TRUNK-AXIS")) {
+    // With segmentation auto, a rigged body whose segmentation looks wrong tries its bone tree (the
+    // any-skeleton path) before it is refused:
+    // - a horizontal trunk is no standing body (a quadruped whose bones carry humanoid names): the bone tree's
+    //   segmentation is taken and its own checks decide;
+    // - any other failed check on the geometry segmentation (auto only falls back to geometry when the rig's
+    //   bone names are not usable, e.g. joints named node0…node21): the bone tree's is taken only when it
+    //   passes every check, otherwise the geometry's findings stand.
+    const bool auto_rigged = config.segmentation == SegmentMethod::kAuto && config.region_map.empty() && mesh.skin &&
+                             r.segmentation.layout.paper;
+    const bool trunk_axis = HasFinding(r.plausibility, "PLAUS-TRUNK-AXIS");
+    const bool unnamed_rig = r.segmentation.method == "geometry" && !r.plausibility.empty();
+    if (auto_rigged && (trunk_axis || unnamed_rig)) {
       Result<Segmentation> skeleton = SegmentBySkeleton(mesh, {}, ctx);
-      if (skeleton.ok()) {
+      std::vector<PlausibilityFinding> checks;
+      if (skeleton.ok()) checks = CheckPlausibility(mesh, skeleton.value(), nullptr, nullptr, config.plausibility);
+      if (skeleton.ok() && (trunk_axis || checks.empty())) {
+        std::string codes;
+        for (const PlausibilityFinding& f : r.plausibility) codes += (codes.empty() ? "" : ", ") + f.code;
+        const std::string why = trunk_axis ? "has a horizontal trunk (PLAUS-TRUNK-AXIS)"
+                                           : "looks wrong (" + codes + ") and the rig's bone names are not usable";
         if (ctx)
-          ctx->Info("segment: the " + r.segmentation.method + " segmentation has a horizontal trunk (PLAUS-TRUNK-AXIS): "
-                    "segmented as a creature by its skeleton instead");
-        const std::string biped = r.segmentation.method;
+          ctx->Info("segment: the " + r.segmentation.method + " segmentation " + why +
+                    ": segmented " + (trunk_axis ? "as a creature " : "") + "by its skeleton instead");
+        const std::string before = r.segmentation.method;
         r.segmentation = std::move(skeleton).value();
-        r.segmentation.notes = "the " + biped + " segmentation had a horizontal trunk (PLAUS-TRUNK-AXIS); " +
-                               r.segmentation.notes;
+        r.segmentation.notes = "the " + before + " segmentation " + (trunk_axis ? "had a horizontal trunk (PLAUS-TRUNK-AXIS)" : why) +
+                               "; " + r.segmentation.notes;
         r.agreement.reset();
         r.other_segmentation.reset();
         r.other_segmentation_error.clear();
-        r.plausibility = CheckPlausibility(mesh, r.segmentation, nullptr, nullptr, config.plausibility);
+        r.plausibility = std::move(checks);
       } else {
+        const std::string failed = !skeleton.ok() ? skeleton.error().message : "its checks failed too";
         for (PlausibilityFinding& f : r.plausibility)
-          if (f.code == "PLAUS-TRUNK-AXIS") f.message += "; the any-skeleton path failed too: " + skeleton.error().message;
+          if (f.code == "PLAUS-TRUNK-AXIS" || (!trunk_axis && &f == &r.plausibility.front()))
+            f.message += "; the any-skeleton path failed too: " + failed;
       }
     }
     if (!r.segmentation.layout.paper && r.other_segmentation_error.empty())

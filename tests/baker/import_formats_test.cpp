@@ -27,12 +27,13 @@ TEST_CASE("import formats: every character format of assimp-testmodels imports, 
   };
   // human.zae and mrfixit.iqm come without bones through assimp 5.2 (static meshes); the SMD and MD5
   // files carry a skeleton.
+  test::SomeInputs inputs;
   for (const Case& c : {Case{"Collada/human.zae", "zae", false}, Case{"IQM/mrfixit.iqm", "iqm", false},
                         Case{"SMD/WusonSMD.smd", "smd", true}, Case{"B3D/WusonBlitz.b3d", "b3d", false},
                         Case{"MS3D/Wuson.ms3d", "ms3d", false}, Case{"MD5/SimpleCube.md5mesh", "md5mesh", true}}) {
     CAPTURE(c.rel);
     const std::string path = test::AssimpModel(c.rel);
-    if (!test::Require(path)) continue;
+    if (!inputs.Found(path)) continue;
     auto r = ImportMesh(path);
     REQUIRE_MESSAGE(r.ok(), (r.ok() ? "" : r.error().message));
     CHECK(r->source_format == c.format);
@@ -62,10 +63,11 @@ TEST_CASE("import formats: a Blender file stands along +Z (Blender's world axis,
 
 // "heavy": three real bakes (the ASan half of CI skips it; it runs once, in the normal suite).
 TEST_CASE("import formats (heavy): the three humans bake, the creatures and the cube are refused with the reason") {
+  test::SomeInputs inputs;
   for (const char* rel : {"Collada/human.zae", "IQM/mrfixit.iqm", "BLEND/HUMAN.blend"}) {
     CAPTURE(rel);
     const std::string path = test::AssimpModel(rel);
-    if (!test::Require(path)) continue;
+    if (!inputs.Found(path)) continue;
     auto r = Bake(path, BakeConfig{});
     REQUIRE_MESSAGE(r.ok(), (r.ok() ? "" : r.error().message));
     CHECK(r->fit.spheres.size() <= 128);
@@ -83,7 +85,7 @@ TEST_CASE("import formats (heavy): the three humans bake, the creatures and the 
   for (const auto& [rel, why] : refused) {
     CAPTURE(rel);
     const std::string path = test::AssimpModel(rel);
-    if (!test::Require(path)) continue;
+    if (!inputs.Found(path)) continue;
     auto r = Bake(path, BakeConfig{});
     REQUIRE(!r.ok());
     CHECK(r.error().message.find("not a standing body") != std::string::npos);

@@ -189,9 +189,10 @@ TEST_CASE("heavy: narrow phase on real frames: MakeHuman morph key poses equal t
 }
 
 TEST_CASE("heavy: narrow phase on real frames: CesiumMan walk and BCN_Epileptic clip equal brute force") {
+  test::SomeInputs inputs;
   for (const std::string& path :
        {test::SharedData("gltf/CesiumMan.gltf"), test::AssimpModel("X/BCN_Epileptic.X")}) {
-    if (!test::Require(path)) continue;
+    if (!inputs.Found(path)) continue;
     Baked b;
     BakeAndLoad(path, &b);
     REQUIRE(!b.bake.mesh.clips.empty());

@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <set>
 #include <string>
 #include <vector>
@@ -431,4 +432,35 @@ TEST_CASE("bake: a quadruped whose bones carry humanoid names is rerouted from t
   CHECK(refused.error().code == sc::Error::Code::kImplausible);
   CHECK(refused.error().message.find("PLAUS-TRUNK-AXIS") != std::string::npos);
   fs::remove(path);
+}
+
+TEST_CASE("bake: a humanoid whose joints are named node0…node12 bakes by its bone tree under auto, not refused") {
+  // tests/data/creature/figure.gltf (make_creature.py figure()): the rig's names say nothing, so auto falls
+  // back to geometry, whose segmentation is implausible (the arms hang with a gap: the left arm ends up
+  // detached and half as long as the right); auto must then take the bone tree, which passes every check.
+  const std::string figure = spherechain::test::SourceFile("tests/data/creature/figure.gltf");
+  sc::BakeConfig config;
+  config.fit.cover_voxel_rel = 0.02;
+  config.fit.max_spheres = 64;
+  auto r = sc::Bake(figure, config);
+  REQUIRE_MESSAGE(r.ok(), (r.ok() ? "" : r.error().message));
+  CHECK(r->segmentation.method == "skeleton");
+  CHECK_MESSAGE(r->segmentation.notes.find("the geometry segmentation looks wrong (") != std::string::npos,
+                r->segmentation.notes);
+  CHECK(r->plausibility.empty());
+  // Four limbs and the head hang off the trunk (node0 node1 node2), each region from its first bone, with
+  // every triangle of the figure's parts: legs 136 each, arms 152 each, head and neck 98, trunk 206.
+  const sc::RegionLayout& layout = r->segmentation.layout;
+  REQUIRE(layout.count() == 6);
+  std::map<std::string, size_t> triangles;
+  for (uint8_t reg : r->segmentation.triangle_regions) ++triangles[layout.Name(sc::Region(reg))];
+  const std::map<std::string, size_t> expected{{"node9", 136}, {"node11", 136}, {"node3", 98},
+                                               {"node5", 152}, {"node7", 152}, {"trunk", 206}};
+  CHECK(triangles == expected);
+  // Forced to geometry, the same figure is refused with the findings that made auto look further.
+  config.segmentation = sc::SegmentMethod::kGeometry;
+  auto refused = sc::Bake(figure, config);
+  REQUIRE_FALSE(refused.ok());
+  CHECK(refused.error().code == sc::Error::Code::kImplausible);
+  CHECK(refused.error().message.find("PLAUS-LIMB-BALANCE") != std::string::npos);
 }

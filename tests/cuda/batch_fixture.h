@@ -25,8 +25,8 @@ namespace sc = spherechain::cuda;
 /// True when a CUDA device is usable; otherwise a visible SKIPPED message (the test returns early).
 inline bool RequireDevice() {
   if (sc::DeviceAvailable() == sc::Status::kOk) return true;
-  MESSAGE("SKIPPED: no CUDA device (cudaGetDeviceCount: " << std::string(sc::LastCudaErrorString())
-          << ") — spherechain::cuda tests need a GPU");
+  Skip("no CUDA device (cudaGetDeviceCount: " + std::string(sc::LastCudaErrorString()) +
+       ") — spherechain::cuda tests need a GPU");
   return false;
 }
 
@@ -254,6 +254,7 @@ inline size_t ForEachRecordedClip(const std::function<void(AssetSet&, const std:
   }
   const std::string spec = env;
   size_t start = 0, clips = 0;
+  spherechain::test::SomeInputs inputs;
   while (start < spec.size()) {
     const size_t end = std::min(spec.find(';', start), spec.size());
     const std::string item = spec.substr(start, end - start);
@@ -261,7 +262,7 @@ inline size_t ForEachRecordedClip(const std::function<void(AssetSet&, const std:
     const size_t eq = item.find('=');
     REQUIRE(eq != std::string::npos);
     const std::string asset_path = item.substr(0, eq), dir = item.substr(eq + 1);
-    if (!Require(asset_path) || !Require(dir)) continue;
+    if (!inputs.Found(asset_path) || !inputs.Found(dir)) continue;
     AssetSet set;
     LoadFile(&set, asset_path);
     std::vector<std::string> files;

@@ -2,6 +2,8 @@
 // loading — or be refused with the version status — when the schema or the loader changes.
 #include <doctest/doctest.h>
 
+#include <filesystem>
+
 #include <cstring>
 #include <fstream>
 #include <vector>
@@ -43,7 +45,7 @@ uint32_t CountM2(const AssetView& view, spherechain::test::Character& ctx, float
 
 TEST_CASE("golden v1 asset (CesiumMan, baked by spherechain 0.1.0) loads with its counts and runs") {
   const std::string path = spherechain::test::SourceFile("tests/data/golden/v1/cesium_man.sphc");
-  REQUIRE_MESSAGE(spherechain::test::Require(path), "the golden asset is part of the repository");
+  REQUIRE_MESSAGE(std::filesystem::exists(path), "the golden asset is part of the repository");
   size_t size = 0;
   std::vector<uint64_t> bytes = ReadAligned(path, &size);
   AssetView view;
@@ -78,7 +80,7 @@ TEST_CASE("golden v1 asset (CesiumMan, baked by spherechain 0.1.0) loads with it
 
 TEST_CASE("golden v2 asset (CesiumMan, cover fit, baked by spherechain 0.2.0) loads with its margin and coverage") {
   const std::string path = spherechain::test::SourceFile("tests/data/golden/v2/cesium_man.sphc");
-  REQUIRE_MESSAGE(spherechain::test::Require(path), "the golden asset is part of the repository");
+  REQUIRE_MESSAGE(std::filesystem::exists(path), "the golden asset is part of the repository");
   size_t size = 0;
   std::vector<uint64_t> bytes = ReadAligned(path, &size);
   AssetView view;
@@ -106,7 +108,7 @@ TEST_CASE("golden v2 asset (CesiumMan, cover fit, baked by spherechain 0.2.0) lo
 
 TEST_CASE("golden v3 asset (CesiumMan, cover fit, joint weights, baked by spherechain 0.2.0) refits from joints") {
   const std::string path = spherechain::test::SourceFile("tests/data/golden/v3/cesium_man.sphc");
-  REQUIRE_MESSAGE(spherechain::test::Require(path), "the golden asset is part of the repository");
+  REQUIRE_MESSAGE(std::filesystem::exists(path), "the golden asset is part of the repository");
   size_t size = 0;
   std::vector<uint64_t> bytes = ReadAligned(path, &size);
   AssetView view;
@@ -156,7 +158,7 @@ TEST_CASE("golden v4 asset (the synthetic creature, any-skeleton path) names its
   // tests/data/creature/creature.gltf baked by `spherechain bake` (default configuration): five limbs and
   // a trunk in Asset.regions, 15 chains pairing them.
   const std::string path = spherechain::test::SourceFile("tests/data/golden/v4/creature.sphc");
-  REQUIRE_MESSAGE(spherechain::test::Require(path), "the golden asset is part of the repository");
+  REQUIRE_MESSAGE(std::filesystem::exists(path), "the golden asset is part of the repository");
   size_t size = 0;
   std::vector<uint64_t> bytes = ReadAligned(path, &size);
   AssetView view;

@@ -24,6 +24,10 @@ creature.gltf — a four-legged animal with a tail, skinned and animated, whose 
 snake.gltf — the same construction for a chain with no limbs: a 2 × 2 × 20 bar along Z skinned to a chain of
   four bones (Seg0 → Seg1 → Seg2 → Seg3): the any-skeleton path must refuse it ("no recognisable limbs").
 
+figure.gltf — a standing humanoid whose bones are named node0…node12 and whose geometry misleads the
+  geometry segmentation (figure() below): `--segmentation auto` must bake it by its bone tree (four limbs,
+  head, trunk).
+
 Run from anywhere: python3 tests/data/creature/make_creature.py (writes beside itself). Deterministic.
 """
 import base64
@@ -224,9 +228,54 @@ def snake(path):
     return len(verts), 2 * len(quads)
 
 
+def figure(path):
+    """A standing humanoid whose bones are named node0…node12 (no usable names, as some exporters write):
+    legs x [0.1, 0.3) left / [-0.3, -0.1) right, y [0, 0.8), z [-0.1, 0.1); trunk x [-0.3, 0.3) y [0.8, 1.5);
+    neck and head x [-0.1, 0.1) y [1.5, 1.9); the arms hang beside the trunk with a gap of one cube
+    (x [0.4, 0.6) left / [-0.6, -0.4) right, y [0.7, 1.5)), joined to it at the shoulders by one cube
+    (x [0.3, 0.4), y [1.3, 1.5)). The geometry segmentation takes the gap for the armpit's end and makes an
+    implausible body of it (PLAUS-LIMB-BALANCE), and the rig's names say nothing, so `--segmentation auto`
+    must take the bone tree."""
+    boxes = [("trunk", (-3, 3), (8, 15), (-1, 1)), ("head", (-1, 1), (15, 19), (-1, 1)),
+             ("leg_l", (1, 3), (0, 8), (-1, 1)), ("leg_r", (-3, -1), (0, 8), (-1, 1)),
+             ("arm_l", (4, 6), (7, 15), (-1, 1)), ("arm_r", (-6, -4), (7, 15), (-1, 1)),
+             ("shoulder_l", (3, 4), (13, 15), (-1, 1)), ("shoulder_r", (-4, -3), (13, 15), (-1, 1))]
+    verts, quads, parts = boxes_surface(boxes)
+    # (name, parent, global position): hips 0, spine 1, chest 2, neck 3, head 4, then each limb's two bones.
+    bones = [("node0", -1, (0.0, 0.8, 0.0)), ("node1", 0, (0.0, 1.1, 0.0)), ("node2", 1, (0.0, 1.4, 0.0)),
+             ("node3", 2, (0.0, 1.5, 0.0)), ("node4", 3, (0.0, 1.7, 0.0)),
+             ("node5", 2, (0.35, 1.4, 0.0)), ("node6", 5, (0.5, 1.1, 0.0)),
+             ("node7", 2, (-0.35, 1.4, 0.0)), ("node8", 7, (-0.5, 1.1, 0.0)),
+             ("node9", 0, (0.2, 0.8, 0.0)), ("node10", 9, (0.2, 0.4, 0.0)),
+             ("node11", 0, (-0.2, 0.8, 0.0)), ("node12", 11, (-0.2, 0.4, 0.0))]
+
+    def weights_of(p):
+        x, y, z = p
+        if y <= 8 and 1 <= abs(x) <= 3:  # a leg (its top ring half the hips)
+            first = 9 if x > 0 else 11
+            if y == 8:
+                return {first: 0.5, 0: 0.5}
+            return {first + 1 if y < 4 else first: 1.0}
+        if abs(x) > 3:  # an arm: the upper arm above y 1.1, the forearm below
+            first = 5 if x > 0 else 7
+            return {first + 1 if y < 11 else first: 1.0}
+        if abs(x) == 3 and 13 <= y <= 15:  # where the shoulder cube meets the trunk: half arm, half chest
+            return {5 if x > 0 else 7: 0.5, 2: 0.5}
+        if y >= 15:
+            return {4 if y > 16 else 3: 1.0}
+        return {2 if y > 12 else 1 if y > 10 else 0: 1.0}
+
+    ident = [0.0, 0.0, 0.0, 1.0]
+    swing = quat_axis_angle((0, 0, 1), -15)  # the left arm swings in, its hand towards the hip
+    clips = [("swing", [("node5", [0.0, 0.5, 1.0], [ident, swing, ident])])]
+    write_gltf(path, verts, quads, bones, weights_of, clips)
+    return len(verts), 2 * len(quads)
+
 if __name__ == "__main__":
     here = os.path.dirname(os.path.abspath(__file__))
     v, t, counts = creature(os.path.join(here, "creature.gltf"))
     print("creature.gltf:", v, "vertices,", t, "triangles,", dict(sorted(counts.items())))
     v, t = snake(os.path.join(here, "snake.gltf"))
     print("snake.gltf:", v, "vertices,", t, "triangles")
+    v, t = figure(os.path.join(here, "figure.gltf"))
+    print("figure.gltf:", v, "vertices,", t, "triangles")
