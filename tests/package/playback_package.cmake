@@ -1,7 +1,7 @@
 # The playback library as a package: install this build tree (BUILD) into WORK/prefix, build
 # tests/package/playback_consumer against it with find_package(spherechain) and run it on the golden v3
 # asset (asset-only validation: no error), on the same asset with its glTF mesh (GLTF, when present: the
-# consumer imports it through the installed baker — a glTF import in a find_package consumer used to bind
+# consumer imports it through the installed import library — a glTF import in a find_package consumer used to bind
 # to libdraco's older tinygltf and crash), and on a truncated copy (SPHC-LOAD, exit 1).
 file(REMOVE_RECURSE ${WORK})
 function(run what)
@@ -21,6 +21,14 @@ endforeach()
 run("configure the consumer" ${CMAKE_COMMAND} -S ${SRC}/tests/package/playback_consumer -B ${WORK}/consumer -G Ninja
     -DCMAKE_PREFIX_PATH=${WORK}/prefix -DCMAKE_BUILD_TYPE=Release)
 run("build the consumer" ${CMAKE_COMMAND} --build ${WORK}/consumer)
+# Playback needs the importers and the runtime, not the baker: the consumer's link line must not name it.
+file(READ ${WORK}/consumer/build.ninja link_rules)
+if(link_rules MATCHES "libspherechain_baker")
+  message(FATAL_ERROR "the playback consumer links the baker (spherechain::playback must not depend on it)")
+endif()
+if(NOT link_rules MATCHES "libspherechain_import")
+  message(FATAL_ERROR "the playback consumer does not link spherechain::import (the check above would prove nothing)")
+endif()
 run("run the consumer" ${WORK}/consumer/playback_consumer ${ASSET})
 if(NOT out MATCHES "errors 0")
   message(FATAL_ERROR "the consumer reported errors on the golden asset: ${out}")
