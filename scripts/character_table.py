@@ -150,8 +150,8 @@ def markdown(rows, args):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--binary", default=os.environ.get("SPHERECHAIN", os.path.join(REPO, "build/dev/baker/spherechain")),
-                    help="spherechain CLI (env SPHERECHAIN; default build/dev/baker/spherechain)")
+    ap.add_argument("--binary", default=os.environ.get("SPHERECHAIN", os.path.join(REPO, "build/dev/cli/spherechain")),
+                    help="spherechain CLI (env SPHERECHAIN; default build/dev/cli/spherechain)")
     ap.add_argument("--shared", default=os.path.join(REPO, "..", "shared", "data"), help="../shared/data")
     ap.add_argument("--models", default="/usr/share/assimp/models", help="Debian's assimp-testmodels")
     ap.add_argument("--out", default="/tmp/spherechain-characters", help="assets, reports and PNGs go here")

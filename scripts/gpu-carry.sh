@@ -11,7 +11,7 @@
 #   build/cuda/bench/cuda_bench .carry/mh.sphc .carry/data/makehuman/base.obj --max-instances 100000
 set -euo pipefail
 cd "$(dirname "$0")/.."
-cli=${SPHERECHAIN_CLI:-build/dev/baker/spherechain}
+cli=${SPHERECHAIN_CLI:-build/dev/cli/spherechain}
 [ -x "$cli" ] || { echo "build the CLI first (bash scripts/test.sh, or set SPHERECHAIN_CLI)" >&2; exit 1; }
 rm -rf .carry && mkdir -p .carry/include .carry/lib/cmake .carry/data/makehuman .carry/data/gltf
 cp -r /usr/include/flatbuffers /usr/include/doctest .carry/include/

@@ -17,7 +17,7 @@ default; false-alarm margin: evaluate's default), writes one JSON per point into
 actual sphere count.
 
 Options:
-  -b, --binary PATH     spherechain CLI (env SPHERECHAIN; default: build/dev/baker/spherechain in the repo)
+  -b, --binary PATH     spherechain CLI (env SPHERECHAIN; default: build/dev/cli/spherechain in the repo)
   -m, --mesh PATH       MakeHuman OBJ (env SPHERECHAIN_MESH; default: ../shared/data/makehuman/base.obj
                         relative to the repo root); its rig default.mhskel must sit beside it
   -p, --poses-dir DIR   key poses of the morph (default: data/poses/makehuman in the repo)
@@ -34,7 +34,7 @@ Example:
 EOF
 }
 
-binary=${SPHERECHAIN:-$repo/build/dev/baker/spherechain}
+binary=${SPHERECHAIN:-$repo/build/dev/cli/spherechain}
 mesh=${SPHERECHAIN_MESH:-$repo/../shared/data/makehuman/base.obj}
 poses=$repo/data/poses/makehuman
 counts="40 64 96 128 160"

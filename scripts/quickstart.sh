@@ -10,10 +10,10 @@ mkdir -p out
 input=../shared/data/makehuman/base.obj
 [ -f "$input" ] || input=/usr/share/assimp/models/X/BCN_Epileptic.X
 name=$(basename "${input%.*}")
-build/release/baker/spherechain bake "$input" -o "out/$name.sphc" --report "out/$name.json" \
+build/release/cli/spherechain bake "$input" -o "out/$name.sphc" --report "out/$name.json" \
   --ray-csv "out/$name.rays.csv" --png "out/$name.png"
-build/release/baker/spherechain inspect "out/$name.sphc"
-build/release/baker/spherechain export-debug "out/$name.sphc" --mesh "$input" -o "out/$name.debug.gltf"
+build/release/cli/spherechain inspect "out/$name.sphc"
+build/release/cli/spherechain export-debug "out/$name.sphc" --mesh "$input" -o "out/$name.debug.gltf"
 echo
 echo "results in $(pwd)/out: $name.sphc (asset), $name.json (report), $name.png (front/side views),"
 echo "  $name.debug.gltf (open in any glTF viewer), $name.rays.csv (per-ray torso comparison)"

@@ -19,7 +19,7 @@ Bakes, plays and evaluates the characters into OUT_DIR (default /tmp/spherechain
 draws the PNGs into docs/.
 
 Options:
-  -b, --binary PATH   spherechain CLI (env SPHERECHAIN; default: build/dev/baker/spherechain in the repo)
+  -b, --binary PATH   spherechain CLI (env SPHERECHAIN; default: build/dev/cli/spherechain in the repo)
   -d, --data DIR      shared data (default: ../shared/data relative to the repo root)
   -x, --x-model PATH  BCN_Epileptic.X (default: /usr/share/assimp/models/X/BCN_Epileptic.X; skipped if absent)
       --docs DIR      where the PNGs go (default: docs/ in the repo)
@@ -29,7 +29,7 @@ Options:
 EOF
 }
 
-binary=${SPHERECHAIN:-$repo/build/dev/baker/spherechain}
+binary=${SPHERECHAIN:-$repo/build/dev/cli/spherechain}
 data=$repo/../shared/data
 xmodel=/usr/share/assimp/models/X/BCN_Epileptic.X
 docs=$repo/docs

@@ -1,5 +1,6 @@
 # The any-skeleton path from the command line (issue 11), on the synthetic creature of tests/data/creature
-# (no shared data, ~1 s): `bake` segments it by its skeleton and names its regions (summary, inspect),
+# (no shared data, ~1 s): `bake` segments it by its skeleton (and `-q bake` of figure.gltf prints only
+# warnings) and names its regions (summary, inspect),
 # `play --clip cross --narrow-phase` reports the fore legs crossing by name; and its bad inputs — a
 # skeleton with no recognisable limbs (snake.gltf), a mesh with no skin under --segmentation skeleton
 # (tests/data/implausible/boxes.obj), a region map naming an unknown region — exit 1 with the reason and
@@ -35,6 +36,16 @@ foreach(_want "R0  Tail +104" "R3  ForeLeg_L +136" "R5  trunk +856" "segmentatio
     message(FATAL_ERROR "bake creature.gltf: the summary lacks '${_want}':\n${out}")
   endif()
 endforeach()
+# -q: warnings and errors only. The humanoid with joints node0…node12 bakes under auto by its bone tree
+# (the geometry segmentation fails a check; tests/data/creature/figure.gltf) and prints nothing but warnings.
+execute_process(COMMAND ${CLI} -q bake ${DATA}/figure.gltf -o ${WORK}/f.sphc --config ${WORK}/fast.json
+                RESULT_VARIABLE rc OUTPUT_VARIABLE qout ERROR_VARIABLE qerr)
+if(NOT rc EQUAL 0 OR NOT EXISTS ${WORK}/f.sphc)
+  message(FATAL_ERROR "-q bake figure.gltf: exit ${rc}:\n${qout}${qerr}")
+endif()
+if(NOT qout STREQUAL "" OR qerr MATCHES "(^|\n)info:")
+  message(FATAL_ERROR "-q bake printed more than warnings and errors:\n${qout}${qerr}")
+endif()
 run(inspect ${CLI} inspect ${WORK}/c.sphc)
 if(NOT rc EQUAL 0 OR NOT out MATCHES "schema v4" OR NOT out MATCHES "HindLeg_L +triangles +136.*limb, from bone HindLeg_L_01, mirror HindLeg_R")
   message(FATAL_ERROR "inspect: exit ${rc}, no v4 or region names:\n${out}")

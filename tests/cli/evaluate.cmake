@@ -11,7 +11,7 @@ endforeach()
 file(REMOVE_RECURSE ${WORK})
 file(MAKE_DIRECTORY ${WORK})
 
-execute_process(COMMAND ${CLI} -q evaluate ${ASSET} --mesh ${MESH} --json ${WORK}/eval.json --png ${WORK}/eval.png
+execute_process(COMMAND ${CLI} evaluate ${ASSET} --mesh ${MESH} --json ${WORK}/eval.json --png ${WORK}/eval.png
                         --min-recall 0 --sweep-margin=0,0.004,0.02
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc EQUAL 0)
