@@ -6,7 +6,7 @@ if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 export DEBIAN_FRONTEND=noninteractive
 $SUDO apt-get update -qq
 $SUDO apt-get install -y -qq --no-install-recommends \
-  build-essential cmake ninja-build pkg-config \
+  build-essential cmake ninja-build pkg-config doxygen \
   libassimp-dev libeigen3-dev libcgal-dev libtinygltf-dev libflatbuffers-dev flatbuffers-compiler \
   doctest-dev nlohmann-json3-dev libcli11-dev libspdlog-dev libxxhash-dev \
   libfcl-dev libbullet-dev libtbb-dev \

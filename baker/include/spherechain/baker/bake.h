@@ -109,7 +109,7 @@ struct BakeResult {
   std::optional<SegmentationAgreement> agreement;      ///< chosen vs other
   std::string other_segmentation_error;                ///< why the comparison could not run
   FitResult fit;
-  std::vector<Ball> phi2;                              ///< #S, minimum enclosing balls
+  std::vector<Ball> phi2;                              ///< \#S, minimum enclosing balls
   std::vector<Chain> chains;
   std::vector<SpherePair> excluded;
   std::vector<SpherePair> cross_region_bind_overlaps;
@@ -126,7 +126,7 @@ struct BakeResult {
   SurroundingRegions surrounding;
   Pivots pivots;
   std::optional<CentreWeights> centre_weights;         ///< rigged mesh: the joint refit's (schema v3)
-  std::vector<SphereAccuracy> sphere_accuracy;         ///< #S
+  std::vector<SphereAccuracy> sphere_accuracy;         ///< \#S
   AccuracySummary accuracy;
   std::vector<uint8_t> asset;                          ///< the .sphc bytes
   uint32_t unassigned_triangles = 0;

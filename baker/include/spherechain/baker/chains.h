@@ -106,7 +106,7 @@ struct ExclusionReasons {
 /// Sorted by (a, b), unique. `reasons` [opt, out] counts them by reason; `cross_region_bind_overlaps`
 /// [opt, out] as ExcludedPairs (bind-overlapping pairs of two different regions other than a limb and
 /// the torso). `layout` [opt]: the regions' meaning (nullptr: the paper's five, torso R4 along `up`); a
-/// creature's layout makes its trunk the torso and RegionLayout::trunk_axis its up. Cost: O(#S²).
+/// creature's layout makes its trunk the torso and RegionLayout::trunk_axis its up. Cost: O(\#S²).
 std::vector<SpherePair> BindExcludedPairs(const std::vector<FittedSphere>& spheres, double near,
                                           ExclusionReasons* reasons = nullptr,
                                           std::vector<SpherePair>* cross_region_bind_overlaps = nullptr,

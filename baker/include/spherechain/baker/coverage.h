@@ -46,7 +46,7 @@ struct CoverageStats {
   /// 0 when no such voxel. [Units: relative to the body height]
   double outside_p95_rel = 0.0;
   double outside_max_rel = 0.0;  ///< see outside_p95_rel
-  /// With CoverageOptions::per_sphere, #spheres entries: the largest surface distance of the outside
+  /// With CoverageOptions::per_sphere, \#spheres entries: the largest surface distance of the outside
   /// voxels inside that sphere (how far it sticks out of the skin), 0 when none; else empty.
   /// [Units: relative to the body height]
   std::vector<float> sphere_outside_max_rel;
@@ -73,9 +73,9 @@ struct CoverageStats {
 
 /// Measures how well `spheres` fill the body `positions`/`indices` (bind pose, model space, source
 /// units): coverage, protrusion, how far the protruding volume reaches from the surface, and how far the
-/// skin lies outside the spheres (CoverageStats::skin_outside_*: O(#V × #spheres), ~2 ms on MakeHuman).
+/// skin lies outside the spheres (CoverageStats::skin_outside_*: O(\#V × \#spheres), ~2 ms on MakeHuman).
 ///
-/// `positions`: #V×3 floats (x, y, z); `indices`: #T×3 vertex indices (orientation and winding are not
+/// `positions`: \#V×3 floats (x, y, z); `indices`: \#T×3 vertex indices (orientation and winding are not
 /// used); `spheres`: centre and radius each [Units: source] — FittedSphere φ1 (center_phi1,
 /// radius_phi1), φ1' (center, radius) and BakeResult::phi2 all fit; overlapping spheres count once.
 ///
@@ -111,7 +111,7 @@ struct CoverageStats {
 /// radius or a negative radius (the message names which); kConfig — voxel_rel not > 0 and finite, or
 /// max_voxels 0; kInternal — CGAL threw (its message).
 ///
-/// Cost: O(#T + #voxels + Σ voxels in each sphere's box + #outside-union voxels × AABB query);
+/// Cost: O(\#T + \#voxels + Σ voxels in each sphere's box + \#outside-union voxels × AABB query);
 /// allocates ~1 byte a voxel plus the crossings and the tree. Measured on the MakeHuman body (26,756
 /// triangles, 96 spheres, 1/200: ~1.3 M voxels) on one core: 0.03 s for φ1' (few protruding voxels),
 /// 0.3 s for φ2 (~84 k protruding voxels, the distance queries dominate). Single-threaded, reentrant,
@@ -138,8 +138,8 @@ struct InteriorVoxels {
   }
 };
 
-/// Voxelises the interior of `positions`/`indices` (as MeasureCoverage: #V×3 floats, #T×3 indices).
-/// Errors: those of MeasureCoverage that concern the mesh and the options. Cost: O(#T + #voxels),
+/// Voxelises the interior of `positions`/`indices` (as MeasureCoverage: \#V×3 floats, \#T×3 indices).
+/// Errors: those of MeasureCoverage that concern the mesh and the options. Cost: O(\#T + \#voxels),
 /// ~1 byte a voxel while it runs. Adds a "voxelize" timing to `ctx` [opt].
 Result<InteriorVoxels> VoxelizeInterior(const std::vector<float>& positions, const std::vector<uint32_t>& indices,
                                         const CoverageOptions& options = {}, Context* ctx = nullptr);

@@ -115,7 +115,7 @@ struct FitResult {
 /// covered. Spheres ordered from the torso outwards; center = center_phi1 = center_phi2.
 /// `region_triangles`: triangle indices of the region (mesh.indices / 3), bind pose, source units.
 /// Errors: kFit (region empty, index out of range, PD outside [0, 0.9], degenerate region).
-/// Cost: O(#T log #T) for the region plus a uniform-grid query a curve sample; allocates.
+/// Cost: O(\#T log \#T) for the region plus a uniform-grid query a curve sample; allocates.
 Result<std::vector<FittedSphere>> FitTubular(const Mesh& mesh, const std::vector<uint32_t>& region_triangles,
                                              Region region, const FitParams& params, Context* ctx = nullptr);
 
@@ -134,9 +134,9 @@ Result<std::vector<FittedSphere>> FitTubular(const Mesh& mesh, const std::vector
 /// t ∈ [0, 1], radius = median distance to support_vertices, t minimising mean |F| over them.
 /// φ2 = MinimumEnclosingBall(support_vertices). Labels: L/R by column; T on levels between the lowest
 /// and highest vertex shared by an arm and the torso (else the level nearest that band); D on the
-/// bottom level. `seg` must match the mesh (#T); it orients left/right and finds the shoulders.
+/// bottom level. `seg` must match the mesh (\#T); it orients left/right and finds the shoulders.
 /// Errors: kFit (empty torso, rays odd or < 8, N_s ≠ 2, PD outside [0, 0.9], δ ≤ 0, segmentation
-/// size mismatch, no level with a closed cross-section). Cost: ~#levels × N_r × #triangles crossing a
+/// size mismatch, no level with a closed cross-section). Cost: ~\#levels × N_r × \#triangles crossing a
 /// level ray tests; allocates.
 Result<std::vector<FittedSphere>> FitTorso(const Mesh& mesh, const std::vector<uint32_t>& torso_triangles,
                                            const Segmentation& seg, const FitParams& params,
@@ -182,10 +182,10 @@ Result<std::vector<FittedSphere>> FitTorso(const Mesh& mesh, const std::vector<u
 /// (within half a radius of it: both), T when the sphere spans a height of the arm–torso junction, D
 /// when its bottom is below the top of the leg–torso junction (each label given to at least one
 /// sphere); level = −1, column by side. center = center_phi1 = center_phi2.
-/// `mesh`: bind pose, model space; `seg` must match it (#T). Errors: kFit (parameters out of range,
+/// `mesh`: bind pose, model space; `seg` must match it (\#T). Errors: kFit (parameters out of range,
 /// segmentation size mismatch, a mesh that encloses almost no volume, a region with triangles but no
-/// interior voxel or no sphere, a voxelisation error). A region without triangles gets no sphere. Cost: O(#T log #T + #voxels + Σ candidate ball voxels
-/// × lazy re-evaluations + #uncovered limb vertices × (one ray and one closest-point query + the vertices
+/// interior voxel or no sphere, a voxelisation error). A region without triangles gets no sphere. Cost: O(\#T log \#T + \#voxels + Σ candidate ball voxels
+/// × lazy re-evaluations + \#uncovered limb vertices × (one ray and one closest-point query + the vertices
 /// within a ball's reach)); allocates ~8 bytes a voxel of the bounding box. Adds "fit.cover.*" timings.
 /// Deterministic on any number of cores (fixed chunks; the medial balls are computed per vertex).
 /// The skin pass's budget FitCover uses: params.skin_spheres when >= 0, else (FitParams::kSkinSpheresByLayout)

@@ -48,7 +48,7 @@ struct PlausibilityLimits {
 /// Runs every check that applies: the limb/head/trunk checks on `seg` of `mesh` (valid, as after
 /// Segment); OUTSIDE when `coverage` is given [opt]; SEG-AGREE when `agreement` is given [opt] (a rigged
 /// body compared with its geometry segmentation). Empty = plausible. Units: relative to the body height
-/// along Mesh::up_axis. Cost O(#V + #T) plus the welded graph (segment_internal.h); allocates; pure.
+/// along Mesh::up_axis. Cost O(\#V + \#T) plus the welded graph (segment_internal.h); allocates; pure.
 std::vector<PlausibilityFinding> CheckPlausibility(const Mesh& mesh, const Segmentation& seg,
                                                    const CoverageStats* coverage,
                                                    const SegmentationAgreement* agreement,

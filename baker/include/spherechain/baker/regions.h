@@ -17,8 +17,8 @@ namespace spherechain::baker {
 /// A sphere may own no triangle (deep inside, another sphere always nearer): its pivots then come from
 /// its neighbourhood (ChoosePivots).
 struct SurroundingRegions {
-  std::vector<uint16_t> triangle_spheres;  ///< #T, owning sphere per triangle
-  std::vector<uint32_t> offsets;           ///< #S+1 into `triangles`
+  std::vector<uint16_t> triangle_spheres;  ///< \#T, owning sphere per triangle
+  std::vector<uint32_t> offsets;           ///< \#S+1 into `triangles`
   std::vector<uint32_t> triangles;         ///< triangle indices grouped by sphere, ascending in a group
   /// Vertex indices of sphere s's surrounding region (unique, ascending), for accuracy and φ2.
   std::vector<uint32_t> Vertices(const Mesh& mesh, size_t sphere) const;
@@ -27,7 +27,7 @@ struct SurroundingRegions {
   /// triangles behind the sphere when the proxy reports it (Asset.reach_offsets / reach_triangles: a
   /// narrow phase restricted to the proxy's pairs tests them). They overlap: a triangle near two spheres
   /// is behind both; `triangle_spheres` still names its one owner.
-  std::vector<uint32_t> reach_offsets;    ///< #S+1 into `reach_triangles`
+  std::vector<uint32_t> reach_offsets;    ///< \#S+1 into `reach_triangles`
   std::vector<uint32_t> reach_triangles;  ///< triangle indices grouped by sphere, ascending in a group
 };
 
@@ -36,7 +36,7 @@ struct SurroundingRegions {
 /// reach the skin: the sphere that reaches the triangle owns it).
 enum class Ownership : uint8_t { kNearestCentre, kNearestSurface };
 
-/// Assigns every triangle to a sphere. Cost: O(#T · spheres per region). Errors: kFit when there is no
+/// Assigns every triangle to a sphere. Cost: O(\#T · spheres per region). Errors: kFit when there is no
 /// sphere at all.
 Result<SurroundingRegions> BuildSurroundingRegions(const Mesh& mesh, const Segmentation& seg,
                                                    const std::vector<FittedSphere>& spheres,
@@ -48,20 +48,20 @@ Result<SurroundingRegions> BuildSurroundingRegions(const Mesh& mesh, const Segme
 /// several centimetres across touches the skin of two or three spheres; owned by the one nearest its
 /// centroid, its contact is behind that sphere only, while another of them is the one that overlaps
 /// (CesiumMan's arms against the flank). Spheres with no region (kNoRegion) keep their surrounding
-/// region. Cost: O(#T · spheres per region). Deterministic.
+/// region. Cost: O(\#T · spheres per region). Deterministic.
 void AddReachRegions(const Mesh& mesh, const Segmentation& seg, const std::vector<FittedSphere>& spheres, double reach,
                      SurroundingRegions* regions);
 
 /// Four pivot polygons per sphere (§5.1, Figure 9 right) and their bind-pose frame data.
 struct Pivots {
-  std::vector<uint32_t> triangles;  ///< #S×4 triangle indices
-  std::vector<uint32_t> vertices;   ///< #S×4×3 vertex indices of those triangles
+  std::vector<uint32_t> triangles;  ///< \#S×4 triangle indices
+  std::vector<uint32_t> vertices;   ///< \#S×4×3 vertex indices of those triangles
   struct Frame {
     std::array<float, 3> local_center{};     ///< centre in the pivot frame (runtime BuildPivotFrame)
     std::array<float, 3> centroid_offset{};  ///< centre − mean of the pivot centroids
     float mean_distance = 0.0f;              ///< mean ‖c − p_k‖ over the four pivot centroids
   };
-  std::vector<Frame> frames;  ///< #S
+  std::vector<Frame> frames;  ///< \#S
   /// What the refinement against training poses did (ChoosePivots `training`; zeros without it).
   struct Training {
     uint32_t poses = 0;            ///< poses the choice was weighed against
@@ -74,7 +74,7 @@ struct Pivots {
 /// What ChoosePivots weighs its choice against: random poses of the character's own rig
 /// (SampleTrainingPoses), over which a choice should keep the sphere where the skin around it goes.
 struct PivotTraining {
-  /// #P buffers of #V×3 (model space, source units); not owned, read during ChoosePivots only. Any buffer of
+  /// \#P buffers of \#V×3 (model space, source units); not owned, read during ChoosePivots only. Any buffer of
   /// another size, or none, leaves the geometric choice as it is (Pivots::training stays zero).
   const std::vector<std::vector<float>>* poses = nullptr;
   /// The skin a sphere answers for: the vertices within `witness_reach` of its bind surface
@@ -100,7 +100,7 @@ struct PivotTraining {
 /// mean_i |ΔF_i| + max(0, max_i ΔF_i), with F_i = r − ‖c − v_i‖ over the sphere's witness vertices
 /// (the paper's accuracy measure F, §3.2, bind vs refit pose) and the refit exactly as the runtime's
 /// kPivotFrame (refit.h). Our method (no published source); the error is the paper's F. Cost:
-/// O(#S · 64 · #P · witnesses ≤ 192), on all cores; deterministic.
+/// O(\#S · 64 · \#P · witnesses ≤ 192), on all cores; deterministic.
 Result<Pivots> ChoosePivots(const Mesh& mesh, const std::vector<FittedSphere>& spheres,
                             const SurroundingRegions& surrounding, const Segmentation* segmentation = nullptr,
                             const PivotTraining* training = nullptr);
@@ -108,9 +108,9 @@ Result<Pivots> ChoosePivots(const Mesh& mesh, const std::vector<FittedSphere>& s
 /// Skin weights of every sphere's centre, for the refit from joint matrices (schema v3
 /// Asset.joint_count / sphere_joints / sphere_joint_weights; runtime JointRefitJob).
 struct CentreWeights {
-  uint32_t joint_count = 0;    ///< #J, the skin's joints
-  std::vector<uint16_t> joints;  ///< #S×4 joint indices, by descending weight (ties: lower index)
-  std::vector<float> weights;    ///< #S×4, >= 0, each sphere's four summing to 1; unused: joint 0, 0
+  uint32_t joint_count = 0;    ///< \#J, the skin's joints
+  std::vector<uint16_t> joints;  ///< \#S×4 joint indices, by descending weight (ties: lower index)
+  std::vector<float> weights;    ///< \#S×4, >= 0, each sphere's four summing to 1; unused: joint 0, 0
 };
 
 /// Derivation: the mean of the skin weights (Skin rows) over the distinct vertices of sphere s's

@@ -10,14 +10,14 @@
 namespace spherechain::baker {
 
 struct Segmentation {
-  std::vector<uint8_t> triangle_regions;  ///< #T, Region value per triangle (never kNoRegion on success)
-  std::vector<uint8_t> vertex_regions;    ///< #V, Region per vertex (kNoRegion for unreferenced vertices)
+  std::vector<uint8_t> triangle_regions;  ///< \#T, Region value per triangle (never kNoRegion on success)
+  std::vector<uint8_t> vertex_regions;    ///< \#V, Region per vertex (kNoRegion for unreferenced vertices)
   std::string method;                     ///< "rig", "geometry", "map" or "skeleton"
   std::string notes;                      ///< human-readable diagnostics (pose found, cut heights, ...)
   /// What the region values mean: the paper's five (rig, geometry, a plain map) or a creature's limbs
   /// and trunk (skeleton; a map that names its regions).
   RegionLayout layout;
-  /// The any-skeleton path: the region of each skin joint (#joints, Skin::joints order; a bone of no limb
+  /// The any-skeleton path: the region of each skin joint (\#joints, Skin::joints order; a bone of no limb
   /// is the trunk's); empty for the other methods. ChoosePivots (regions.h) puts a creature's pivots on
   /// skin its own region's bones move.
   std::vector<uint8_t> joint_regions;
@@ -59,11 +59,11 @@ struct SkeletonOptions {
 /// Errors: kSegmentation "segment (skeleton): the mesh has no skin: ..." (no rig), "segment (skeleton): no
 /// recognisable limbs: ..." (fewer than three weighted bones, no junction, more than kMaxRegions − 1
 /// limbs, a trunk or fewer than two limbs left with triangles) — the message names the bones.
-/// Cost O(#V·influences + #bones + #T·#regions) plus MakeLimbsConnected; allocates.
+/// Cost O(\#V·influences + \#bones + \#T·\#regions) plus MakeLimbsConnected; allocates.
 Result<Segmentation> SegmentBySkeleton(const Mesh& mesh, const SkeletonOptions& options = {}, Context* ctx = nullptr);
 
-/// Reads a user region map: a JSON file {"triangle_regions": [r0, r1, ...]} with #T values, or
-/// {"vertex_regions": [...]} with #V values (a triangle takes its vertices' majority). A value is a region
+/// Reads a user region map: a JSON file {"triangle_regions": [r0, r1, ...]} with \#T values, or
+/// {"vertex_regions": [...]} with \#V values (a triangle takes its vertices' majority). A value is a region
 /// index, its symbol ("R2") or its name ("left_leg"); the regions are the paper's five, or with
 /// "regions": ["Tail", "Leg_L", ..., "trunk"] (3..kMaxRegions unique names, the trunk last) a creature's
 /// layout (limbs paired left/right by name, trunk_axis measured).
@@ -86,14 +86,14 @@ const char* ExtremityName(Extremity e);
 enum class ExtremityMethod : uint8_t { kAuto, kRig, kGeometry };
 
 struct ExtremitySplit {
-  std::vector<uint8_t> triangle_parts;  ///< #T, Extremity per triangle (kNone: stays in its region)
+  std::vector<uint8_t> triangle_parts;  ///< \#T, Extremity per triangle (kNone: stays in its region)
   /// Per Extremity value (index 1..5): "rig", "geometry", or empty when the part was not found.
   std::array<std::string, kExtremityCount + 1> method;
   std::string notes;  ///< cut positions and triangle counts, for the report
 };
 
 /// Cuts head, hands and feet out of a five-region segmentation `seg` (bind pose, standing along
-/// Mesh::up_axis; `seg` must match the mesh, #T). A hand / foot is only ever cut from its own arm /
+/// Mesh::up_axis; `seg` must match the mesh, \#T). A hand / foot is only ever cut from its own arm /
 /// leg, the head from the torso.
 /// - rig (kAuto, kRig; hands and feet): triangles whose corners' skin weights are more than half on
 ///   bones named like the part (hand, wrist, finger, thumb, metacarpal, palm / foot, toe, ankle, heel,
@@ -106,7 +106,7 @@ struct ExtremitySplit {
 ///   part must widen past the cut (by 1.2× for a palm, 1.3× for a foot or a head), else it is not
 ///   there (CesiumMan's mitten arms have no hands). A triangle is beyond the cut when two corners are.
 /// Errors: kSegmentation when `seg` does not match the mesh. A part that cannot be found is left in
-/// its region (ExtremitySplit::method empty; `notes` says why). Cost O(#V log #V + #T); allocates.
+/// its region (ExtremitySplit::method empty; `notes` says why). Cost O(\#V log \#V + \#T); allocates.
 Result<ExtremitySplit> SplitExtremities(const Mesh& mesh, const Segmentation& seg,
                                         ExtremityMethod method = ExtremityMethod::kAuto, Context* ctx = nullptr);
 
@@ -117,13 +117,13 @@ Result<ExtremitySplit> SplitExtremities(const Mesh& mesh, const Segmentation& se
 /// and feet mirror each other and hang off their arm / leg (RegionInfo::parent), the head off the torso.
 /// A part that was not found stays in its region. Segmentation::vertex_regions is recomputed and a
 /// summary appended to `notes`. Errors: kSegmentation when `seg` is not the paper's five regions or
-/// `split` does not match it (#T). No-op (Ok) when nothing was found.
+/// `split` does not match it (\#T). No-op (Ok) when nothing was found.
 Status ApplyExtremities(const Mesh& mesh, const ExtremitySplit& split, Segmentation* seg);
 
 /// Fraction of triangles (area-weighted) on which two segmentations agree, overall and per region
 /// (IoU per region). Both must have the same triangle count.
 struct SegmentationAgreement {
-  double triangle_fraction = 0.0;            ///< agreeing triangles / #T
+  double triangle_fraction = 0.0;            ///< agreeing triangles / \#T
   double area_fraction = 0.0;                ///< agreeing area / total area
   std::array<double, kRegionCount> iou{};    ///< per region: |A∩B| / |A∪B| by triangle count
 };

@@ -25,9 +25,9 @@ struct TrainingPoseOptions {
 /// (Σ_j w_j · G'(node_j) · inverse_bind_j · v, G' the posed global transforms). A vertex without
 /// influence stays where it is. The poses are no animation of the character: they are a spread of the
 /// bends its rig allows, for the baker to prefer what tracks the skin under any of them (ChoosePivots).
-/// Returns #poses buffers of #V×3 floats (model space, source units). An unskinned mesh, or a skin whose
+/// Returns \#poses buffers of \#V×3 floats (model space, source units). An unskinned mesh, or a skin whose
 /// weight rows do not match the vertices, gives none (no error: the callers then keep the geometric
-/// choice). Cost: O(count · (#nodes + Σ influences)), count × #V × 12 bytes. Deterministic.
+/// choice). Cost: O(count · (\#nodes + Σ influences)), count × \#V × 12 bytes. Deterministic.
 std::vector<std::vector<float>> SampleTrainingPoses(const Mesh& mesh, const TrainingPoseOptions& options = {});
 
 }  // namespace spherechain::baker

@@ -26,7 +26,7 @@ struct AssetInputs {
   const Mesh* mesh = nullptr;
   const Segmentation* segmentation = nullptr;
   const FitResult* fit = nullptr;
-  const std::vector<Ball>* phi2 = nullptr;  ///< #S
+  const std::vector<Ball>* phi2 = nullptr;  ///< \#S
   const std::vector<Chain>* chains = nullptr;
   const std::vector<SpherePair>* excluded = nullptr;
   const SurroundingRegions* surrounding = nullptr;

@@ -13,24 +13,24 @@ namespace spherechain::cuda {
 /// the DeviceAsset's destruction). The values are runtime::Model's arrays (ModelArrays), the same floats, so
 /// the device evaluates the same formulas (spherechain/runtime/formulas.h) on the same inputs:
 struct DeviceAssetDesc {
-  const uint32_t* pivot_vertices = nullptr;  ///< #S×12: vertex indices (< #V) of the 4 pivot triangles
+  const uint32_t* pivot_vertices = nullptr;  ///< \#S×12: vertex indices (< \#V) of the 4 pivot triangles
                                              ///< (Asset.pivot_vertices)
-  const float4* frame_local = nullptr;       ///< #S: (PivotFrame.local_center xyz, bind radius /
+  const float4* frame_local = nullptr;       ///< \#S: (PivotFrame.local_center xyz, bind radius /
                                              ///< PivotFrame.mean_distance)
-  const float4* frame_offset = nullptr;      ///< #S: (PivotFrame.centroid_offset xyz, 0)
-  const float4* bind = nullptr;              ///< #S: bind spheres (centre xyz, radius) (Asset.spheres)
-  const uint32_t* chain_mask = nullptr;      ///< #S: bit c ⇔ sphere in Asset.chains[c]
-  const uint32_t* chain_offsets = nullptr;   ///< #C+1 into chain_spheres
+  const float4* frame_offset = nullptr;      ///< \#S: (PivotFrame.centroid_offset xyz, 0)
+  const float4* bind = nullptr;              ///< \#S: bind spheres (centre xyz, radius) (Asset.spheres)
+  const uint32_t* chain_mask = nullptr;      ///< \#S: bit c ⇔ sphere in Asset.chains[c]
+  const uint32_t* chain_offsets = nullptr;   ///< \#C+1 into chain_spheres
   const uint16_t* chain_spheres = nullptr;   ///< Σ|chain|, each chain ascending
-  const uint32_t* excl_offsets = nullptr;    ///< #S+1 into excl_neighbors (CSR by the smaller index a)
-  const uint16_t* excl_neighbors = nullptr;  ///< #excluded: partners b > a, ascending per a
-  const uint8_t* sphere_regions = nullptr;   ///< #S: each sphere's region (Asset.sphere_regions), only when the
+  const uint32_t* excl_offsets = nullptr;    ///< \#S+1 into excl_neighbors (CSR by the smaller index a)
+  const uint16_t* excl_neighbors = nullptr;  ///< \#excluded: partners b > a, ascending per a
+  const uint8_t* sphere_regions = nullptr;   ///< \#S: each sphere's region (Asset.sphere_regions), only when the
                                              ///< asset has a fold margin (fold_margin >= 0); else null
-  uint32_t sphere_count = 0;                 ///< #S (1..65535)
-  uint32_t vertex_count = 0;                 ///< #V the positions must have
-  uint32_t chain_count = 0;                  ///< #C (0..32)
+  uint32_t sphere_count = 0;                 ///< \#S (1..65535)
+  uint32_t vertex_count = 0;                 ///< \#V the positions must have
+  uint32_t chain_count = 0;                  ///< \#C (0..32)
   uint32_t max_chain_length = 0;             ///< longest chain (spheres)
-  uint32_t excluded_count = 0;               ///< #excluded (len(Asset.excluded_pairs))
+  uint32_t excluded_count = 0;               ///< \#excluded (len(Asset.excluded_pairs))
   float contact_margin = 0.0f;               ///< the asset's contact margin [Units: source units]
                                              ///< (Asset.contact_margin, schema v2; 0 for v1 assets), as
                                              ///< runtime::Model::contact_margin(): the margin
@@ -62,7 +62,7 @@ class DeviceAsset {
   /// model nor the asset bytes are needed afterwards.
   /// Returns kOk; kErrorNullArgument (model not initialised); kErrorOutOfMemory (host/device allocation);
   /// kErrorCuda (LastCudaError()). On failure the object is left empty.
-  /// Cost: O(#S + Σ|chain| + #excluded) host work, ~100 B per sphere of device memory, synchronous.
+  /// Cost: O(\#S + Σ|chain| + \#excluded) host work, ~100 B per sphere of device memory, synchronous.
   /// Must not be called while a Batch referencing this asset runs (it frees the old copy).
   Status Upload(const runtime::Model& model);
   /// Frees the device memory (cudaFree, synchronising). Safe on an empty object.
@@ -72,9 +72,9 @@ class DeviceAsset {
   bool valid() const { return storage_ != nullptr; }
   /// Device pointers + counts (see DeviceAssetDesc); all null/0 when empty.
   const DeviceAssetDesc& desc() const { return desc_; }
-  uint32_t sphere_count() const { return desc_.sphere_count; }  ///< #S
-  uint32_t vertex_count() const { return desc_.vertex_count; }  ///< #V
-  uint32_t chain_count() const { return desc_.chain_count; }    ///< #C
+  uint32_t sphere_count() const { return desc_.sphere_count; }  ///< \#S
+  uint32_t vertex_count() const { return desc_.vertex_count; }  ///< \#V
+  uint32_t chain_count() const { return desc_.chain_count; }    ///< \#C
   /// The asset's contact margin (DeviceAssetDesc::contact_margin) [Units: source units]; 0 when empty.
   float contact_margin() const { return desc_.contact_margin; }
   /// The asset's fold margin (DeviceAssetDesc::fold_margin) [Units: source units]; < 0: none (also when empty).

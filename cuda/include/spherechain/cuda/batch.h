@@ -20,7 +20,7 @@ enum class Strategy : uint8_t {
   kAuto = 0,
   /// A block per instance, a thread per sphere: thread a refits sphere a into shared memory, then
   /// tests it against every higher-index sphere b > a (M1: only b sharing a chain with a). The paper's
-  /// M2 GPU mapping. Block size = #S rounded up to 32, at most 256 (larger #S: threads loop).
+  /// M2 GPU mapping. Block size = \#S rounded up to 32, at most 256 (larger \#S: threads loop).
   kThreadPerSphere = 1,
   /// M1 only: a block per (instance, chain), a thread per chain sphere: the block refits its chain's
   /// spheres into shared memory (a sphere in k chains is refitted k times), thread i tests chain
@@ -41,7 +41,7 @@ struct Instance {
   /// Read by every Batch::Run; must stay valid (and be written by the caller's skinning before Run
   /// on the same stream, or synchronised) for as long as the batch runs.
   const void* positions = nullptr;
-  uint32_t vertex_count = 0;   ///< #V [Limit: == the asset's vertex_count, else kErrorVertexCount]
+  uint32_t vertex_count = 0;   ///< \#V [Limit: == the asset's vertex_count, else kErrorVertexCount]
   uint32_t stride_bytes = 12;  ///< [Limit: >= 12, multiple of 4, else kErrorStride]
   uint32_t asset = 0;          ///< slot in the `assets` array passed to Batch::Init [Limit: < asset_count]
 };
@@ -84,7 +84,7 @@ struct HostResults {
   std::vector<BatchCollision> pairs;     ///< min(total, capacity) records, in no particular order
   std::vector<uint32_t> instance_counts; ///< per instance: distinct overlapping non-excluded pairs
                                          ///< (complete even when the output overflowed)
-  std::vector<float4> spheres;           ///< Σ#S (when FrameParams::write_spheres; else empty)
+  std::vector<float4> spheres;           ///< Σ\#S (when FrameParams::write_spheres; else empty)
   uint32_t total = 0;                    ///< Σ instance_counts (may exceed capacity)
   bool overflow = false;                 ///< total > capacity: `pairs` holds an arbitrary subset
 };
@@ -120,7 +120,7 @@ class Batch {
   /// Returns kOk; kErrorNullArgument; kErrorInvalidJob (asset slot out of range, asset not uploaded,
   /// counts out of limits); kErrorAlignment / kErrorStride / kErrorVertexCount (the first bad
   /// instance; the batch is left empty); kErrorOutOfMemory; kErrorCuda.
-  /// Cost: O(#assets + N) host work, allocations, synchronous copies.
+  /// Cost: O(\#assets + N) host work, allocations, synchronous copies.
   Status Init(const DeviceAsset* const* assets, uint32_t asset_count, const Instance* instances,
               uint32_t instance_count, uint32_t capacity = 0);
 
@@ -159,7 +159,7 @@ class Batch {
   bool initialized() const { return instance_count_ != 0; }       ///< after a successful Init
   uint32_t instance_count() const { return instance_count_; }     ///< N
   uint32_t capacity() const { return capacity_; }                 ///< records in pairs()
-  uint32_t total_spheres() const { return total_spheres_; }       ///< Σ#S over instances
+  uint32_t total_spheres() const { return total_spheres_; }       ///< Σ\#S over instances
   /// Index of instance i's first sphere in spheres(). [Limit: i < N]
   uint32_t sphere_offset(uint32_t i) const { return sphere_offsets_[i]; }
   const BatchCollision* pairs() const { return pairs_; }  ///< DEVICE, [capacity]

@@ -14,8 +14,8 @@
 
 namespace spherechain::import {
 
-/// Source fingerprint (schema Fingerprint): counts and XXH3-64 of the bind positions (#V×3 float32)
-/// and indices (#T×3 uint32) as read.
+/// Source fingerprint (schema Fingerprint): counts and XXH3-64 of the bind positions (\#V×3 float32)
+/// and indices (\#T×3 uint32) as read.
 struct Fingerprint {
   uint32_t vertex_count = 0;
   uint32_t triangle_count = 0;
@@ -24,10 +24,10 @@ struct Fingerprint {
 };
 Fingerprint ComputeFingerprint(const Mesh& mesh);
 
-/// Weld ids (schema Asset.weld_ids) of bind positions `positions` (#V×3): for every vertex the lowest
+/// Weld ids (schema Asset.weld_ids) of bind positions `positions` (\#V×3): for every vertex the lowest
 /// vertex index whose position compares equal (==, so +0 and −0 weld) — UV seams and triangle soups
 /// get the adjacency a narrow phase needs to skip triangles that share a corner. Nothing is merged:
-/// the index buffer keeps the source's vertices. Cost O(#V log #V), deterministic.
+/// the index buffer keeps the source's vertices. Cost O(\#V log \#V), deterministic.
 std::vector<uint32_t> ComputeWeldIds(const std::vector<float>& positions);
 
 /// XXH3-64 of arbitrary bytes (the canonical bake configuration, ...).

@@ -32,7 +32,7 @@ struct MeshIssues {
   uint32_t non_manifold_edges = 0;
 };
 
-/// Counts the MeshIssues of a mesh that passed ValidateMesh. O(#T log #T), allocates.
+/// Counts the MeshIssues of a mesh that passed ValidateMesh. O(\#T log \#T), allocates.
 MeshIssues InspectMesh(const Mesh& mesh);
 
 /// Which vertex buffer an assimp-format character is read as (README "Vertex contract"); the asset's
@@ -71,8 +71,8 @@ struct ImportOptions {
 /// - every other extension: assimp, triangulated, and with `options.vertices` joined (the default)
 ///   aiProcess_JoinIdenticalVertices, nothing else that welds or reorders; meshes concatenated in
 ///   depth-first node order, then mesh order in the node. Mesh::source_vertex_count and
-///   joined_vertex_count hold #V under both contracts (one read, the join applied after counting).
-///   Cost: the join is O(#V log #V) in assimp. Mesh::up_axis: +Y (assimp's convention) unless the
+///   joined_vertex_count hold \#V under both contracts (one read, the join applied after counting).
+///   Cost: the join is O(\#V log \#V) in assimp. Mesh::up_axis: +Y (assimp's convention) unless the
 ///   file declares another (assimp's "UpAxis" scene metadata, e.g. FBX); a `.blend` is +Z (Blender's
 ///   world axis, which assimp's Blender reader keeps).
 /// - MakeHuman `base.obj`: only group `obj_group` ("body"); its vertices are the OBJ's vertices in file

@@ -221,7 +221,7 @@ struct SkinJoint {
 struct Skin {
   std::vector<Node> nodes;
   std::vector<SkinJoint> joints;
-  std::vector<uint32_t> weight_offsets;  ///< #V+1
+  std::vector<uint32_t> weight_offsets;  ///< \#V+1
   std::vector<uint32_t> weight_joints;   ///< index into joints
   std::vector<float> weights;
   std::string source;  ///< "gltf", "assimp", "mhskel"
@@ -248,8 +248,8 @@ struct Clip {
 /// The character as imported. Positions are the assembled bind pose (node transforms applied) in
 /// model space and source units; vertex and triangle order are the source's (parts concatenated).
 struct Mesh {
-  std::vector<float> positions;  ///< #V×3
-  std::vector<uint32_t> indices;  ///< #T×3, counter-clockwise as in the source
+  std::vector<float> positions;  ///< \#V×3
+  std::vector<uint32_t> indices;  ///< \#T×3, counter-clockwise as in the source
   std::vector<MeshPart> parts;
   std::string source_path;
   std::string source_format;  ///< "gltf", "obj", "x", "fbx", ...
@@ -261,7 +261,7 @@ struct Mesh {
   /// The vertex contract the importer applied (import.h VertexContract): "joined" or "source" for the
   /// assimp formats, "file" for glTF / OBJ (the file's own buffer, which is what engines upload).
   std::string vertex_contract = "file";
-  /// assimp formats: #V under each contract (the same file read both ways); 0 for the other formats.
+  /// assimp formats: \#V under each contract (the same file read both ways); 0 for the other formats.
   /// Lets a mismatch message say which contract a game's buffer looks like (Asset.*_vertex_count).
   uint32_t source_vertex_count = 0;
   uint32_t joined_vertex_count = 0;

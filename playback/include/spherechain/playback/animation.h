@@ -60,7 +60,7 @@ std::array<float, 3> QuatRotate(const Quat& q, const std::array<float, 3>& v);
 
 // ---- poses and clips → local transforms -----------------------------------------------------------
 
-/// Every node's rest (bind-time) local transform, in Skin::nodes order (#nodes).
+/// Every node's rest (bind-time) local transform, in Skin::nodes order (\#nodes).
 void RestLocals(const Skin& skin, std::vector<Transform>* locals);
 
 /// A static pose: local rotations that replace the rest rotation of some nodes (translation and scale
@@ -88,7 +88,7 @@ Status ValidateClip(const Skin& skin, const Clip& clip);
 /// Linear channels interpolate translation/scale linearly and rotation by QuatSlerp (shorter arc);
 /// step channels hold the last key at or before `time_s`. Before the first key the first value holds,
 /// after the last key the last value holds (no wrapping: pass fmod(t, duration) for a loop).
-/// Errors: ValidateClip's. O(#nodes + Σ log #keys); allocation only to grow `locals`.
+/// Errors: ValidateClip's. O(\#nodes + Σ log \#keys); allocation only to grow `locals`.
 Status SampleClip(const Skin& skin, const Clip& clip, float time_s, std::vector<Transform>* locals);
 
 // ---- local transforms → skinning matrices → deformed positions --------------------------------------
@@ -99,18 +99,18 @@ Matrix4 TransformMatrix(const Transform& t);
 Matrix4 MatrixMultiply(const Matrix4& a, const Matrix4& b);
 
 /// Node globals (model space): Global(n) = Global(parent)·Local(n), roots Local(n). Each product in double,
-/// stored as float. Errors: kConfig when `locals.size()` != #nodes or a parent index is not < n.
+/// stored as float. Errors: kConfig when `locals.size()` != \#nodes or a parent index is not < n.
 Status GlobalMatrices(const Skin& skin, const std::vector<Transform>& locals, std::vector<Matrix4>* globals);
 
-/// Skinning matrices M_j = Global(node_j)·inverse_bind_j (#joints), bind model space → posed model
+/// Skinning matrices M_j = Global(node_j)·inverse_bind_j (\#joints), bind model space → posed model
 /// space; the identity for every joint at the rest pose. Errors: kConfig when `globals.size()` !=
-/// #nodes or a joint's node is out of range.
+/// \#nodes or a joint's node is out of range.
 Status SkinningMatrices(const Skin& skin, const std::vector<Matrix4>& globals, std::vector<Matrix4>* matrices);
 
-/// Linear blend skinning of `mesh.positions` (bind pose, #V×3, source units) by `matrices` (#joints)
-/// into `out` (#V×3 floats, caller-owned, `out_floats` = 3·#V; may not alias mesh.positions).
-/// Errors: kConfig when the mesh has no skin, `out` is null or `out_floats` != 3·#V, `matrices` has
-/// the wrong length, or the skin's weight rows do not match #V / reference a joint out of range.
+/// Linear blend skinning of `mesh.positions` (bind pose, \#V×3, source units) by `matrices` (\#joints)
+/// into `out` (\#V×3 floats, caller-owned, `out_floats` = 3·\#V; may not alias mesh.positions).
+/// Errors: kConfig when the mesh has no skin, `out` is null or `out_floats` != 3·\#V, `matrices` has
+/// the wrong length, or the skin's weight rows do not match \#V / reference a joint out of range.
 /// Cost: O(Σ influences); no allocation; thread-safe.
 Status SkinPositions(const Mesh& mesh, const std::vector<Matrix4>& matrices, float* out, size_t out_floats);
 
@@ -126,12 +126,12 @@ struct SkinningScratch {
 Status SkinLocals(const Mesh& mesh, const std::vector<Transform>& locals, SkinningScratch* scratch, float* out,
                   size_t out_floats);
 
-/// The whole chain for a clip: SampleClip(t) → SkinLocals into `out` (#V×3). `mesh.skin` required
+/// The whole chain for a clip: SampleClip(t) → SkinLocals into `out` (\#V×3). `mesh.skin` required
 /// (kConfig otherwise). Errors: those of SampleClip and SkinLocals.
 Status SkinClip(const Mesh& mesh, const Clip& clip, float time_s, SkinningScratch* scratch, float* out,
                 size_t out_floats);
 
-/// The whole chain for a static pose: PoseLocals → SkinLocals into `out` (#V×3).
+/// The whole chain for a static pose: PoseLocals → SkinLocals into `out` (\#V×3).
 Status SkinPose(const Mesh& mesh, const Pose& pose, SkinningScratch* scratch, float* out, size_t out_floats);
 
 /// Index of the node named `name` in `skin.nodes`, or -1.

@@ -20,10 +20,10 @@ struct AnimationRequest {
   std::vector<std::string> morph;  ///< [opt] key poses: .json files, names of poses in `poses_dir`, or folders
   bool use_morph = false;          ///< play the morph even when the mesh has clips (`morph` empty: every pose in `poses_dir`)
   std::string poses_dir;           ///< [opt] folder of the character's default key poses (see DefaultPoseCharacter)
-  uint32_t frames = 40;            ///< [Limit: > 0; >= 2 × #keys for the morph] frames to play
+  uint32_t frames = 40;            ///< [Limit: > 0; >= 2 × \#keys for the morph] frames to play
 };
 
-/// The folder name a character's default key poses live under (data/poses/<name>): "makehuman" for a
+/// The folder name a character's default key poses live under (`data/poses/<name>`): "makehuman" for a
 /// MakeHuman rig (Skin::source "mhskel"), else the stem of `mesh_name`.
 std::string DefaultPoseCharacter(const Mesh& mesh, const std::string& mesh_name);
 
@@ -47,11 +47,11 @@ struct Animation {
   float FrameTime(uint32_t f) const;
   /// Frame `f`'s label: "t=0.533s" (clip) or "arms_crossed t=0.500" (morph key and Bézier parameter).
   std::string FrameLabel(uint32_t f) const;
-  /// Every node's local transform at frame `f` (#nodes of `skin`): SampleClip, or MorphLocals of the
+  /// Every node's local transform at frame `f` (\#nodes of `skin`): SampleClip, or MorphLocals of the
   /// frame's key. Errors: those of SampleClip / MorphFrameAt / MorphLocals. Allocates only to grow `locals`.
   Status FrameLocals(const Skin& skin, uint32_t f, std::vector<Transform>* locals) const;
-  /// Deforms frame `f` of `mesh` (bind #V×3 → posed #V×3, model space, source units) into `out`
-  /// (resized to 3·#V) by linear blend skinning (SkinClip / SkinMorphFrame; `scratch->matrices` then hold
+  /// Deforms frame `f` of `mesh` (bind \#V×3 → posed \#V×3, model space, source units) into `out`
+  /// (resized to 3·\#V) by linear blend skinning (SkinClip / SkinMorphFrame; `scratch->matrices` then hold
   /// the frame's skinning matrices), and names it in `label` [opt]. Errors: those of the skinning.
   Status Frame(const Mesh& mesh, uint32_t f, SkinningScratch* scratch, std::vector<float>* out,
                std::string* label = nullptr) const;
@@ -63,7 +63,7 @@ struct Animation {
 /// pose in `poses_dir`. Errors (kConfig unless the pose loader says otherwise; the messages name the
 /// CLI's options): clip and morph both given, no skin, unknown clip (the message lists the clips), no
 /// clips and no poses folder, a pose file that does not parse (LoadPose / LoadPoseFolder), frames == 0,
-/// frames < 2 × #keys for the morph. Cost: reads the pose files.
+/// frames < 2 × \#keys for the morph. Cost: reads the pose files.
 Result<Animation> OpenAnimation(const Mesh& mesh, const AnimationRequest& request);
 
 }  // namespace spherechain::playback

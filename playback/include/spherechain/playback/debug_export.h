@@ -42,7 +42,7 @@ struct FrameSphere {
 
 /// One animation frame as a 4-panel SVG (front and side; each: mesh coloured by region with marked
 /// triangles, then the mesh in grey with marked triangles and `spheres`). `positions`: the deformed
-/// mesh, #V×3 (model space). `triangle_marks`: #T entries (shorter = unmarked), 0 none, 1 red (e.g. a
+/// mesh, \#V×3 (model space). `triangle_marks`: \#T entries (shorter = unmarked), 0 none, 1 red (e.g. a
 /// contact the proxy missed), 2 amber (a contact it found). `caption` is printed under the panels
 /// (plain text, no markup). What `spherechain evaluate --png` shows.
 std::string RenderFrameSvg(const Mesh& mesh, const runtime::AssetView& asset, const float* positions,

@@ -33,12 +33,12 @@ namespace spherechain::playback {
 /// What ExportAnimatedGltf wrote.
 struct AnimatedGltfStats {
   uint32_t frames = 0;            ///< keyframes per channel (= Animation::frames)
-  uint32_t skeleton_nodes = 0;    ///< #N (3 channels each)
-  uint32_t spheres = 0;           ///< #S (2 channels each)
-  uint32_t channels = 0;          ///< 3·#N + 2·#S
+  uint32_t skeleton_nodes = 0;    ///< \#N (3 channels each)
+  uint32_t spheres = 0;           ///< \#S (2 channels each)
+  uint32_t channels = 0;          ///< 3·\#N + 2·\#S
   uint32_t max_influences = 0;    ///< most joints on one vertex (> 4: JOINTS_1/WEIGHTS_1 ... written)
   size_t bytes = 0;               ///< size of the file written
-  std::vector<float> first_frame_spheres;  ///< frame 0's refit spheres, #S×4 (x, y, z, r), source units
+  std::vector<float> first_frame_spheres;  ///< frame 0's refit spheres, \#S×4 (x, y, z, r), source units
 };
 
 /// Writes the animated debug glTF above to `out_path`, atomically (nothing is left there on failure).
@@ -47,7 +47,7 @@ struct AnimatedGltfStats {
 /// `refit`: the runtime refit mode for the spheres (kPivotFrame is play's default).
 /// Errors: kConfig (counts differ, no skin, a joint node out of range), kFormat / kConfig from the
 /// animation's frames, kInternal (runtime refit failed: the status is named; a non-finite sphere),
-/// kIo (folder missing, write failed). Cost: one skinning + refit per frame, O(frames·(#V + #N + #S))
+/// kIo (folder missing, write failed). Cost: one skinning + refit per frame, O(frames·(\#V + \#N + \#S))
 /// memory for the file; allocates; thread-safe for distinct outputs.
 Status ExportAnimatedGltf(const Mesh& mesh, const runtime::AssetView& asset, const Animation& animation,
                           const std::string& out_path, runtime::RefitMode refit = runtime::RefitMode::kPivotFrame,

@@ -59,7 +59,7 @@ Quat QuadraticBezierRotation(const Quat& p0, const Quat& c, const Quat& p2, floa
 /// Errors: PoseLocals' (a rotation's node out of range).
 Status MorphLocals(const Skin& skin, const Pose& key, float t, std::vector<Transform>* locals);
 
-/// Frame `frame` of the morph through `keys` → deformed positions `out` (#V×3, source units, model
+/// Frame `frame` of the morph through `keys` → deformed positions `out` (\#V×3, source units, model
 /// space), via MorphFrameAt, MorphLocals and SkinLocals. Errors: those, and kConfig when `keys` is
 /// empty or the mesh has no skin.
 Status SkinMorphFrame(const Mesh& mesh, const std::vector<Pose>& keys, uint32_t frame, uint32_t frame_count,

@@ -46,11 +46,11 @@ struct PlayOptions {
   /// [Limit: finite, >= 0; otherwise Play answers kConfig]
   float narrow_behind_margin = 0.0f;
   uint32_t contact_capacity = 1u << 16;   ///< narrow-phase contacts kept per frame (more are counted, not kept)
-  bool keep_spheres = false;              ///< fill FrameReport::spheres (#S×4 per frame)
+  bool keep_spheres = false;              ///< fill FrameReport::spheres (\#S×4 per frame)
   /// [opt] called after each animation frame (not the bind pose) is skinned and measured: the frame index,
-  /// its deformed positions (#V×3, model space, source units) and, when the asset holds centre joint weights
-  /// for this skin (Asset.sphere_joints, joint_count == #joints), its skinning matrices in JointRefitJob's
-  /// layout (#J×12, row-major 3×4), else null. Borrowed for the call. A returned error stops Play with it.
+  /// its deformed positions (\#V×3, model space, source units) and, when the asset holds centre joint weights
+  /// for this skin (Asset.sphere_joints, joint_count == \#joints), its skinning matrices in JointRefitJob's
+  /// layout (\#J×12, row-major 3×4), else null. Borrowed for the call. A returned error stops Play with it.
   std::function<Status(uint32_t frame, const std::vector<float>& positions, const std::vector<float>* joint_matrices)>
       on_frame;
 };
@@ -64,7 +64,7 @@ struct FrameReport {
   /// |ΔF| of the refit spheres against the bind pose over every (sphere, surrounding-region vertex):
   /// F = r − ‖c − v‖, ΔF = F(frame) − F(bind); 0 when a sphere moves and scales exactly with its surface.
   double tracking_mean = 0, tracking_max = 0;  ///< [Units: source units]
-  std::vector<double> joint_error;  ///< kJoints: per sphere ‖c_joints − c_pivot_frame‖ / r_pivot_frame [%], #S
+  std::vector<double> joint_error;  ///< kJoints: per sphere ‖c_joints − c_pivot_frame‖ / r_pivot_frame [%], \#S
   std::vector<std::pair<int, int>> regions;  ///< region pairs (min, max) of `pairs`, sorted, each once
   std::vector<runtime::Collision> pairs;     ///< M2's colliding pairs when run, else M1's (runtime order)
   runtime::NarrowPhaseStats narrow;          ///< narrow_phase: counters
@@ -72,7 +72,7 @@ struct FrameReport {
   std::vector<runtime::TriangleContact> contacts;   ///< narrow_phase: the frame's contacts (≤ contact_capacity)
   std::vector<std::pair<int, int>> contact_regions; ///< narrow_phase: region pairs of the contacts, sorted
   uint32_t narrow_pairs = 0;                 ///< narrow_behind_margin > 0: M2's pairs the narrow phase ran behind
-  std::vector<float> spheres;  ///< keep_spheres: the refit spheres, #S×4 (x, y, z, r), source units, model space
+  std::vector<float> spheres;  ///< keep_spheres: the refit spheres, \#S×4 (x, y, z, r), source units, model space
 };
 
 /// Totals over the animation frames (the bind pose excluded).

@@ -71,8 +71,8 @@ struct ValidateNames {
 /// that its bind pose (mesh->positions, refit then M2 detect at the asset's contact margin) reports no
 /// sphere pair. Findings in a fixed order: the asset's own (forced bake findings, then by sphere, then chain), then the mesh's,
 /// then bind collisions in the runtime's documented pair order; empty = valid, no warnings.
-/// Ownership: reads `view` and `mesh` during the call only. Cost: O(#S + #chains·#S + Σ region sizes)
-/// plus, with a mesh, one fingerprint hash (O(#V + #T)), one runtime Model + Workspace Init and one refit/detect
+/// Ownership: reads `view` and `mesh` during the call only. Cost: O(\#S + \#chains·\#S + Σ region sizes)
+/// plus, with a mesh, one fingerprint hash (O(\#V + \#T)), one runtime Model + Workspace Init and one refit/detect
 /// (allocates; thread-safe for distinct arguments). Never throws except std::bad_alloc.
 std::vector<Finding> ValidateAsset(const runtime::AssetView& view, const import::Mesh* mesh,
                                    const ValidateNames& names = {});

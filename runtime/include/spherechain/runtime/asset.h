@@ -47,9 +47,9 @@ inline constexpr uint32_t kPivotsPerSphere = 4;
 struct AssetView {
   /// Root table of the FlatBuffer (schemas/spherechain.fbs `Asset`); null when not loaded.
   const schema::Asset* asset = nullptr;
-  uint32_t sphere_count = 0;    ///< #S = len(Asset.spheres), 1..kMaxSpheres.
-  uint32_t vertex_count = 0;    ///< #V = Asset.fingerprint.vertex_count (the game's vertex buffer length).
-  uint32_t triangle_count = 0;  ///< #T = Asset.fingerprint.triangle_count.
+  uint32_t sphere_count = 0;    ///< \#S = len(Asset.spheres), 1..kMaxSpheres.
+  uint32_t vertex_count = 0;    ///< \#V = Asset.fingerprint.vertex_count (the game's vertex buffer length).
+  uint32_t triangle_count = 0;  ///< \#T = Asset.fingerprint.triangle_count.
   uint32_t chain_count = 0;     ///< len(Asset.chains), 0..kMaxChains.
 
   /// True after a successful LoadAsset.
@@ -59,7 +59,7 @@ struct AssetView {
 /// Loads (checks, does not copy) a .sphc asset.
 ///
 /// @param bytes  the whole file. [Limit: 8-byte aligned — the buffer holds uint64 fields and the
-///               accessors read them in place; memory from new/malloc/std::vector<uint8_t> or an
+///               accessors read them in place; memory from new/malloc/`std::vector<uint8_t>` or an
 ///               mmap satisfies this] Borrowed for the lifetime of `*out`.
 /// @param size   [bytes] [Limit: 8..kMaxAssetBytes]
 /// @param out    receives the view; reset to an empty view on every failure.
@@ -73,17 +73,17 @@ struct AssetView {
 ///  2. flatbuffers::Verifier (alignment checked, max depth 8 — the schema nests 3 deep — and max
 ///     tables 16 + 1024 chains + 65536 mesh parts + 256 forced bake findings + 256 regions): kErrorCorrupt;
 ///  3. semantics: kErrorMissingField, kErrorNoSpheres, kErrorTooManySpheres, kErrorTooManyChains,
-///     kErrorCountMismatch (#S in spheres, pivot_frames, 4·#S pivot_triangles, 12·#S pivot_vertices,
-///     #S+1 surrounding_offsets, optional spheres_phi1/phi2/sphere_regions/sphere_labels; #T in
+///     kErrorCountMismatch (\#S in spheres, pivot_frames, 4·\#S pivot_triangles, 12·\#S pivot_vertices,
+///     \#S+1 surrounding_offsets, optional spheres_phi1/phi2/sphere_regions/sphere_labels; \#T in
 ///     optional triangle_regions/triangle_spheres; pivots_per_sphere == 4 when params present),
-///     kErrorIndexOutOfRange (chain / excluded-pair / triangle_spheres sphere indices < #S,
-///     surrounding / pivot triangles < #T, pivot vertices < #V, optional `triangles` indices < #V —
-///     3·#T of them, else kErrorCountMismatch —, optional `weld_ids`: #V entries, weld_ids[v] <= v and
+///     kErrorIndexOutOfRange (chain / excluded-pair / triangle_spheres sphere indices < \#S,
+///     surrounding / pivot triangles < \#T, pivot vertices < \#V, optional `triangles` indices < \#V —
+///     3·\#T of them, else kErrorCountMismatch —, optional `weld_ids`: \#V entries, weld_ids[v] <= v and
 ///     weld_ids[weld_ids[v]] == weld_ids[v], else kErrorIndexOutOfRange), kErrorOffsets, kErrorNonFinite,
 ///     kErrorRadius, kErrorPivotFrame, kErrorChainOrder, kErrorExcludedPairs, kErrorContactMargin
 ///     (contact_margin < 0; NaN or inf: kErrorNonFinite), the optional fold_margin (NaN or inf:
 ///     kErrorNonFinite; >= 0 without sphere_regions: kErrorMissingField), and the optional v3 joint weights:
-///     sphere_joints and sphere_joint_weights both present or both absent, 4·#S each
+///     sphere_joints and sphere_joint_weights both present or both absent, 4·\#S each
 ///     (kErrorCountMismatch), joint indices < joint_count (kErrorIndexOutOfRange), weights finite,
 ///     >= 0 and summing to 1 ± 1e-3 per sphere (kErrorSkinWeights); the optional v4 regions: 2 to
 ///     kMaxRegions, exactly one Trunk and it the last, every sphere_regions / triangle_regions value below
@@ -93,7 +93,7 @@ struct AssetView {
 /// Untrusted input: every truncated prefix and bit flip returns an error, never crashes (tested).
 Status LoadAsset(const void* bytes, size_t size, AssetView* out);
 
-/// Span of triangle indices (into the source mesh's triangle order, < #T).
+/// Span of triangle indices (into the source mesh's triangle order, < \#T).
 struct TriangleSpan {
   const uint32_t* data = nullptr;  ///< Borrowed from the asset bytes; null when count == 0.
   uint32_t count = 0;
@@ -125,7 +125,7 @@ const char* RegionName(const AssetView& view, uint32_t region);
 /// True for the trunk (a creature's Trunk region, the paper's R4 torso). Cost O(1).
 bool IsTrunkRegion(const AssetView& view, uint32_t region);
 
-/// The four pivot triangles of `sphere` (Asset.pivot_triangles[4·sphere ..]), each < #T; empty span
+/// The four pivot triangles of `sphere` (Asset.pivot_triangles[4·sphere ..]), each < \#T; empty span
 /// on out-of-range `sphere`. Cost O(1). Lifetime: the asset bytes.
 TriangleSpan PivotTriangles(const AssetView& view, uint32_t sphere);
 

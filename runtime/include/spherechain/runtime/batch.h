@@ -22,7 +22,7 @@ enum class RefitSource : uint8_t {
 struct CharacterFrame {
   Workspace* workspace = nullptr;         ///< made for the batch's model; spheres overwritten
   PositionsView positions;                ///< RefitSource::kVertices: this frame's deformed vertices
-  const float* joint_matrices = nullptr;  ///< RefitSource::kJoints: #J × 12 floats (see JointRefitJob)
+  const float* joint_matrices = nullptr;  ///< RefitSource::kJoints: \#J × 12 floats (see JointRefitJob)
   Collision* output = nullptr;            ///< [opt when capacity == 0] detection records (DetectJob)
   uint32_t capacity = 0;                  ///< records `output` holds; DetectBound() never truncates
   uint32_t* count = nullptr;              ///< out: records written
@@ -36,16 +36,16 @@ struct CharacterFrame {
 /// parallel_for [opt]: one task index per `parallel_grain` characters, each character's refit and
 /// detection serial inside its task (characters are independent: they share only the read-only model),
 /// so the batch scales with the cores the hook brings; null: serial.
-/// Cost: #characters × (refit + detect), plus the hook's own overhead — measured on MakeHuman (128 spheres)
+/// Cost: \#characters × (refit + detect), plus the hook's own overhead — measured on MakeHuman (128 spheres)
 /// in README, "Many characters per frame"; no allocation, no exceptions.
 /// Thread safety: the workspaces must be distinct (one job per workspace at a time).
 struct BatchJob {
   const Model* model = nullptr;              ///< initialised, shared by every character (read only)
-  CharacterFrame* characters = nullptr;      ///< #N characters [opt when character_count == 0]
-  uint32_t character_count = 0;              ///< #N
+  CharacterFrame* characters = nullptr;      ///< \#N characters [opt when character_count == 0]
+  uint32_t character_count = 0;              ///< \#N
   RefitSource source = RefitSource::kVertices;
   RefitMode mode = RefitMode::kPivotFrame;   ///< kVertices only (see RefitJob)
-  uint32_t joint_count = 0;                  ///< kJoints only: #J [Limit: == Model::joint_count()]
+  uint32_t joint_count = 0;                  ///< kJoints only: \#J [Limit: == Model::joint_count()]
   DetectMethod method = DetectMethod::kM1;
   float margin = -1.0f;                      ///< see DetectJob::margin (< 0: the asset's)
   float fold_margin = -1.0f;                 ///< see DetectJob::fold_margin (< 0: the asset's, if any)

@@ -17,7 +17,7 @@ enum class DetectMethod : uint8_t {
   /// several chains is counted (DetectStats::tests, DetectStats::raw_pairs) once per chain, as the
   /// paper does, but evaluated once and reported once.
   kM1 = 0,
-  /// Without chains: every pair of the #S spheres, O(#S²) in the paper.
+  /// Without chains: every pair of the \#S spheres, O(\#S²) in the paper.
   kM2 = 1,
 };
 
@@ -34,19 +34,19 @@ static_assert(sizeof(Collision) == 12);
 /// Counters of one DetectJob::Run, complete even when the output was truncated.
 struct DetectStats {
   uint32_t tests = 0;           ///< overlap tests in the paper's count (M1: Σ n(n−1)/2 over chains,
-                                ///< M2: #S(#S−1)/2; excluded pairs included)
+                                ///< M2: \#S(\#S−1)/2; excluded pairs included)
   uint32_t raw_pairs = 0;       ///< M1: overlapping non-excluded (chain, pair) hits, duplicates across
                                 ///< chains included (the paper's count); M2: == distinct_pairs
   uint32_t distinct_pairs = 0;  ///< overlapping non-excluded pairs (a < b); > capacity ⇔ truncated
   uint32_t box_tests = 0;       ///< broad phase: pairs of blocks of 8 spheres bound-tested (those that
-                                ///< hold a candidate pair of the method; ≈ (#S/8)²/2 at most)
+                                ///< hold a candidate pair of the method; ≈ (\#S/8)²/2 at most)
   uint32_t sphere_tests = 0;    ///< candidate pairs in the block pairs that passed: the sphere tests
                                 ///< that count (the rest of the paper's `tests` was culled)
 };
 
 /// Most Collision records a DetectJob with `method` can write for this asset: an upper bound, so a
-/// buffer of this size is never truncated. M2: #S(#S−1)/2; M1: min(Σ_chains n(n−1)/2, #S(#S−1)/2).
-/// 0 for an invalid view or method. Cost O(#chains), no allocation. (Model::m1_candidate_pairs() /
+/// buffer of this size is never truncated. M2: \#S(\#S−1)/2; M1: min(Σ_chains n(n−1)/2, \#S(\#S−1)/2).
+/// 0 for an invalid view or method. Cost O(\#chains), no allocation. (Model::m1_candidate_pairs() /
 /// m2_candidate_pairs() give the exact, smaller numbers.)
 uint32_t DetectBound(const AssetView& view, DetectMethod method);
 
@@ -69,7 +69,7 @@ uint32_t DetectBound(const AssetView& view, DetectMethod method);
 /// per-asset table of candidate lanes (excluded pairs, M1's pairs sharing no chain).
 /// Blocks follow the bind pose: a pose that scatters a block's spheres (not a body's motion) culls
 /// less, never wrongly.
-/// Cost: O(#S) gather and boxes + ≤ (#S/8)²/2 block tests + 64 sphere tests per kept block pair (on
+/// Cost: O(\#S) gather and boxes + ≤ (\#S/8)²/2 block tests + 64 sphere tests per kept block pair (on
 /// MakeHuman's 128 spheres over its 40-frame morph: 182 block tests, 46 kept pairs, 1,470 candidate
 /// pairs tested of M2's 8,128); a sort of the hits. No allocation, no exceptions.
 /// parallel_for [opt] (both methods): one task index per row block of 8 spheres (its block pairs

@@ -15,7 +15,7 @@ namespace spherechain::runtime {
 /// of it: world space works, spheres come out in that space). Borrowed for one job Run().
 struct PositionsView {
   const void* data = nullptr;  ///< [Limit: 4-byte aligned, non-null] first vertex's x.
-  uint32_t count = 0;          ///< #V [Limit: == Model::vertex_count(), else kErrorVertexCount].
+  uint32_t count = 0;          ///< \#V [Limit: == Model::vertex_count(), else kErrorVertexCount].
   uint32_t stride_bytes = 12;  ///< [Limit: >= 12, multiple of 4, else kErrorStride] 12 = packed xyz.
 };
 
@@ -31,7 +31,7 @@ struct ParallelFor {
   void* user = nullptr;  ///< [opt] passed back to `run`.
 };
 
-/// Read-only SoA view of spheres (#S each): centres (x, y, z) and radii r. Space/units: those of the
+/// Read-only SoA view of spheres (\#S each): centres (x, y, z) and radii r. Space/units: those of the
 /// positions last refitted (model space and source units of the asset; the bind pose after Init).
 /// Transient: valid until the next refit of the workspace / its Init / its destruction.
 struct SphereArrays {
@@ -39,26 +39,26 @@ struct SphereArrays {
   const float* y = nullptr;
   const float* z = nullptr;
   const float* r = nullptr;  ///< radius, > 0 for sane input.
-  uint32_t count = 0;        ///< #S
+  uint32_t count = 0;        ///< \#S
 };
 
 /// The per-asset arrays of a Model, SoA, for readers outside the runtime (the CUDA upload, tests,
 /// tools). Every pointer is owned by the Model (lifetime: until its destruction / next Init) and
-/// immutable; padded arrays may be read up to 8 entries past #S (zeros).
+/// immutable; padded arrays may be read up to 8 entries past \#S (zeros).
 struct ModelArrays {
-  const float *bind_x, *bind_y, *bind_z, *bind_r;  ///< #S: Asset.spheres (bind centres, radii) [source units]
-  const uint32_t* pivot_vertices;  ///< #S×12: vertex indices (< #V) of the 4 pivot triangles (Asset.pivot_vertices)
-  const float *local_x, *local_y, *local_z;     ///< #S + 8: PivotFrame.local_center (pivot-frame coordinates)
-  const float *offset_x, *offset_y, *offset_z;  ///< #S + 8: PivotFrame.centroid_offset [source units]
-  const float* radius_scale;                    ///< #S + 8: bind radius / PivotFrame.mean_distance (one division)
-  const uint32_t* chain_mask;     ///< #S + 1: bit c ⇔ sphere in Asset.chains[c]; [#S] = 0
-  const uint32_t* chain_offsets;  ///< #C + 1 into chain_spheres
+  const float *bind_x, *bind_y, *bind_z, *bind_r;  ///< \#S: Asset.spheres (bind centres, radii) [source units]
+  const uint32_t* pivot_vertices;  ///< \#S×12: vertex indices (< \#V) of the 4 pivot triangles (Asset.pivot_vertices)
+  const float *local_x, *local_y, *local_z;     ///< \#S + 8: PivotFrame.local_center (pivot-frame coordinates)
+  const float *offset_x, *offset_y, *offset_z;  ///< \#S + 8: PivotFrame.centroid_offset [source units]
+  const float* radius_scale;                    ///< \#S + 8: bind radius / PivotFrame.mean_distance (one division)
+  const uint32_t* chain_mask;     ///< \#S + 1: bit c ⇔ sphere in Asset.chains[c]; [\#S] = 0
+  const uint32_t* chain_offsets;  ///< \#C + 1 into chain_spheres
   const uint16_t* chain_spheres;  ///< Σ|chain|: each chain's spheres, ascending (Asset.chains)
-  const uint32_t* excl_offsets;   ///< #S + 1 into excl_neighbors (CSR by the smaller sphere a)
-  const uint16_t* excl_neighbors; ///< #excluded: partners b > a, ascending per a (Asset.excluded_pairs)
-  const uint16_t* sphere_joints;  ///< #S×4 or null: Asset.sphere_joints (schema v3, rigged bakes)
-  const float* sphere_joint_weights;  ///< #S×4 or null: Asset.sphere_joint_weights
-  uint32_t excluded_count;        ///< #excluded
+  const uint32_t* excl_offsets;   ///< \#S + 1 into excl_neighbors (CSR by the smaller sphere a)
+  const uint16_t* excl_neighbors; ///< \#excluded: partners b > a, ascending per a (Asset.excluded_pairs)
+  const uint16_t* sphere_joints;  ///< \#S×4 or null: Asset.sphere_joints (schema v3, rigged bakes)
+  const float* sphere_joint_weights;  ///< \#S×4 or null: Asset.sphere_joint_weights
+  uint32_t excluded_count;        ///< \#excluded
   uint32_t max_chain_length;      ///< longest chain [spheres]
 };
 
@@ -82,13 +82,13 @@ class Model {
   ~Model();
 
   /// Bytes InitInPlace needs for `view` (the exact size of the Model's block), or 0 when `!view.valid()`.
-  /// Cost: O(#S · (#C log n + #groups)), no allocation; thread-safe.
+  /// Cost: O(\#S · (\#C log n + \#groups)), no allocation; thread-safe.
   static size_t RequiredBytes(const AssetView& view);
 
   /// Builds the model of `view` in one allocation of RequiredBytes(view) bytes (the only allocation),
   /// aligned to 64. Returns kOk; kErrorNullArgument (`!view.valid()`); kErrorOutOfMemory (allocation
   /// failed, or the broad phase's candidate lanes exceed 2^32) — the model is left empty on failure.
-  /// Cost: O(#S² · log degree) time (the block-pair lane tables); memory: see RequiredBytes — ~110 B a
+  /// Cost: O(\#S² · log degree) time (the block-pair lane tables); memory: see RequiredBytes — ~110 B a
   /// sphere (+ 52 B with joint weights) + 2 × 9 B per pair of blocks of 8 spheres + 2 B per excluded pair
   /// (32 KB for MakeHuman's 128 spheres). Picks the per-frame kernels here: SSE2, AVX or AVX-512, the
   /// best the CPU runs (SPHERECHAIN_ISA=sse2|avx caps it), all giving the same bits.
@@ -110,10 +110,10 @@ class Model {
   /// A number unique to this build of the model in the process (never 0 once initialised; kept by a
   /// move): what a Workspace records to refuse another model (kErrorWorkspaceModel).
   uint64_t id() const { return id_; }
-  uint32_t sphere_count() const { return sphere_count_; }  ///< #S
-  uint32_t vertex_count() const { return vertex_count_; }  ///< #V the positions must have.
+  uint32_t sphere_count() const { return sphere_count_; }  ///< \#S
+  uint32_t vertex_count() const { return vertex_count_; }  ///< \#V the positions must have.
   uint32_t chain_count() const { return chain_count_; }    ///< number of chains (≤ kMaxChains).
-  /// #J, the skinning matrices JointRefitJob takes (Asset.joint_count); 0 when the asset holds no centre
+  /// \#J, the skinning matrices JointRefitJob takes (Asset.joint_count); 0 when the asset holds no centre
   /// joint weights (v1/v2 or unrigged bake).
   uint32_t joint_count() const { return joint_count_; }
   /// The asset's contact margin (Asset.contact_margin, schema v2; 0 for v1 assets) [Units: source]:
@@ -124,7 +124,7 @@ class Model {
   /// unless the job overrides it; < 0 (assets without the field): such pairs are tested like any other.
   float fold_margin() const { return fold_margin_; }
   /// Region of sphere `s` (Asset.sphere_regions) when the asset has a fold margin, else 0 for every sphere.
-  /// [Limit: s < #S]
+  /// [Limit: s < \#S]
   uint8_t fold_region(uint32_t s) const { return fold_region_ ? fold_region_[s] : uint8_t{0}; }
   size_t bytes() const { return bytes_; }  ///< size of the model's block
 
@@ -132,7 +132,7 @@ class Model {
   SphereArrays bind_spheres() const { return {a_.bind_x, a_.bind_y, a_.bind_z, a_.bind_r, sphere_count_}; }
   /// All per-asset arrays (see ModelArrays); valid for the model's lifetime.
   const ModelArrays& arrays() const { return a_; }
-  /// Bitmask of the chains sphere `s` belongs to (bit c = Asset.chains[c]). [Limit: s < #S]
+  /// Bitmask of the chains sphere `s` belongs to (bit c = Asset.chains[c]). [Limit: s < \#S]
   uint32_t chain_mask(uint32_t s) const { return a_.chain_mask[s]; }
   /// True if (a, b) is an excluded (adjacent) pair (Asset.excluded_pairs), either order. O(degree).
   bool IsExcluded(uint32_t a, uint32_t b) const;
@@ -178,7 +178,7 @@ class Model {
   uint32_t joint_group_end_[4] = {};         // end of the records using 1, 2, 3, 4 influences
 };
 
-/// One character's state for one Model: its current spheres (SoA, #S + 8 each, NaN padding) and the
+/// One character's state for one Model: its current spheres (SoA, \#S + 8 each, NaN padding) and the
 /// per-frame scratch of DetectJob (spheres gathered in block order, block boxes, hit keys, per-row-block
 /// counters). Records the id() of the Model it was made for: a job given this workspace and another
 /// model answers kErrorWorkspaceModel and writes nothing.
@@ -199,7 +199,7 @@ class Workspace {
   static size_t RequiredBytes(const Model& model);
   /// Sizes the workspace for `model` (one allocation), records model.id() and sets the spheres to the
   /// bind pose. Returns kOk; kErrorInvalidJob (model not initialised); kErrorOutOfMemory (workspace left
-  /// empty). Cost: O(#S + lanes) time.
+  /// empty). Cost: O(\#S + lanes) time.
   Status Init(const Model& model);
   /// The same in caller memory: `memory` [Limit: 16-byte aligned, else kErrorAlignment] of `bytes`
   /// [Limit: >= RequiredBytes(model), else kErrorBufferTooSmall]; kErrorNullArgument for null memory.
@@ -211,18 +211,18 @@ class Workspace {
   bool initialized() const { return sphere_count_ != 0; }  ///< true after a successful Init
   uint64_t model_id() const { return model_id_; }          ///< Model::id() it was made for
   bool made_for(const Model& model) const { return model_id_ != 0 && model_id_ == model.id(); }
-  uint32_t sphere_count() const { return sphere_count_; }  ///< #S
+  uint32_t sphere_count() const { return sphere_count_; }  ///< \#S
 
   /// Current spheres (see SphereArrays for lifetime).
   SphereArrays spheres() const { return {x_, y_, z_, r_, sphere_count_}; }
-  /// Writable spheres (#S each): lets a caller set them directly (tests, a GPU path copying back)
+  /// Writable spheres (\#S each): lets a caller set them directly (tests, a GPU path copying back)
   /// before a DetectJob. Same lifetime as spheres().
   float* mutable_x() { return x_; }
   float* mutable_y() { return y_; }
   float* mutable_z() { return z_; }
   float* mutable_r() { return r_; }
   /// Resets the spheres to `model`'s bind pose. kErrorWorkspaceModel (another model: nothing written),
-  /// kErrorInvalidJob (not initialised), else kOk. O(#S).
+  /// kErrorInvalidJob (not initialised), else kOk. O(\#S).
   Status ResetToBindPose(const Model& model);
 
   struct Internal;

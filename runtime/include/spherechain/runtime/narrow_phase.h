@@ -60,8 +60,8 @@ enum class NarrowPhaseRegions : uint8_t {
 
 /// One contact: two intersecting triangles of different surrounding regions. POD, 12 bytes.
 struct TriangleContact {
-  uint32_t triangle_a;  ///< source triangle index (< #T), in sphere_a's surrounding region (owned by it)
-  uint32_t triangle_b;  ///< source triangle index (< #T), in sphere_b's surrounding region (owned by it)
+  uint32_t triangle_a;  ///< source triangle index (< \#T), in sphere_a's surrounding region (owned by it)
+  uint32_t triangle_b;  ///< source triangle index (< \#T), in sphere_b's surrounding region (owned by it)
   uint16_t sphere_a;    ///< sphere_a < sphere_b
   uint16_t sphere_b;
 };
@@ -106,7 +106,7 @@ class NarrowPhaseModel {
   /// Returns kOk; kErrorNullArgument when `!view.valid()`; kErrorMissingField when the asset has no
   /// `triangles` or `weld_ids` (baked before the narrow phase existed: re-bake); kErrorOutOfMemory;
   /// kErrorInvalidJob for an unknown `regions`. The model is empty (not initialised) after a failure.
-  /// Cost: O(#T + #V + #S log) time; memory ~40 B per region triangle + 4 B per vertex + 4 B per
+  /// Cost: O(\#T + \#V + \#S log) time; memory ~40 B per region triangle + 4 B per vertex + 4 B per
   /// (sphere, region vertex) + ~20 B per sphere; kReach also 2 B per (triangle, sphere it stands behind).
   /// Not thread-safe on one object (nothing may use the model meanwhile).
   Status Init(const AssetView& view, NarrowPhaseRegions regions = NarrowPhaseRegions::kSurrounding);
@@ -118,18 +118,18 @@ class NarrowPhaseModel {
   /// A number unique to this build of the model in the process (never 0 once initialised; kept by a
   /// move): what a NarrowPhaseWorkspace records to refuse another model (kErrorWorkspaceModel).
   uint64_t id() const { return id_; }
-  uint32_t sphere_count() const { return sphere_count_; }      ///< #S
-  uint32_t vertex_count() const { return vertex_count_; }      ///< #V the positions must have
-  uint32_t triangle_count() const { return triangle_count_; }  ///< #T
+  uint32_t sphere_count() const { return sphere_count_; }      ///< \#S
+  uint32_t vertex_count() const { return vertex_count_; }      ///< \#V the positions must have
+  uint32_t triangle_count() const { return triangle_count_; }  ///< \#T
   /// Triangles of the asset whose corners repeat a weld id (index-degenerate): never tested.
   uint32_t index_degenerate_triangles() const { return index_degenerate_; }
   /// Triangles in no surrounding region (Asset.unassigned at bake time): the narrow phase cannot see them.
   uint32_t unassigned_triangles() const { return unassigned_; }
   /// True if (a, b) is an excluded pair of the asset, either order. O(log degree).
   bool IsExcluded(uint32_t a, uint32_t b) const;
-  /// Owning sphere of source triangle `t` [Limit: < #T], or 0xFFFF when unassigned.
+  /// Owning sphere of source triangle `t` [Limit: < \#T], or 0xFFFF when unassigned.
   uint16_t triangle_sphere(uint32_t t) const { return tri_sphere_[t]; }
-  /// Weld id of vertex `v` [Limit: < #V]: see Asset.weld_ids.
+  /// Weld id of vertex `v` [Limit: < \#V]: see Asset.weld_ids.
   uint32_t weld_id(uint32_t v) const { return weld_[v]; }
 
   friend class NarrowPhaseWorkspace;
@@ -183,7 +183,7 @@ class NarrowPhaseWorkspace {
 
   /// Sizes the scratch for `model` and records model.id(). The only allocating call (catches
   /// std::bad_alloc). Returns kOk; kErrorInvalidJob (model not initialised); kErrorOutOfMemory (left
-  /// empty). Cost: O(#T + #S) time.
+  /// empty). Cost: O(\#T + \#S) time.
   Status Init(const NarrowPhaseModel& model);
 
   /// True after a successful Init (false when moved from).
@@ -239,7 +239,7 @@ class NarrowPhaseWorkspace {
 /// ascending (or in `sphere_pairs` order), then in the order the sweep meets the triangle pairs. With a
 /// kReach model the order is that of the candidate pair that reported the contact, while its record names
 /// the owners (sphere_a < sphere_b, each with its own triangle), which need not be that pair.
-/// Cost: O(#V) for the region boxes, #S(#S−1)/2 box tests for the candidates (twice, four at a time),
+/// Cost: O(\#V) for the region boxes, \#S(\#S−1)/2 box tests for the candidates (twice, four at a time),
 /// then once per sphere with a candidate its region's vertices (an outcode each) and triangles (culled
 /// by their corners' outcodes, boxes computed for those kept and for each run of 8), then per candidate
 /// a box test of each side's kept runs (four at a time) and of the triangles of the runs that meet the
@@ -271,7 +271,7 @@ struct NarrowPhaseJob {
   /// kErrorNullArgument (model, workspace, count or positions.data null; output null with capacity > 0;
   /// sphere_pairs null with sphere_pair_count > 0), kErrorInvalidJob (model or workspace not
   /// initialised, unknown exclusions), kErrorWorkspaceModel (the workspace was made for another model), kErrorAlignment (positions not 4-byte aligned), kErrorStride, kErrorVertexCount,
-  /// kErrorIndexOutOfRange (a sphere_pairs record with a >= b or b >= #S), else kOk.
+  /// kErrorIndexOutOfRange (a sphere_pairs record with a >= b or b >= \#S), else kOk.
   Status Check() const;
   /// Returns Check()'s error (outputs untouched); kErrorNonFinitePositions when a vertex of a
   /// surrounding region is NaN/Inf (count 0, stats zero); kOk; or kOkTruncated when more contacts than

@@ -12,7 +12,7 @@
 namespace spherechain::runtime {
 
 /// How a sphere follows its four pivot polygons (§5.1). Let p0..p3 be the current centroids of the
-/// sphere's pivot triangles (Asset.pivot_vertices, #S×4×3 vertex indices; centroid = mean of the 3
+/// sphere's pivot triangles (Asset.pivot_vertices, \#S×4×3 vertex indices; centroid = mean of the 3
 /// vertices) and m their mean. In both modes the radius is
 ///   r = (bind radius / PivotFrame.mean_distance) · mean_k ‖c − p_k‖
 /// — the paper's "average of the distances from the centre to the pivot polygons", scaled so the
@@ -84,9 +84,9 @@ inline void TriangleCentroid(const float a[3], const float b[3], const float c[3
 /// ozz-style job: refits every sphere of one character (`workspace`) to its deformed `positions` (§5.1),
 /// with the per-asset data of `model`. Per sphere: the centroids p0..p3 of its 4 pivot triangles, then
 /// formulas::RefitLanes (centre per RefitMode, radius = radius_scale · mean distance to the p_k).
-/// Inputs: positions (#V vertices, strided), mode, parallel_for [opt]. Output: the workspace's spheres
+/// Inputs: positions (\#V vertices, strided), mode, parallel_for [opt]. Output: the workspace's spheres
 /// (Workspace::spheres(), SoA, same space/units as positions).
-/// Cost: O(#S) — 12 vertex reads + ~120 flops per sphere (SSE2, AVX or AVX-512 — 4, 8 or 16 spheres an
+/// Cost: O(\#S) — 12 vertex reads + ~120 flops per sphere (SSE2, AVX or AVX-512 — 4, 8 or 16 spheres an
 /// iteration, picked at Model::Init — all bit-identical to the scalar formulas); no allocation, no exceptions. With parallel_for set, spheres are split into ranges
 /// (`parallel_grain` spheres per task index). Thread safety: one job per workspace at a time; the model
 /// is only read.
@@ -130,9 +130,9 @@ inline void JointMatrixFromColumnMajor(const float m[16], float out[kJointMatrix
 /// matrices moves centres but does not resize spheres). Tracking against the vertex refit (RefitJob,
 /// kPivotFrame) on the real clips: README, "Refit from joint matrices".
 ///
-/// Inputs: `joint_matrices` #J × kJointMatrixFloats floats, packed: the skinning matrices
+/// Inputs: `joint_matrices` \#J × kJointMatrixFloats floats, packed: the skinning matrices
 /// M_j = (joint j's current model-space transform) · (its inverse bind matrix), in the skin's joint
-/// order (Asset.joint_count = #J; glTF skin.joints, assimp bones, .mhskel bones) — the same matrices
+/// order (Asset.joint_count = \#J; glTF skin.joints, assimp bones, .mhskel bones) — the same matrices
 /// that deform the vertices. Units: the asset's source units; output spheres in that model space.
 /// Borrowed for Run(). The joint weights and bind spheres are the model's (copied out of the asset at
 /// Model::Init: the asset bytes are not read). Output: the workspace's spheres (SoA), overwritten.
@@ -140,15 +140,15 @@ inline void JointMatrixFromColumnMajor(const float m[16], float out[kJointMatrix
 /// blend runs over influence 0 and then influences 1, 2, 3 while their weight is not 0 (the first zero
 /// weight ends it), M = ((w0·M_j0 + w1·M_j1) + w2·M_j2) + w3·M_j3 per element; each centre coordinate is
 /// (m_r0·bx + m_r1·by) + (m_r2·bz + m_r3), no FMA.
-/// Cost: O(#J) to check the matrices + O(#S · influences) — ≤ 4 × 12 multiply-adds per sphere (SSE2,
+/// Cost: O(\#J) to check the matrices + O(\#S · influences) — ≤ 4 × 12 multiply-adds per sphere (SSE2,
 /// AVX or AVX-512: a row or a whole matrix per vector; the model groups the spheres by influence count,
 /// so no branch per sphere); serial, no allocation, no exceptions. Thread safety: one job per workspace
 /// at a time.
 struct JointRefitJob {
   const Model* model = nullptr;           ///< initialised; its centre joint weights (schema v3) are read
   Workspace* workspace = nullptr;         ///< made for `model`; its spheres are overwritten
-  const float* joint_matrices = nullptr;  ///< #J × 12 floats [Limit: 4-byte aligned]
-  uint32_t joint_count = 0;               ///< #J [Limit: == Model::joint_count(), else kErrorJointCount]
+  const float* joint_matrices = nullptr;  ///< \#J × 12 floats [Limit: 4-byte aligned]
+  uint32_t joint_count = 0;               ///< \#J [Limit: == Model::joint_count(), else kErrorJointCount]
 
   /// True when Run() would not fail on arguments (does not read the matrices).
   bool Validate() const { return Check() == Status::kOk; }
@@ -158,7 +158,7 @@ struct JointRefitJob {
   /// from a mesh without a skin, or schema v1/v2 — re-bake), kErrorJointCount, kErrorAlignment
   /// (joint_matrices not 4-byte aligned).
   Status Check() const;
-  /// Runs the refit. Returns Check()'s error, or kErrorNonFiniteJoints when one of the #J matrices
+  /// Runs the refit. Returns Check()'s error, or kErrorNonFiniteJoints when one of the \#J matrices
   /// holds a NaN or an infinity — in both cases the spheres are untouched — or kOk.
   Status Run() const;
 };

@@ -49,12 +49,12 @@ enum class [[nodiscard]] Status : uint32_t {
   kErrorMissingField = 0x8000'0201u,     ///< A field the runtime needs is absent (fingerprint, spheres,
                                          ///< chains, surrounding_*, pivot_*).
   kErrorNoSpheres = 0x8000'0202u,        ///< spheres is empty.
-  kErrorTooManySpheres = 0x8000'0203u,   ///< #S > kMaxSpheres (indices are uint16).
-  kErrorTooManyChains = 0x8000'0204u,    ///< #chains > kMaxChains (chain bitmask is 32 bits), or the chains'
+  kErrorTooManySpheres = 0x8000'0203u,   ///< \#S > kMaxSpheres (indices are uint16).
+  kErrorTooManyChains = 0x8000'0204u,    ///< \#chains > kMaxChains (chain bitmask is 32 bits), or the chains'
                                          ///< candidate pairs Σ|ζ|(|ζ|−1)/2 > kMaxChainPairs.
-  kErrorCountMismatch = 0x8000'0205u,    ///< An array's length disagrees with #S, #T or 4·#S / 12·#S.
-  kErrorIndexOutOfRange = 0x8000'0206u,  ///< A sphere index >= #S, triangle index >= #T or vertex
-                                         ///< index >= #V.
+  kErrorCountMismatch = 0x8000'0205u,    ///< An array's length disagrees with \#S, \#T or 4·\#S / 12·\#S.
+  kErrorIndexOutOfRange = 0x8000'0206u,  ///< A sphere index >= \#S, triangle index >= \#T or vertex
+                                         ///< index >= \#V.
   kErrorOffsets = 0x8000'0207u,          ///< surrounding_offsets (or reach_offsets) not starting at 0,
                                          ///< not monotone, or not ending at len(surrounding_triangles)
                                          ///< (reach_triangles); a sphere's reach triangles not ascending.
