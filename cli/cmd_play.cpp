@@ -28,6 +28,7 @@ struct PlayArgs {
   AnimationArgs anim;  // --mesh, --clip, --morph, --poses-dir, --frames
   uint32_t repeat = 5;
   bool narrow_phase = false;
+  bool asset_exclusions = false;
   float narrow_behind = 0.0f;  // --narrow-behind: the narrow phase behind M2's pairs at this × the asset's margin
 };
 
@@ -55,6 +56,7 @@ int RunPlay(const PlayArgs& a) {
                                      : playback::PlayRefit::kPivotFrame;
   opts.repeat = a.repeat;
   opts.narrow_phase = a.narrow_phase || a.narrow_behind > 0.0f;
+  opts.crease = !a.asset_exclusions;
   opts.narrow_behind_margin = a.narrow_behind;
   const bool joints = opts.refit == playback::PlayRefit::kJoints;
   if (joints && !view.asset->sphere_joints())
@@ -255,8 +257,12 @@ void RegisterPlay(CLI::App& app, Commands* commands) {
       ->check(CLI::ExistingDirectory);
   sub->add_option("--json", args->json, "Write the per-frame table and summary as JSON");
   sub->add_flag("--narrow-phase", args->narrow_phase,
-                "Also find the exact triangle contacts between surrounding regions (runtime NarrowPhaseJob): "
-                "contacts per frame in the table and the JSON");
+                "Also find the exact triangle contacts (runtime NarrowPhaseJob): every self-contact the skin makes "
+                "(the crease rule, Exclusions::kCrease) on an asset baked with it, else those between surrounding "
+                "regions of spheres the asset does not exclude; contacts per frame in the table and the JSON");
+  sub->add_flag("--asset-exclusions", args->asset_exclusions,
+                "With --narrow-phase: the asset's excluded sphere pairs define a contact (Exclusions::kAsset), as "
+                "before the crease rule");
   sub->add_option("--narrow-behind", args->narrow_behind,
                   "The narrow phase only behind M2's sphere pairs found with SCALE times the asset's contact margin "
                   "(reach regions: the spheres as a game's broad phase; 1.5 finds 96-100 % of the region pairs in "

@@ -1,5 +1,6 @@
 #include "spherechain/baker/bake.h"
 #include "spherechain/baker/training_poses.h"
+#include "spherechain/runtime/crease.h"
 
 #include <algorithm>
 #include <cmath>
@@ -66,7 +67,7 @@ Result<BakeConfig> ParseBakeConfig(const std::string& text, const std::string& w
                                               "min_radius_rel", "min_gain", "region_balance", "refine_sweeps", "dilation_rel",
                                               "skin_spheres", "skin_tolerance_rel", "skin_min_vertices", "medial_min_rel",
                                               "contact_margin_rel", "near_rel", "vertices", "regions", "pivot_poses",
-                                              "pivot_pose_angle", "reach_rel", "fold_margin_rel"};
+                                              "pivot_pose_angle", "reach_rel", "fold_margin_rel", "crease_rel"};
   for (auto it = j.begin(); it != j.end(); ++it)
     if (!known.count(it.key())) return MakeError(Error::Code::kConfig, where + ": unknown key '" + it.key() + "'");
 
@@ -135,6 +136,7 @@ Result<BakeConfig> ParseBakeConfig(const std::string& text, const std::string& w
     if (s.ok()) c.fold_margin_rel = v < 0.0 ? -1.0 : v;
   }
   if (s.ok()) s = ReadNumber(j, "reach_rel", 0.0, 0.05, &c.reach_rel, where);
+  if (s.ok()) s = ReadNumber(j, "crease_rel", 1e-6, 0.5, &c.crease_rel, where);
   if (s.ok()) s = ReadNumber(j, "pivot_poses", 0u, 256u, &c.pivot_poses, where);
   if (s.ok()) s = ReadNumber(j, "pivot_pose_angle", 0.0, 90.0, &c.pivot_pose_angle, where);
   if (s.ok()) s = ReadNumber(j, "spheres_per_level", 2, 2, &c.fit.spheres_per_level, where);
@@ -200,6 +202,7 @@ std::string CanonicalConfig(const BakeConfig& c, const RegionLayout* layout) {
   j["near_rel"] = c.near_rel;
   j["reach_rel"] = c.reach_rel;
   if (c.fold_margin_rel) j["fold_margin_rel"] = *c.fold_margin_rel;  // added later: written only when set
+  j["crease_rel"] = c.crease_rel;
   // Added after assets were cached on the hash: written only when on (the default is off).
   if (c.pivot_poses) j["pivot_poses"] = c.pivot_poses, j["pivot_pose_angle"] = c.pivot_pose_angle;
   j["rays"] = c.fit.rays;
@@ -297,12 +300,27 @@ Result<CreatureExclusions> CreatureExcludedPairs(const Mesh& mesh, const Segment
 
 Result<BakeResult> Bake(const std::string& input_path, const BakeConfig& config, Context* ctx) {
   BakeResult r;
+  if (!(config.crease_rel > 0.0 && config.crease_rel <= 0.5))  // NaN too
+    return MakeError(Error::Code::kConfig, "crease_rel must be in (0, 0.5] (a fraction of the body height)");
   {
     // ImportMesh and FitSpheres time themselves ("import", "fit").
     auto mesh = ImportMesh(input_path, config.import, ctx);
     if (!mesh.ok()) return mesh.error();
     r.mesh = std::move(mesh).value();
     r.mesh_issues = InspectMesh(r.mesh);
+  }
+  {
+    // The crease rule measures on the welded bind surface: how many pieces it has (a triangle soup with no
+    // welded adjacency has one per triangle, and every fold of it counts as a contact).
+    Context::Timer t(ctx, "crease");
+    const std::vector<uint32_t> weld = ComputeWeldIds(r.mesh.positions);
+    runtime::CreaseGraph graph;
+    if (graph.Init(r.mesh.positions.data(), r.mesh.vertex_count(), r.mesh.indices.data(), r.mesh.triangle_count(),
+                   weld.data(), 1.0f) == runtime::Status::kOk)
+      r.crease_components = graph.components();
+    if (ctx && r.crease_components > 1)
+      ctx->Info("crease: the welded bind surface has " + std::to_string(r.crease_components) +
+                " separate pieces (the crease is measured within each)");
   }
   const Mesh& mesh = r.mesh;
   {
@@ -537,6 +555,8 @@ Result<BakeResult> Bake(const std::string& input_path, const BakeConfig& config,
     in.config_hash = Hash64(canonical.data(), canonical.size());
     in.contact_margin = config.contact_margin_rel * r.fit.body_height;
     in.fold_margin = FoldMarginRel(config, r.segmentation.layout) * r.fit.body_height;
+    in.bind_positions = &mesh.positions;
+    in.crease = config.crease_rel * r.fit.body_height;
     if (r.coverage) in.coverage = &*r.coverage;
     in.coverage_voxel_rel = r.coverage_options.voxel_rel;
     in.forced_findings = &r.plausibility;
@@ -632,6 +652,8 @@ json MakeBakeReport(const BakeResult& r, const BakeConfig& config, const Context
   j["contact_margin_rel"] = config.contact_margin_rel;
   if (const double fold = FoldMarginRel(config, r.segmentation.layout); fold >= 0.0)
     j["fold_margin"] = fold * r.fit.body_height, j["fold_margin_rel"] = fold;
+  j["crease"] = {{"crease", config.crease_rel * r.fit.body_height}, {"crease_rel", config.crease_rel},
+                 {"surface_components", r.crease_components}};
   if (r.coverage)
     j["coverage"] = {{"coverage", r.coverage->coverage},
                      {"protrusion", r.coverage->protrusion},

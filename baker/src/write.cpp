@@ -142,11 +142,15 @@ std::vector<uint8_t> BuildAsset(const AssetInputs& in) {
     regions_table = b.CreateVector(list);
   }
 
+  flatbuffers::Offset<flatbuffers::Vector<float>> bind_v;
+  if (in.bind_positions && in.crease > 0.0) bind_v = b.CreateVector(*in.bind_positions);
+
   fb::AssetBuilder ab(b);
   ab.add_schema_version(layout.IsPaperFive() ? spherechain::runtime::kPaperSchemaVersion : spherechain::runtime::kSchemaVersion);
   ab.add_generator(generator);
   ab.add_contact_margin(float(in.contact_margin));
   if (in.fold_margin >= 0.0) ab.add_fold_margin(float(in.fold_margin));
+  if (in.bind_positions && in.crease > 0.0) ab.add_bind_positions(bind_v), ab.add_crease(float(in.crease));
   ab.add_fit_method(fit_method);
   if (in.coverage) ab.add_coverage(coverage);
   if (in.centre_weights) {

@@ -128,6 +128,17 @@ struct FrameEval {
   // the refit keeps the bind fit's fill and how far the spheres stick out of the deformed skin.
   bool has_refit_coverage = false;
   baker::CoverageStats refit_coverage;
+  // The skin's definition (runtime crease.h), on the mesh alone: intersecting triangle pairs (no shared welded
+  // corner) that are not near on the welded bind surface. `skin_bind`: of those, pairs that intersect at
+  // bind pose already (modelling artefacts, reported apart); `skin_hidden`: pairs the exclusion-based
+  // definition above does not count (same owner, excluded pair, unassigned); the narrow phase under the
+  // same rule (Exclusions::kCrease) against it; M1 / M2 region pairs and the restricted narrow phase behind
+  // them (reach regions) against it.
+  uint32_t skin = 0, skin_bind = 0, skin_hidden = 0, skin_behind_reach[2] = {0, 0};
+  std::set<RegionPair> skin_regions;
+  uint32_t skin_narrow = 0, skin_narrow_true = 0;
+  runtime::NarrowPhaseStats skin_stats;
+  double skin_us = 0;
 };
 
 /// [{"a", "b", "triangle_pairs"}]: sphere pairs with how many intersecting triangle pairs they own.
@@ -213,6 +224,7 @@ import::Result<Evaluation> Evaluate(const runtime::AssetView& view, const import
     return Fail("'" + a.asset_name + "': narrow phase (reach regions): " + runtime::ToString(s));
 
   const uint32_t V = view.vertex_count, T = view.triangle_count;
+  const bool crease_job = narrow.has_crease();
   std::vector<uint32_t> weld(V);
   for (uint32_t v = 0; v < V; ++v) weld[v] = narrow.weld_id(v);
   const auto* sphere_regions = view.asset->sphere_regions();
@@ -258,6 +270,28 @@ import::Result<Evaluation> Evaluate(const runtime::AssetView& view, const import
       c += Eigen::Vector3d(mesh.positions[3 * mesh.indices[3 * t + k]], mesh.positions[3 * mesh.indices[3 * t + k] + 1],
                            mesh.positions[3 * mesh.indices[3 * t + k] + 2]);
     bind_centroid[t] = c / 3.0;
+  }
+  // The skin's definition on the mesh alone (its own weld ids and bind positions; no asset data): the
+  // crease is --crease of the height, or the asset's when larger (a job may only widen the asset's).
+  const double skin_crease = std::max(crease, crease_job ? double(narrow.crease()) : 0.0);
+  const std::vector<uint32_t> mesh_weld = import::ComputeWeldIds(mesh.positions);
+  runtime::CreaseGraph skin_graph;
+  runtime::CreaseScratch skin_scratch;
+  if (runtime::Status s = skin_graph.Init(mesh.positions.data(), V, mesh.indices.data(), T, mesh_weld.data(),
+                                          float(skin_crease));
+      runtime::Failed(s) || runtime::Failed(s = skin_scratch.Init(skin_graph)))
+    return Fail(std::string("the crease rule's graph: ") + runtime::ToString(s));
+  auto skin_near = [&](uint32_t ta, uint32_t tb) {
+    const uint32_t* ia = &mesh.indices[3 * size_t{ta}];
+    const uint32_t* ib = &mesh.indices[3 * size_t{tb}];
+    return skin_scratch.Near(skin_graph, ia, ib, float(skin_crease));
+  };
+  std::set<baker::TrianglePair> skin_at_bind;  // skin contacts of the bind pose itself
+  {
+    auto bind = baker::ExactSelfIntersections(mesh.positions.data(), V, mesh.indices, mesh_weld);
+    if (!bind.ok()) return Fail(import::Error{bind.error().code, "bind pose: " + bind.error().message});
+    for (const baker::TrianglePair& p : bind.value())
+      if (!skin_near(p.a, p.b)) skin_at_bind.insert(p);
   }
   const runtime::RefitMode mode = a.refit == "paper" ? runtime::RefitMode::kPaper : runtime::RefitMode::kPivotFrame;
   // --refit joints: the spheres a GPU-skinned game gets (JointRefitJob: linear blend skinning of the
@@ -402,6 +436,39 @@ import::Result<Evaluation> Evaluate(const runtime::AssetView& view, const import
     auto exact = baker::ExactSelfIntersections(positions.data(), V, mesh.indices, weld, &row.degenerate);
     row.exact_ms = std::chrono::duration<double, std::milli>(Clock::now() - t1).count();
     if (!exact.ok()) return Fail(import::Error{exact.error().code, "frame " + std::to_string(f) + ": " + exact.error().message});
+    // The skin's definition, and the narrow phase under it.
+    std::set<baker::TrianglePair> skin_pairs;
+    for (const baker::TrianglePair& p : exact.value()) {
+      if (skin_near(p.a, p.b)) continue;
+      skin_pairs.insert(p);
+      const uint32_t sa = narrow.triangle_sphere(p.a), sb = narrow.triangle_sphere(p.b);
+      row.skin_bind += skin_at_bind.count(p) > 0;
+      row.skin_hidden += sa == 0xFFFF || sb == 0xFFFF || sa == sb || narrow.IsExcluded(sa, sb);
+      if (sa != 0xFFFF && sb != 0xFFFF) row.skin_regions.insert(region_pair(sa, sb));
+      for (int m = 0; m < 2; ++m) row.skin_behind_reach[m] += behind_reach_pairs[m].count(p) > 0;
+    }
+    row.skin = static_cast<uint32_t>(skin_pairs.size());
+    if (crease_job) {
+      runtime::NarrowPhaseJob skin_job;
+      skin_job.model = &narrow;
+      skin_job.workspace = &narrow_ws;
+      skin_job.positions = refit.positions;
+      skin_job.exclusions = runtime::Exclusions::kCrease;
+      skin_job.crease = float(skin_crease);
+      skin_job.output = contacts.data();
+      skin_job.capacity = static_cast<uint32_t>(contacts.size());
+      uint32_t n = 0;
+      skin_job.count = &n;
+      skin_job.stats = &row.skin_stats;
+      const auto ts = Clock::now();
+      const runtime::Status ks = skin_job.Run();
+      row.skin_us = std::chrono::duration<double, std::micro>(Clock::now() - ts).count();
+      if (runtime::Failed(ks)) return Fail(std::string("narrow phase (crease rule): ") + runtime::ToString(ks));
+      row.skin_narrow = row.skin_stats.contacts;
+      for (uint32_t i = 0; i < n; ++i)
+        row.skin_narrow_true += skin_pairs.count({std::min(contacts[i].triangle_a, contacts[i].triangle_b),
+                                                  std::max(contacts[i].triangle_a, contacts[i].triangle_b)}) > 0;
+    }
     std::vector<baker::TrianglePair> contact_pairs;  // this frame's contacts
     for (const baker::TrianglePair& p : exact.value()) {
       const uint32_t sa = narrow.triangle_sphere(p.a), sb = narrow.triangle_sphere(p.b);
@@ -605,6 +672,10 @@ import::Result<Evaluation> Evaluate(const runtime::AssetView& view, const import
   std::vector<double> narrow_us;
   double exact_ms = 0;
   uint32_t worst = 0;
+  // The skin's definition (crease rule), summed over the frames.
+  size_t skin = 0, skin_bind = 0, skin_hidden = 0, skin_behind_reach[2] = {0, 0}, skin_regions = 0;
+  size_t skin_found[2] = {0, 0}, skin_narrow = 0, skin_narrow_true = 0, skin_folds = 0;
+  std::vector<double> skin_us;
   for (uint32_t f = 0; f < anim.frames; ++f) {
     const FrameEval& r = rows[f];
     exact_regions += r.exact_regions.size();
@@ -629,6 +700,11 @@ import::Result<Evaluation> Evaluate(const runtime::AssetView& view, const import
     imprecise_m2 += r.imprecise_gaps.size();
     apart += r.apart, apart_sphere += r.apart_sphere, apart_region += r.apart_region;
     apart_excluded += r.apart_excluded, apart_same += r.apart_same;
+    skin += r.skin, skin_bind += r.skin_bind, skin_hidden += r.skin_hidden, skin_regions += r.skin_regions.size();
+    for (int m = 0; m < 2; ++m) skin_behind_reach[m] += r.skin_behind_reach[m];
+    skin_found[0] += CountIn(r.skin_regions, r.m1_regions), skin_found[1] += CountIn(r.skin_regions, r.m2_regions);
+    skin_narrow += r.skin_narrow, skin_narrow_true += r.skin_narrow_true, skin_folds += r.skin_stats.crease_folds;
+    if (crease_job) skin_us.push_back(r.skin_us);
     reported_m2 += r.m2_spheres.size();
     gt += r.contacts;
     narrow_total += r.narrow.contacts;
@@ -749,6 +825,23 @@ import::Result<Evaluation> Evaluate(const runtime::AssetView& view, const import
               100 * a.crease_rel, apart, 100 * apart_recall_sphere, 100 * apart_recall_region,
               100 * Ratio(double(apart_excluded), double(apart)) * (apart > 0),
               100 * Ratio(double(apart_same), double(apart)) * (apart > 0));
+  std::sort(skin_us.begin(), skin_us.end());
+  const double skin_recall = Ratio(double(skin_narrow_true), double(skin)),
+               skin_precision = Ratio(double(skin_narrow_true), double(skin_narrow));
+  Appendf(&text, "skin contacts (the definition: intersecting triangles not within %.3g %% of the height of each other "
+              "along the welded bind surface nor within two triangle rings): %zu triangle pairs in %zu (frame, region "
+              "pair)s, %zu of them intersecting at bind pose already; hidden by the exclusion-based count above %.1f %%; "
+              "region pairs found by M1 %.1f %%, M2 %.1f %%; behind the proxy's pairs (reach regions) M1 %.1f %%, M2 %.1f %%\n",
+              100 * skin_crease / height, skin, skin_regions, skin_bind, 100 * Ratio(double(skin_hidden), double(skin)) * (skin > 0),
+              100 * Ratio(double(skin_found[0]), double(skin_regions)), 100 * Ratio(double(skin_found[1]), double(skin_regions)),
+              100 * Ratio(double(skin_behind_reach[0]), double(skin)), 100 * Ratio(double(skin_behind_reach[1]), double(skin)));
+  if (crease_job)
+    Appendf(&text, "narrow phase, crease rule (every triangle pair): recall %.2f %% (%zu/%zu), precision %.2f %% (%zu/%zu), "
+                "%zu folds skipped; median %.1f us, max %.1f us a frame\n",
+                100 * skin_recall, skin_narrow_true, skin, 100 * skin_precision, skin_narrow_true, skin_narrow, skin_folds,
+                skin_us.empty() ? 0.0 : skin_us[skin_us.size() / 2], skin_us.empty() ? 0.0 : skin_us.back());
+  else
+    Appendf(&text, "narrow phase, crease rule: the asset was baked without it (no Asset.crease): re-bake to run it\n");
   Appendf(&text, "sphere-pair precision M2 (reported pairs whose own surrounding regions come within the margin): "
               "%.1f %% (%zu/%zu)\n",
               100 * sphere_precision_m2, reported_m2 - imprecise_m2, reported_m2);
@@ -929,6 +1022,18 @@ import::Result<Evaluation> Evaluate(const runtime::AssetView& view, const import
                                        {"covered_by_sphere_pairs_m2", apart_recall_sphere},
                                        {"covered_by_region_pairs_m2", apart_recall_region},
                                        {"in_excluded_pairs", apart_excluded}, {"inside_one_sphere", apart_same}}},
+        {"skin_contacts",
+         {{"crease", skin_crease}, {"crease_rel", skin_crease / height}, {"triangle_pairs", skin},
+          {"region_pairs", skin_regions}, {"at_bind_pose", skin_bind}, {"hidden_by_exclusions", skin_hidden},
+          {"region_recall_m1", Ratio(double(skin_found[0]), double(skin_regions))},
+          {"region_recall_m2", Ratio(double(skin_found[1]), double(skin_regions))},
+          {"behind_reach_m1", Ratio(double(skin_behind_reach[0]), double(skin))},
+          {"behind_reach_m2", Ratio(double(skin_behind_reach[1]), double(skin))},
+          {"narrow", crease_job ? nlohmann::json{{"recall", skin_recall}, {"precision", skin_precision},
+                                                 {"contacts", skin_narrow}, {"folds", skin_folds},
+                                                 {"median_us", skin_us.empty() ? 0.0 : skin_us[skin_us.size() / 2]},
+                                                 {"max_us", skin_us.empty() ? 0.0 : skin_us.back()}}
+                                : nlohmann::json(nullptr)}}},
         {"narrow", {{"recall", n_recall}, {"precision", n_precision}, {"contacts", narrow_total},
                     {"median_us", narrow_us.empty() ? 0.0 : narrow_us[narrow_us.size() / 2]},
                     {"max_us", narrow_us.empty() ? 0.0 : narrow_us.back()}}},

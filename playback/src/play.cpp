@@ -136,6 +136,8 @@ class Player {
       // joint, and the exact narrow phase behind them cannot cry wolf (README "The spheres as a broad phase").
       if (model_->fold_margin() >= 0.0f) broad.fold_margin = broad.margin;
       if (behind) job.sphere_pairs = out_behind_.data();
+      // Unrestricted on an asset with the crease rule: every self-contact the skin makes (Exclusions::kCrease).
+      else if (o_.crease && narrow_->has_crease()) job.exclusions = runtime::Exclusions::kCrease;
       auto run = [&] {
         if (behind) {
           if (const runtime::Status s = broad.Run(); runtime::Failed(s)) return s;
@@ -146,7 +148,8 @@ class Player {
       if (auto s = Time(run, &row->narrow_us); !s.ok()) return s;
       std::set<std::pair<int, int>> cr;
       for (uint32_t i = 0; i < count_contacts_; ++i) {
-        const int ra = sr ? sr->Get(contacts_[i].sphere_a) : -1, rb = sr ? sr->Get(contacts_[i].sphere_b) : -1;
+        const uint16_t a = contacts_[i].sphere_a, b = contacts_[i].sphere_b;  // 0xFFFF: an unassigned triangle
+        const int ra = sr && a < sr->size() ? sr->Get(a) : -1, rb = sr && b < sr->size() ? sr->Get(b) : -1;
         cr.emplace(std::min(ra, rb), std::max(ra, rb));
       }
       row->contact_regions.assign(cr.begin(), cr.end());

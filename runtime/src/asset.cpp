@@ -145,6 +145,17 @@ Status Semantics(const Asset& a, AssetView* view) {
     }
   }
 
+  // The skin's contact definition (optional): #V bind positions, finite, with the index buffer and weld ids
+  // they are measured on, and a crease > 0 (absent: < 0).
+  if (!Finite(a.crease())) return Status::kErrorNonFinite;
+  if (const auto* bind = a.bind_positions()) {
+    if (bind->size() != size_t{3} * V) return Status::kErrorCountMismatch;
+    for (float x : *bind)
+      if (!std::isfinite(x)) return Status::kErrorNonFinite;
+  }
+  if (a.crease() == 0.0f) return Status::kErrorMissingField;  // neither absent (-1) nor a length
+  if (a.crease() > 0.0f && (!a.bind_positions() || !a.triangles() || !a.weld_ids())) return Status::kErrorMissingField;
+
   // Pivots.
   for (uint32_t t : *piv_t)
     if (t >= T) return Status::kErrorIndexOutOfRange;

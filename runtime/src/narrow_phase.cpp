@@ -1,6 +1,7 @@
 #include "spherechain/runtime/narrow_phase.h"
 
 #include <algorithm>
+#include <cmath>
 #include <atomic>
 #include <bit>
 #include <cstring>
@@ -16,6 +17,11 @@
 #endif
 
 namespace spherechain::runtime {
+
+// Exclusions::kCrease (skin_contacts.cpp).
+Status InitCreaseModel(NarrowPhaseModel& m, const AssetView& view);
+Status InitCreaseWorkspace(NarrowPhaseWorkspace& w, const NarrowPhaseModel& m);
+Status RunCrease(const NarrowPhaseJob& job);
 
 namespace {
 
@@ -703,6 +709,10 @@ Status NarrowPhaseModel::Init(const AssetView& view, NarrowPhaseRegions regions)
     vertex_count_ = V;
     triangle_count_ = T;
     reach_ = reach;
+    if (Status cs = InitCreaseModel(*this, view); cs != Status::kOk) {
+      *this = NarrowPhaseModel{};
+      return cs;
+    }
     id_ = g_next_narrow_model_id.fetch_add(1, std::memory_order_relaxed);
   } SPHERECHAIN_CATCH_BAD_ALLOC {
     *this = NarrowPhaseModel{};
@@ -746,6 +756,10 @@ Status NarrowPhaseWorkspace::Init(const NarrowPhaseModel& model) {
       l->slot.assign(largest + kSentinels, 0);
       for (int k = 0; k < 3; ++k) l->lo[k].assign(largest + kSentinels, 0.0f), l->hi[k].assign(largest + kSentinels, 0.0f);
     }
+    if (Status cs = InitCreaseWorkspace(*this, model); cs != Status::kOk) {
+      *this = NarrowPhaseWorkspace{};
+      return cs;
+    }
     model_id_ = model.id_;
   } SPHERECHAIN_CATCH_BAD_ALLOC {
     *this = NarrowPhaseWorkspace{};
@@ -768,7 +782,13 @@ Status NarrowPhaseJob::Check() const {
   if (!sphere_pairs && sphere_pair_count > 0) return Status::kErrorNullArgument;
   if (!model->initialized() || !workspace->initialized()) return Status::kErrorInvalidJob;
   if (!workspace->made_for(*model)) return Status::kErrorWorkspaceModel;
-  if (exclusions != Exclusions::kAsset && exclusions != Exclusions::kNone) return Status::kErrorInvalidJob;
+  if (exclusions != Exclusions::kAsset && exclusions != Exclusions::kNone && exclusions != Exclusions::kCrease)
+    return Status::kErrorInvalidJob;
+  if (exclusions == Exclusions::kCrease) {
+    if (!model->has_crease()) return Status::kErrorMissingField;
+    if (sphere_pairs || !std::isfinite(crease) || crease < 0.0f || (crease > 0.0f && crease < model->crease()))
+      return Status::kErrorInvalidJob;
+  }
   if (reinterpret_cast<uintptr_t>(positions.data) % 4 != 0) return Status::kErrorAlignment;
   if (positions.stride_bytes < 12 || positions.stride_bytes % 4 != 0) return Status::kErrorStride;
   if (positions.count != model->vertex_count()) return Status::kErrorVertexCount;
@@ -780,6 +800,7 @@ Status NarrowPhaseJob::Check() const {
 
 Status NarrowPhaseJob::Run() const {
   if (Status s = Check(); s != Status::kOk) return s;
+  if (exclusions == Exclusions::kCrease) return RunCrease(*this);
   NarrowPhaseInternal::Frame c{*model, *workspace};
   NarrowPhaseStats st;
   *count = 0;

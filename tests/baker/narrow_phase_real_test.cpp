@@ -8,6 +8,10 @@
 #include <doctest/doctest.h>
 
 #include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <limits>
 #include <cstring>
 #include <set>
 #include <string>
@@ -206,4 +210,165 @@ TEST_CASE("heavy: narrow phase on real frames: CesiumMan walk and BCN_Epileptic 
       CheckFrame(&b, pos, true, path + " frame " + std::to_string(f), &total);
     }
   }
+}
+
+namespace {
+
+// The skin's definition computed apart from the runtime's sweep: CGAL's box intersection + exact
+// do_intersect (ExactSelfIntersections) on the frame, kept unless a crease graph built here from the mesh
+// alone (its own weld ids and bind positions, not the asset's) calls the pair a fold.
+PairSet SkinTruth(const Baked& b, const std::vector<float>& pos, float crease) {
+  const baker::Mesh& mesh = b.bake.mesh;
+  runtime::CreaseGraph graph;
+  REQUIRE(graph.Init(mesh.positions.data(), mesh.vertex_count(), mesh.indices.data(), mesh.triangle_count(),
+                     b.weld.data(), crease) == runtime::Status::kOk);
+  runtime::CreaseScratch scratch;
+  REQUIRE(scratch.Init(graph) == runtime::Status::kOk);
+  auto exact = baker::ExactSelfIntersections(pos.data(), mesh.vertex_count(), mesh.indices, b.weld);
+  REQUIRE(exact.ok());
+  PairSet truth;
+  for (const baker::TrianglePair& p : exact.value())
+    if (!scratch.Near(graph, &mesh.indices[3 * size_t{p.a}], &mesh.indices[3 * size_t{p.b}], crease)) truth.insert(p);
+  return truth;
+}
+
+PairSet CreaseContacts(Baked* b, const std::vector<float>& pos, runtime::NarrowPhaseStats* stats, float crease = 0) {
+  std::vector<runtime::TriangleContact> out(1u << 18);
+  uint32_t n = 0;
+  runtime::NarrowPhaseJob job;
+  job.model = &b->narrow;
+  job.workspace = &b->narrow_ws;
+  job.exclusions = runtime::Exclusions::kCrease;
+  job.crease = crease;
+  job.positions = {pos.data(), b->view.vertex_count, 12};
+  job.output = out.data();
+  job.capacity = static_cast<uint32_t>(out.size());
+  job.count = &n;
+  job.stats = stats;
+  REQUIRE(job.Run() == runtime::Status::kOk);
+  PairSet s;
+  for (uint32_t i = 0; i < n; ++i) {
+    const auto& c = out[i];
+    CHECK(b->narrow.triangle_sphere(c.triangle_a) == c.sphere_a);
+    CHECK(b->narrow.triangle_sphere(c.triangle_b) == c.sphere_b);
+    CHECK((c.sphere_a < c.sphere_b || (c.sphere_a == c.sphere_b && c.triangle_a < c.triangle_b)));
+    s.insert({std::min(c.triangle_a, c.triangle_b), std::max(c.triangle_a, c.triangle_b)});
+  }
+  CHECK(s.size() == n);
+  return s;
+}
+
+}  // namespace
+
+TEST_CASE("heavy: the crease rule on real frames: CesiumMan walk and BCN_Epileptic clip equal the skin's truth") {
+  // Every self-contact the skin makes, whichever spheres own it: the crease job equals the definition computed
+  // apart (at the asset's crease and at twice it), and it finds contacts the exclusion-based job cannot (pairs
+  // of one sphere or of an excluded pair) — the walking arm on the flank.
+  test::SomeInputs inputs;
+  for (const std::string& path :
+       {test::SharedData("gltf/CesiumMan.gltf"), test::AssimpModel("X/BCN_Epileptic.X")}) {
+    if (!inputs.Found(path)) continue;
+    CAPTURE(path);
+    Baked b;
+    BakeAndLoad(path, &b);
+    REQUIRE(b.narrow.has_crease());
+    CHECK(b.narrow.crease() == doctest::Approx(0.03 * b.bake.fit.body_height).epsilon(1e-5));
+    const baker::Clip& clip = b.bake.mesh.clips.front();
+    std::vector<float> pos(b.bake.mesh.positions.size());
+    playback::SkinningScratch scratch;
+    size_t total = 0, hidden = 0, folds = 0;
+    for (uint32_t f = 0; f < 40; f += 8) {
+      CAPTURE(f);
+      REQUIRE(playback::SkinClip(b.bake.mesh, clip, clip.duration_s * float(f) / 40.0f, &scratch, pos.data(), pos.size()).ok());
+      for (float scale : {1.0f, 2.0f}) {
+        const float crease = scale * b.narrow.crease();
+        runtime::NarrowPhaseStats st;
+        const PairSet found = CreaseContacts(&b, pos, &st, scale == 1.0f ? 0.0f : crease);
+        const PairSet truth = SkinTruth(b, pos, crease);
+        CHECK(found == truth);
+        if (scale != 1.0f) continue;
+        total += found.size();
+        folds += st.crease_folds;
+        for (const baker::TrianglePair& p : found) {
+          const uint32_t sa = b.narrow.triangle_sphere(p.a), sb = b.narrow.triangle_sphere(p.b);
+          hidden += sa == sb || b.narrow.IsExcluded(sa, sb);
+        }
+      }
+    }
+    MESSAGE(path << ": " << total << " skin contacts over 5 frames, " << hidden << " of them in one sphere or an excluded pair; "
+                 << folds << " folds");
+    CHECK(total > 0);
+    CHECK(hidden > 0);  // what the exclusion-based definition hid
+  }
+}
+
+TEST_CASE("the crease rule: the synthetic creature's crossing fore legs are contacts; bad jobs and old assets refused") {
+  const std::string creature = test::SourceFile("tests/data/creature/creature.gltf");
+  Baked b;
+  BakeAndLoad(creature, &b);
+  REQUIRE(b.narrow.has_crease());
+  CHECK(b.narrow.bind_contact_count() == 0);  // the cubes' surface does not pass through itself
+  const baker::Clip* cross = nullptr;
+  for (const baker::Clip& c : b.bake.mesh.clips)
+    if (c.name == "cross") cross = &c;
+  REQUIRE(cross);
+  std::vector<float> pos(b.bake.mesh.positions.size());
+  playback::SkinningScratch scratch;
+  // Mid-clip the left fore leg lies across the right one: contacts, every one between the two fore legs
+  // (regions ForeLeg_L and ForeLeg_R), none a fold. At bind pose: nothing.
+  REQUIRE(playback::SkinClip(b.bake.mesh, *cross, 0.5f, &scratch, pos.data(), pos.size()).ok());
+  runtime::NarrowPhaseStats st;
+  const PairSet mid = CreaseContacts(&b, pos, &st);
+  CHECK(mid == SkinTruth(b, pos, b.narrow.crease()));
+  REQUIRE(!mid.empty());
+  const auto& layout = b.bake.segmentation.layout;
+  for (const baker::TrianglePair& p : mid) {
+    const std::string ra = layout.Name(baker::Region(b.bake.segmentation.triangle_regions[p.a]));
+    const std::string rb = layout.Name(baker::Region(b.bake.segmentation.triangle_regions[p.b]));
+    CHECK(((ra == "ForeLeg_L" && rb == "ForeLeg_R") || (ra == "ForeLeg_R" && rb == "ForeLeg_L")));
+  }
+  CHECK(CreaseContacts(&b, b.bake.mesh.positions, &st).empty());
+  // Bad jobs: a crease below the asset's, not finite, or with a sphere-pair list.
+  runtime::NarrowPhaseJob job;
+  std::vector<runtime::TriangleContact> out(16);
+  uint32_t n = 0;
+  job.model = &b.narrow;
+  job.workspace = &b.narrow_ws;
+  job.exclusions = runtime::Exclusions::kCrease;
+  job.positions = {pos.data(), b.view.vertex_count, 12};
+  job.output = out.data();
+  job.capacity = 16;
+  job.count = &n;
+  job.crease = 0.5f * b.narrow.crease();
+  CHECK(job.Run() == runtime::Status::kErrorInvalidJob);
+  job.crease = std::numeric_limits<float>::quiet_NaN();
+  CHECK(job.Run() == runtime::Status::kErrorInvalidJob);
+  job.crease = 0.0f;
+  runtime::Collision one{};
+  one.a = 0, one.b = 1;
+  job.sphere_pairs = &one, job.sphere_pair_count = 1;
+  CHECK(job.Run() == runtime::Status::kErrorInvalidJob);
+  job.sphere_pairs = nullptr, job.sphere_pair_count = 0;
+  CHECK(job.Run() == runtime::Status::kOkTruncated);  // more than 16 contacts: the first 16, count complete
+  CHECK(n == 16);
+  // An asset baked before the rule (the golden v4 creature): loads, runs the old definition, and a crease
+  // job gets kErrorMissingField.
+  const std::string golden = test::SourceFile("tests/data/golden/v4/creature.sphc");
+  REQUIRE(std::filesystem::exists(golden));
+  std::ifstream in(golden, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::vector<uint64_t> storage((bytes.size() + 7) / 8);
+  std::memcpy(storage.data(), bytes.data(), bytes.size());
+  runtime::AssetView old_view;
+  REQUIRE(runtime::LoadAsset(storage.data(), bytes.size(), &old_view) == runtime::Status::kOk);
+  runtime::NarrowPhaseModel old_model;
+  runtime::NarrowPhaseWorkspace old_ws;
+  REQUIRE(old_model.Init(old_view) == runtime::Status::kOk);
+  REQUIRE(old_ws.Init(old_model) == runtime::Status::kOk);
+  CHECK_FALSE(old_model.has_crease());
+  job.model = &old_model, job.workspace = &old_ws;
+  job.positions = {pos.data(), old_view.vertex_count, 12};
+  if (old_view.vertex_count == b.view.vertex_count) CHECK(job.Run() == runtime::Status::kErrorMissingField);
+  job.exclusions = runtime::Exclusions::kAsset;
+  if (old_view.vertex_count == b.view.vertex_count) CHECK(runtime::Succeeded(job.Run()));
 }

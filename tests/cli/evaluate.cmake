@@ -209,7 +209,7 @@ endforeach()
 # --refit joints: the proxy a GPU-skinned game gets (centres skinned by the frame's joint matrices) against
 # the same truth. Spheres left at the bind pose (a joint refit that did nothing) would miss the crossed arms
 # of frames 1-3 entirely (10 frames: two a key pose, the first key at frame 1).
-execute_process(COMMAND ${CLI} -q evaluate ${ASSET} --mesh ${MESH} --frames 10 --no-coverage --refit joints
+execute_process(COMMAND ${CLI} evaluate ${ASSET} --mesh ${MESH} --frames 10 --no-coverage --refit joints
                         --json ${WORK}/joints.json
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc EQUAL 0)
@@ -225,7 +225,7 @@ if(NOT refit_kind STREQUAL "joints" OR NOT j_contacts GREATER 0 OR j_recall LESS
 endif()
 
 # --min-recall 1.0: exit 1 with the reason when the proxy misses anything on these 16 frames, else 0.
-execute_process(COMMAND ${CLI} -q evaluate ${ASSET} --mesh ${MESH} --frames 16 --no-coverage --min-recall 1.0
+execute_process(COMMAND ${CLI} evaluate ${ASSET} --mesh ${MESH} --frames 16 --no-coverage --min-recall 1.0
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT (rc EQUAL 1 AND err MATCHES "is below --min-recall 1.000") AND NOT (rc EQUAL 0 AND out MATCHES ">= --min-recall"))
   message(FATAL_ERROR "--min-recall 1.0: unexpected exit ${rc}:\n${out}${err}")

@@ -7,7 +7,7 @@ if(NOT EXISTS ${MESH} OR NOT EXISTS ${ASSET})
 endif()
 file(REMOVE_RECURSE ${WORK})
 file(MAKE_DIRECTORY ${WORK})
-execute_process(COMMAND ${CLI} -q export-debug ${ASSET} --mesh ${MESH} --morph --frames 10 -o ${WORK}/morph.gltf
+execute_process(COMMAND ${CLI} export-debug ${ASSET} --mesh ${MESH} --morph --frames 10 -o ${WORK}/morph.gltf
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "export-debug --morph failed (${rc}):\n${out}${err}")
@@ -22,12 +22,12 @@ string(JSON name GET "${json}" animations 0 name)
 if(NOT n EQUAL 1 OR NOT name STREQUAL "morph" OR channels LESS 256)
   message(FATAL_ERROR "export-debug --morph: ${n} animations, first '${name}' with ${channels} channels")
 endif()
-execute_process(COMMAND ${CLI} -q export-debug ${ASSET} --mesh ${MESH} --clip Walk -o ${WORK}/bad.gltf
+execute_process(COMMAND ${CLI} export-debug ${ASSET} --mesh ${MESH} --clip Walk -o ${WORK}/bad.gltf
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(rc EQUAL 0 OR NOT "${out}${err}" MATCHES "no clip named 'Walk'" OR EXISTS ${WORK}/bad.gltf)
   message(FATAL_ERROR "export-debug --clip Walk on MakeHuman: expected a failure naming the clip:\n${out}${err}")
 endif()
-execute_process(COMMAND ${CLI} -q export-debug ${ASSET} --mesh ${MESH} --clip Walk --morph arms_crossed -o ${WORK}/bad.gltf
+execute_process(COMMAND ${CLI} export-debug ${ASSET} --mesh ${MESH} --clip Walk --morph arms_crossed -o ${WORK}/bad.gltf
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(rc EQUAL 0 OR NOT "${out}${err}" MATCHES "exclude each other" OR EXISTS ${WORK}/bad.gltf)
   message(FATAL_ERROR "export-debug --clip with --morph: expected a failure:\n${out}${err}")

@@ -51,13 +51,13 @@ endif()
 
 # The extended layout is the default: a bake without a config writes the same bytes. `--regions paper` (over the
 # config's "extended") gives the paper's five regions: schema v3, no head region, no fold margin.
-execute_process(COMMAND ${CLI} -q bake ${MESH} -o ${WORK}/mh_default.sphc RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+execute_process(COMMAND ${CLI} bake ${MESH} -o ${WORK}/mh_default.sphc RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 file(SHA256 ${WORK}/mh.sphc h_ext)
 file(SHA256 ${WORK}/mh_default.sphc h_default)
 if(NOT rc EQUAL 0 OR NOT h_ext STREQUAL h_default)
   message(FATAL_ERROR "the default bake (${rc}) differs from regions extended:\n${out}${err}")
 endif()
-execute_process(COMMAND ${CLI} -q bake ${MESH} -o ${WORK}/mh_paper.sphc --config ${WORK}/extended.json --regions paper
+execute_process(COMMAND ${CLI} bake ${MESH} -o ${WORK}/mh_paper.sphc --config ${WORK}/extended.json --regions paper
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 execute_process(COMMAND ${CLI} inspect ${WORK}/mh_paper.sphc --json RESULT_VARIABLE rc2 OUTPUT_VARIABLE pins ERROR_VARIABLE err2)
 if(NOT rc EQUAL 0 OR NOT rc2 EQUAL 0)
@@ -81,7 +81,7 @@ if(NOT fold_rel EQUAL 0.0015 OR fold_ins STREQUAL "null")
   message(FATAL_ERROR "extended bake: fold_margin_rel '${fold_rel}' in the report (expected 0.0015), inspect '${fold_ins}'")
 endif()
 file(WRITE ${WORK}/extended_nofold.json "{\"regions\": \"extended\", \"fold_margin_rel\": -1}")
-execute_process(COMMAND ${CLI} -q bake ${MESH} -o ${WORK}/mh_nofold.sphc --config ${WORK}/extended_nofold.json
+execute_process(COMMAND ${CLI} bake ${MESH} -o ${WORK}/mh_nofold.sphc --config ${WORK}/extended_nofold.json
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "bake extended without a fold margin failed (${rc}):\n${out}${err}")
@@ -89,7 +89,7 @@ endif()
 foreach(variant "mh;0" "mh_nofold;1")
   list(GET variant 0 name)
   list(GET variant 1 want_alarms)
-  execute_process(COMMAND ${CLI} -q evaluate ${WORK}/${name}.sphc --mesh ${MESH} --no-coverage --json ${WORK}/${name}_morph.json
+  execute_process(COMMAND ${CLI} evaluate ${WORK}/${name}.sphc --mesh ${MESH} --no-coverage --json ${WORK}/${name}_morph.json
                   RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
   if(NOT rc EQUAL 0)
     message(FATAL_ERROR "evaluate ${name} failed (${rc}):\n${out}${err}")
@@ -107,7 +107,7 @@ endforeach()
 foreach(case "hand_on_face;R4-R6" "fingers_interlocked;R5-R6")
   list(GET case 0 pose)
   list(GET case 1 pair)
-  execute_process(COMMAND ${CLI} -q evaluate ${WORK}/mh.sphc --mesh ${MESH} --morph ${POSES}/${pose}.json --frames 8
+  execute_process(COMMAND ${CLI} evaluate ${WORK}/mh.sphc --mesh ${MESH} --morph ${POSES}/${pose}.json --frames 8
                           --no-coverage --json ${WORK}/${pose}.json
                   RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
   if(NOT rc EQUAL 0)
@@ -122,7 +122,7 @@ foreach(case "hand_on_face;R4-R6" "fingers_interlocked;R5-R6")
   endif()
 endforeach()
 
-execute_process(COMMAND ${CLI} -q evaluate ${WORK}/mh.sphc --mesh ${MESH} --morph ${POSES}/hand_on_face.json --frames 8
+execute_process(COMMAND ${CLI} evaluate ${WORK}/mh.sphc --mesh ${MESH} --morph ${POSES}/hand_on_face.json --frames 8
                         --no-coverage --regions paper --json ${WORK}/paper.json
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 file(READ ${WORK}/paper.json j)
@@ -136,12 +136,12 @@ if(NOT EXISTS ${BCN})
   message("SKIPPED: ${BCN} not found (Debian's assimp-testmodels is absent): the BCN_Epileptic check")
   return()
 endif()
-execute_process(COMMAND ${CLI} -q bake ${BCN} -o ${WORK}/bcn.sphc --config ${WORK}/extended.json
+execute_process(COMMAND ${CLI} bake ${BCN} -o ${WORK}/bcn.sphc --config ${WORK}/extended.json
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "bake BCN_Epileptic --config regions extended failed (${rc}):\n${out}${err}")
 endif()
-execute_process(COMMAND ${CLI} -q evaluate ${WORK}/bcn.sphc --mesh ${BCN} --no-coverage --json ${WORK}/bcn.json
+execute_process(COMMAND ${CLI} evaluate ${WORK}/bcn.sphc --mesh ${BCN} --no-coverage --json ${WORK}/bcn.json
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "evaluate BCN_Epileptic (extended) failed (${rc}):\n${out}${err}")

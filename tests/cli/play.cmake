@@ -6,7 +6,7 @@ if(NOT EXISTS ${MESH} OR NOT EXISTS ${ASSET})
 endif()
 file(REMOVE_RECURSE ${WORK})
 file(MAKE_DIRECTORY ${WORK})
-execute_process(COMMAND ${CLI} -q play ${ASSET} --mesh ${MESH} --repeat 1 --json ${WORK}/play.json
+execute_process(COMMAND ${CLI} play ${ASSET} --mesh ${MESH} --repeat 1 --json ${WORK}/play.json
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "play failed (${rc}):\n${out}${err}")
@@ -48,10 +48,13 @@ endforeach()
 # finds a subset of the unrestricted narrow phase's contacts, frame by frame; with a margin wide enough that M2
 # lists every pair the asset allows (100 x), all of them. A negative scale is refused.
 set(np_counts "")
-foreach(mode "all;--narrow-phase" "behind;--narrow-behind;1.5" "wide;--narrow-behind;100")
+# The restricted path keeps the asset's exclusions, so it is compared with the unrestricted one under them
+# (--asset-exclusions); the crease rule's run (the default) must report contacts of one region too.
+foreach(mode "all;--narrow-phase;--asset-exclusions" "behind;--narrow-behind;1.5" "wide;--narrow-behind;100"
+             "crease;--narrow-phase")
   list(GET mode 0 name)
   list(SUBLIST mode 1 -1 flags)
-  execute_process(COMMAND ${CLI} -q play ${ASSET} --mesh ${MESH} --frames 12 --repeat 1 --method m2 ${flags}
+  execute_process(COMMAND ${CLI} play ${ASSET} --mesh ${MESH} --frames 12 --repeat 1 --method m2 ${flags}
                           --json ${WORK}/np_${name}.json
                   RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
   if(NOT rc EQUAL 0)
@@ -61,12 +64,19 @@ foreach(mode "all;--narrow-phase" "behind;--narrow-behind;1.5" "wide;--narrow-be
 endforeach()
 set(total_all 0)
 set(total_behind 0)
+set(crease_same_region 0)
 foreach(f RANGE 11)
   string(JSON c_all GET "${np_all}" frames ${f} narrow_phase contacts)
   string(JSON c_behind GET "${np_behind}" frames ${f} narrow_phase contacts)
   string(JSON c_wide GET "${np_wide}" frames ${f} narrow_phase contacts)
   string(JSON r_all GET "${np_all}" frames ${f} narrow_phase regions_in_contact)
   string(JSON n_r LENGTH "${np_behind}" frames ${f} narrow_phase regions_in_contact)
+  string(JSON r_crease GET "${np_crease}" frames ${f} narrow_phase regions_in_contact)
+  foreach(k RANGE 9)
+    if(r_crease MATCHES "\"R${k}-R${k}\"")
+      math(EXPR crease_same_region "${crease_same_region} + 1")
+    endif()
+  endforeach()
   if(c_behind GREATER c_all OR NOT c_wide EQUAL c_all)
     message(FATAL_ERROR "frame ${f}: narrow phase ${c_all} contacts, behind M2's pairs at 1.5x ${c_behind}, at 100x ${c_wide}")
   endif()
@@ -83,6 +93,10 @@ foreach(f RANGE 11)
   math(EXPR total_behind "${total_behind} + ${c_behind}")
 endforeach()
 message(STATUS "narrow phase over 12 frames: ${total_all} contacts; behind M2's pairs at 1.5x the margin: ${total_behind}")
+message(STATUS "the crease rule: ${crease_same_region} (frame, region) contacts of a region with itself")
+if(NOT crease_same_region GREATER 0)
+  message(FATAL_ERROR "the crease rule found no contact of a region with itself on the morph's 12 frames")
+endif()
 if(NOT total_all GREATER 0 OR NOT total_behind GREATER 0)
   message(FATAL_ERROR "expected contacts on the morph's 12 frames: ${total_all} unrestricted, ${total_behind} behind")
 endif()

@@ -13,13 +13,13 @@ file(REMOVE_RECURSE ${WORK})
 file(MAKE_DIRECTORY ${WORK})
 
 # Without three.js (an empty --three folder): exit 1, a message naming `npm ci`, no file.
-execute_process(COMMAND ${CLI} -q view ${ASSET} --mesh ${MESH} --three ${WORK} -o ${WORK}/none.html
+execute_process(COMMAND ${CLI} view ${ASSET} --mesh ${MESH} --three ${WORK} -o ${WORK}/none.html
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc EQUAL 1 OR NOT "${out}${err}" MATCHES "three.js not found.*npm ci" OR EXISTS ${WORK}/none.html)
   message(FATAL_ERROR "view without three.js: expected exit 1, a message naming `npm ci` and no file; got ${rc}:\n${out}${err}")
 endif()
 
-execute_process(COMMAND ${CLI} -q view ${ASSET} --mesh ${MESH} -o ${WORK}/makehuman.html
+execute_process(COMMAND ${CLI} view ${ASSET} --mesh ${MESH} -o ${WORK}/makehuman.html
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc EQUAL 0)
   if("${out}${err}" MATCHES "three.js not found")

@@ -62,6 +62,12 @@ struct BakeConfig {
   /// five and creatures (where a limb region holds its hand or foot, and BCN_Epileptic's knee folds are found
   /// through those pairs). Negative: none (every pair on contact_margin_rel). [Limit: < 0, or [0, 0.05]]
   std::optional<double> fold_margin_rel;
+  /// The crease (Asset.crease, runtime crease.h), relative to the body height: two triangles that intersect
+  /// are a fold of the skin, not a self-contact, when their corners lie within crease_rel × body height of
+  /// each other along the welded bind surface's edges, or within two triangle rings. Written with the bind
+  /// positions (Asset.bind_positions) so the runtime applies it with no geodesics per frame.
+  /// [Limit: (0, 0.5]; config key "crease_rel"]
+  double crease_rel = 0.03;
   /// Exclusions (cover fit): pairs whose spheres come within (near_rel + 2·contact_margin_rel) × body
   /// height of each other at bind pose are adjacent (chains.h BindExcludedPairs) — so nothing the
   /// margin reaches at bind pose is ever reported.
@@ -104,6 +110,7 @@ struct SphereAccuracy {
 /// Everything a bake produced.
 struct BakeResult {
   Mesh mesh;
+  uint32_t crease_components = 0;  ///< connected pieces of the welded bind surface (runtime CreaseGraph)
   Segmentation segmentation;
   std::optional<Segmentation> other_segmentation;      ///< the method not chosen, when compared
   std::optional<SegmentationAgreement> agreement;      ///< chosen vs other

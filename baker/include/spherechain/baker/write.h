@@ -37,6 +37,8 @@ struct AssetInputs {
   uint64_t config_hash = 0;
   double contact_margin = 0.0;                      ///< Asset.contact_margin [Units: source]
   double fold_margin = -1.0;                        ///< Asset.fold_margin [Units: source]; < 0: left out
+  const std::vector<float>* bind_positions = nullptr;  ///< Asset.bind_positions (\#V×3); null: left out
+  double crease = -1.0;                             ///< Asset.crease [Units: source]; <= 0: left out
   const CoverageStats* coverage = nullptr;          ///< [opt] Asset.coverage
   float coverage_voxel_rel = 0.0f;                  ///< the voxel edge it was measured with / height
   /// [opt] Asset.forced_findings: plausibility checks the bake failed and was forced past (bake --force).

@@ -45,6 +45,11 @@ struct PlayOptions {
   /// narrow phase cannot cry wolf). That M2 run is timed into FrameReport::narrow_us with the narrow phase.
   /// [Limit: finite, >= 0; otherwise Play answers kConfig]
   float narrow_behind_margin = 0.0f;
+  /// With narrow_phase over every region (narrow_behind_margin 0) on an asset baked with the crease rule
+  /// (Asset.crease): the skin's definition, Exclusions::kCrease — every self-contact whichever spheres own
+  /// it (a contact's sphere is 0xFFFF for an unassigned triangle; its region -1). false, or an older asset:
+  /// the asset's excluded pairs (Exclusions::kAsset).
+  bool crease = true;
   uint32_t contact_capacity = 1u << 16;   ///< narrow-phase contacts kept per frame (more are counted, not kept)
   bool keep_spheres = false;              ///< fill FrameReport::spheres (\#S×4 per frame)
   /// [opt] called after each animation frame (not the bind pose) is skinned and measured: the frame index,

@@ -82,7 +82,10 @@ struct AssetView {
 ///     weld_ids[weld_ids[v]] == weld_ids[v], else kErrorIndexOutOfRange), kErrorOffsets, kErrorNonFinite,
 ///     kErrorRadius, kErrorPivotFrame, kErrorChainOrder, kErrorExcludedPairs, kErrorContactMargin
 ///     (contact_margin < 0; NaN or inf: kErrorNonFinite), the optional fold_margin (NaN or inf:
-///     kErrorNonFinite; >= 0 without sphere_regions: kErrorMissingField), and the optional v3 joint weights:
+///     kErrorNonFinite; >= 0 without sphere_regions: kErrorMissingField), the optional crease rule
+///     (bind_positions: 3·\#V finite floats, else kErrorCountMismatch / kErrorNonFinite; crease NaN or inf:
+///     kErrorNonFinite; crease == 0, or > 0 without bind_positions, triangles and weld_ids:
+///     kErrorMissingField), and the optional v3 joint weights:
 ///     sphere_joints and sphere_joint_weights both present or both absent, 4·\#S each
 ///     (kErrorCountMismatch), joint indices < joint_count (kErrorIndexOutOfRange), weights finite,
 ///     >= 0 and summing to 1 ± 1e-3 per sphere (kErrorSkinWeights); the optional v4 regions: 2 to

@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "spherechain/runtime/asset.h"
+#include "spherechain/runtime/crease.h"
 #include "spherechain/runtime/model.h"
 #include "spherechain/runtime/detect.h"
 #include "spherechain/runtime/status.h"
@@ -41,6 +42,13 @@ namespace spherechain::runtime {
 enum class Exclusions : uint8_t {
   kAsset = 0,  ///< skip Asset.excluded_pairs (joint neighbourhoods): what the proxy skips too
   kNone = 1,   ///< test every pair of different spheres (shows skinning artefacts at joints)
+  /// The skin's own definition (crease.h): every pair of triangles that share no welded corner, intersect,
+  /// and are not near on the welded bind surface (within the crease, Asset.crease, or two triangle rings),
+  /// whichever spheres own them — the same sphere, an excluded pair, or none (unassigned triangles: sphere
+  /// 0xFFFF in the record). Needs an asset baked with the crease rule (Asset.bind_positions and crease;
+  /// else kErrorMissingField) and every sphere pair (sphere_pairs null; else kErrorInvalidJob). The
+  /// sphere pairs play no part: all triangles are swept at once.
+  kCrease = 2,
 };
 
 /// Which triangles stand behind a sphere in a NarrowPhaseModel.
@@ -58,11 +66,14 @@ enum class NarrowPhaseRegions : uint8_t {
   kReach = 1,
 };
 
-/// One contact: two intersecting triangles of different surrounding regions. POD, 12 bytes.
+/// One contact: two intersecting triangles (of different surrounding regions, except with
+/// Exclusions::kCrease, where both may be one sphere's and an unassigned triangle's owner is 0xFFFF). POD,
+/// 12 bytes.
 struct TriangleContact {
   uint32_t triangle_a;  ///< source triangle index (< \#T), in sphere_a's surrounding region (owned by it)
   uint32_t triangle_b;  ///< source triangle index (< \#T), in sphere_b's surrounding region (owned by it)
-  uint16_t sphere_a;    ///< sphere_a < sphere_b
+  uint16_t sphere_a;    ///< sphere_a < sphere_b (kCrease: sphere_a <= sphere_b, and triangle_a < triangle_b
+                        ///< when equal)
   uint16_t sphere_b;
 };
 static_assert(sizeof(TriangleContact) == 12);
@@ -79,6 +90,9 @@ struct NarrowPhaseStats {
   uint32_t degenerate_triangles = 0;  ///< triangles that reached an exact test and were found degenerate
                                       ///< (zero area, exact; once a frame each): they never make contacts
   uint32_t contacts = 0;              ///< intersecting triangle pairs; > capacity ⇔ truncated
+  uint32_t crease_folds = 0;          ///< kCrease: intersecting pairs near on the bind surface (folds, not contacts)
+  uint32_t bind_contacts = 0;         ///< kCrease: contacts whose triangles intersect at bind pose too (modelling
+                                      ///< artefacts; reported, NarrowPhaseModel::IntersectsAtBind names them)
 };
 
 struct NarrowPhaseJob;
@@ -131,13 +145,31 @@ class NarrowPhaseModel {
   uint16_t triangle_sphere(uint32_t t) const { return tri_sphere_[t]; }
   /// Weld id of vertex `v` [Limit: < \#V]: see Asset.weld_ids.
   uint32_t weld_id(uint32_t v) const { return weld_[v]; }
+  /// True when the asset carries the crease rule (Asset.bind_positions, crease): Exclusions::kCrease works.
+  bool has_crease() const { return crease_graph_.initialized(); }
+  /// The asset's crease [Units: model], 0 without the rule.
+  float crease() const { return crease_graph_.crease(); }
+  /// The welded bind surface's edge graph (crease.h); uninitialised without the rule.
+  const CreaseGraph& crease_graph() const { return crease_graph_; }
+  /// True when triangles t and u (< \#T, either order) intersect at bind pose and are not near (crease
+  /// rule): a contact the model already makes (a modelling artefact), reported apart. False without the
+  /// rule. O(log \#bind contacts).
+  bool IntersectsAtBind(uint32_t t, uint32_t u) const;
+  /// How many such pairs the bind pose has (computed by Init with the crease rule).
+  uint32_t bind_contact_count() const { return static_cast<uint32_t>(bind_contacts_.size()); }
 
   friend class NarrowPhaseWorkspace;
   friend struct NarrowPhaseJob;
   friend struct NarrowPhaseInternal;
+  friend struct CreaseSweep;
 
  private:
   uint64_t id_ = 0;
+  // The crease rule (Asset.bind_positions, crease; empty without): the bind surface's graph, every
+  // triangle's corners (#T×3, the index buffer), and the bind pose's own contacts (t << 32 | u, t < u, sorted).
+  CreaseGraph crease_graph_;
+  std::vector<uint32_t> tri_v_;
+  std::vector<uint64_t> bind_contacts_;
   bool reach_ = false;  // regions from Asset.reach_*: overlapping, owners from the surrounding regions
   uint32_t sphere_count_ = 0, vertex_count_ = 0, triangle_count_ = 0;
   std::vector<uint32_t> behind_offsets_;  // reach_ only: CSR #T+1, the spheres each triangle stands behind
@@ -193,6 +225,7 @@ class NarrowPhaseWorkspace {
 
   friend struct NarrowPhaseJob;
   friend struct NarrowPhaseInternal;
+  friend struct CreaseSweep;
 
   struct Culled {                     // culled triangles of one side of a candidate pair
     std::vector<uint64_t> key;        // sweep order: ordered bits of the box minimum on the axis << 32 | n
@@ -231,6 +264,14 @@ class NarrowPhaseWorkspace {
   std::vector<uint64_t> listed_;               // reach models: #S rows of ⌈#S/64⌉ words, bit (a, b) set for
                                                // this Run's candidates (a < b); cleared before it returns
   Culled list_a_, list_b_;
+  // Exclusions::kCrease (sized only for a model with the crease rule): every triangle's box (6 rows of #T:
+  // min x, y, z, max x, y, z), the sweep order, prepared triangles with their state this frame, the rule's
+  // scratch.
+  std::vector<float> tri_box_;
+  std::vector<uint64_t> sweep_;
+  std::vector<PreparedTriangle> tri_prepared_;
+  std::vector<uint8_t> tri_state_;  // 0 not prepared this frame, 1 prepared, 2 degenerate
+  CreaseScratch crease_scratch_;
 };
 
 /// ozz-style job: exact triangle contacts between the surrounding regions of different spheres
@@ -256,6 +297,9 @@ struct NarrowPhaseJob {
   NarrowPhaseWorkspace* workspace = nullptr;  ///< made for `model` (NarrowPhaseWorkspace::Init); scratch written
   PositionsView positions;                ///< deformed vertex positions, same as RefitJob's
   Exclusions exclusions = Exclusions::kAsset;
+  /// kCrease only: the fold distance [Units: model]; 0 = the asset's (Asset.crease). [Limit: 0 or >= the
+  /// asset's crease — a job may widen the folds, never narrow them below what was baked: kErrorInvalidJob]
+  float crease = 0.0f;
   /// [opt] restrict the candidates to these sphere pairs (e.g. a DetectJob's output — then only the
   /// contacts behind the proxy's pairs are searched); null = every sphere pair (the exact answer).
   const Collision* sphere_pairs = nullptr;
@@ -270,7 +314,8 @@ struct NarrowPhaseJob {
   bool Validate() const { return Check() == Status::kOk; }
   /// kErrorNullArgument (model, workspace, count or positions.data null; output null with capacity > 0;
   /// sphere_pairs null with sphere_pair_count > 0), kErrorInvalidJob (model or workspace not
-  /// initialised, unknown exclusions), kErrorWorkspaceModel (the workspace was made for another model), kErrorAlignment (positions not 4-byte aligned), kErrorStride, kErrorVertexCount,
+  /// initialised, unknown exclusions; kCrease with sphere_pairs or a crease below the asset's or not
+  /// finite), kErrorMissingField (kCrease on an asset without the crease rule), kErrorWorkspaceModel (the workspace was made for another model), kErrorAlignment (positions not 4-byte aligned), kErrorStride, kErrorVertexCount,
   /// kErrorIndexOutOfRange (a sphere_pairs record with a >= b or b >= \#S), else kOk.
   Status Check() const;
   /// Returns Check()'s error (outputs untouched); kErrorNonFinitePositions when a vertex of a

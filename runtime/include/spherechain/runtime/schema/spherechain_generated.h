@@ -768,7 +768,9 @@ struct Asset FLATBUFFERS_FINAL_CLASS : private flatbuffers::Table {
     VT_BIPED = 76,
     VT_REACH_OFFSETS = 78,
     VT_REACH_TRIANGLES = 80,
-    VT_FOLD_MARGIN = 82
+    VT_FOLD_MARGIN = 82,
+    VT_BIND_POSITIONS = 84,
+    VT_CREASE = 86
   };
   uint32_t schema_version() const {
     return GetField<uint32_t>(VT_SCHEMA_VERSION, 0);
@@ -898,6 +900,12 @@ struct Asset FLATBUFFERS_FINAL_CLASS : private flatbuffers::Table {
   float fold_margin() const {
     return GetField<float>(VT_FOLD_MARGIN, -1.0f);
   }
+  const flatbuffers::Vector<float> *bind_positions() const {
+    return GetPointer<const flatbuffers::Vector<float> *>(VT_BIND_POSITIONS);
+  }
+  float crease() const {
+    return GetField<float>(VT_CREASE, -1.0f);
+  }
   bool Verify(flatbuffers::Verifier &verifier) const {
     return VerifyTableStart(verifier) &&
            VerifyField<uint32_t>(verifier, VT_SCHEMA_VERSION, 4) &&
@@ -975,6 +983,9 @@ struct Asset FLATBUFFERS_FINAL_CLASS : private flatbuffers::Table {
            VerifyOffset(verifier, VT_REACH_TRIANGLES) &&
            verifier.VerifyVector(reach_triangles()) &&
            VerifyField<float>(verifier, VT_FOLD_MARGIN, 4) &&
+           VerifyOffset(verifier, VT_BIND_POSITIONS) &&
+           verifier.VerifyVector(bind_positions()) &&
+           VerifyField<float>(verifier, VT_CREASE, 4) &&
            verifier.EndTable();
   }
 };
@@ -1103,6 +1114,12 @@ struct AssetBuilder {
   void add_fold_margin(float fold_margin) {
     fbb_.AddElement<float>(Asset::VT_FOLD_MARGIN, fold_margin, -1.0f);
   }
+  void add_bind_positions(flatbuffers::Offset<flatbuffers::Vector<float>> bind_positions) {
+    fbb_.AddOffset(Asset::VT_BIND_POSITIONS, bind_positions);
+  }
+  void add_crease(float crease) {
+    fbb_.AddElement<float>(Asset::VT_CREASE, crease, -1.0f);
+  }
   explicit AssetBuilder(flatbuffers::FlatBufferBuilder &_fbb)
         : fbb_(_fbb) {
     start_ = fbb_.StartTable();
@@ -1155,8 +1172,12 @@ inline flatbuffers::Offset<Asset> CreateAsset(
     bool biped = false,
     flatbuffers::Offset<flatbuffers::Vector<uint32_t>> reach_offsets = 0,
     flatbuffers::Offset<flatbuffers::Vector<uint32_t>> reach_triangles = 0,
-    float fold_margin = -1.0f) {
+    float fold_margin = -1.0f,
+    flatbuffers::Offset<flatbuffers::Vector<float>> bind_positions = 0,
+    float crease = -1.0f) {
   AssetBuilder builder_(_fbb);
+  builder_.add_crease(crease);
+  builder_.add_bind_positions(bind_positions);
   builder_.add_fold_margin(fold_margin);
   builder_.add_reach_triangles(reach_triangles);
   builder_.add_reach_offsets(reach_offsets);
@@ -1241,7 +1262,9 @@ inline flatbuffers::Offset<Asset> CreateAssetDirect(
     bool biped = false,
     const std::vector<uint32_t> *reach_offsets = nullptr,
     const std::vector<uint32_t> *reach_triangles = nullptr,
-    float fold_margin = -1.0f) {
+    float fold_margin = -1.0f,
+    const std::vector<float> *bind_positions = nullptr,
+    float crease = -1.0f) {
   auto generator__ = generator ? _fbb.CreateString(generator) : 0;
   auto parts__ = parts ? _fbb.CreateVector<flatbuffers::Offset<spherechain::schema::MeshPart>>(*parts) : 0;
   auto units__ = units ? _fbb.CreateString(units) : 0;
@@ -1269,6 +1292,7 @@ inline flatbuffers::Offset<Asset> CreateAssetDirect(
   auto regions__ = regions ? _fbb.CreateVector<flatbuffers::Offset<spherechain::schema::RegionInfo>>(*regions) : 0;
   auto reach_offsets__ = reach_offsets ? _fbb.CreateVector<uint32_t>(*reach_offsets) : 0;
   auto reach_triangles__ = reach_triangles ? _fbb.CreateVector<uint32_t>(*reach_triangles) : 0;
+  auto bind_positions__ = bind_positions ? _fbb.CreateVector<float>(*bind_positions) : 0;
   return spherechain::schema::CreateAsset(
       _fbb,
       schema_version,
@@ -1310,7 +1334,9 @@ inline flatbuffers::Offset<Asset> CreateAssetDirect(
       biped,
       reach_offsets__,
       reach_triangles__,
-      fold_margin);
+      fold_margin,
+      bind_positions__,
+      crease);
 }
 
 /// One region of a body (Asset.regions, schema v4).
