@@ -469,6 +469,141 @@ bool BehindTheProxy(const Workload& w, const sc::AssetView& view, int runs,
 }
 
 // Prints the "narrow phase" section; false when a cross-check failed.
+// Skin contacts (Exclusions::kCrease): NarrowPhaseJob under the crease rule on every frame, the fastest of
+// `runs` passes per frame; and a peer doing the same work the plain way, which also checks it: one sort and
+// sweep of all triangle boxes on the longest axis, pairs sharing a welded corner skipped, TrianglesIntersect
+// on prepared triangles, then the rule asked of the graph (CreaseScratch::Near, bounded Dijkstra) for each
+// intersecting pair. Its contacts must equal the job's on every frame.
+bool SkinContacts(const Workload& w, const sc::AssetView& view, int runs) {
+  sc::NarrowPhaseModel np;
+  sc::NarrowPhaseWorkspace np_ws;
+  const double init_ms = Micros([&] { (void)np.Init(view); }) / 1000.0;
+  if (!np.has_crease() || np_ws.Init(np) != sc::Status::kOk) {
+    std::printf("\nskin contacts: skipped (the asset has no crease rule: bake it again)\n");
+    return true;
+  }
+  const size_t F = w.frames.size();
+  const uint32_t T = np.triangle_count();
+  const uint32_t* tri = view.asset->triangles()->data();
+  std::vector<sc::TriangleContact> out(size_t{1} << 20);
+  uint32_t count = 0;
+  sc::NarrowPhaseStats st;
+  sc::NarrowPhaseJob job;
+  job.model = &np;
+  job.workspace = &np_ws;
+  job.exclusions = sc::Exclusions::kCrease;
+  job.output = out.data();
+  job.capacity = static_cast<uint32_t>(out.size());
+  job.count = &count;
+  job.stats = &st;
+  std::vector<sc::NarrowPhaseStats> stats(F);
+  std::vector<double> us(F, 1e300), peer_us(F, 1e300);
+  std::vector<std::vector<TrianglePair>> found(F), peer(F);
+  // The peer's scratch.
+  std::vector<float> box(6 * size_t{T});
+  std::vector<std::pair<float, uint32_t>> order;
+  std::vector<sc::PreparedTriangle> prepared(T);
+  std::vector<int8_t> state(T);
+  sc::CreaseScratch scratch;
+  (void)scratch.Init(np.crease_graph());
+  auto sweep_all = [&](const float* pos, std::vector<TrianglePair>* pairs) {
+    pairs->clear();
+    order.clear();
+    float lo[3] = {1e30f, 1e30f, 1e30f}, hi[3] = {-1e30f, -1e30f, -1e30f};
+    for (uint32_t t = 0; t < T; ++t) {
+      const uint32_t* v = tri + 3 * size_t{t};
+      if (np.weld_id(v[0]) == np.weld_id(v[1]) || np.weld_id(v[1]) == np.weld_id(v[2]) || np.weld_id(v[0]) == np.weld_id(v[2]))
+        continue;
+      for (int k = 0; k < 3; ++k) {
+        float a = pos[3 * size_t{v[0]} + k], b = pos[3 * size_t{v[1]} + k], c = pos[3 * size_t{v[2]} + k];
+        box[6 * size_t{t} + k] = std::min({a, b, c});
+        box[6 * size_t{t} + 3 + k] = std::max({a, b, c});
+        lo[k] = std::min(lo[k], box[6 * size_t{t} + k]), hi[k] = std::max(hi[k], box[6 * size_t{t} + 3 + k]);
+      }
+      order.emplace_back(0.0f, t);
+      state[t] = 0;
+    }
+    int axis = 0;
+    for (int k = 1; k < 3; ++k)
+      if (hi[k] - lo[k] > hi[axis] - lo[axis]) axis = k;
+    for (auto& o : order) o.first = box[6 * size_t{o.second} + axis];
+    std::sort(order.begin(), order.end());
+    scratch.Reset();
+    auto ready = [&](uint32_t t) {
+      if (state[t] == 0) {
+        const uint32_t* v = tri + 3 * size_t{t};
+        state[t] = sc::PrepareTriangle(pos + 3 * size_t{v[0]}, pos + 3 * size_t{v[1]}, pos + 3 * size_t{v[2]}, &prepared[t]) ? 1 : 2;
+      }
+      return state[t] == 1;
+    };
+    for (size_t i = 0; i < order.size(); ++i) {
+      const uint32_t t = order[i].second;
+      const float* bt = &box[6 * size_t{t}];
+      const uint32_t* tv = tri + 3 * size_t{t};
+      for (size_t j = i + 1; j < order.size() && order[j].first <= bt[3 + axis]; ++j) {
+        const uint32_t u = order[j].second;
+        const float* bu = &box[6 * size_t{u}];
+        bool overlap = true;
+        for (int k = 0; k < 3; ++k) overlap &= bu[k] <= bt[3 + k] && bu[3 + k] >= bt[k];
+        if (!overlap) continue;
+        const uint32_t* uv = tri + 3 * size_t{u};
+        bool shared = false;
+        for (int a = 0; a < 3; ++a)
+          for (int b = 0; b < 3; ++b) shared |= np.weld_id(tv[a]) == np.weld_id(uv[b]);
+        if (shared || !ready(t) || !ready(u) || !sc::TrianglesIntersect(prepared[t], prepared[u])) continue;
+        if (scratch.Near(np.crease_graph(), tv, uv, np.crease())) continue;
+        pairs->emplace_back(std::min(t, u), std::max(t, u));
+      }
+    }
+    std::sort(pairs->begin(), pairs->end());
+  };
+  for (size_t f = 0; f < F; ++f) {
+    job.positions = {w.frames[f].data(), w.vertex_count, 12};
+    if (sc::Status s = job.Run(); s != sc::Status::kOk) {
+      std::fprintf(stderr, "skin contacts, frame %zu: %s\n", f, sc::ToString(s));
+      return false;
+    }
+    stats[f] = st;
+    for (uint32_t i = 0; i < count; ++i)
+      found[f].emplace_back(std::min(out[i].triangle_a, out[i].triangle_b), std::max(out[i].triangle_a, out[i].triangle_b));
+    std::sort(found[f].begin(), found[f].end());
+  }
+  for (int k = 0; k < runs; ++k)
+    for (size_t f = 0; f < F; ++f) {
+      job.positions = {w.frames[f].data(), w.vertex_count, 12};
+      us[f] = std::min(us[f], Micros([&] { (void)job.Run(); }));
+      if (k < 2) peer_us[f] = std::min(peer_us[f], Micros([&] { sweep_all(w.frames[f].data(), &peer[f]); }));
+    }
+  bool ok = true;
+  for (size_t f = 0; f < F; ++f)
+    if (peer[f] != found[f]) {
+      std::fprintf(stderr, "MISMATCH skin contacts, frame %zu: job %zu, whole-mesh sweep %zu\n", f, found[f].size(), peer[f].size());
+      ok = false;
+    }
+  const Summary time = Summarize(us), ptime = Summarize(peer_us);
+  const Summary pairs = Summarize(Column(stats, &sc::NarrowPhaseStats::candidate_pairs));
+  const Summary box_tests = Summarize(Column(stats, &sc::NarrowPhaseStats::box_tests));
+  const Summary near = Summarize(Column(stats, &sc::NarrowPhaseStats::crease_folds));
+  const Summary tests = Summarize(Column(stats, &sc::NarrowPhaseStats::triangle_tests));
+  const Summary hits = Summarize(Column(stats, &sc::NarrowPhaseStats::contacts));
+  std::printf("\nskin contacts (NarrowPhaseJob, Exclusions::kCrease: crease %.4g, %u bind contacts; one core)\n",
+              double(np.crease()), np.bind_contact_count());
+  std::printf("NarrowPhaseModel::Init %.1f ms (patches and near bits included: %u patches, %.2f MB)\n", init_ms,
+              np.crease_patch_count(), double(np.crease_patch_bytes()) / 1e6);
+  std::printf("%-30s %12s %12s %12s\n", "per frame", "median", "mean", "max");
+  std::printf("%-30s %12.1f %12.1f %12.1f  (frame %zu)\n", "time us", time.median, time.mean, time.max, time.argmax);
+  std::printf("%-30s %12.0f %12.1f %12.0f\n", "patch pairs looked at", pairs.median, pairs.mean, pairs.max);
+  std::printf("%-30s %12.0f %12.1f %12.0f\n", "triangle box tests", box_tests.median, box_tests.mean, box_tests.max);
+  std::printf("%-30s %12.0f %12.1f %12.0f\n", "near pairs skipped", near.median, near.mean, near.max);
+  std::printf("%-30s %12.0f %12.1f %12.0f\n", "exact triangle tests", tests.median, tests.mean, tests.max);
+  std::printf("%-30s %12.0f %12.1f %12.0f\n", "contacts", hits.median, hits.mean, hits.max);
+  std::printf("%-30s %12.1f %12.1f %12.1f  (best of %d)\n", "peer: whole-mesh sweep us", ptime.median, ptime.mean,
+              ptime.max, std::min(runs, 2));
+  std::printf("ratio whole-mesh sweep / job: %.1fx (medians), %.1fx (maxima); contacts equal on every frame: %s\n",
+              ptime.median / time.median, ptime.max / time.max, ok ? "yes" : "NO");
+  return ok;
+}
+
 bool NarrowPhase(const Workload& w, const sc::AssetView& view, int runs, int cgal_frames, bool per_frame,
                  const std::vector<float>& margin_scales) {
   sc::NarrowPhaseModel np;
@@ -611,6 +746,7 @@ bool NarrowPhase(const Workload& w, const sc::AssetView& view, int runs, int cga
   std::printf("replica (bench-side sweep over all triangle boxes): tested pairs and contacts %s on every frame\n",
               ok ? "equal" : "DIFFER (see stderr)");
   for (float scale : margin_scales) ok = BehindTheProxy(w, view, runs, contacts, scale) && ok;
+  ok = SkinContacts(w, view, runs) && ok;
 
 #if SPHERECHAIN_BENCH_CGAL
   const size_t G = std::min(F, size_t(std::max(0, cgal_frames)));

@@ -115,6 +115,8 @@ int RunPlay(const PlayArgs& a) {
     if (opts.narrow_phase) Out(" %8u %8u %9.1f", r.narrow.contacts, r.narrow.triangle_tests, r.narrow_us);
     Out("  %s", playback::RegionPairsText(r.regions).c_str());
     if (opts.narrow_phase) Out(" | %s", playback::RegionPairsText(r.contact_regions).c_str());
+    if (!r.contact_region_depth.empty())
+      Out(" (deepest %.3g)", double(*std::max_element(r.contact_region_depth.begin(), r.contact_region_depth.end())));
     Out("\n");
   };
   print_row(bind, "bind");
@@ -191,6 +193,8 @@ int RunPlay(const PlayArgs& a) {
                              {"degenerate_triangles", r.narrow.degenerate_triangles},
                              {"us", r.narrow_us},
                              {"regions_in_contact", RegionsJson(r.contact_regions)}};
+      if (opts.narrow_phase && !r.contact_region_depth.empty())
+        o["narrow_phase"]["regions_in_contact_depth"] = r.contact_region_depth;
       if (opts.narrow_behind_margin > 0.0f) {
         o["narrow_phase"]["behind_m2_pairs"] = r.narrow_pairs;
         o["narrow_phase"]["behind_margin_scale"] = opts.narrow_behind_margin;

@@ -69,7 +69,7 @@ class Player {
     mode_ = o.refit == PlayRefit::kPaper ? runtime::RefitMode::kPaper : runtime::RefitMode::kPivotFrame;
     out_m1_.resize(runtime::DetectBound(view, runtime::DetectMethod::kM1));
     out_m2_.resize(runtime::DetectBound(view, runtime::DetectMethod::kM2));
-    if (narrow_) contacts_.resize(o.contact_capacity);
+    if (narrow_) contacts_.resize(o.contact_capacity), depths_.resize(o.contact_capacity);
     if (narrow_ && o.narrow_behind_margin > 0.0f) out_behind_.resize(runtime::DetectBound(view, runtime::DetectMethod::kM2));
   }
 
@@ -137,7 +137,7 @@ class Player {
       if (model_->fold_margin() >= 0.0f) broad.fold_margin = broad.margin;
       if (behind) job.sphere_pairs = out_behind_.data();
       // Unrestricted on an asset with the crease rule: every self-contact the skin makes (Exclusions::kCrease).
-      else if (o_.crease && narrow_->has_crease()) job.exclusions = runtime::Exclusions::kCrease;
+      else if (o_.crease && narrow_->has_crease()) job.exclusions = runtime::Exclusions::kCrease, job.depths = depths_.data();
       auto run = [&] {
         if (behind) {
           if (const runtime::Status s = broad.Run(); runtime::Failed(s)) return s;
@@ -146,14 +146,20 @@ class Player {
         return job.Run();
       };
       if (auto s = Time(run, &row->narrow_us); !s.ok()) return s;
-      std::set<std::pair<int, int>> cr;
+      std::map<std::pair<int, int>, float> cr;  // region pair → its deepest contact (0 without depths)
       for (uint32_t i = 0; i < count_contacts_; ++i) {
         const uint16_t a = contacts_[i].sphere_a, b = contacts_[i].sphere_b;  // 0xFFFF: an unassigned triangle
         const int ra = sr && a < sr->size() ? sr->Get(a) : -1, rb = sr && b < sr->size() ? sr->Get(b) : -1;
-        cr.emplace(std::min(ra, rb), std::max(ra, rb));
+        float& deepest = cr[{std::min(ra, rb), std::max(ra, rb)}];
+        if (job.depths) deepest = std::max(deepest, depths_[i].depth);
       }
-      row->contact_regions.assign(cr.begin(), cr.end());
+      row->contact_regions.clear(), row->contact_region_depth.clear(), row->depths.clear();
+      for (const auto& [pair, depth] : cr) {
+        row->contact_regions.push_back(pair);
+        if (job.depths) row->contact_region_depth.push_back(depth);
+      }
       row->contacts.assign(contacts_.begin(), contacts_.begin() + count_contacts_);
+      if (job.depths) row->depths.assign(depths_.begin(), depths_.begin() + count_contacts_);
     }
     std::set<std::pair<int, int>> regions;
     row->pairs.assign(regions_from, regions_from + regions_count);
@@ -218,6 +224,7 @@ class Player {
   const runtime::NarrowPhaseModel* narrow_ = nullptr;
   runtime::NarrowPhaseWorkspace* narrow_ws_ = nullptr;
   std::vector<runtime::TriangleContact> contacts_;
+  std::vector<runtime::ContactDepth> depths_;
   uint32_t count_contacts_ = 0;
   std::vector<float> ref_;  // the vertex refit's spheres (x, y, z, r blocks) under kJoints
 };

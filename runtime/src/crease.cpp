@@ -122,9 +122,9 @@ Status CreaseScratch::Init(const CreaseGraph& graph) {
   return Status::kOk;
 }
 
-bool CreaseScratch::Near(const CreaseGraph& g, const uint32_t t[3], const uint32_t u[3], float crease) {
-  uint32_t src[3], dst[3];
-  for (int k = 0; k < 3; ++k) src[k] = g.node_of_[t[k]], dst[k] = g.node_of_[u[k]];
+void CreaseScratch::Search(const CreaseGraph& g, const uint32_t t[3], float crease) {
+  uint32_t src[3];
+  for (int k = 0; k < 3; ++k) src[k] = g.node_of_[t[k]];
   if (!(src[0] == source_[0] && src[1] == source_[1] && src[2] == source_[2] && crease == source_crease_)) {
     for (uint32_t n : touched_) dist_[n] = kInf, ring_[n] = 0;
     touched_.clear();
@@ -167,6 +167,17 @@ bool CreaseScratch::Near(const CreaseGraph& g, const uint32_t t[3], const uint32
     for (int k = 0; k < 3; ++k) source_[k] = src[k];
     source_crease_ = crease;
   }
+}
+
+const std::vector<uint32_t>& CreaseScratch::Reach(const CreaseGraph& g, const uint32_t t[3], float crease) {
+  Search(g, t, crease);
+  return touched_;
+}
+
+bool CreaseScratch::Near(const CreaseGraph& g, const uint32_t t[3], const uint32_t u[3], float crease) {
+  Search(g, t, crease);
+  uint32_t dst[3];
+  for (int k = 0; k < 3; ++k) dst[k] = g.node_of_[u[k]];
   for (uint32_t n : dst)
     if (ring_[n] || dist_[n] < crease) return true;
   return false;

@@ -1,7 +1,21 @@
-// spherechain runtime — the narrow phase under the skin's own definition (Exclusions::kCrease): every
-// triangle swept against every other at once (sort and sweep on the longest axis of the mesh's box), pairs
-// sharing a welded corner skipped, the rest tested exactly (TrianglesIntersect on prepared triangles), and
-// each intersecting pair kept unless the crease rule (crease.h) calls it a fold.
+// spherechain runtime — the narrow phase under the skin's own definition (Exclusions::kCrease).
+//
+// The crease rule (crease.h) is a property of the bind surface, so the model decides it once, for every
+// pair of triangles that could ever be near, and no frame searches the surface:
+//   - Init groups the triangles into patches of up to 16, grown over the welded bind surface from seeds
+//     in Morton order (each patch the nearest unassigned triangles around its seed that touch it), and
+//     records, for every pair of patches holding a near pair, 16×16 near bits (one bounded Dijkstra per
+//     triangle at the asset's crease; a patch pair where every pair is near — most of a patch with
+//     itself and its neighbours — is marked to skip whole).
+//   - Each frame: the box of each patch from its distinct vertices; the patches swept against each other
+//     along the longest axis of the mesh (sort and sweep), each with itself too; per overlapping pair not
+//     skipped whole, each triangle's box (computed once a frame per patch met) against the 16 boxes of
+//     the other patch, the near bits cleared, and the rest tested exactly (TrianglesIntersect on
+//     prepared triangles). A job wider than the asset's crease also asks the graph (CreaseScratch::Near)
+//     about each intersecting pair the bits let through.
+// So every pair of triangles whose boxes overlap is either near by the bits (skipped: a fold, or
+// neighbours sharing a corner — the two-ring floor covers them) or tested: the same contacts as testing
+// every pair of triangles, each once.
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -14,7 +28,11 @@
 namespace spherechain::runtime {
 
 namespace {
-constexpr float kSweepInf = std::numeric_limits<float>::infinity();
+constexpr float kInfinity = std::numeric_limits<float>::infinity();
+constexpr uint32_t kPatch = 16;     // triangles per patch (one uint16_t of near bits per row)
+constexpr uint32_t kNone = ~0u;
+constexpr uint32_t kAllNear = ~0u;      // a near block: every pair of the two patches is near
+constexpr uint32_t kFarPair = ~0u - 1;  // no near block: no pair of the two patches is near
 
 // Maps a float to a uint32 of the same order (negative floats flipped).
 uint32_t OrderedBits(float f) {
@@ -22,101 +40,292 @@ uint32_t OrderedBits(float f) {
   std::memcpy(&u, &f, 4);
   return (u & 0x80000000u) ? ~u : (u | 0x80000000u);
 }
+
+// Interleaves the low 10 bits of x, y, z (a 30-bit Morton code).
+uint32_t Morton(uint32_t x, uint32_t y, uint32_t z) {
+  auto spread = [](uint32_t v) {
+    v &= 0x3ffu;
+    v = (v | v << 16) & 0x030000ffu;
+    v = (v | v << 8) & 0x0300f00fu;
+    v = (v | v << 4) & 0x030c30c3u;
+    v = (v | v << 2) & 0x09249249u;
+    return v;
+  };
+  return spread(x) | spread(y) << 1 | spread(z) << 2;
+}
 }  // namespace
+
+void ContactDepthOf(const float* const a[3], const float* const b[3], ContactDepth* out) {
+  double n[2][3];
+  const float* const* tri[2] = {a, b};
+  for (int s = 0; s < 2; ++s) {
+    const float* const* p = tri[s];
+    double e1[3], e2[3];
+    for (int k = 0; k < 3; ++k) e1[k] = double(p[1][k]) - p[0][k], e2[k] = double(p[2][k]) - p[0][k];
+    n[s][0] = e1[1] * e2[2] - e1[2] * e2[1];
+    n[s][1] = e1[2] * e2[0] - e1[0] * e2[2];
+    n[s][2] = e1[0] * e2[1] - e1[1] * e2[0];
+    const double len = std::sqrt(n[s][0] * n[s][0] + n[s][1] * n[s][1] + n[s][2] * n[s][2]);
+    if (!(len > 0.0)) {
+      *out = ContactDepth{0.0f, {0.0f, 0.0f, 0.0f}};
+      return;
+    }
+    for (double& c : n[s]) c /= len;
+  }
+  // behind[s]: how far the deepest corner of triangle s lies behind the other's plane.
+  double behind[2] = {0.0, 0.0};
+  for (int s = 0; s < 2; ++s) {
+    const float* const* p = tri[s];
+    const float* const* q = tri[1 - s];
+    const double* m = n[1 - s];
+    for (int j = 0; j < 3; ++j) {
+      double d = 0;
+      for (int k = 0; k < 3; ++k) d += m[k] * (double(p[j][k]) - q[0][k]);
+      behind[s] = std::max(behind[s], -d);
+    }
+  }
+  const bool along_b = behind[0] <= behind[1];
+  out->depth = static_cast<float>(along_b ? behind[0] : behind[1]);
+  for (int k = 0; k < 3; ++k) out->direction[k] = static_cast<float>(along_b ? n[1][k] : -n[0][k]);
+}
 
 struct CreaseSweep {
   struct Counters {
-    uint32_t box_tests = 0, adjacent = 0, tests = 0, degenerate = 0, folds = 0, contacts = 0;
+    uint32_t patch_pairs = 0, box_tests = 0, near = 0, tests = 0, degenerate = 0, folds = 0, contacts = 0;
   };
 
-  /// Every triangle's box from `base`/`stride` into ws.tri_box_ and the sweep keys into ws.sweep_ (sorted);
-  /// returns the number of keys, or ~0u when a corner is NaN/Inf.
-  static uint32_t Boxes(const NarrowPhaseModel& m, NarrowPhaseWorkspace& w, const char* base, size_t stride,
-                        int* axis_out) {
-    const uint32_t T = m.triangle_count_;
-    float* box = w.tri_box_.data();
-    float lo[3] = {kSweepInf, kSweepInf, kSweepInf}, hi[3] = {-kSweepInf, -kSweepInf, -kSweepInf};
-    for (uint32_t t = 0; t < T; ++t) {
-      float bl[3] = {kSweepInf, kSweepInf, kSweepInf}, bh[3] = {-kSweepInf, -kSweepInf, -kSweepInf};
-      for (int j = 0; j < 3; ++j) {
-        const float* p = reinterpret_cast<const float*>(base + stride * m.tri_v_[3 * size_t{t} + j]);
-        for (int k = 0; k < 3; ++k) {
-          if (!std::isfinite(p[k])) return ~0u;
-          bl[k] = std::min(bl[k], p[k]);
-          bh[k] = std::max(bh[k], p[k]);
-        }
-      }
-      for (int k = 0; k < 3; ++k) {
-        box[k * size_t{T} + t] = bl[k];
-        box[(3 + k) * size_t{T} + t] = bh[k];
-        lo[k] = std::min(lo[k], bl[k]);
-        hi[k] = std::max(hi[k], bh[k]);
-      }
-    }
-    int axis = 0;
-    for (int k = 1; k < 3; ++k)
-      if (hi[k] - lo[k] > hi[axis] - lo[axis]) axis = k;
-    *axis_out = axis;
-    uint32_t n = 0;
-    for (uint32_t t = 0; t < T; ++t) {
+  static uint32_t PatchCount(const NarrowPhaseModel& m) { return static_cast<uint32_t>(m.cl_tri_.size() / kPatch); }
+
+  /// Patches and near bits (file comment) from the bind pose `bind` (#V×3) and the model's graph.
+  static Status BuildPatches(NarrowPhaseModel& m, const float* bind) {
+    const CreaseGraph& g = m.crease_graph_;
+    const uint32_t T = static_cast<uint32_t>(m.tri_v_.size() / 3), N = g.node_count();
+    auto valid = [&](uint32_t t) {
       const uint32_t* v = &m.tri_v_[3 * size_t{t}];
       const uint32_t w0 = m.weld_[v[0]], w1 = m.weld_[v[1]], w2 = m.weld_[v[2]];
-      if (w0 == w1 || w1 == w2 || w0 == w2) continue;  // index-degenerate: never tested
-      w.sweep_[n++] = uint64_t{OrderedBits(box[axis * size_t{T} + t])} << 32 | t;
+      return w0 != w1 && w1 != w2 && w0 != w2;  // index-degenerate triangles are never tested
+    };
+    // Node → triangles (CSR) and each triangle's bind centroid.
+    std::vector<uint32_t> nt_off(size_t{N} + 1, 0), nt_tri, order;
+    std::vector<float> centroid(3 * size_t{T});
+    float lo[3] = {kInfinity, kInfinity, kInfinity}, hi[3] = {-kInfinity, -kInfinity, -kInfinity};
+    for (uint32_t t = 0; t < T; ++t) {
+      if (!valid(t)) continue;
+      order.push_back(t);
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t v = m.tri_v_[3 * size_t{t} + k];
+        ++nt_off[g.node(v) + 1];
+        for (int a = 0; a < 3; ++a) centroid[3 * size_t{t} + a] += bind[3 * size_t{v} + a] / 3.0f;
+      }
+      for (int a = 0; a < 3; ++a)
+        lo[a] = std::min(lo[a], centroid[3 * size_t{t} + a]), hi[a] = std::max(hi[a], centroid[3 * size_t{t} + a]);
     }
-    std::sort(w.sweep_.begin(), w.sweep_.begin() + n);
-    std::fill(w.tri_state_.begin(), w.tri_state_.end(), uint8_t{0});
-    return n;
+    for (uint32_t n = 0; n < N; ++n) nt_off[n + 1] += nt_off[n];
+    nt_tri.resize(nt_off[N]);
+    {
+      std::vector<uint32_t> fill(nt_off.begin(), nt_off.end() - 1);
+      for (uint32_t t : order)
+        for (int k = 0; k < 3; ++k) nt_tri[fill[g.node(m.tri_v_[3 * size_t{t} + k])]++] = t;
+    }
+    // Seeds in Morton order of the centroids (ties by index: deterministic).
+    std::vector<uint64_t> seeds(order.size());
+    for (size_t i = 0; i < order.size(); ++i) {
+      uint32_t q[3];
+      for (int a = 0; a < 3; ++a) {
+        const float span = hi[a] - lo[a];
+        q[a] = span > 0.0f ? static_cast<uint32_t>(std::min(1023.0f, (centroid[3 * size_t{order[i]} + a] - lo[a]) / span * 1024.0f)) : 0;
+      }
+      seeds[i] = uint64_t{Morton(q[0], q[1], q[2])} << 32 | order[i];
+    }
+    std::sort(seeds.begin(), seeds.end());
+    // Grow each patch from its seed: the unassigned triangles sharing a corner with it, nearest the seed first.
+    std::vector<uint32_t> patch_of(T, kNone), seen(T, kNone), frontier;
+    m.cl_tri_.clear();
+    auto dist2 = [&](uint32_t a, uint32_t b) {
+      float d = 0;
+      for (int k = 0; k < 3; ++k) d += (centroid[3 * size_t{a} + k] - centroid[3 * size_t{b} + k]) * (centroid[3 * size_t{a} + k] - centroid[3 * size_t{b} + k]);
+      return d;
+    };
+    for (uint64_t key : seeds) {
+      const uint32_t seed = static_cast<uint32_t>(key);
+      if (patch_of[seed] != kNone) continue;
+      const uint32_t p = PatchCount(m);
+      m.cl_tri_.resize(m.cl_tri_.size() + kPatch, kNone);
+      frontier.assign(1, seed);
+      seen[seed] = p;
+      for (uint32_t n_in = 0; n_in < kPatch && !frontier.empty();) {
+        size_t best = 0;
+        for (size_t i = 1; i < frontier.size(); ++i)
+          if (dist2(frontier[i], seed) < dist2(frontier[best], seed) ||
+              (dist2(frontier[i], seed) == dist2(frontier[best], seed) && frontier[i] < frontier[best]))
+            best = i;
+        const uint32_t t = frontier[best];
+        frontier[best] = frontier.back();
+        frontier.pop_back();
+        patch_of[t] = p;
+        m.cl_tri_[kPatch * size_t{p} + n_in++] = t;
+        for (int k = 0; k < 3; ++k) {
+          const uint32_t n = g.node(m.tri_v_[3 * size_t{t} + k]);
+          for (uint32_t i = nt_off[n]; i < nt_off[n + 1]; ++i) {
+            const uint32_t u = nt_tri[i];
+            if (patch_of[u] == kNone && seen[u] != p) seen[u] = p, frontier.push_back(u);
+          }
+        }
+      }
+    }
+    const uint32_t C = PatchCount(m);
+    std::vector<uint8_t> slot_of(T, 0);
+    for (size_t k = 0; k < m.cl_tri_.size(); ++k)
+      if (m.cl_tri_[k] != kNone) slot_of[m.cl_tri_[k]] = static_cast<uint8_t>(k % kPatch);
+    // Each patch's distinct vertices.
+    m.cl_vert_offsets_.assign(1, 0);
+    m.cl_vert_.clear();
+    std::vector<uint32_t> verts;
+    for (uint32_t p = 0; p < C; ++p) {
+      verts.clear();
+      for (uint32_t i = 0; i < kPatch; ++i) {
+        const uint32_t t = m.cl_tri_[kPatch * size_t{p} + i];
+        if (t != kNone) verts.insert(verts.end(), &m.tri_v_[3 * size_t{t}], &m.tri_v_[3 * size_t{t}] + 3);
+      }
+      std::sort(verts.begin(), verts.end());
+      verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
+      m.cl_vert_.insert(m.cl_vert_.end(), verts.begin(), verts.end());
+      m.cl_vert_offsets_.push_back(static_cast<uint32_t>(m.cl_vert_.size()));
+    }
+    // Near bits: per triangle of patch p, the nodes near it (CreaseScratch::Reach), their triangles in
+    // patches q >= p.
+    CreaseScratch scratch;
+    if (Status s = scratch.Init(g); s != Status::kOk) return s;
+    std::vector<uint32_t> entry_of(C, kNone), touched;
+    std::vector<uint16_t> rows;
+    std::vector<uint64_t> pairs;  // (p << 32 | q) and (q << 32 | p) for every pair of patches with a near pair
+    std::vector<uint32_t> block;  // per pair in `pairs`: its rows' block in near_rows_, or kAllNear
+    m.near_rows_.clear();
+    auto valid_mask = [&](uint32_t p) {
+      uint32_t mask = 0;
+      for (uint32_t i = 0; i < kPatch; ++i) mask |= uint32_t{m.cl_tri_[kPatch * size_t{p} + i] != kNone} << i;
+      return mask;
+    };
+    for (uint32_t p = 0; p < C; ++p) {
+      touched.clear();
+      rows.clear();
+      for (uint32_t i = 0; i < kPatch; ++i) {
+        const uint32_t t = m.cl_tri_[kPatch * size_t{p} + i];
+        if (t == kNone) break;
+        for (uint32_t n : scratch.Reach(g, &m.tri_v_[3 * size_t{t}], g.crease()))
+          for (uint32_t k = nt_off[n]; k < nt_off[n + 1]; ++k) {
+            const uint32_t u = nt_tri[k], q = patch_of[u];
+            if (q < p) continue;
+            if (entry_of[q] == kNone) {
+              entry_of[q] = static_cast<uint32_t>(touched.size());
+              touched.push_back(q);
+              rows.resize(rows.size() + kPatch, 0);
+            }
+            rows[kPatch * size_t{entry_of[q]} + i] |= static_cast<uint16_t>(1u << slot_of[u]);
+          }
+      }
+      const uint32_t mask_p = valid_mask(p);
+      for (uint32_t q : touched) {
+        uint16_t* r = &rows[kPatch * size_t{entry_of[q]}];
+        const uint32_t mask_q = valid_mask(q);
+        bool all = true;
+        for (uint32_t i = 0; i < kPatch; ++i) {
+          r[i] |= static_cast<uint16_t>(~mask_q);  // padding slots: as if near (never tested)
+          if ((mask_p >> i & 1) && r[i] != 0xffffu) all = false;
+        }
+        uint32_t b = kAllNear;
+        if (!all) {
+          b = static_cast<uint32_t>(m.near_rows_.size() / kPatch);
+          m.near_rows_.insert(m.near_rows_.end(), r, r + kPatch);
+        }
+        pairs.push_back(uint64_t{p} << 32 | q), block.push_back(b);
+        if (q != p) pairs.push_back(uint64_t{q} << 32 | p), block.push_back(b);
+        entry_of[q] = kNone;
+      }
+    }
+    // Per patch, its partners ascending (CSR).
+    std::vector<uint32_t> idx(pairs.size());
+    for (uint32_t i = 0; i < idx.size(); ++i) idx[i] = i;
+    std::sort(idx.begin(), idx.end(), [&](uint32_t x, uint32_t y) { return pairs[x] < pairs[y]; });
+    m.near_offsets_.assign(size_t{C} + 1, 0);
+    m.near_patch_.resize(pairs.size());
+    m.near_block_.resize(pairs.size());
+    for (size_t i = 0; i < idx.size(); ++i) {
+      ++m.near_offsets_[(pairs[idx[i]] >> 32) + 1];
+      m.near_patch_[i] = static_cast<uint32_t>(pairs[idx[i]]);
+      m.near_block_[i] = block[idx[i]];
+    }
+    for (uint32_t p = 0; p < C; ++p) m.near_offsets_[p + 1] += m.near_offsets_[p];
+    return Status::kOk;
   }
 
   static bool Prepared(const NarrowPhaseModel& m, NarrowPhaseWorkspace& w, const char* base, size_t stride,
                        uint32_t t, Counters* c) {
-    uint8_t& state = w.tri_state_[t];
-    if (state == 0) {
+    uint32_t& state = w.tri_frame_[t];
+    if (state >> 1 != w.frame_) {
       const uint32_t* v = &m.tri_v_[3 * size_t{t}];
       const float* p[3];
       for (int j = 0; j < 3; ++j) p[j] = reinterpret_cast<const float*>(base + stride * v[j]);
-      state = PrepareTriangle(p[0], p[1], p[2], &w.tri_prepared_[t]) ? 1 : 2;
-      c->degenerate += state == 2;
+      const bool ok = PrepareTriangle(p[0], p[1], p[2], &w.tri_prepared_[t]);
+      state = w.frame_ << 1 | (ok ? 0u : 1u);
+      c->degenerate += !ok;
     }
-    return state == 1;
+    return !(state & 1);
   }
 
-  /// Sweeps the sorted keys; calls on_contact(t, u) for each intersecting pair the crease rule keeps.
-  template <class OnContact>
-  static void Sweep(const NarrowPhaseModel& m, NarrowPhaseWorkspace& w, const char* base, size_t stride,
-                    uint32_t n, int axis, float crease, Counters* c, OnContact&& on_contact) {
-    const uint32_t T = m.triangle_count_;
-    const float* box = w.tri_box_.data();
-    const float* hi_axis = box + (3 + axis) * size_t{T};
-    const int o1 = (axis + 1) % 3, o2 = (axis + 2) % 3;
-    const float *lo1 = box + o1 * size_t{T}, *hi1 = box + (3 + o1) * size_t{T};
-    const float *lo2 = box + o2 * size_t{T}, *hi2 = box + (3 + o2) * size_t{T};
-    const float* lo_axis = box + axis * size_t{T};
-    for (uint32_t i = 0; i < n; ++i) {
-      const uint32_t t = static_cast<uint32_t>(w.sweep_[i]);
-      const float end = hi_axis[t];
-      const uint32_t* tv = &m.tri_v_[3 * size_t{t}];
-      const uint32_t tw[3] = {m.weld_[tv[0]], m.weld_[tv[1]], m.weld_[tv[2]]};
-      for (uint32_t j = i + 1; j < n; ++j) {
-        const uint32_t u = static_cast<uint32_t>(w.sweep_[j]);
-        if (lo_axis[u] > end) break;
-        ++c->box_tests;
-        if (lo1[u] > hi1[t] || hi1[u] < lo1[t] || lo2[u] > hi2[t] || hi2[u] < lo2[t]) continue;
-        const uint32_t* uv = &m.tri_v_[3 * size_t{u}];
-        const uint32_t uw[3] = {m.weld_[uv[0]], m.weld_[uv[1]], m.weld_[uv[2]]};
-        bool shared = false;
-        for (int a = 0; a < 3; ++a)
-          shared |= tw[a] == uw[0] || tw[a] == uw[1] || tw[a] == uw[2];
-        if (shared) {
-          ++c->adjacent;
-          continue;
+  /// The 16 triangle boxes of patch p this frame (6 rows of 16: min x, y, z, max x, y, z; padding inverted).
+  static const float* TriangleBoxes(const NarrowPhaseModel& m, NarrowPhaseWorkspace& w, const char* base,
+                                    size_t stride, uint32_t p) {
+    float* box = &w.patch_tri_box_[96 * size_t{p}];
+    if (w.patch_frame_[p] == w.frame_) return box;
+    w.patch_frame_[p] = w.frame_;
+    for (uint32_t i = 0; i < kPatch; ++i) {
+      const uint32_t t = m.cl_tri_[kPatch * size_t{p} + i];
+      float bl[3] = {kInfinity, kInfinity, kInfinity}, bh[3] = {-kInfinity, -kInfinity, -kInfinity};
+      if (t != kNone)
+        for (int j = 0; j < 3; ++j) {
+          const float* q = reinterpret_cast<const float*>(base + stride * m.tri_v_[3 * size_t{t} + j]);
+          for (int k = 0; k < 3; ++k) bl[k] = std::min(bl[k], q[k]), bh[k] = std::max(bh[k], q[k]);
         }
-        if (!Prepared(m, w, base, stride, t, c)) break;  // t degenerate: in no contact
+      for (int k = 0; k < 3; ++k) box[16 * k + i] = bl[k], box[16 * (3 + k) + i] = bh[k];
+    }
+    return box;
+  }
+
+  /// Patch pair (a <= b): every triangle pair not near whose boxes overlap, tested exactly.
+  template <class OnContact>
+  static void Pair(const NarrowPhaseModel& m, NarrowPhaseWorkspace& w, const char* base, size_t stride, uint32_t a,
+                   uint32_t b, const uint16_t* rows, float crease, Counters* c, OnContact& on_contact) {
+    ++c->patch_pairs;
+    const float* ba = TriangleBoxes(m, w, base, stride, a);
+    const float* bb = TriangleBoxes(m, w, base, stride, b);
+    const bool wider = crease > m.crease_graph_.crease();
+    const size_t C = PatchCount(m);
+    const float* pb = w.patch_box_.data() + b;  // b's patch box: rows of C
+    for (uint32_t i = 0; i < kPatch; ++i) {
+      const uint32_t t = m.cl_tri_[kPatch * size_t{a} + i];
+      if (t == kNone) break;
+      if ((rows[i] | (a == b ? (2u << i) - 1 : 0u)) == 0xffffu) continue;  // every partner near (or already paired)
+      const float lx = ba[i], ly = ba[16 + i], lz = ba[32 + i], hx = ba[48 + i], hy = ba[64 + i], hz = ba[80 + i];
+      if (pb[0] > hx || pb[3 * C] < lx || pb[C] > hy || pb[4 * C] < ly || pb[2 * C] > hz || pb[5 * C] < lz) continue;
+      uint32_t overlap = 0;
+      for (uint32_t j = 0; j < kPatch; ++j)
+        overlap |= static_cast<uint32_t>((bb[j] <= hx) & (bb[48 + j] >= lx) & (bb[16 + j] <= hy) & (bb[64 + j] >= ly) &
+                                         (bb[32 + j] <= hz) & (bb[80 + j] >= lz))
+                   << j;
+      c->box_tests += kPatch;
+      if (a == b) overlap &= ~((2u << i) - 1);  // each pair of one patch once (j > i)
+      c->near += static_cast<uint32_t>(__builtin_popcount(overlap & rows[i]));
+      overlap &= ~uint32_t{rows[i]};
+      if (!overlap) continue;
+      if (!Prepared(m, w, base, stride, t, c)) continue;  // t degenerate: in no contact
+      const uint32_t* tv = &m.tri_v_[3 * size_t{t}];
+      for (; overlap; overlap &= overlap - 1) {
+        const uint32_t u = m.cl_tri_[kPatch * size_t{b} + static_cast<uint32_t>(__builtin_ctz(overlap))];
         if (!Prepared(m, w, base, stride, u, c)) continue;
         ++c->tests;
         if (!TrianglesIntersect(w.tri_prepared_[t], w.tri_prepared_[u])) continue;
-        if (w.crease_scratch_.Near(m.crease_graph_, tv, uv, crease)) {
+        if (wider && w.crease_scratch_.Near(m.crease_graph_, tv, &m.tri_v_[3 * size_t{u}], crease)) {
           ++c->folds;
           continue;
         }
@@ -126,7 +335,79 @@ struct CreaseSweep {
     }
   }
 
-  /// Model part: the index buffer, the graph and the bind pose's own contacts (one sweep of the bind pose).
+  /// One frame: patch boxes, the sweep, every pair. False (nothing reported) when a patch vertex is NaN/Inf.
+  template <class OnContact>
+  static bool Collide(const NarrowPhaseModel& m, NarrowPhaseWorkspace& w, const char* base, size_t stride,
+                      float crease, Counters* c, OnContact&& on_contact) {
+    const uint32_t C = PatchCount(m);
+    if (++w.frame_ >= 0x7fffffffu) {  // stamps wrap: forget them all
+      std::fill(w.patch_frame_.begin(), w.patch_frame_.end(), 0u);
+      std::fill(w.tri_frame_.begin(), w.tri_frame_.end(), 0u);
+      w.frame_ = 1;
+    }
+    float* box = w.patch_box_.data();
+    float lo[3] = {kInfinity, kInfinity, kInfinity}, hi[3] = {-kInfinity, -kInfinity, -kInfinity};
+    for (uint32_t p = 0; p < C; ++p) {
+      float bl[3] = {kInfinity, kInfinity, kInfinity}, bh[3] = {-kInfinity, -kInfinity, -kInfinity};
+      bool nan = false;  // std::min/max would drop a NaN
+      for (uint32_t i = m.cl_vert_offsets_[p]; i < m.cl_vert_offsets_[p + 1]; ++i) {
+        const float* q = reinterpret_cast<const float*>(base + stride * m.cl_vert_[i]);
+        for (int k = 0; k < 3; ++k) bl[k] = std::min(bl[k], q[k]), bh[k] = std::max(bh[k], q[k]), nan |= q[k] != q[k];
+      }
+      if (nan) return false;
+      for (int k = 0; k < 3; ++k) {
+        if (!std::isfinite(bl[k]) || !std::isfinite(bh[k])) return false;
+        box[k * size_t{C} + p] = bl[k];
+        box[(3 + k) * size_t{C} + p] = bh[k];
+        lo[k] = std::min(lo[k], bl[k]), hi[k] = std::max(hi[k], bh[k]);
+      }
+    }
+    int axis = 0;
+    for (int k = 1; k < 3; ++k)
+      if (hi[k] - lo[k] > hi[axis] - lo[axis]) axis = k;
+    for (uint32_t p = 0; p < C; ++p) w.sweep_[p] = uint64_t{OrderedBits(box[axis * size_t{C} + p])} << 32 | p;
+    std::sort(w.sweep_.begin(), w.sweep_.begin() + C);
+    // The boxes in sweep order: the sweep's axis first, then the two others (a sentinel after the last).
+    const int rows_of[6] = {axis, 3 + axis, (axis + 1) % 3, 3 + (axis + 1) % 3, (axis + 2) % 3, 3 + (axis + 2) % 3};
+    float* sb = w.sweep_box_.data();
+    const size_t pitch = size_t{C} + 1;
+    for (uint32_t i = 0; i < C; ++i) {
+      const uint32_t p = static_cast<uint32_t>(w.sweep_[i]);
+      for (int r = 0; r < 6; ++r) sb[r * pitch + i] = box[rows_of[r] * size_t{C} + p];
+    }
+    static const uint16_t kFar[kPatch] = {};
+    for (uint32_t i = 0; i < C; ++i) {
+      const uint32_t p = static_cast<uint32_t>(w.sweep_[i]);
+      if (++w.step_ == 0) {  // stamps wrap: forget them
+        std::fill(w.near_stamp_.begin(), w.near_stamp_.end(), 0u);
+        w.step_ = 1;
+      }
+      for (uint32_t k = m.near_offsets_[p]; k < m.near_offsets_[p + 1]; ++k)
+        w.near_at_[m.near_patch_[k]] = m.near_block_[k], w.near_stamp_[m.near_patch_[k]] = w.step_;
+      auto pair = [&](uint32_t q) {
+        const uint32_t block = w.near_stamp_[q] == w.step_ ? w.near_at_[q] : kFarPair;
+        if (block == kAllNear) return;
+        const uint16_t* rows = block == kFarPair ? kFar : &m.near_rows_[kPatch * size_t{block}];
+        Pair(m, w, base, stride, std::min(p, q), std::max(p, q), rows, crease, c, on_contact);
+      };
+      pair(p);
+      const float end = sb[pitch + i], l1 = sb[2 * pitch + i], h1 = sb[3 * pitch + i], l2 = sb[4 * pitch + i],
+                  h2 = sb[5 * pitch + i];
+      // The patches starting before p ends on the axis, then those overlapping it on the two others
+      // (branch-free: their sweep positions appended to hits_ as found).
+      const uint32_t last = static_cast<uint32_t>(std::upper_bound(sb + i + 1, sb + C, end) - sb);
+      uint32_t n = 0;
+      uint32_t* hits = w.sweep_hits_.data();
+      for (uint32_t j = i + 1; j < last; ++j) {
+        hits[n] = j;
+        n += (sb[2 * pitch + j] <= h1) & (sb[3 * pitch + j] >= l1) & (sb[4 * pitch + j] <= h2) & (sb[5 * pitch + j] >= l2);
+      }
+      for (uint32_t k = 0; k < n; ++k) pair(static_cast<uint32_t>(w.sweep_[hits[k]]));
+    }
+    return true;
+  }
+
+  /// Model part: the index buffer, the graph, the patches and the bind pose's own contacts.
   static Status InitModel(NarrowPhaseModel& m, const AssetView& view) {
     const schema::Asset& a = *view.asset;
     const auto* bind = a.bind_positions();
@@ -137,26 +418,31 @@ struct CreaseSweep {
                                         m.weld_.data(), a.crease());
         s != Status::kOk)
       return s;
+    if (Status s = BuildPatches(m, bind->data()); s != Status::kOk) return s;
     NarrowPhaseWorkspace w;
     if (Status s = InitWorkspace(w, m); s != Status::kOk) return s;
-    int axis = 0;
-    const char* base = reinterpret_cast<const char*>(bind->data());
-    const uint32_t n = Boxes(m, w, base, 12, &axis);
     Counters c;
-    Sweep(m, w, base, 12, n, axis, m.crease_graph_.crease(), &c, [&](uint32_t t, uint32_t u) {
-      m.bind_contacts_.push_back(uint64_t{std::min(t, u)} << 32 | std::max(t, u));
-    });
+    Collide(m, w, reinterpret_cast<const char*>(bind->data()), 12, m.crease_graph_.crease(), &c,
+            [&](uint32_t t, uint32_t u) { m.bind_contacts_.push_back(uint64_t{std::min(t, u)} << 32 | std::max(t, u)); });
     std::sort(m.bind_contacts_.begin(), m.bind_contacts_.end());
     return Status::kOk;
   }
 
   static Status InitWorkspace(NarrowPhaseWorkspace& w, const NarrowPhaseModel& m) {
     if (!m.crease_graph_.initialized()) return Status::kOk;
-    const uint32_t T = m.triangle_count_ ? m.triangle_count_ : static_cast<uint32_t>(m.tri_v_.size() / 3);
-    w.tri_box_.assign(6 * size_t{T}, 0.0f);
-    w.sweep_.assign(T, 0);
+    const uint32_t C = PatchCount(m), T = static_cast<uint32_t>(m.tri_v_.size() / 3);
+    w.patch_box_.assign(6 * size_t{C}, 0.0f);
+    w.sweep_.assign(C, 0);
+    w.sweep_box_.assign(6 * (size_t{C} + 1), 0.0f);
+    w.sweep_hits_.assign(size_t{C} + 1, 0);
+    w.near_at_.assign(C, 0);
+    w.near_stamp_.assign(C, 0);
+    w.step_ = 0;
+    w.patch_tri_box_.assign(96 * size_t{C}, 0.0f);
+    w.patch_frame_.assign(C, 0);
     w.tri_prepared_.assign(T, PreparedTriangle{});
-    w.tri_state_.assign(T, 0);
+    w.tri_frame_.assign(T, 0);
+    w.frame_ = 0;
     return w.crease_scratch_.Init(m.crease_graph_);
   }
 
@@ -166,27 +452,35 @@ struct CreaseSweep {
     NarrowPhaseStats st;
     *job.count = 0;
     if (job.stats) *job.stats = st;
-    const char* base = static_cast<const char*>(job.positions.data);
-    const size_t stride = job.positions.stride_bytes;
-    int axis = 0;
-    const uint32_t n = Boxes(m, w, base, stride, &axis);
-    if (n == ~0u) return Status::kErrorNonFinitePositions;
     const float crease = job.crease > 0.0f ? job.crease : m.crease_graph_.crease();
     w.crease_scratch_.Reset();
     Counters c;
     uint32_t written = 0;
-    Sweep(m, w, base, stride, n, axis, crease, &c, [&](uint32_t t, uint32_t u) {
-      st.bind_contacts += m.IntersectsAtBind(t, u);
-      if (written >= job.capacity) return;
-      uint16_t sa = m.tri_sphere_[t], sb = m.tri_sphere_[u];
-      if (sa > sb || (sa == sb && t > u)) std::swap(sa, sb), std::swap(t, u);
-      job.output[written++] = TriangleContact{t, u, sa, sb};
-    });
+    const char* base = static_cast<const char*>(job.positions.data);
+    const size_t stride = job.positions.stride_bytes;
+    const bool finite = Collide(m, w, base, stride, crease,
+                                &c, [&](uint32_t t, uint32_t u) {
+                                  st.bind_contacts += m.IntersectsAtBind(t, u);
+                                  if (written >= job.capacity) return;
+                                  uint16_t sa = m.tri_sphere_[t], sb = m.tri_sphere_[u];
+                                  if (sa > sb || (sa == sb && t > u)) std::swap(sa, sb), std::swap(t, u);
+                                  if (job.depths) {
+                                    const float* pa[3];
+                                    const float* pb[3];
+                                    for (int j = 0; j < 3; ++j) {
+                                      pa[j] = reinterpret_cast<const float*>(base + stride * m.tri_v_[3 * size_t{t} + j]);
+                                      pb[j] = reinterpret_cast<const float*>(base + stride * m.tri_v_[3 * size_t{u} + j]);
+                                    }
+                                    ContactDepthOf(pa, pb, &job.depths[written]);
+                                  }
+                                  job.output[written++] = TriangleContact{t, u, sa, sb};
+                                });
+    if (!finite) return Status::kErrorNonFinitePositions;
+    st.candidate_pairs = c.patch_pairs;
     st.box_tests = c.box_tests;
-    st.adjacent_skipped = c.adjacent;
     st.triangle_tests = c.tests;
     st.degenerate_triangles = c.degenerate;
-    st.crease_folds = c.folds;
+    st.crease_folds = c.near + c.folds;
     st.contacts = c.contacts;
     *job.count = written;
     if (job.stats) *job.stats = st;

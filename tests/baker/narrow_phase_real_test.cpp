@@ -234,10 +234,12 @@ PairSet SkinTruth(const Baked& b, const std::vector<float>& pos, float crease) {
 
 PairSet CreaseContacts(Baked* b, const std::vector<float>& pos, runtime::NarrowPhaseStats* stats, float crease = 0) {
   std::vector<runtime::TriangleContact> out(1u << 18);
+  std::vector<runtime::ContactDepth> depth(out.size());
   uint32_t n = 0;
   runtime::NarrowPhaseJob job;
   job.model = &b->narrow;
   job.workspace = &b->narrow_ws;
+  job.depths = depth.data();
   job.exclusions = runtime::Exclusions::kCrease;
   job.crease = crease;
   job.positions = {pos.data(), b->view.vertex_count, 12};
@@ -253,6 +255,31 @@ PairSet CreaseContacts(Baked* b, const std::vector<float>& pos, runtime::NarrowP
     CHECK(b->narrow.triangle_sphere(c.triangle_b) == c.sphere_b);
     CHECK((c.sphere_a < c.sphere_b || (c.sphere_a == c.sphere_b && c.triangle_a < c.triangle_b)));
     s.insert({std::min(c.triangle_a, c.triangle_b), std::max(c.triangle_a, c.triangle_b)});
+    // Its depth: what ContactDepthOf says of the two triangles, never more than the larger one's diameter
+    // (a corner's distance behind the other's plane, the other's corners straddling it), a unit direction.
+    const uint32_t* tri = b->view.asset->triangles()->data();
+    const float* pa[3];
+    const float* pb[3];
+    double diameter = 0;
+    for (int j = 0; j < 3; ++j) {
+      pa[j] = &pos[3 * size_t{tri[3 * size_t{c.triangle_a} + j]}];
+      pb[j] = &pos[3 * size_t{tri[3 * size_t{c.triangle_b} + j]}];
+    }
+    for (const float* const* p : {pa, pb})
+      for (int j = 0; j < 3; ++j)
+        for (int k = 0; k < 3; ++k) {
+          const double dx = p[j][0] - p[k][0], dy = p[j][1] - p[k][1], dz = p[j][2] - p[k][2];
+          diameter = std::max(diameter, std::sqrt(dx * dx + dy * dy + dz * dz));
+        }
+    runtime::ContactDepth expect{};
+    runtime::ContactDepthOf(pa, pb, &expect);
+    const runtime::ContactDepth& d = depth[i];
+    CHECK(d.depth == expect.depth);
+    CHECK(d.depth >= 0.0f);
+    CHECK(d.depth <= diameter * (1 + 1e-6));
+    const double len = std::sqrt(double(d.direction[0]) * d.direction[0] + double(d.direction[1]) * d.direction[1] +
+                                 double(d.direction[2]) * d.direction[2]);
+    CHECK(len == doctest::Approx(1.0).epsilon(1e-5));
   }
   CHECK(s.size() == n);
   return s;

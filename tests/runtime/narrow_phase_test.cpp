@@ -357,3 +357,38 @@ TEST_CASE("narrow phase: bad input gets its status and no output") {
   bytes = st::Serialize(bad_tris);
   CHECK(rt::LoadAsset(bytes.data(), bytes.size, &view) == rt::Status::kErrorCountMismatch);
 }
+
+TEST_CASE("ContactDepthOf: a triangle piercing another, depth and push direction computed by hand") {
+  // b lies in z = 0 with its normal +z; a stands through it, its lowest corner 0.3 below. The corners of b
+  // behind a's plane lie 0.396 deep (by hand: a's normal (-0.08, -0.08, 0.01)/0.11358, b's corner (1, 0, 0)
+  // at -0.045/0.11358), so the separating-axis estimate takes b's normal and 0.3.
+  const float b0[3] = {0, 0, 0}, b1[3] = {1, 0, 0}, b2[3] = {0, 1, 0};
+  const float a0[3] = {0.2f, 0.2f, -0.3f}, a1[3] = {0.3f, 0.2f, 0.5f}, a2[3] = {0.2f, 0.3f, 0.5f};
+  REQUIRE(rt::TrianglesIntersect(a0, a1, a2, b0, b1, b2));
+  const float* a[3] = {a0, a1, a2};
+  const float* b[3] = {b0, b1, b2};
+  rt::ContactDepth d{};
+  rt::ContactDepthOf(a, b, &d);
+  CHECK(d.depth == doctest::Approx(0.3).epsilon(1e-6));
+  CHECK(d.direction[0] == doctest::Approx(0.0));
+  CHECK(d.direction[1] == doctest::Approx(0.0));
+  CHECK(d.direction[2] == doctest::Approx(1.0));
+  // The other order: the same depth, and b moves down (minus its own normal).
+  rt::ContactDepthOf(b, a, &d);
+  CHECK(d.depth == doctest::Approx(0.3).epsilon(1e-6));
+  CHECK(d.direction[2] == doctest::Approx(-1.0));
+  // Lower a's corner: the estimate follows it until the other axis (0.396 + ...) is the smaller.
+  const float deep[3] = {0.2f, 0.2f, -0.6f};
+  const float* a_deep[3] = {deep, a1, a2};
+  rt::ContactDepthOf(a_deep, b, &d);
+  CHECK(d.depth < 0.6f);  // b's corners are less deep behind a's (tilted) plane than 0.6
+  CHECK(d.depth > 0.3f);
+  const double n = std::sqrt(double(d.direction[0]) * d.direction[0] + double(d.direction[1]) * d.direction[1] +
+                             double(d.direction[2]) * d.direction[2]);
+  CHECK(n == doctest::Approx(1.0));
+  // A zero-area triangle: depth 0, no direction.
+  const float* flat[3] = {b0, b0, b1};
+  rt::ContactDepthOf(a, flat, &d);
+  CHECK(d.depth == 0.0f);
+  CHECK(d.direction[0] == 0.0f);
+}

@@ -76,6 +76,10 @@ struct FrameReport {
   double narrow_us = 0;                      ///< narrow_phase [Units: µs]
   std::vector<runtime::TriangleContact> contacts;   ///< narrow_phase: the frame's contacts (≤ contact_capacity)
   std::vector<std::pair<int, int>> contact_regions; ///< narrow_phase: region pairs of the contacts, sorted
+  /// narrow_phase under the crease rule: per contact_regions entry, its deepest contact's depth [Units: model]
+  /// (runtime::ContactDepth); empty otherwise
+  std::vector<float> contact_region_depth;
+  std::vector<runtime::ContactDepth> depths;        ///< crease rule: per contact (parallel to `contacts`), else empty
   uint32_t narrow_pairs = 0;                 ///< narrow_behind_margin > 0: M2's pairs the narrow phase ran behind
   std::vector<float> spheres;  ///< keep_spheres: the refit spheres, \#S×4 (x, y, z, r), source units, model space
 };

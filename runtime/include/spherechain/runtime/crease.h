@@ -92,10 +92,17 @@ class CreaseScratch {
   /// Searches from t's corners out to `crease` (bounded Dijkstra, once per distinct (t, crease) in a row).
   /// Cost: O(k log k) for the k edges within the crease of t on a new source, O(1) after. No allocation.
   bool Near(const CreaseGraph& graph, const uint32_t t[3], const uint32_t u[3], float crease);
+  /// The nodes near the triangle with corners `t` (vertex indices < \#V) for `crease`: its corners, their
+  /// edge neighbours and every node within `crease` of a corner (unordered, no repeats). A triangle u is
+  /// near t (Near) exactly when one of u's corners' nodes (CreaseGraph::node) is in this list. The span
+  /// is the scratch's own and valid until the next Near, Reach or Reset. Same search and cost as Near.
+  const std::vector<uint32_t>& Reach(const CreaseGraph& graph, const uint32_t t[3], float crease);
   /// Forgets the last source (the next Near searches again). O(1).
   void Reset() { source_crease_ = -1.0f; }
 
  private:
+  void Search(const CreaseGraph& graph, const uint32_t t[3], float crease);
+
   uint32_t source_[3] = {~0u, ~0u, ~0u};
   float source_crease_ = -1.0f;
   std::vector<float> dist_;          // per node: distance from the source's corners, +inf when unreached
