@@ -150,8 +150,8 @@ class NarrowPhaseModel {
   /// Cost: O(\#T + \#V + \#S log) time; memory ~40 B per region triangle + 4 B per vertex + 4 B per
   /// (sphere, region vertex) + ~20 B per sphere; kReach also 2 B per (triangle, sphere it stands behind).
   /// An asset with the crease rule adds the rule's patches and near bits: one bounded Dijkstra per triangle
-  /// (~0.9 s for MakeHuman's 26,756 triangles, RelWithDebInfo, one core) and ~2.6 MB (MakeHuman: 1,722
-  /// patches, 103,124 patch-partner entries, 28,064 blocks of near bits).
+  /// (~0.9 s for MakeHuman's 26,756 triangles, RelWithDebInfo, one core) and their memory
+  /// (crease_patch_bytes(): 1.95 MB in 1,722 patches for MakeHuman).
   /// Not thread-safe on one object (nothing may use the model meanwhile).
   Status Init(const AssetView& view, NarrowPhaseRegions regions = NarrowPhaseRegions::kSurrounding);
   /// kReach when built from reach regions, else kSurrounding.
@@ -333,7 +333,8 @@ class NarrowPhaseWorkspace {
 /// ozz-style job: exact triangle contacts between the surrounding regions of different spheres
 /// (see the file comment for the three stages and the definition of a contact).
 /// Output order (deterministic, a pure function of the asset and the positions): by sphere pair (a, b)
-/// ascending (or in `sphere_pairs` order), then in the order the sweep meets the triangle pairs. With a
+/// ascending (or in `sphere_pairs` order), then in the order the sweep meets the triangle pairs (kCrease:
+/// in the order the sweep of the model's patches meets them). With a
 /// kReach model the order is that of the candidate pair that reported the contact, while its record names
 /// the owners (sphere_a < sphere_b, each with its own triangle), which need not be that pair.
 /// Cost: O(\#V) for the region boxes, \#S(\#S−1)/2 box tests for the candidates (twice, four at a time),
