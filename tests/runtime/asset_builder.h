@@ -98,6 +98,8 @@ struct AssetData {
   std::vector<uint8_t> sphere_regions;      // [opt] #S: empty = field absent
   std::vector<uint8_t> triangle_regions;    // [opt] #T: empty = field absent
   std::vector<uint32_t> reach_offsets, reach_triangles;  // [opt] Asset.reach_*: each empty = field absent
+  std::vector<float> bind_positions;  // [opt] Asset.bind_positions (#V×3): empty = field absent
+  float crease = -1.0f;               ///< Asset.crease; -1 (the schema default) = not written
   /// [opt] Asset.regions (schema v4): names and kinds (true: Trunk); empty = field absent.
   std::vector<std::pair<std::string, bool>> regions;
 };
@@ -232,6 +234,8 @@ inline AlignedBytes Serialize(const AssetData& d) {
   flatbuffers::Offset<flatbuffers::Vector<uint32_t>> ro, rt;
   if (!d.reach_offsets.empty()) ro = b.CreateVector(d.reach_offsets);
   if (!d.reach_triangles.empty()) rt = b.CreateVector(d.reach_triangles);
+  flatbuffers::Offset<flatbuffers::Vector<float>> bind;
+  if (!d.bind_positions.empty()) bind = b.CreateVector(d.bind_positions);
   flatbuffers::Offset<flatbuffers::Vector<flatbuffers::Offset<schema::RegionInfo>>> regions;
   if (!d.regions.empty()) {
     std::vector<flatbuffers::Offset<schema::RegionInfo>> list;
@@ -258,6 +262,8 @@ inline AlignedBytes Serialize(const AssetData& d) {
   ab.add_pivot_frames(pf);
   if (!d.triangles.empty()) ab.add_triangles(tris);
   if (!d.weld_ids.empty()) ab.add_weld_ids(weld);
+  if (!d.bind_positions.empty()) ab.add_bind_positions(bind);
+  if (!(d.crease == -1.0f)) ab.add_crease(d.crease);
   if (d.contact_margin != 0.0f) ab.add_contact_margin(d.contact_margin);
   if (!(d.fold_margin == -1.0f)) ab.add_fold_margin(d.fold_margin);  // NaN written too (loader tests)
   if (d.joint_count != 0) ab.add_joint_count(d.joint_count);

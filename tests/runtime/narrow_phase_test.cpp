@@ -392,3 +392,97 @@ TEST_CASE("ContactDepthOf: a triangle piercing another, depth and push direction
   CHECK(d.depth == 0.0f);
   CHECK(d.direction[0] == 0.0f);
 }
+
+TEST_CASE("narrow phase, crease rule: a bent tube's fold is not a contact, its ends meeting are") {
+  // A tube of 30 rings 0.6 apart (radius 1, length 17.4), its bind pose straight, crease 3. Bent by 100° at
+  // ring 15, the inner sides of the elbow pass through each other within about a radius of the fold: along
+  // the surface those triangles are less than the crease apart, so they are a fold and not reported (while
+  // the plain narrow phase reports them). Bent by 178° instead, the far part comes back onto the near one:
+  // rings 15 + k and 15 − k meet, 2k rings apart along the tube, and from about k = 3 on those are contacts.
+  // Both equal brute force over every triangle pair with the rule.
+  st::Mesh mesh;
+  st::Tube tube;
+  tube.rings = 30;
+  tube.sides = 12;
+  tube.spacing = 0.6f;
+  st::AssetData d = st::MakeTubes({tube}, {}, &mesh);
+  d.bind_positions = mesh.positions;
+  d.crease = 3.0f;
+  Loaded l = Load(d);
+  Narrow ctx;
+  REQUIRE(ctx.Init(l.view) == rt::Status::kOk);
+  REQUIRE(ctx.model.has_crease());
+  CHECK(ctx.model.crease() == 3.0f);
+  CHECK(ctx.model.bind_contact_count() == 0);
+  CHECK(ctx.model.crease_graph().components() == 1);
+  auto crease_run = [&](const std::vector<float>& pos, std::vector<rt::ContactDepth>* depths = nullptr) {
+    std::vector<rt::TriangleContact> out(1u << 16);
+    if (depths) depths->assign(out.size(), rt::ContactDepth{});
+    uint32_t n = 0;
+    rt::NarrowPhaseStats stats;
+    rt::NarrowPhaseJob job;
+    job.model = &ctx.model;
+    job.workspace = &ctx.ws;
+    job.exclusions = rt::Exclusions::kCrease;
+    job.positions = {pos.data(), static_cast<uint32_t>(pos.size() / 3), 12};
+    job.output = out.data();
+    job.capacity = static_cast<uint32_t>(out.size());
+    job.depths = depths ? depths->data() : nullptr;
+    job.count = &n;
+    job.stats = &stats;
+    REQUIRE(job.Run() == rt::Status::kOk);
+    out.resize(n);
+    return std::make_pair(out, stats);
+  };
+  // Straight: nothing.
+  CHECK(crease_run(mesh.positions).first.empty());
+  // One elbow: the plain narrow phase sees the fold, the crease rule skips it.
+  const std::vector<float> elbow = Fold(mesh, tube, 15, 100.0f);
+  REQUIRE(!RunJob(&ctx, elbow, rt::Exclusions::kNone).contacts.empty());
+  const auto [fold_contacts, fold_stats] = crease_run(elbow);
+  CHECK(fold_contacts.empty());
+  CHECK(fold_stats.crease_folds > 0);
+  // A hairpin: the far half back along the near one.
+  const std::vector<float> hairpin = Fold(mesh, tube, 15, 178.0f);
+  std::vector<rt::ContactDepth> depths;
+  const auto [contacts, stats] = crease_run(hairpin, &depths);
+  REQUIRE(!contacts.empty());
+  // Every one of them lies more than the crease apart along the tube (ring distance × spacing) and equals
+  // brute force over all triangle pairs with the rule.
+  // The geodesic between two triangles' bind centroids on the unrolled cylinder (radius 1): sqrt((Δangle)² +
+  // Δx²). A triangle is under 0.6 × 0.52 across, so a pair's corners are within ~1.2 of its centroids'.
+  const auto geodesic = [&](uint32_t t, uint32_t u) {
+    double c[2][3] = {};
+    for (int s2 = 0; s2 < 2; ++s2)
+      for (int k = 0; k < 3; ++k)
+        for (int a = 0; a < 3; ++a) c[s2][a] += mesh.positions[3 * size_t{d.triangles[3 * size_t{s2 ? u : t} + k]} + a] / 3;
+    double dang = std::abs(std::atan2(c[0][2], c[0][1]) - std::atan2(c[1][2], c[1][1]));
+    dang = std::min(dang, 2 * 3.14159265358979 - dang);
+    return std::sqrt(dang * dang + (c[0][0] - c[1][0]) * (c[0][0] - c[1][0]));
+  };
+  for (const auto& c : RunJob(&ctx, elbow, rt::Exclusions::kNone).contacts)
+    CHECK(geodesic(c.triangle_a, c.triangle_b) < 3.0 + 1.2);  // the elbow's pairs: within the crease
+  std::set<std::pair<uint32_t, uint32_t>> truth;
+  rt::CreaseScratch scratch;
+  REQUIRE(scratch.Init(ctx.model.crease_graph()) == rt::Status::kOk);
+  auto vtx = [&](uint32_t t, int k) { return &hairpin[3 * size_t{d.triangles[3 * t + k]}]; };
+  for (uint32_t t = 0; t < d.triangle_count; ++t)
+    for (uint32_t u = t + 1; u < d.triangle_count; ++u) {
+      bool shared = false;
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) shared |= d.weld_ids[d.triangles[3 * t + a]] == d.weld_ids[d.triangles[3 * u + b]];
+      if (shared || !rt::TrianglesIntersect(vtx(t, 0), vtx(t, 1), vtx(t, 2), vtx(u, 0), vtx(u, 1), vtx(u, 2))) continue;
+      if (!scratch.Near(ctx.model.crease_graph(), &d.triangles[3 * size_t{t}], &d.triangles[3 * size_t{u}], 3.0f))
+        truth.insert({t, u});
+    }
+  std::set<std::pair<uint32_t, uint32_t>> found;
+  for (size_t i = 0; i < contacts.size(); ++i) {
+    const auto& c = contacts[i];
+    found.insert({std::min(c.triangle_a, c.triangle_b), std::max(c.triangle_a, c.triangle_b)});
+    CHECK(geodesic(c.triangle_a, c.triangle_b) > 3.0 - 1.2);  // beyond the crease along the skin
+    CHECK(depths[i].depth >= 0.0f);
+    CHECK(depths[i].depth <= 2.0f);  // never more than a triangle's size here (edges ≤ 0.6, ring chords ≤ 0.52)
+  }
+  CHECK(found == truth);
+  CHECK(found.size() == contacts.size());
+}
