@@ -4,6 +4,8 @@
 //   runtime_bench --synthetic [--frames N] [--reps R] [--runs K] [--narrow-only] [--cgal-frames N] [--per-frame]
 //   runtime_bench ASSET.sphc FRAMES [--reps R] [--runs K] [--narrow-only] [--cgal-frames N] [--per-frame]
 //                 [--behind-margins S,S,...]   ("behind M2's pairs" with DetectJob's margin S × the asset's; default 1)
+//   runtime_bench ASSET.sphc FRAMES --geodesics N   (the crease rule's Dijkstra against exact geodesics, CGAL
+//                                                   Surface_mesh_shortest_path, from N bind-pose vertices; then exits)
 //   runtime_bench ASSET.sphc FRAMES --profile R   (refit + M1 over all frames R times, nothing else:
 //                                                   for valgrind --tool=callgrind instruction counts)
 //   runtime_bench ASSET.sphc FRAMES --batch-only [--characters N] [--runs K]   (only "many characters")
@@ -82,6 +84,7 @@
 #include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Surface_mesh.h>
+#include <CGAL/Surface_mesh_shortest_path.h>
 #endif
 
 namespace sc = spherechain::runtime;
@@ -604,6 +607,92 @@ bool SkinContacts(const Workload& w, const sc::AssetView& view, int runs) {
   return ok;
 }
 
+#if SPHERECHAIN_BENCH_CGAL
+// The crease rule's geodesics (crease.h: Dijkstra on the welded edge graph) against exact ones (CGAL
+// Surface_mesh_shortest_path, Xin–Wang's variant of Chen–Han) on the asset's bind pose: from `sources`
+// vertices spread over the mesh, every vertex within twice the crease (exact) compared. Prints the ratio
+// Dijkstra / exact and how many pairs nearer than the crease the graph puts beyond it.
+bool Geodesics(const sc::AssetView& view, uint32_t sources) {
+  sc::NarrowPhaseModel np;
+  if (np.Init(view) != sc::Status::kOk || !np.has_crease()) {
+    std::printf("geodesics: the asset has no crease rule (bake it again)\n");
+    return false;
+  }
+  const NarrowAsset m{&np, view.asset->triangles()->data(), np.triangle_count()};
+  CgalPeer peer;
+  if (const std::string why = peer.Build(m, view.vertex_count); !why.empty()) {
+    std::printf("geodesics: %s\n", why.c_str());
+    return false;
+  }
+  peer.SetFrame(view.asset->bind_positions()->data());
+  using Traits = CGAL::Surface_mesh_shortest_path_traits<Epick, CgalMesh>;
+  using Shortest = CGAL::Surface_mesh_shortest_path<Traits>;
+  const double crease = np.crease();
+  const uint32_t V = static_cast<uint32_t>(peer.mesh.number_of_vertices());
+  std::vector<double> ratio;
+  size_t near = 0, near_called_apart = 0;
+  double worst_missed = 1;  // the smallest exact distance / crease among pairs the graph calls apart
+  double build_ms = 0;
+  std::vector<double> dist(V);
+  std::vector<std::pair<double, uint32_t>> heap;
+  std::vector<CgalMesh::Vertex_index> used;  // vertices with a face (the welded ones' representatives)
+  for (CgalMesh::Vertex_index v : peer.mesh.vertices())
+    if (!peer.mesh.is_isolated(v)) used.push_back(v);
+  for (uint32_t k = 0; k < sources; ++k) {
+    const CgalMesh::Vertex_index src = used[(uint64_t{k} * used.size()) / sources];
+    Shortest shortest(peer.mesh);
+    build_ms += Micros([&] {
+      shortest.add_source_point(src);
+      shortest.build_sequence_tree();
+    }) / 1000.0;
+    // Dijkstra on the same mesh's edges, bind lengths: the crease rule's graph.
+    std::fill(dist.begin(), dist.end(), std::numeric_limits<double>::infinity());
+    dist[src.idx()] = 0;
+    heap.assign(1, {0.0, src.idx()});
+    while (!heap.empty()) {
+      std::pop_heap(heap.begin(), heap.end(), std::greater<>());
+      const auto [d, v] = heap.back();
+      heap.pop_back();
+      if (d > dist[v] || d > 4 * crease) continue;
+      for (CgalMesh::Halfedge_index h : CGAL::halfedges_around_source(CgalMesh::Vertex_index(v), peer.mesh)) {
+        const CgalMesh::Vertex_index u = peer.mesh.target(h);
+        const double nd = d + std::sqrt(CGAL::to_double(CGAL::squared_distance(peer.mesh.point(CgalMesh::Vertex_index(v)), peer.mesh.point(u))));
+        if (nd < dist[u.idx()]) {
+          dist[u.idx()] = nd;
+          heap.emplace_back(nd, u.idx());
+          std::push_heap(heap.begin(), heap.end(), std::greater<>());
+        }
+      }
+    }
+    for (CgalMesh::Vertex_index v : used) {
+      if (v == src || !(dist[v.idx()] <= 4 * crease)) continue;  // ratios above 2 not seen (none were)
+      const double exact = shortest.shortest_distance_to_source_points(v).first;
+      if (!(exact > 0) || exact > 2 * crease) continue;
+      ratio.push_back(dist[v.idx()] / exact);
+      if (exact < crease) {
+        ++near;
+        if (dist[v.idx()] >= crease) ++near_called_apart, worst_missed = std::min(worst_missed, exact / crease);
+      }
+    }
+  }
+  if (ratio.empty()) {
+    std::printf("geodesics: no vertex pair within twice the crease\n");
+    return false;
+  }
+  std::sort(ratio.begin(), ratio.end());
+  auto q = [&](double f) { return ratio[std::min(ratio.size() - 1, size_t(f * double(ratio.size())))]; };
+  std::printf("\ngeodesics: Dijkstra on the welded edge graph / exact (CGAL Surface_mesh_shortest_path), bind pose, "
+              "%u sources, %zu vertex pairs within 2 x the crease (%.4g; the graph searched to 4 x)\n", sources, ratio.size(), crease);
+  std::printf("ratio: min %.4f, median %.4f, p90 %.4f, p99 %.4f, max %.4f\n", ratio.front(), q(0.5), q(0.9), q(0.99),
+              ratio.back());
+  std::printf("pairs nearer than the crease: %zu, of which the graph puts %zu (%.2f %%) at or beyond it (the nearest "
+              "of those at %.3f x the crease)\n", near, near_called_apart, 100.0 * double(near_called_apart) / double(std::max<size_t>(near, 1)),
+              near_called_apart ? worst_missed : 0.0);
+  std::printf("CGAL sequence tree: %.0f ms a source (one core)\n", build_ms / sources);
+  return true;
+}
+#endif
+
 bool NarrowPhase(const Workload& w, const sc::AssetView& view, int runs, int cgal_frames, bool per_frame,
                  const std::vector<float>& margin_scales) {
   sc::NarrowPhaseModel np;
@@ -933,6 +1022,7 @@ bool ManyCharacters(const Workload& w, const sc::Model& model, uint32_t n, int r
 
 int main(int argc, char** argv) {
   bool synthetic = false, narrow_only = false, per_frame = false, batch_only = false;
+  uint32_t geodesics = 0;
   int reps = 200, runs = 1, profile = 0, cgal_frames = 10;
   uint32_t characters = 1000;
   uint32_t frame_count = 40;
@@ -946,6 +1036,7 @@ int main(int argc, char** argv) {
     else if (a == "--runs" && i + 1 < argc) runs = std::max(1, std::atoi(argv[++i]));
     else if (a == "--profile" && i + 1 < argc) profile = std::max(1, std::atoi(argv[++i]));
     else if (a == "--narrow-only") narrow_only = true;
+    else if (a == "--geodesics" && i + 1 < argc) geodesics = static_cast<uint32_t>(std::atoi(argv[++i]));
     else if (a == "--batch-only") batch_only = true;
     else if (a == "--characters" && i + 1 < argc) characters = uint32_t(std::max(1, std::atoi(argv[++i])));
     else if (a == "--per-frame") per_frame = true;
@@ -984,6 +1075,13 @@ int main(int argc, char** argv) {
   sc::AssetView view;
   if (sc::Status s = sc::LoadAsset(w.bytes.data(), w.bytes.size, &view); s != sc::Status::kOk)
     return std::fprintf(stderr, "load: %s\n", sc::ToString(s)), 1;
+  if (geodesics) {
+#if SPHERECHAIN_BENCH_CGAL
+    return Geodesics(view, geodesics) ? 0 : 1;
+#else
+    return std::fprintf(stderr, "--geodesics needs CGAL (libcgal-dev) at configure time\n"), 2;
+#endif
+  }
   sc::Model model;  // shared by every character of the asset
   sc::Workspace ws;  // one character
   if (sc::Status s = model.Init(view); s != sc::Status::kOk || (s = ws.Init(model)) != sc::Status::kOk)
