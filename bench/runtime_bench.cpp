@@ -78,6 +78,9 @@
 #include <BulletCollision/BroadphaseCollision/btDbvtBroadphase.h>
 #include <BulletCollision/BroadphaseCollision/btOverlappingPairCache.h>
 #endif
+#if SPHERECHAIN_BENCH_EMBREE
+#include <embree3/rtcore.h>
+#endif
 #if SPHERECHAIN_BENCH_CGAL
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
@@ -472,6 +475,109 @@ bool BehindTheProxy(const Workload& w, const sc::AssetView& view, int runs,
 }
 
 // Prints the "narrow phase" section; false when a cross-check failed.
+#if SPHERECHAIN_BENCH_EMBREE
+// Intel Embree 3 as the skin contacts' peer: one thread, a user geometry of the deformed triangles' boxes
+// (index-degenerate triangles left out) refit each frame (RTC_BUILD_QUALITY_REFIT), rtcCollide of the scene
+// with itself, and in the callback what the job does after its boxes: pairs sharing a welded corner skipped,
+// the exact test on prepared triangles, the crease rule asked of the graph (CreaseScratch::Near).
+struct EmbreePeer {
+  const sc::NarrowPhaseModel* np = nullptr;
+  const uint32_t* tri = nullptr;
+  const float* pos = nullptr;
+  std::vector<uint32_t> prims;  // embree primitive → triangle
+  std::vector<sc::PreparedTriangle> prepared;
+  std::vector<int8_t> state;
+  sc::CreaseScratch scratch;
+  std::vector<TrianglePair>* out = nullptr;
+  RTCDevice device = nullptr;
+  RTCScene scene = nullptr;
+  RTCGeometry geometry = nullptr;
+  uint64_t box_pairs = 0;
+
+  static void Bounds(const RTCBoundsFunctionArguments* args) {
+    const EmbreePeer& e = *static_cast<const EmbreePeer*>(args->geometryUserPtr);
+    const uint32_t* v = e.tri + 3 * size_t{e.prims[args->primID]};
+    RTCBounds& b = *args->bounds_o;
+    const float* p0 = e.pos + 3 * size_t{v[0]};
+    const float* p1 = e.pos + 3 * size_t{v[1]};
+    const float* p2 = e.pos + 3 * size_t{v[2]};
+    b.lower_x = std::min({p0[0], p1[0], p2[0]}), b.upper_x = std::max({p0[0], p1[0], p2[0]});
+    b.lower_y = std::min({p0[1], p1[1], p2[1]}), b.upper_y = std::max({p0[1], p1[1], p2[1]});
+    b.lower_z = std::min({p0[2], p1[2], p2[2]}), b.upper_z = std::max({p0[2], p1[2], p2[2]});
+  }
+  bool Ready(uint32_t t) {
+    if (state[t] == 0) {
+      const uint32_t* v = tri + 3 * size_t{t};
+      state[t] = sc::PrepareTriangle(pos + 3 * size_t{v[0]}, pos + 3 * size_t{v[1]}, pos + 3 * size_t{v[2]}, &prepared[t]) ? 1 : 2;
+    }
+    return state[t] == 1;
+  }
+  static void Collide(void* user, RTCCollision* c, unsigned int n) {
+    EmbreePeer& e = *static_cast<EmbreePeer*>(user);
+    for (unsigned int i = 0; i < n; ++i) {
+      uint32_t t = e.prims[c[i].primID0], u = e.prims[c[i].primID1];
+      if (t == u) continue;
+      if (t > u) std::swap(t, u);
+      ++e.box_pairs;
+      const uint32_t* tv = e.tri + 3 * size_t{t};
+      const uint32_t* uv = e.tri + 3 * size_t{u};
+      bool shared = false;
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) shared |= e.np->weld_id(tv[a]) == e.np->weld_id(uv[b]);
+      if (shared || !e.Ready(t) || !e.Ready(u) || !sc::TrianglesIntersect(e.prepared[t], e.prepared[u])) continue;
+      if (e.scratch.Near(e.np->crease_graph(), tv, uv, e.np->crease())) continue;
+      e.out->emplace_back(t, u);
+    }
+  }
+  bool Init(const sc::NarrowPhaseModel& model, const uint32_t* triangles, uint32_t T) {
+    np = &model;
+    tri = triangles;
+    for (uint32_t t = 0; t < T; ++t) {
+      const uint32_t* v = tri + 3 * size_t{t};
+      if (model.weld_id(v[0]) != model.weld_id(v[1]) && model.weld_id(v[1]) != model.weld_id(v[2]) &&
+          model.weld_id(v[0]) != model.weld_id(v[2]))
+        prims.push_back(t);
+    }
+    prepared.resize(T);
+    state.assign(T, 0);
+    if (scratch.Init(model.crease_graph()) != sc::Status::kOk) return false;
+    device = rtcNewDevice("threads=1");
+    if (!device) return false;
+    scene = rtcNewScene(device);
+    rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_LOW);
+    rtcSetSceneFlags(scene, RTC_SCENE_FLAG_DYNAMIC);
+    geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
+    rtcSetGeometryUserPrimitiveCount(geometry, static_cast<unsigned int>(prims.size()));
+    rtcSetGeometryUserData(geometry, this);
+    rtcSetGeometryBoundsFunction(geometry, &Bounds, this);
+    rtcSetGeometryBuildQuality(geometry, RTC_BUILD_QUALITY_REFIT);
+    rtcAttachGeometry(scene, geometry);
+    return true;
+  }
+  ~EmbreePeer() {
+    if (geometry) rtcReleaseGeometry(geometry);
+    if (scene) rtcReleaseScene(scene);
+    if (device) rtcReleaseDevice(device);
+  }
+  // One frame: the boxes refit (or built, the first time) and the self-collision. Returns the build time (µs).
+  double Frame(const float* positions, std::vector<TrianglePair>* pairs) {
+    pos = positions;
+    out = pairs;
+    pairs->clear();
+    std::fill(state.begin(), state.end(), int8_t{0});
+    scratch.Reset();
+    const double build_us = Micros([&] {
+      rtcCommitGeometry(geometry);
+      rtcCommitScene(scene);
+    });
+    rtcCollide(scene, scene, &Collide, this);
+    std::sort(pairs->begin(), pairs->end());
+    pairs->erase(std::unique(pairs->begin(), pairs->end()), pairs->end());
+    return build_us;
+  }
+};
+#endif
+
 // Skin contacts (Exclusions::kCrease): NarrowPhaseJob under the crease rule on every frame, the fastest of
 // `runs` passes per frame; and a peer doing the same work the plain way, which also checks it: one sort and
 // sweep of all triangle boxes on the longest axis, pairs sharing a welded corner skipped, TrianglesIntersect
@@ -578,6 +684,27 @@ bool SkinContacts(const Workload& w, const sc::AssetView& view, int runs) {
       if (k < 2) peer_us[f] = std::min(peer_us[f], Micros([&] { sweep_all(w.frames[f].data(), &peer[f]); }));
     }
   bool ok = true;
+#if SPHERECHAIN_BENCH_EMBREE
+  EmbreePeer embree;
+  std::vector<double> embree_us(F, 1e300), embree_build_us(F, 1e300);
+  uint64_t embree_box_pairs = 0;
+  if (embree.Init(np, tri, T)) {
+    std::vector<TrianglePair> pairs;
+    for (int k = 0; k < std::min(runs, 2); ++k)
+      for (size_t f = 0; f < F; ++f) {
+        double build = 0;
+        const double total = Micros([&] { build = embree.Frame(w.frames[f].data(), &pairs); });
+        if (total < embree_us[f]) embree_us[f] = total, embree_build_us[f] = build;
+        if (k == 0 && pairs != found[f]) {
+          std::fprintf(stderr, "MISMATCH skin contacts, frame %zu: job %zu, Embree %zu\n", f, found[f].size(), pairs.size());
+          ok = false;
+        }
+      }
+    embree_box_pairs = embree.box_pairs / (uint64_t{F} * std::min(runs, 2));
+  } else {
+    std::fprintf(stderr, "Embree: rtcNewDevice failed\n");
+  }
+#endif
   for (size_t f = 0; f < F; ++f)
     if (peer[f] != found[f]) {
       std::fprintf(stderr, "MISMATCH skin contacts, frame %zu: job %zu, whole-mesh sweep %zu\n", f, found[f].size(), peer[f].size());
@@ -604,6 +731,15 @@ bool SkinContacts(const Workload& w, const sc::AssetView& view, int runs) {
               ptime.max, std::min(runs, 2));
   std::printf("ratio whole-mesh sweep / job: %.1fx (medians), %.1fx (maxima); contacts equal on every frame: %s\n",
               ptime.median / time.median, ptime.max / time.max, ok ? "yes" : "NO");
+#if SPHERECHAIN_BENCH_EMBREE
+  const Summary etime = Summarize(embree_us), ebuild = Summarize(embree_build_us);
+  std::printf("%-30s %12.1f %12.1f %12.1f  (best of %d; refit/build median %.1f us; %llu box pairs a frame)\n",
+              "peer: Embree rtcCollide us", etime.median, etime.mean, etime.max, std::min(runs, 2), ebuild.median,
+              static_cast<unsigned long long>(embree_box_pairs));
+  std::printf("ratio Embree / job: %.1fx (medians), %.1fx (maxima)\n", etime.median / time.median, etime.max / time.max);
+#else
+  std::printf("Embree peer: not built (libembree-dev not found at configure time)\n");
+#endif
   return ok;
 }
 

@@ -165,6 +165,8 @@ int RunView(const ViewArgs& a) {
   const runtime::DetectMethod method = a.method == "m1" ? runtime::DetectMethod::kM1 : runtime::DetectMethod::kM2;
   std::vector<runtime::Collision> pairs(runtime::DetectBound(view, method));
   std::vector<runtime::TriangleContact> contacts(1u << 14);
+  std::vector<runtime::ContactDepth> depths;  // with the crease rule: the skin's definition, with depths
+  const bool crease = narrow.has_crease();
 
   const uint32_t V = view.vertex_count, T = view.triangle_count, S = view.sphere_count, F = anim.frames;
   std::vector<std::vector<float>> frames(F);
@@ -220,7 +222,9 @@ int RunView(const ViewArgs& a) {
     job.positions = positions;
     job.count = &contact_count;
     job.stats = &stats;
+    if (crease) job.exclusions = runtime::Exclusions::kCrease;
     for (;;) {  // no useful bound exists: grow the buffer until every contact fits
+      if (crease) depths.resize(contacts.size()), job.depths = depths.data();
       job.output = contacts.data();
       job.capacity = static_cast<uint32_t>(contacts.size());
       const runtime::Status s = job.Run();
@@ -242,7 +246,10 @@ int RunView(const ViewArgs& a) {
                            {"positions", Base64(q)},
                            {"spheres", Base64(spheres)},
                            {"pairs", pj},
-                           {"contacts", cj}});
+                           {"contacts", cj},
+                           {"deepest", crease && contact_count ? std::max_element(depths.begin(), depths.begin() + contact_count,
+                                                                                   [](const auto& x, const auto& y) { return x.depth < y.depth; })->depth
+                                                               : 0.0f}});
     total_contacts += contact_count;
     max_pairs = std::max(max_pairs, pair_count);
     max_contacts = std::max(max_contacts, contact_count);

@@ -9,7 +9,7 @@ $SUDO apt-get install -y -qq --no-install-recommends \
   build-essential cmake ninja-build pkg-config doxygen \
   libassimp-dev libeigen3-dev libcgal-dev libtinygltf-dev libflatbuffers-dev flatbuffers-compiler \
   doctest-dev nlohmann-json3-dev libcli11-dev libspdlog-dev libxxhash-dev \
-  libfcl-dev libbullet-dev libtbb-dev \
+  libfcl-dev libbullet-dev libtbb-dev libembree-dev \
   clang libclang-rt-14-dev \
   librsvg2-bin assimp-testmodels chromium >/dev/null
 # three.js for `spherechain view` (viewer/package.json pins it; the CLI embeds it in the HTML it writes),
