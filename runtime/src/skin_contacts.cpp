@@ -25,6 +25,11 @@
 #include "alloc_guard.h"
 #include "spherechain/runtime/narrow_phase.h"
 
+#if defined(__GNUC__) && defined(__x86_64__)
+#define SPHERECHAIN_SKIN_SSE2 1
+#include <immintrin.h>
+#endif
+
 namespace spherechain::runtime {
 
 namespace {
@@ -39,6 +44,31 @@ uint32_t OrderedBits(float f) {
   uint32_t u;
   std::memcpy(&u, &f, 4);
   return (u & 0x80000000u) ? ~u : (u | 0x80000000u);
+}
+
+// Bit j (< 16) set when box j of `b` (6 rows of 16: min x, y, z, max x, y, z) overlaps the box (lo, hi)
+// (closed intervals). SSE2 on x86-64 (its baseline), scalar elsewhere; the same answer.
+uint32_t OverlapMask16(const float* b, const float lo[3], const float hi[3]) {
+#if SPHERECHAIN_SKIN_SSE2
+  const __m128 lx = _mm_set1_ps(lo[0]), ly = _mm_set1_ps(lo[1]), lz = _mm_set1_ps(lo[2]);
+  const __m128 hx = _mm_set1_ps(hi[0]), hy = _mm_set1_ps(hi[1]), hz = _mm_set1_ps(hi[2]);
+  uint32_t mask = 0;
+  for (int q = 0; q < 4; ++q) {
+    const float* c = b + 4 * q;
+    __m128 m = _mm_and_ps(_mm_cmple_ps(_mm_loadu_ps(c), hx), _mm_cmpge_ps(_mm_loadu_ps(c + 48), lx));
+    m = _mm_and_ps(m, _mm_and_ps(_mm_cmple_ps(_mm_loadu_ps(c + 16), hy), _mm_cmpge_ps(_mm_loadu_ps(c + 64), ly)));
+    m = _mm_and_ps(m, _mm_and_ps(_mm_cmple_ps(_mm_loadu_ps(c + 32), hz), _mm_cmpge_ps(_mm_loadu_ps(c + 80), lz)));
+    mask |= static_cast<uint32_t>(_mm_movemask_ps(m)) << (4 * q);
+  }
+  return mask;
+#else
+  uint32_t mask = 0;
+  for (uint32_t j = 0; j < 16; ++j)
+    mask |= static_cast<uint32_t>((b[j] <= hi[0]) & (b[48 + j] >= lo[0]) & (b[16 + j] <= hi[1]) & (b[64 + j] >= lo[1]) &
+                                  (b[32 + j] <= hi[2]) & (b[80 + j] >= lo[2]))
+            << j;
+  return mask;
+#endif
 }
 
 // Interleaves the low 10 bits of x, y, z (a 30-bit Morton code).
@@ -302,17 +332,16 @@ struct CreaseSweep {
     const bool wider = crease > m.crease_graph_.crease();
     const size_t C = PatchCount(m);
     const float* pb = w.patch_box_.data() + b;  // b's patch box: rows of C
-    for (uint32_t i = 0; i < kPatch; ++i) {
+    const float plo[3] = {pb[0], pb[C], pb[2 * C]}, phi[3] = {pb[3 * C], pb[4 * C], pb[5 * C]};
+    // a's triangles that meet b's patch box (padding never does) and have a partner not near (nor paired).
+    uint32_t live = OverlapMask16(ba, plo, phi);
+    for (uint32_t i = 0; i < kPatch; ++i)
+      if ((rows[i] | (a == b ? (2u << i) - 1 : 0u)) == 0xffffu) live &= ~(1u << i);
+    for (; live; live &= live - 1) {
+      const uint32_t i = static_cast<uint32_t>(__builtin_ctz(live));
       const uint32_t t = m.cl_tri_[kPatch * size_t{a} + i];
-      if (t == kNone) break;
-      if ((rows[i] | (a == b ? (2u << i) - 1 : 0u)) == 0xffffu) continue;  // every partner near (or already paired)
-      const float lx = ba[i], ly = ba[16 + i], lz = ba[32 + i], hx = ba[48 + i], hy = ba[64 + i], hz = ba[80 + i];
-      if (pb[0] > hx || pb[3 * C] < lx || pb[C] > hy || pb[4 * C] < ly || pb[2 * C] > hz || pb[5 * C] < lz) continue;
-      uint32_t overlap = 0;
-      for (uint32_t j = 0; j < kPatch; ++j)
-        overlap |= static_cast<uint32_t>((bb[j] <= hx) & (bb[48 + j] >= lx) & (bb[16 + j] <= hy) & (bb[64 + j] >= ly) &
-                                         (bb[32 + j] <= hz) & (bb[80 + j] >= lz))
-                   << j;
+      const float lo[3] = {ba[i], ba[16 + i], ba[32 + i]}, hi[3] = {ba[48 + i], ba[64 + i], ba[80 + i]};
+      uint32_t overlap = OverlapMask16(bb, lo, hi);
       c->box_tests += kPatch;
       if (a == b) overlap &= ~((2u << i) - 1);  // each pair of one patch once (j > i)
       c->near += static_cast<uint32_t>(__builtin_popcount(overlap & rows[i]));
@@ -349,12 +378,26 @@ struct CreaseSweep {
     float lo[3] = {kInfinity, kInfinity, kInfinity}, hi[3] = {-kInfinity, -kInfinity, -kInfinity};
     for (uint32_t p = 0; p < C; ++p) {
       float bl[3] = {kInfinity, kInfinity, kInfinity}, bh[3] = {-kInfinity, -kInfinity, -kInfinity};
+#if SPHERECHAIN_SKIN_SSE2
+      __m128 vl = _mm_set1_ps(kInfinity), vh = _mm_set1_ps(-kInfinity), vnan = _mm_setzero_ps();
+      for (uint32_t i = m.cl_vert_offsets_[p]; i < m.cl_vert_offsets_[p + 1]; ++i) {
+        const float* q = reinterpret_cast<const float*>(base + stride * m.cl_vert_[i]);
+        // x, y, z, 0 without reading past the vertex (the positions are only 4-byte aligned)
+        const __m128 v = _mm_movelh_ps(_mm_unpacklo_ps(_mm_load_ss(q), _mm_load_ss(q + 1)), _mm_load_ss(q + 2));
+        vl = _mm_min_ps(vl, v), vh = _mm_max_ps(vh, v), vnan = _mm_or_ps(vnan, _mm_cmpunord_ps(v, v));
+      }
+      if (_mm_movemask_ps(vnan)) return false;  // min/max would drop a NaN
+      alignas(16) float tl[4], th[4];
+      _mm_store_ps(tl, vl), _mm_store_ps(th, vh);
+      for (int k = 0; k < 3; ++k) bl[k] = tl[k], bh[k] = th[k];
+#else
       bool nan = false;  // std::min/max would drop a NaN
       for (uint32_t i = m.cl_vert_offsets_[p]; i < m.cl_vert_offsets_[p + 1]; ++i) {
         const float* q = reinterpret_cast<const float*>(base + stride * m.cl_vert_[i]);
         for (int k = 0; k < 3; ++k) bl[k] = std::min(bl[k], q[k]), bh[k] = std::max(bh[k], q[k]), nan |= q[k] != q[k];
       }
       if (nan) return false;
+#endif
       for (int k = 0; k < 3; ++k) {
         if (!std::isfinite(bl[k]) || !std::isfinite(bh[k])) return false;
         box[k * size_t{C} + p] = bl[k];
@@ -398,7 +441,19 @@ struct CreaseSweep {
       const uint32_t last = static_cast<uint32_t>(std::upper_bound(sb + i + 1, sb + C, end) - sb);
       uint32_t n = 0;
       uint32_t* hits = w.sweep_hits_.data();
-      for (uint32_t j = i + 1; j < last; ++j) {
+      uint32_t j = i + 1;
+#if SPHERECHAIN_SKIN_SSE2
+      const __m128 vl1 = _mm_set1_ps(l1), vh1 = _mm_set1_ps(h1), vl2 = _mm_set1_ps(l2), vh2 = _mm_set1_ps(h2);
+      for (; j + 4 <= last; j += 4) {
+        const __m128 mk = _mm_and_ps(_mm_and_ps(_mm_cmple_ps(_mm_loadu_ps(sb + 2 * pitch + j), vh1),
+                                                _mm_cmpge_ps(_mm_loadu_ps(sb + 3 * pitch + j), vl1)),
+                                     _mm_and_ps(_mm_cmple_ps(_mm_loadu_ps(sb + 4 * pitch + j), vh2),
+                                                _mm_cmpge_ps(_mm_loadu_ps(sb + 5 * pitch + j), vl2)));
+        for (uint32_t bits = static_cast<uint32_t>(_mm_movemask_ps(mk)); bits; bits &= bits - 1)
+          hits[n++] = j + static_cast<uint32_t>(__builtin_ctz(bits));
+      }
+#endif
+      for (; j < last; ++j) {
         hits[n] = j;
         n += (sb[2 * pitch + j] <= h1) & (sb[3 * pitch + j] >= l1) & (sb[4 * pitch + j] <= h2) & (sb[5 * pitch + j] >= l2);
       }
