@@ -475,6 +475,20 @@ bool BehindTheProxy(const Workload& w, const sc::AssetView& view, int runs,
 }
 
 // Prints the "narrow phase" section; false when a cross-check failed.
+// A NarrowPhaseJob over all of `out` (its whole size as capacity), writing its count and stats.
+sc::NarrowPhaseJob NarrowJob(const sc::NarrowPhaseModel& np, sc::NarrowPhaseWorkspace& ws, sc::Exclusions exclusions,
+                             std::vector<sc::TriangleContact>& out, uint32_t* count, sc::NarrowPhaseStats* stats) {
+  sc::NarrowPhaseJob job;
+  job.model = &np;
+  job.workspace = &ws;
+  job.exclusions = exclusions;
+  job.output = out.data();
+  job.capacity = static_cast<uint32_t>(out.size());
+  job.count = count;
+  job.stats = stats;
+  return job;
+}
+
 #if SPHERECHAIN_BENCH_EMBREE
 // Intel Embree 3 as the skin contacts' peer: one thread, a user geometry of the deformed triangles' boxes
 // (index-degenerate triangles left out) refit each frame (RTC_BUILD_QUALITY_REFIT), rtcCollide of the scene
@@ -597,14 +611,7 @@ bool SkinContacts(const Workload& w, const sc::AssetView& view, int runs) {
   std::vector<sc::TriangleContact> out(size_t{1} << 20);
   uint32_t count = 0;
   sc::NarrowPhaseStats st;
-  sc::NarrowPhaseJob job;
-  job.model = &np;
-  job.workspace = &np_ws;
-  job.exclusions = sc::Exclusions::kCrease;
-  job.output = out.data();
-  job.capacity = static_cast<uint32_t>(out.size());
-  job.count = &count;
-  job.stats = &st;
+  sc::NarrowPhaseJob job = NarrowJob(np, np_ws, sc::Exclusions::kCrease, out, &count, &st);
   std::vector<sc::NarrowPhaseStats> stats(F);
   std::vector<double> us(F, 1e300), peer_us(F, 1e300);
   std::vector<std::vector<TrianglePair>> found(F), peer(F);
@@ -844,14 +851,7 @@ bool NarrowPhase(const Workload& w, const sc::AssetView& view, int runs, int cga
   std::vector<sc::TriangleContact> out(size_t{1} << 20);
   uint32_t count = 0;
   sc::NarrowPhaseStats st;
-  sc::NarrowPhaseJob job;
-  job.model = &np;
-  job.workspace = &np_ws;
-  job.exclusions = sc::Exclusions::kAsset;
-  job.output = out.data();
-  job.capacity = static_cast<uint32_t>(out.size());
-  job.count = &count;
-  job.stats = &st;
+  sc::NarrowPhaseJob job = NarrowJob(np, np_ws, sc::Exclusions::kAsset, out, &count, &st);
   // Region boxes alone: an explicit, empty list of candidate sphere pairs.
   const sc::Collision no_pair{};
   sc::NarrowPhaseJob boxes_only = job;
