@@ -7,14 +7,8 @@
 
 namespace spherechain::cli {
 
-namespace {
-
 namespace fs = std::filesystem;
 
-/// Folder of the character's default key poses, the first that exists of: --poses-dir; the installed
-/// data, <executable's folder>/SPHERECHAIN_BIN_TO_DATA/poses/<character> (bin/ → share/spherechain/);
-/// the source tree's data/poses/<character> (a build tree, compiled-in path); data/poses/<character>
-/// walking up from the current directory. Empty when none exists.
 std::string FindPosesDir(const std::string& character, const std::string& explicit_dir) {
   if (!explicit_dir.empty()) return explicit_dir;
   std::vector<fs::path> candidates;
@@ -32,8 +26,6 @@ std::string FindPosesDir(const std::string& character, const std::string& explic
     if (fs::is_directory(c, ec)) return c.lexically_normal().string();
   return {};
 }
-
-}  // namespace
 
 void AddAnimationOptions(CLI::App* sub, std::string* asset, std::string* rig, AnimationArgs* anim) {
   sub->add_option("asset", *asset, ".sphc asset baked from the mesh")->required()->check(CLI::ExistingFile);

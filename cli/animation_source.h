@@ -37,6 +37,12 @@ struct AnimationArgs {
 /// `rig` and `anim` (--mesh fills anim->mesh). The pointers must outlive the parse.
 void AddAnimationOptions(CLI::App* sub, std::string* asset, std::string* rig, AnimationArgs* anim);
 
+/// Folder of the character's default key poses, the first that exists of: `explicit_dir` (--poses-dir); the
+/// installed data, <executable's folder>/SPHERECHAIN_BIN_TO_DATA/poses/<character> (bin/ → share/spherechain/);
+/// the source tree's data/poses/<character> (a build tree, compiled-in path); data/poses/<character> walking up
+/// from the current directory. Empty when none exists.
+std::string FindPosesDir(const std::string& character, const std::string& explicit_dir);
+
 /// The chosen animation (playback::Animation: a clip sampled uniformly, or the Bézier morph through key poses).
 using AnimationSource = playback::Animation;
 

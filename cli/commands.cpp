@@ -15,6 +15,7 @@ void Register(CLI::App& app, Commands* commands) {
   RegisterValidate(app, commands);
   RegisterEvaluate(app, commands);
   RegisterView(app, commands);
+  RegisterCheck(app, commands);
 }
 
 int Dispatch(const Commands& commands) {

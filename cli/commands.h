@@ -28,6 +28,7 @@ void RegisterPlay(CLI::App& app, Commands* commands);
 void RegisterValidate(CLI::App& app, Commands* commands);
 void RegisterEvaluate(CLI::App& app, Commands* commands);
 void RegisterView(CLI::App& app, Commands* commands);
+void RegisterCheck(CLI::App& app, Commands* commands);
 
 /// A import::Context whose log lines go to spdlog.
 import::Context MakeLoggingContext();

@@ -1,4 +1,4 @@
-// spherechain — the command-line tool: bake, inspect, export-debug, play, validate, evaluate.
+// spherechain — the command-line tool: bake, inspect, export-debug, play, validate, evaluate, view, check.
 #include <CLI/CLI.hpp>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
@@ -18,7 +18,8 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // Usage errors exit 2 (as `check` documents for bad input); --help and --version 0.
+    return app.exit(e) == 0 ? 0 : 2;
   }
   // Messages (info, warnings, errors) on stderr, as the README promises: stdout carries only what a
   // command produces (tables, summaries, JSON), so a pipeline can redirect one without the other.

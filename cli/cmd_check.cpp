@@ -1,0 +1,393 @@
+// spherechain check CHARACTER [--asset A.sphc] [--clip NAME]... [--poses [POSES...]] [--fps N] [--max-depth D]
+//                   [--policy P.json] [--baseline OLD.json] [--json OUT] [--junit OUT.xml] [--html OUT.html]
+//
+// Animation QA for a game's CI (spherechain/evaluate/check.h says what is measured): plays every clip, finds
+// every self-contact the skin makes on every frame, groups them into events and fails a clip when an event
+// is deeper than the policy allows. Bakes the asset when none is given (cached by content). Exit codes:
+// 0 every clip passes, 1 a clip failed, 2 bad input (nothing written but the reports asked for, complete).
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+
+#include <spdlog/spdlog.h>
+
+#include "animation_source.h"
+#include "commands.h"
+#include "html_embed.h"
+#include "spherechain/baker/bake.h"
+#include "spherechain/evaluate/check.h"
+#include "spherechain/import/import.h"
+#include "spherechain/playback/character.h"
+
+namespace spherechain::cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kExitFailed = 1, kExitBadInput = 2;
+// Bump when the baker's output for the same input changes: cached assets of other versions are not reused.
+constexpr const char* kCacheVersion = "spherechain 0.1.0 bake defaults 1";
+
+struct CheckArgs {
+  std::string character, asset, rig, max_depth, policy, baseline, json, junit, html, cache_dir;
+  std::vector<std::string> clips, poses;
+  CLI::Option* poses_option = nullptr;
+  double fps = 30;
+  uint32_t morph_frames = 40;
+  bool no_cache = false;
+};
+
+int BadInput(const std::string& message) {
+  spdlog::error("{}", message);
+  return kExitBadInput;
+}
+
+// The cache folder: --cache-dir, $SPHERECHAIN_CACHE_DIR, $XDG_CACHE_HOME/spherechain, ~/.cache/spherechain.
+fs::path CacheDir(const std::string& explicit_dir) {
+  if (!explicit_dir.empty()) return explicit_dir;
+  if (const char* d = std::getenv("SPHERECHAIN_CACHE_DIR"); d && *d) return d;
+  if (const char* d = std::getenv("XDG_CACHE_HOME"); d && *d) return fs::path(d) / "spherechain";
+  if (const char* h = std::getenv("HOME"); h && *h) return fs::path(h) / ".cache" / "spherechain";
+  return fs::temp_directory_path() / "spherechain-cache";
+}
+
+// What the bake of `mesh` depends on: bind positions and triangles, skin weights, the bone tree, the
+// importer's vertex contract, the baker's version.
+uint64_t BakeKey(const import::Mesh& mesh, const std::string& rig) {
+  std::string k = kCacheVersion;
+  const import::Fingerprint fp = import::ComputeFingerprint(mesh);
+  k += "|" + std::to_string(fp.vertex_count) + "|" + std::to_string(fp.triangle_count) + "|" +
+       std::to_string(fp.positions_hash) + "|" + std::to_string(fp.indices_hash) + "|" + mesh.vertex_contract + "|" + rig;
+  if (mesh.skin) {
+    const import::Skin& s = *mesh.skin;
+    k += "|" + std::to_string(import::Hash64(s.weight_offsets.data(), s.weight_offsets.size() * 4)) + "|" +
+         std::to_string(import::Hash64(s.weight_joints.data(), s.weight_joints.size() * 4)) + "|" +
+         std::to_string(import::Hash64(s.weights.data(), s.weights.size() * 4));
+    for (const import::SkinJoint& j : s.joints) k += "|" + std::to_string(j.node);
+    for (const import::Node& n : s.nodes) {
+      k += "|" + n.name + ":" + std::to_string(n.parent);
+      k.append(reinterpret_cast<const char*>(n.translation.data()), sizeof(float) * 3);
+      k.append(reinterpret_cast<const char*>(n.rotation.data()), sizeof(float) * 4);
+    }
+  }
+  return import::Hash64(k.data(), k.size());
+}
+
+// The asset: --asset (imported mesh checked by fingerprint), else a cached bake, else a fresh bake (cached).
+// A mesh with no clips has nothing to check unless key poses are given: said before any bake.
+bool HasAnimation(const CheckArgs& a, const import::Mesh& mesh, std::string* error) {
+  if (!mesh.clips.empty() || (a.poses_option && a.poses_option->count() > 0)) return true;
+  *error = "'" + a.character + "' has no animation clips: nothing to check (a static mesh); --poses [POSES...] checks "
+           "a morph through key poses (bare: the character's default poses)";
+  return false;
+}
+
+bool OpenOrBake(const CheckArgs& a, LoadedAsset* asset, import::Mesh* mesh, std::string* asset_name, std::string* error) {
+  if (!a.asset.empty()) {
+    *asset_name = a.asset;
+    return OpenAssetAndMesh(a.asset, a.character, a.rig, asset, mesh, error) && HasAnimation(a, *mesh, error);
+  }
+  import::Context log = MakeLoggingContext();
+  import::ImportOptions io;
+  io.rig_path = a.rig;
+  auto imported = import::ImportMesh(a.character, io, &log);
+  if (!imported.ok()) return *error = imported.error().message, false;
+  *mesh = std::move(imported).value();
+  if (!HasAnimation(a, *mesh, error)) return false;
+  char name[32];
+  std::snprintf(name, sizeof name, "%016llx.sphc", static_cast<unsigned long long>(BakeKey(*mesh, a.rig)));
+  const fs::path cached = CacheDir(a.cache_dir) / name;
+  std::error_code ec;
+  if (!a.no_cache && fs::is_regular_file(cached, ec) && import::LoadAssetFile(cached.string(), asset).ok() &&
+      playback::CheckFingerprint(asset->view, *mesh, cached.string(), a.character).ok()) {
+    *asset_name = cached.string();
+    spdlog::info("asset: {} (cached bake)", cached.string());
+    return true;
+  }
+  spdlog::info("baking {} (no --asset given)...", a.character);
+  baker::BakeConfig config;
+  config.import.rig_path = a.rig;
+  auto baked = baker::Bake(a.character, config, &log);
+  if (!baked.ok()) return *error = "bake: " + baked.error().message, false;
+  const std::vector<uint8_t>& bytes = baked->asset;
+  *mesh = std::move(baked->mesh);
+  if (!a.no_cache) {
+    fs::create_directories(cached.parent_path(), ec);
+    if (auto s = import::WriteFileAtomic(cached.string(), bytes.data(), bytes.size()); s.ok()) {
+      spdlog::info("asset: {} (baked, cached)", cached.string());
+      if (import::LoadAssetFile(cached.string(), asset).ok()) return *asset_name = cached.string(), true;
+    } else {
+      spdlog::warn("cannot cache the bake: {}", s.error().message);
+    }
+  }
+  // Not cached: a temporary file read back into aligned memory the same way.
+  const fs::path tmp = fs::temp_directory_path() / ("spherechain-check-" + std::to_string(getpid()) + ".sphc");
+  if (auto s = import::WriteFileAtomic(tmp.string(), bytes.data(), bytes.size()); !s.ok())
+    return *error = s.error().message, false;
+  auto s = import::LoadAssetFile(tmp.string(), asset);
+  fs::remove(tmp, ec);
+  if (!s.ok()) return *error = "the baked asset does not load: " + s.error().message, false;
+  *asset_name = a.character + " (baked)";
+  return true;
+}
+
+// "1.23 cm (0.7 %)" with units, else "0.0123 (0.7 %)".
+std::string DepthText(double d, const evaluate::CheckReport& r) {
+  char b[64];
+  if (r.unit_scale_m > 0) std::snprintf(b, sizeof b, "%.2f cm (%.2f %%)", d * r.unit_scale_m * 100.0, 100.0 * d / r.height);
+  else std::snprintf(b, sizeof b, "%.4g (%.2f %%)", d, 100.0 * d / r.height);
+  return b;
+}
+
+// "150.66 cm" with units, else "1.507 units".
+std::string LengthText(double d, const evaluate::CheckReport& r) {
+  char b[48];
+  if (r.unit_scale_m > 0) std::snprintf(b, sizeof b, "%.2f cm", d * r.unit_scale_m * 100.0);
+  else std::snprintf(b, sizeof b, "%.4g units", d);
+  return b;
+}
+
+// The command that writes a viewer page of `clip` (its frames are CheckClips' frames).
+std::string ViewCommand(const CheckArgs& a, const std::string& asset_name, const evaluate::CheckClip& clip,
+                        const std::vector<std::string>& poses) {
+  std::string cmd = "spherechain view " + asset_name + " --mesh " + a.character;
+  if (clip.name == "morph" && !poses.empty()) {
+    cmd += " --morph";
+    for (const std::string& p : poses) cmd += " " + p;
+  } else {
+    cmd += " --clip '" + clip.name + "'";
+  }
+  return cmd + " --frames " + std::to_string(clip.frames) + " -o view.html";
+}
+
+std::string Html(const std::string& s) {
+  std::string o;
+  for (const char c : s) {
+    if (c == '<') o += "&lt;";
+    else if (c == '>') o += "&gt;";
+    else if (c == '&') o += "&amp;";
+    else if (c == '"') o += "&quot;";
+    else o += c;
+  }
+  return o;
+}
+
+// One self-contained page: the summary table, then per failing event its picture at the deepest frame.
+bool WriteHtml(const CheckArgs& a, const std::string& asset_name, const runtime::AssetView& view,
+               const import::Mesh& mesh, const evaluate::CheckOptions& options, const evaluate::CheckReport& r,
+               std::string* error) {
+  std::string page =
+      "<!doctype html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>spherechain check: " + Html(a.character) +
+      "</title><style>body{font:14px system-ui,sans-serif;margin:24px;color:#222}table{border-collapse:collapse}"
+      "td,th{padding:4px 10px;border-bottom:1px solid #ddd;text-align:left}.FAIL{color:#b00;font-weight:bold}"
+      ".PASS{color:#070;font-weight:bold}figure{margin:16px 0 32px}img{max-width:100%;border:1px solid #ccc}"
+      "code{background:#f4f4f4;padding:2px 4px}</style></head><body>\n";
+  page += "<h1>spherechain check: " + Html(fs::path(a.character).filename().string()) + "</h1>\n<p>" +
+          Html(a.character) + ", asset " + Html(asset_name) + ". Height " + LengthText(r.height, r) +
+          "; default threshold " + DepthText(r.max_depth, r) + ". " + (r.failed() ? "<span class=FAIL>FAIL</span>" : "<span class=PASS>PASS</span>") +
+          "</p>\n<table><tr><th>clip</th><th>frames</th><th>events</th><th>failing</th><th>deepest</th><th>result</th></tr>\n";
+  for (const evaluate::CheckClip& c : r.clips) {
+    size_t failing = 0;
+    for (const auto& e : c.events) failing += e.failed;
+    page += "<tr><td>" + Html(c.name) + "</td><td>" + std::to_string(c.frames) + "</td><td>" +
+            std::to_string(c.events.size()) + "</td><td>" + std::to_string(failing) + "</td><td>" +
+            DepthText(c.deepest(), r) + "</td><td class=" + (c.failed() ? "FAIL>FAIL" : "PASS>PASS") + "</td></tr>\n";
+  }
+  page += "</table>\n";
+  std::vector<float> positions;
+  const fs::path png = fs::temp_directory_path() / ("spherechain-check-" + std::to_string(getpid()) + ".png");
+  for (const evaluate::CheckClip& c : r.clips) {
+    if (!c.failed()) continue;
+    page += "<h2>" + Html(c.name) + "</h2>\n<p>Viewer of this clip: <code>" + Html(ViewCommand(a, asset_name, c, options.poses)) +
+            "</code>, then open the links below.</p>\n";
+    for (const evaluate::CheckEvent& e : c.events) {
+      if (!e.failed) continue;
+      if (auto s = evaluate::CheckFrame(mesh, options, c, e.deepest_frame, &positions); !s.ok())
+        return *error = s.error().message, false;
+      std::vector<uint8_t> marks(mesh.triangle_count(), 0);
+      for (const auto& [ta, tb] : e.contacts) marks[ta] = marks[tb] = 1;
+      char caption[256];
+      std::snprintf(caption, sizeof caption, "%s frame %u (%.3f s): %s, depth %s", c.name.c_str(), e.deepest_frame,
+                    e.deepest_time, e.name.c_str(), DepthText(e.depth, r).c_str());
+      const std::string svg = playback::RenderFrameSvg(mesh, view, positions.data(), {}, marks, caption, 1200);
+      if (auto s = playback::SvgToPng(svg, png.string()); !s.ok()) return *error = s.error().message, false;
+      std::string bytes;
+      const bool read = ReadText(png, &bytes);
+      std::error_code ec;
+      fs::remove(png, ec);
+      if (!read) return *error = "cannot read the picture " + png.string(), false;
+      char line[512];
+      std::snprintf(line, sizeof line,
+                    "frames %u–%u (%.3f–%.3f s), deepest at frame %u; triangles %u / %u, joints %s / %s; %u contacts "
+                    "there%s",
+                    e.first_frame, e.last_frame, e.first_time, e.last_time, e.deepest_frame, e.triangles[0],
+                    e.triangles[1], e.joints[0].c_str(), e.joints[1].c_str(), unsigned(e.contacts.size()),
+                    e.baseline.empty() ? "" : ("; baseline: " + e.baseline).c_str());
+      page += "<figure class=event><figcaption><b>" + Html(e.name) + "</b> depth " + DepthText(e.depth, r) +
+              " over " + DepthText(e.threshold, r) + ": " + Html(line) + ". <a href=\"view.html#frame=" +
+              std::to_string(e.deepest_frame) + "\">view at frame " + std::to_string(e.deepest_frame) +
+              "</a></figcaption>\n<img alt=\"" + Html(e.name) + " at frame " + std::to_string(e.deepest_frame) +
+              "\" src=\"data:image/png;base64," + Base64(bytes.data(), bytes.size()) + "\"></figure>\n";
+    }
+    if (!c.fixed.empty()) {
+      page += "<p>Fixed since the baseline:";
+      for (const std::string& f : c.fixed) page += " " + Html(f);
+      page += "</p>\n";
+    }
+  }
+  page += "</body></html>\n";
+  if (auto s = import::WriteFileAtomic(a.html, page); !s.ok()) return *error = s.error().message, false;
+  return true;
+}
+
+int RunCheck(const CheckArgs& a) {
+  // ---- what needs no file -----------------------------------------------------------------------------
+  if (!(a.fps > 0 && a.fps <= 1000)) return BadInput("--fps " + std::to_string(a.fps) + " is outside (0, 1000]");
+  for (const std::string* out : {&a.json, &a.junit, &a.html}) {
+    if (out->empty()) continue;
+    const fs::path dir = fs::path(*out).parent_path();
+    if (!dir.empty() && !fs::is_directory(dir))
+      return BadInput("cannot write '" + *out + "': folder '" + dir.string() + "' does not exist");
+  }
+  nlohmann::json baseline;
+  if (!a.baseline.empty()) {
+    auto bytes = import::ReadFileBytes(a.baseline);
+    if (!bytes.ok()) return BadInput(bytes.error().message);
+    baseline = nlohmann::json::parse(bytes->begin(), bytes->end(), nullptr, false);
+    if (baseline.is_discarded()) return BadInput("--baseline '" + a.baseline + "' is not JSON");
+  }
+
+  LoadedAsset asset;
+  import::Mesh mesh;
+  std::string asset_name, error;
+  if (!OpenOrBake(a, &asset, &mesh, &asset_name, &error)) return BadInput(error);
+
+  evaluate::CheckOptions options;
+  options.mesh_name = a.character;
+  options.asset_name = asset_name;
+  options.clips = a.clips;
+  options.fps = a.fps;
+  options.morph_frames = a.morph_frames;
+  if (a.poses_option && a.poses_option->count() > 0) {
+    for (const std::string& p : a.poses)
+      if (!p.empty()) options.poses.push_back(p);
+    if (options.poses.empty()) {  // bare --poses: the character's default key poses
+      const std::string dir = FindPosesDir(playback::DefaultPoseCharacter(mesh, a.character), "");
+      if (dir.empty()) return BadInput("--poses: no default key poses for '" + a.character + "'; name pose files or a folder");
+      options.poses.push_back(dir);
+    }
+  }
+  const double height = evaluate::BodyHeight(mesh);
+  if (!a.max_depth.empty()) {
+    auto d = evaluate::ParseDepth(a.max_depth, height, mesh.unit_scale_m);
+    if (!d.ok()) return BadInput("--max-depth: " + d.error().message);
+    options.policy.max_depth = d.value();
+  }
+  if (!a.policy.empty())
+    if (auto s = evaluate::LoadCheckPolicy(a.policy, asset.view, height, mesh.unit_scale_m, &options.policy); !s.ok())
+      return BadInput(s.error().message);
+
+  const bool tty = isatty(2) && !Quiet();
+  const auto start = std::chrono::steady_clock::now();
+  if (!Quiet()) options.progress = [&](size_t clip, size_t clips, uint32_t frame, uint32_t frames) {
+    if (tty) {
+      const int width = 30, filled = int(width * (clip + double(frame) / frames) / clips);
+      std::fprintf(stderr, "\rcheck [%-*s] clip %zu/%zu frame %u/%u", width, std::string(size_t(filled), '#').c_str(),
+                   clip + 1, clips, frame, frames);
+      if (clip + 1 == clips && frame == frames) std::fprintf(stderr, "\n");
+    } else if (frame == frames) {
+      std::fprintf(stderr, "check: clip %zu/%zu done (%u frames, %.1f s)\n", clip + 1, clips, frames,
+                   std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    }
+  };
+  auto checked = evaluate::CheckClips(asset.view, mesh, options);
+  if (!checked.ok()) return BadInput(checked.error().message);
+  evaluate::CheckReport& r = checked.value();
+  if (!a.baseline.empty())
+    if (auto s = evaluate::ApplyBaseline(baseline, &r); !s.ok()) return BadInput("--baseline: " + s.error().message);
+
+  // ---- the table ------------------------------------------------------------------------------------
+  Out("%-24s %7s %7s %8s  %-22s %s\n", "clip", "frames", "events", "failing", "deepest", "result");
+  for (const evaluate::CheckClip& c : r.clips) {
+    size_t failing = 0;
+    for (const auto& e : c.events) failing += e.failed;
+    Out("%-24s %7u %7zu %8zu  %-22s %s\n", c.name.c_str(), c.frames, c.events.size(), failing,
+        DepthText(c.deepest(), r).c_str(), c.failed() ? "FAIL" : "PASS");
+  }
+  for (const evaluate::CheckClip& c : r.clips) {
+    for (const evaluate::CheckEvent& e : c.events)
+      if (e.failed)
+        Out("  FAIL %s: %s frames %u-%u, depth %s at frame %u (over %s), joints %s / %s%s\n", c.name.c_str(),
+            e.name.c_str(), e.first_frame, e.last_frame, DepthText(e.depth, r).c_str(), e.deepest_frame,
+            DepthText(e.threshold, r).c_str(), e.joints[0].c_str(), e.joints[1].c_str(),
+            e.baseline.empty() ? "" : (" (" + e.baseline + ")").c_str());
+    for (const std::string& f : c.fixed) Out("  fixed %s: %s\n", c.name.c_str(), f.c_str());
+  }
+  Out("threshold %s by default; %s\n", DepthText(r.max_depth, r).c_str(), r.failed() ? "FAIL" : "PASS");
+
+  // ---- the reports (each written whole, atomically) ---------------------------------------------------
+  if (!a.json.empty()) {
+    if (auto s = import::WriteFileAtomic(a.json, evaluate::CheckReportJson(r).dump(2) + "\n"); !s.ok())
+      return BadInput(s.error().message);
+    Out("wrote %s\n", a.json.c_str());
+  }
+  if (!a.junit.empty()) {
+    if (auto s = import::WriteFileAtomic(a.junit, evaluate::CheckReportJUnit(r)); !s.ok()) return BadInput(s.error().message);
+    Out("wrote %s\n", a.junit.c_str());
+  }
+  if (!a.html.empty()) {
+    if (!WriteHtml(a, asset_name, asset.view, mesh, options, r, &error)) return BadInput("--html: " + error);
+    Out("wrote %s\n", a.html.c_str());
+  }
+  return r.failed() ? kExitFailed : 0;
+}
+
+}  // namespace
+
+void RegisterCheck(CLI::App& app, Commands* commands) {
+  auto args = std::make_shared<CheckArgs>();
+  CLI::App* sub = app.add_subcommand(
+      "check",
+      "Animation QA: play every clip, find every self-contact the skin makes, fail a clip when one goes deeper than "
+      "the policy allows. Exit 0 pass, 1 a clip failed, 2 bad input");
+  sub->footer(
+      "Example:\n  spherechain check CesiumMan.gltf --max-depth 1cm --junit check.xml --html check.html\n"
+      "  spherechain check base.obj --poses --json old.json   # MakeHuman: its default key poses\n"
+      "  spherechain check hero.fbx --baseline old.json --policy policy.json\n"
+      "Policy file: {\"allow\": [\"left_hand-head\"], \"max_depth\": {\"left_arm-torso\": \"2cm\"}, "
+      "\"default_max_depth\": \"1%\"}");
+  sub->add_option("character", args->character, "Character file with clips: .gltf/.glb, .fbx, .dae, .x, ...")
+      ->required()->check(CLI::ExistingFile);
+  sub->add_option("--asset", args->asset, "Asset baked from it (default: bake it, cached by content)")
+      ->check(CLI::ExistingFile);
+  sub->add_option("--rig", args->rig, "MakeHuman rig (.mhskel) for an OBJ; default: default.mhskel beside the OBJ");
+  sub->add_option("--clip", args->clips, "Clip to check (repeatable; default: every clip)");
+  args->poses_option = sub->add_option("--poses", args->poses,
+                                       "Also check the morph through key poses (files, folders); bare: the "
+                                       "character's default poses. How a mesh without clips is checked")
+                           ->expected(0, CLI::detail::expected_max_vector_size);
+  sub->add_option("--morph-frames", args->morph_frames, "Frames of the morph (default 40)")->check(CLI::PositiveNumber);
+  sub->add_option("--fps", args->fps, "Frames per second a clip is sampled at (default 30)");
+  sub->add_option("--max-depth", args->max_depth,
+                  "Deepest penetration allowed: 1cm, 5mm, 0.02m, 1% (of the height; the default) or model units");
+  sub->add_option("--policy", args->policy, "JSON policy: allowed region pairs and per-pair depths (see below)")
+      ->check(CLI::ExistingFile);
+  sub->add_option("--baseline", args->baseline,
+                  "An earlier --json of the same character: fail only on new or deeper events, list the fixed ones")
+      ->check(CLI::ExistingFile);
+  sub->add_option("--json", args->json, "Write the events as JSON (a later --baseline)");
+  sub->add_option("--junit", args->junit, "Write JUnit XML: one testcase per clip (CI test reporters)");
+  sub->add_option("--html", args->html, "Write one self-contained HTML report with a picture per failing event");
+  sub->add_option("--cache-dir", args->cache_dir,
+                  "Where bakes are cached (default $SPHERECHAIN_CACHE_DIR, else $XDG_CACHE_HOME/spherechain, else "
+                  "~/.cache/spherechain)");
+  sub->add_flag("--no-cache", args->no_cache, "Bake afresh and do not cache");
+  commands->handlers.emplace_back(sub, [args] { return RunCheck(*args); });
+}
+
+}  // namespace spherechain::cli

@@ -1,0 +1,267 @@
+// spherechain evaluate — check.h: events against the exact truth, the policy, depths, the baseline, JUnit.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <map>
+#include <set>
+
+#include "spherechain/baker/bake.h"
+#include "spherechain/baker/contacts.h"
+#include "spherechain/evaluate/check.h"
+#include "spherechain/import/file_io.h"
+#include "spherechain/playback/animation.h"
+#include "spherechain/runtime/crease.h"
+#include "spherechain/runtime/narrow_phase.h"
+#include "test_data.h"
+
+namespace {
+
+using namespace spherechain;
+using evaluate::CheckPair;
+
+struct Baked {
+  baker::BakeResult result;
+  runtime::AssetView view;
+};
+
+bool BakeIt(const std::string& path, Baked* out) {
+  auto r = baker::Bake(path, baker::BakeConfig{});
+  REQUIRE_MESSAGE(r.ok(), (r.ok() ? "" : r.error().message));
+  out->result = std::move(r).value();
+  return !runtime::Failed(runtime::LoadAsset(out->result.asset.data(), out->result.asset.size(), &out->view));
+}
+
+// The truth of one frame, from the mesh alone: every intersecting triangle pair (exact predicates, CGAL) that
+// is not near on the welded bind surface within the asset's crease and does not intersect at bind pose, per
+// region pair with its deepest ContactDepthOf.
+std::map<CheckPair, float> TruthOf(const import::Mesh& mesh, const runtime::AssetView& view, const std::vector<float>& pos,
+                                   const std::vector<uint32_t>& weld, runtime::CreaseGraph& graph,
+                                   runtime::CreaseScratch& scratch, const std::set<baker::TrianglePair>& at_bind) {
+  const uint32_t V = mesh.vertex_count();
+  auto pairs = baker::ExactSelfIntersections(pos.data(), V, mesh.indices, weld);
+  REQUIRE(pairs.ok());
+  const auto* tr = view.asset->triangle_regions();
+  std::map<CheckPair, float> out;
+  for (const baker::TrianglePair& p : pairs.value()) {
+    const uint32_t* ia = &mesh.indices[3 * size_t{p.a}];
+    const uint32_t* ib = &mesh.indices[3 * size_t{p.b}];
+    if (scratch.Near(graph, ia, ib, graph.crease()) || at_bind.count(p)) continue;
+    const float* a[3] = {&pos[3 * ia[0]], &pos[3 * ia[1]], &pos[3 * ia[2]]};
+    const float* b[3] = {&pos[3 * ib[0]], &pos[3 * ib[1]], &pos[3 * ib[2]]};
+    runtime::ContactDepth d;
+    runtime::ContactDepthOf(a, b, &d);
+    const int ra = tr->Get(p.a), rb = tr->Get(p.b);
+    float& deepest = out[{std::min(ra, rb), std::max(ra, rb)}];
+    deepest = std::max(deepest, d.depth);
+  }
+  return out;
+}
+
+// Every frame of every clip: a region pair is in an event covering the frame exactly when the truth has a
+// contact of the pair there; each event's depth is the deepest of the truth over its frames.
+void CheckAgainstTruth(const std::string& path, uint32_t max_frames_checked) {
+  Baked b;
+  REQUIRE(BakeIt(path, &b));
+  const import::Mesh& mesh = b.result.mesh;
+  evaluate::CheckOptions o;
+  o.fps = 15;
+  auto report = evaluate::CheckClips(b.view, mesh, o);
+  REQUIRE_MESSAGE(report.ok(), (report.ok() ? "" : report.error().message));
+  REQUIRE(report->clips.size() == mesh.clips.size());
+
+  const std::vector<uint32_t> weld = import::ComputeWeldIds(mesh.positions);
+  runtime::CreaseGraph graph;
+  runtime::CreaseScratch scratch;
+  REQUIRE(graph.Init(mesh.positions.data(), mesh.vertex_count(), mesh.indices.data(), mesh.triangle_count(), weld.data(),
+                     b.view.asset->crease()) == runtime::Status::kOk);
+  REQUIRE(scratch.Init(graph) == runtime::Status::kOk);
+  std::set<baker::TrianglePair> at_bind;
+  {
+    auto bind = baker::ExactSelfIntersections(mesh.positions.data(), mesh.vertex_count(), mesh.indices, weld);
+    REQUIRE(bind.ok());
+    at_bind.insert(bind->begin(), bind->end());
+  }
+  uint32_t frames_with_truth = 0;
+  for (const evaluate::CheckClip& clip : report->clips) {
+    std::map<const evaluate::CheckEvent*, float> deepest;  // the truth's deepest over each event's frames
+    const uint32_t step = std::max(1u, clip.frames / max_frames_checked);
+    for (uint32_t f = 0; f < clip.frames; f += step) {
+      std::vector<float> pos;
+      REQUIRE(evaluate::CheckFrame(mesh, o, clip, f, &pos).ok());
+      const std::map<CheckPair, float> truth = TruthOf(mesh, b.view, pos, weld, graph, scratch, at_bind);
+      frames_with_truth += !truth.empty();
+      std::set<CheckPair> covered;
+      for (const evaluate::CheckEvent& e : clip.events)
+        if (e.first_frame <= f && f <= e.last_frame) {
+          CAPTURE(clip.name);
+          CAPTURE(f);
+          CAPTURE(e.name);
+          CHECK(covered.insert(e.regions).second);  // one event per pair and frame
+          REQUIRE(truth.count(e.regions));
+          deepest[&e] = std::max(deepest[&e], truth.at(e.regions));
+        }
+      for (const auto& [pair, d] : truth) {
+        CAPTURE(f);
+        CHECK_MESSAGE(covered.count(pair), "frame " << f << ": the truth's pair " << pair.first << "-" << pair.second
+                                                    << " is in no event");
+      }
+    }
+    if (step == 1)
+      for (const evaluate::CheckEvent& e : clip.events) {
+        CAPTURE(e.name);
+        CHECK(e.depth == doctest::Approx(deepest[&e]).epsilon(1e-5));
+        CHECK(e.failed == (double(e.depth) > report->max_depth));
+        CHECK(e.deepest_frame >= e.first_frame);
+        CHECK(e.deepest_frame <= e.last_frame);
+        CHECK(!e.contacts.empty());
+      }
+  }
+  CHECK(frames_with_truth > 0);  // the clips make contacts: the comparison compared something
+}
+
+}  // namespace
+
+TEST_CASE("check: the creature's events are the exact truth's, frame by frame, with its depths") {
+  const std::string path = spherechain::test::SourceFile("tests/data/creature/creature.gltf");
+  REQUIRE(std::filesystem::exists(path));
+  CheckAgainstTruth(path, 1000);
+}
+
+TEST_CASE("check: CesiumMan's walk, events against the exact truth") {
+  const std::string path = spherechain::test::SharedData("gltf/CesiumMan.gltf");
+  if (!spherechain::test::Require(path)) return;
+  CheckAgainstTruth(path, 1000);
+}
+
+TEST_CASE("check: policy, depths, baseline and JUnit on the creature") {
+  Baked b;
+  REQUIRE(BakeIt(spherechain::test::SourceFile("tests/data/creature/creature.gltf"), &b));
+  const import::Mesh& mesh = b.result.mesh;
+  const double h = evaluate::BodyHeight(mesh);
+  REQUIRE(h > 0);
+
+  SUBCASE("depths") {
+    CHECK(evaluate::ParseDepth("0.5", h, 0).value() == doctest::Approx(0.5));
+    CHECK(evaluate::ParseDepth("2%", h, 0).value() == doctest::Approx(0.02 * h));
+    CHECK(evaluate::ParseDepth("1cm", h, 1.0).value() == doctest::Approx(0.01));
+    CHECK(evaluate::ParseDepth("5mm", h, 0.1).value() == doctest::Approx(0.05));  // decimetre units
+    CHECK(!evaluate::ParseDepth("1cm", h, 0).ok());                               // units unknown
+    for (const char* bad : {"", "-1", "0", "1parsec", "cm", "nan"}) {
+      CAPTURE(bad);
+      CHECK(!evaluate::ParseDepth(bad, h, 1.0).ok());
+    }
+  }
+
+  evaluate::CheckOptions o;
+  auto first = evaluate::CheckClips(b.view, mesh, o);
+  REQUIRE(first.ok());
+  const evaluate::CheckReport& r = first.value();
+  REQUIRE(r.clips.size() == 2);  // "cross" drives the fore legs through each other, "still" does not move
+  const evaluate::CheckClip* cross = r.clips[0].name == "cross" ? &r.clips[0] : &r.clips[1];
+  const evaluate::CheckClip* still = cross == &r.clips[0] ? &r.clips[1] : &r.clips[0];
+  REQUIRE(cross->failed());
+  CHECK(!still->failed());
+  CHECK(still->events.empty());
+  const evaluate::CheckEvent& legs = cross->events.front();
+  CHECK(legs.name == "ForeLeg_L-ForeLeg_R");
+  CHECK(legs.joints[0].rfind("ForeLeg_L", 0) == 0);
+  CHECK(legs.joints[1].rfind("ForeLeg_R", 0) == 0);
+
+  SUBCASE("policy: a deeper threshold for the pair, or the pair allowed, passes the clip") {
+    evaluate::CheckOptions p = o;
+    p.policy.pair_max_depth[legs.regions] = legs.depth * 1.01;
+    auto r2 = evaluate::CheckClips(b.view, mesh, p);
+    REQUIRE(r2.ok());
+    CHECK(!r2->failed());
+    p.policy.pair_max_depth.clear();
+    p.policy.allow.push_back(legs.regions);
+    r2 = evaluate::CheckClips(b.view, mesh, p);
+    REQUIRE(r2.ok());
+    CHECK(!r2->failed());
+    CHECK(!r2->clips[0].events.empty());  // still listed
+  }
+
+  SUBCASE("policy file: names and symbols; an unknown region lists the regions") {
+    const std::string dir = std::string(SPHERECHAIN_BINARY_DIR) + "/tests/check_policy";
+    std::filesystem::create_directories(dir);
+    REQUIRE(import::WriteFileAtomic(dir + "/ok.json", std::string(R"({"allow": ["ForeLeg_L-ForeLeg_R"],
+        "max_depth": {"R0-R1": "2%"}, "default_max_depth": 0.5})")).ok());
+    evaluate::CheckPolicy policy;
+    REQUIRE(evaluate::LoadCheckPolicy(dir + "/ok.json", b.view, h, 0, &policy).ok());
+    CHECK(policy.max_depth == doctest::Approx(0.5));
+    CHECK(policy.Threshold(legs.regions) == std::numeric_limits<double>::infinity());
+    CHECK(policy.Threshold({0, 1}) == doctest::Approx(0.02 * h));
+    REQUIRE(import::WriteFileAtomic(dir + "/bad.json", std::string(R"({"allow": ["Wing_L-ForeLeg_R"]})")).ok());
+    auto s = evaluate::LoadCheckPolicy(dir + "/bad.json", b.view, h, 0, &policy);
+    REQUIRE(!s.ok());
+    CHECK(s.error().message.find("Wing_L-ForeLeg_R") != std::string::npos);
+    CHECK(s.error().message.find("ForeLeg_L") != std::string::npos);  // the regions there are
+    REQUIRE(import::WriteFileAtomic(dir + "/key.json", std::string(R"({"alow": []})")).ok());
+    CHECK(!evaluate::LoadCheckPolicy(dir + "/key.json", b.view, h, 0, &policy).ok());
+  }
+
+  SUBCASE("baseline: the same run is known; deeper fails; a vanished event is fixed; another character refused") {
+    const nlohmann::json base = evaluate::CheckReportJson(r);
+    evaluate::CheckReport again = r;
+    REQUIRE(evaluate::ApplyBaseline(base, &again).ok());
+    CHECK(!again.failed());
+    for (const auto& c : again.clips)
+      for (const auto& e : c.events) CHECK(e.baseline == (e.depth > again.max_depth ? "known" : e.baseline));
+
+    evaluate::CheckReport deeper = r;
+    for (auto& c : deeper.clips)
+      for (auto& e : c.events) e.depth *= 1.2f;
+    REQUIRE(evaluate::ApplyBaseline(base, &deeper).ok());
+    CHECK(deeper.failed());
+
+    nlohmann::json shallow = base;  // the baseline had no failing event: every failing one is new
+    for (auto& c : shallow["clips"]) c["events"] = nlohmann::json::array();
+    evaluate::CheckReport fresh = r;
+    REQUIRE(evaluate::ApplyBaseline(shallow, &fresh).ok());
+    CHECK(fresh.failed());
+
+    evaluate::CheckReport fixed = r;  // this run is clean: the baseline's failures are fixed
+    for (auto& c : fixed.clips) c.events.clear();
+    REQUIRE(evaluate::ApplyBaseline(base, &fixed).ok());
+    bool listed = false;
+    for (const auto& c : fixed.clips) listed |= std::find(c.fixed.begin(), c.fixed.end(), legs.name) != c.fixed.end();
+    CHECK(listed);
+
+    nlohmann::json other = base;
+    other["fingerprint"] = "0123456789abcdef";
+    evaluate::CheckReport o2 = r;
+    auto s = evaluate::ApplyBaseline(other, &o2);
+    REQUIRE(!s.ok());
+    CHECK(s.error().message.find("another character") != std::string::npos);
+    CHECK(!evaluate::ApplyBaseline(nlohmann::json::object(), &o2).ok());
+  }
+
+  SUBCASE("JUnit: one testcase per clip, a failure for the failing one naming its event") {
+    const std::string x = evaluate::CheckReportJUnit(r);
+    size_t cases = 0, failures = 0;
+    for (size_t k = x.find("<testcase "); k != std::string::npos; k = x.find("<testcase ", k + 1)) ++cases;
+    for (size_t k = x.find("<failure "); k != std::string::npos; k = x.find("<failure ", k + 1)) ++failures;
+    CHECK(cases == 2);
+    CHECK(failures == 1);
+    CHECK(x.find("ForeLeg_L-ForeLeg_R frames") != std::string::npos);
+  }
+
+  SUBCASE("bad input") {
+    evaluate::CheckOptions bad = o;
+    bad.clips = {"gallop"};
+    auto e = evaluate::CheckClips(b.view, mesh, bad);
+    REQUIRE(!e.ok());
+    CHECK(e.error().message.find("'cross'") != std::string::npos);  // lists the clips there are
+    bad = o;
+    bad.fps = 0;
+    CHECK(!evaluate::CheckClips(b.view, mesh, bad).ok());
+    bad = o;
+    bad.max_frames = 3;
+    CHECK(!evaluate::CheckClips(b.view, mesh, bad).ok());
+    import::Mesh no_clips = mesh;
+    no_clips.clips.clear();
+    e = evaluate::CheckClips(b.view, no_clips, o);
+    REQUIRE(!e.ok());
+    CHECK(e.error().message.find("nothing to check") != std::string::npos);
+  }
+}
