@@ -1,4 +1,4 @@
-// spherechain check CHARACTER [--asset A.sphc] [--clip NAME]... [--poses [POSES...]] [--fps N] [--max-depth D]
+// spherechain check CHARACTER [--asset A.sphc] [--clip NAME]... [--poses [POSES...]] [--fps N | --key-times] [--max-depth D]
 //                   [--policy P.json] [--baseline OLD.json] [--json OUT] [--junit OUT.xml] [--html OUT.html]
 //
 // Animation QA for a game's CI (spherechain/evaluate/check.h says what is measured): plays every clip, finds
@@ -39,7 +39,7 @@ struct CheckArgs {
   CLI::Option* poses_option = nullptr;
   double fps = 30;
   uint32_t morph_frames = 40;
-  bool no_cache = false;
+  bool no_cache = false, key_times = false;
 };
 
 int BadInput(const std::string& message) {
@@ -162,6 +162,7 @@ std::string ViewCommand(const CheckArgs& a, const std::string& asset_name, const
   } else {
     cmd += " --clip '" + clip.name + "'";
   }
+  if (a.key_times) return cmd + " -o view.html  # (--key-times: the viewer's frames are uniform, not these)";
   return cmd + " --frames " + std::to_string(clip.frames) + " -o view.html";
 }
 
@@ -229,9 +230,11 @@ bool WriteHtml(const CheckArgs& a, const std::string& asset_name, const runtime:
                     e.triangles[1], e.joints[0].c_str(), e.joints[1].c_str(), unsigned(e.contacts.size()),
                     e.baseline.empty() ? "" : ("; baseline: " + e.baseline).c_str());
       page += "<figure class=event><figcaption><b>" + Html(e.name) + "</b> depth " + DepthText(e.depth, r) +
-              " over " + DepthText(e.threshold, r) + ": " + Html(line) + ". <a href=\"view.html#frame=" +
-              std::to_string(e.deepest_frame) + "\">view at frame " + std::to_string(e.deepest_frame) +
-              "</a></figcaption>\n<img alt=\"" + Html(e.name) + " at frame " + std::to_string(e.deepest_frame) +
+              " over " + DepthText(e.threshold, r) + ": " + Html(line) + "." +
+              (a.key_times ? std::string()
+                           : " <a href=\"view.html#frame=" + std::to_string(e.deepest_frame) + "\">view at frame " +
+                                 std::to_string(e.deepest_frame) + "</a>") +
+              "</figcaption>\n<img alt=\"" + Html(e.name) + " at frame " + std::to_string(e.deepest_frame) +
               "\" src=\"data:image/png;base64," + Base64(bytes.data(), bytes.size()) + "\"></figure>\n";
     }
     if (!c.fixed.empty()) {
@@ -272,6 +275,7 @@ int RunCheck(const CheckArgs& a) {
   options.asset_name = asset_name;
   options.clips = a.clips;
   options.fps = a.fps;
+  options.key_times = a.key_times;
   options.morph_frames = a.morph_frames;
   if (a.poses_option && a.poses_option->count() > 0) {
     for (const std::string& p : a.poses)
@@ -373,6 +377,8 @@ void RegisterCheck(CLI::App& app, Commands* commands) {
                            ->expected(0, CLI::detail::expected_max_vector_size);
   sub->add_option("--morph-frames", args->morph_frames, "Frames of the morph (default 40)")->check(CLI::PositiveNumber);
   sub->add_option("--fps", args->fps, "Frames per second a clip is sampled at (default 30)");
+  sub->add_flag("--key-times", args->key_times,
+                "Play each clip at its own key times instead of --fps (the poses the animator set)");
   sub->add_option("--max-depth", args->max_depth,
                   "Deepest penetration allowed: 1cm, 5mm, 0.02m, 1% (of the height; the default) or model units");
   sub->add_option("--policy", args->policy, "JSON policy: allowed region pairs and per-pair depths (see below)")

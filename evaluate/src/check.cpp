@@ -103,27 +103,62 @@ std::string XmlEscape(const std::string& s) {
 
 const char* const kMorphClip = "morph";
 
+// What CheckClips plays for one clip: a playback::Animation sampled uniformly, or (CheckOptions::key_times)
+// at the clip's own key times.
+struct CheckAnimation {
+  playback::Animation anim;
+  std::vector<float> times;  // key_times: the clip's key times in [0, duration], ascending; else empty
+
+  uint32_t frames() const { return times.empty() ? anim.frames : uint32_t(times.size()); }
+  float Time(uint32_t f) const { return times.empty() ? anim.FrameTime(f) : times[f]; }
+  import::Status Frame(const import::Mesh& mesh, uint32_t f, playback::SkinningScratch* scratch,
+                       std::vector<float>* out) const {
+    if (times.empty()) return anim.Frame(mesh, f, scratch, out);
+    out->resize(mesh.positions.size());
+    return playback::SkinClip(mesh, *anim.clip, times[f], scratch, out->data(), out->size());
+  }
+};
+
 // The animation CheckClips plays for clip `name` (kMorphClip: the morph through options.poses).
-import::Result<playback::Animation> OpenCheckAnimation(const import::Mesh& mesh, const CheckOptions& o,
-                                                       const std::string& name) {
+import::Result<CheckAnimation> OpenCheckAnimation(const import::Mesh& mesh, const CheckOptions& o,
+                                                  const std::string& name) {
   playback::AnimationRequest request;
   request.mesh_name = o.mesh_name;
+  CheckAnimation out;
   if (name == kMorphClip && !o.poses.empty()) {
     request.morph = o.poses;
     request.frames = o.morph_frames;
-    return playback::OpenAnimation(mesh, request);
+    auto anim = playback::OpenAnimation(mesh, request);
+    if (!anim.ok()) return anim.error();
+    out.anim = std::move(anim).value();
+    return out;
   }
   const import::Clip* clip = nullptr;
   for (const import::Clip& c : mesh.clips)
     if (c.name == name) clip = &c;
   request.clip = name;
-  const double frames = clip ? std::max(1.0, std::ceil(double(clip->duration_s) * o.fps - 1e-6)) : 1.0;
+  std::vector<float> times;
+  if (clip && o.key_times) {
+    for (const import::Channel& ch : clip->channels)
+      for (const float t : ch.times)
+        if (t >= 0.0f && t <= clip->duration_s) times.push_back(t);
+    std::sort(times.begin(), times.end());
+    times.erase(std::unique(times.begin(), times.end(), [](float a, float b) { return b - a < 1e-6f; }), times.end());
+    if (times.empty()) times.push_back(0.0f);
+  }
+  const double frames = !times.empty() ? double(times.size())
+                        : clip         ? std::max(1.0, std::ceil(double(clip->duration_s) * o.fps - 1e-6))
+                                       : 1.0;
   if (frames > o.max_frames)
     return Fail(Code::kConfig, "clip '" + name + "' is " + std::to_string(clip->duration_s) + " s: " +
-                                   std::to_string(uint64_t(frames)) + " frames at " + std::to_string(o.fps) +
-                                   " fps, over the limit of " + std::to_string(o.max_frames));
+                                   std::to_string(uint64_t(frames)) + " frames, over the limit of " +
+                                   std::to_string(o.max_frames));
   request.frames = uint32_t(frames);
-  return playback::OpenAnimation(mesh, request);  // an unknown clip: the message lists the clips
+  auto anim = playback::OpenAnimation(mesh, request);  // an unknown clip: the message lists the clips
+  if (!anim.ok()) return anim.error();
+  out.anim = std::move(anim).value();
+  out.times = std::move(times);
+  return out;
 }
 
 }  // namespace
@@ -132,8 +167,8 @@ import::Status CheckFrame(const import::Mesh& mesh, const CheckOptions& options,
                           uint32_t frame, std::vector<float>* positions) {
   auto anim = OpenCheckAnimation(mesh, options, clip.name);
   if (!anim.ok()) return anim.error();
-  if (frame >= anim->frames)
-    return Fail(Code::kConfig, "clip '" + clip.name + "' has " + std::to_string(anim->frames) + " frames, not " +
+  if (frame >= anim->frames())
+    return Fail(Code::kConfig, "clip '" + clip.name + "' has " + std::to_string(anim->frames()) + " frames, not " +
                                    std::to_string(frame + 1));
   playback::SkinningScratch scratch;
   return anim->Frame(mesh, frame, &scratch, positions);
@@ -263,7 +298,7 @@ import::Result<CheckReport> CheckClips(const runtime::AssetView& view, const imp
   if (names.empty() && o.poses.empty())
     return Fail(Code::kConfig, "the character has no animation clips: nothing to check (a static mesh; give key poses "
                                "to check a morph through them)");
-  std::vector<playback::Animation> animations;
+  std::vector<CheckAnimation> animations;
   for (const std::string& name : names) {
     auto anim = OpenCheckAnimation(mesh, o, name);
     if (!anim.ok()) return anim.error();
@@ -296,14 +331,14 @@ import::Result<CheckReport> CheckClips(const runtime::AssetView& view, const imp
   playback::SkinningScratch scratch;
 
   for (size_t c = 0; c < animations.size(); ++c) {
-    const playback::Animation& anim = animations[c];
+    const CheckAnimation& anim = animations[c];
     CheckClip clip;
     clip.name = names[c];
-    clip.frames = anim.frames;
-    clip.duration = anim.clip ? anim.clip->duration_s : anim.frames / playback::Animation::kMorphFps;
+    clip.frames = anim.frames();
+    clip.duration = anim.anim.clip ? anim.anim.clip->duration_s : anim.frames() / playback::Animation::kMorphFps;
     std::map<CheckPair, size_t> open;  // region pair → index of its event running up to the previous frame
     const auto t0 = std::chrono::steady_clock::now();
-    for (uint32_t f = 0; f < anim.frames; ++f) {
+    for (uint32_t f = 0; f < anim.frames(); ++f) {
       if (auto s = anim.Frame(mesh, f, &scratch, &positions); !s.ok())
         return Fail(s.error().code, "clip '" + clip.name + "' frame " + std::to_string(f) + ": " + s.error().message);
       uint32_t count = 0;
@@ -350,20 +385,20 @@ import::Result<CheckReport> CheckClips(const runtime::AssetView& view, const imp
           ev.regions = pair;
           ev.name = PairLabel(view, pair);
           ev.first_frame = f;
-          ev.first_time = anim.FrameTime(f);
+          ev.first_time = anim.Time(f);
           ev.depth = -1;
           clip.events.push_back(ev);
         }
         CheckEvent& ev = clip.events[e];
         ev.last_frame = f;
-        ev.last_time = anim.FrameTime(f);
+        ev.last_time = anim.Time(f);
         ev.max_contacts = std::max(ev.max_contacts, n);
         if (depths[deepest].depth > ev.depth) {
           const runtime::TriangleContact& k = contacts[deepest];
           const bool swap = region_of(k.triangle_a) > region_of(k.triangle_b);  // the pair's order
           ev.depth = depths[deepest].depth;
           ev.deepest_frame = f;
-          ev.deepest_time = anim.FrameTime(f);
+          ev.deepest_time = anim.Time(f);
           ev.triangles[0] = swap ? k.triangle_b : k.triangle_a;
           ev.triangles[1] = swap ? k.triangle_a : k.triangle_b;
           ev.contacts.clear();
@@ -383,7 +418,7 @@ import::Result<CheckReport> CheckClips(const runtime::AssetView& view, const imp
         next[pair] = e;
       }
       open.swap(next);
-      if (o.progress) o.progress(c, animations.size(), f + 1, anim.frames);
+      if (o.progress) o.progress(c, animations.size(), f + 1, anim.frames());
     }
     clip.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     for (CheckEvent& ev : clip.events) {

@@ -1,4 +1,5 @@
 #include "spherechain/evaluate/evaluate.h"
+#include "spherechain/evaluate/check.h"  // BodyHeight
 
 #include <algorithm>
 #include <chrono>
@@ -259,10 +260,7 @@ import::Result<Evaluation> Evaluate(const runtime::AssetView& view, const import
       if (s < sphere_triangles.size()) sphere_triangles[s].push_back(t);
     }
 
-  double lo = 1e300, hi = -1e300;
-  const int up = mesh.up_axis == import::UpAxis::kZ ? 2 : mesh.up_axis == import::UpAxis::kX ? 0 : 1;
-  for (uint32_t v = 0; v < V; ++v) lo = std::min(lo, double(mesh.positions[3 * v + up])), hi = std::max(hi, double(mesh.positions[3 * v + up]));
-  const double height = hi - lo, margin = a.margin_rel * height, crease = a.crease_rel * height;
+  const double height = BodyHeight(mesh), margin = a.margin_rel * height, crease = a.crease_rel * height;
   std::vector<Eigen::Vector3d> bind_centroid(T);
   for (uint32_t t = 0; t < T; ++t) {
     Eigen::Vector3d c = Eigen::Vector3d::Zero();

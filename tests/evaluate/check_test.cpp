@@ -59,15 +59,22 @@ std::map<CheckPair, float> TruthOf(const import::Mesh& mesh, const runtime::Asse
 
 // Every frame of every clip: a region pair is in an event covering the frame exactly when the truth has a
 // contact of the pair there; each event's depth is the deepest of the truth over its frames.
-void CheckAgainstTruth(const std::string& path, uint32_t max_frames_checked) {
+void CheckAgainstTruth(const std::string& path, uint32_t max_frames_checked, bool key_times = false) {
   Baked b;
   REQUIRE(BakeIt(path, &b));
   const import::Mesh& mesh = b.result.mesh;
   evaluate::CheckOptions o;
   o.fps = 15;
+  o.key_times = key_times;
   auto report = evaluate::CheckClips(b.view, mesh, o);
   REQUIRE_MESSAGE(report.ok(), (report.ok() ? "" : report.error().message));
   REQUIRE(report->clips.size() == mesh.clips.size());
+  if (key_times)
+    for (size_t c = 0; c < mesh.clips.size(); ++c) {
+      std::set<float> keys;  // the clip's key times (the creature's are distinct to far more than 1e-6 s)
+      for (const auto& ch : mesh.clips[c].channels) keys.insert(ch.times.begin(), ch.times.end());
+      CHECK(report->clips[c].frames == keys.size());
+    }
 
   const std::vector<uint32_t> weld = import::ComputeWeldIds(mesh.positions);
   runtime::CreaseGraph graph;
@@ -125,6 +132,7 @@ TEST_CASE("check: the creature's events are the exact truth's, frame by frame, w
   const std::string path = spherechain::test::SourceFile("tests/data/creature/creature.gltf");
   REQUIRE(std::filesystem::exists(path));
   CheckAgainstTruth(path, 1000);
+  CheckAgainstTruth(path, 1000, /*key_times=*/true);
 }
 
 TEST_CASE("check: CesiumMan's walk, events against the exact truth") {

@@ -64,6 +64,9 @@ struct CheckOptions {
   double fps = 30;                 ///< clip sampling rate [Units: frames/s] [Limit: (0, 1000]]: a clip of
                                    ///< duration d plays max(1, ceil(d · fps)) frames at t = d · f / frames,
                                    ///< the frames of `play/evaluate/view --clip C --frames N`
+  /// Play each clip at its own key times instead (the sorted union of its channels' key times within
+  /// [0, duration]; the morph keeps morph_frames): the poses the animator set, no more, no fewer.
+  bool key_times = false;
   CheckPolicy policy;              ///< max_depth 0: 1 % of the height
   uint32_t max_frames = 100000;    ///< [Limit: > 0] a clip longer than this many frames is refused (kConfig)
   /// [opt] called after each frame: (clip index, clip count, frame, frames of the clip).
@@ -145,8 +148,8 @@ import::Status ApplyBaseline(const nlohmann::json& baseline, CheckReport* report
 /// "name", "first_frame", ... as CheckEvent}]}]}. Depths in model units and as "depth_rel" (of the height).
 nlohmann::json CheckReportJson(const CheckReport& report);
 
-/// The report as JUnit XML (one <testsuite> "spherechain check", one <testcase> per clip, each failing
-/// event a line of its <failure> message), the format CI reporters read.
+/// The report as JUnit XML (one `testsuite` "spherechain check", one `testcase` per clip, each failing
+/// event a line of its `failure` text), the format CI reporters read.
 std::string CheckReportJUnit(const CheckReport& report);
 
 }  // namespace spherechain::evaluate
