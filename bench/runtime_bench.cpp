@@ -720,7 +720,6 @@ bool SkinContacts(const Workload& w, const sc::AssetView& view, int runs) {
   const Summary time = Summarize(us), ptime = Summarize(peer_us);
   const Summary pairs = Summarize(Column(stats, &sc::NarrowPhaseStats::candidate_pairs));
   const Summary box_tests = Summarize(Column(stats, &sc::NarrowPhaseStats::box_tests));
-  const Summary near = Summarize(Column(stats, &sc::NarrowPhaseStats::crease_folds));
   const Summary tests = Summarize(Column(stats, &sc::NarrowPhaseStats::triangle_tests));
   const Summary hits = Summarize(Column(stats, &sc::NarrowPhaseStats::contacts));
   std::printf("\nskin contacts (NarrowPhaseJob, Exclusions::kCrease: crease %.4g, %u bind contacts; one core)\n",
@@ -731,7 +730,6 @@ bool SkinContacts(const Workload& w, const sc::AssetView& view, int runs) {
   std::printf("%-30s %12.1f %12.1f %12.1f  (frame %zu)\n", "time us", time.median, time.mean, time.max, time.argmax);
   std::printf("%-30s %12.0f %12.1f %12.0f\n", "patch pairs looked at", pairs.median, pairs.mean, pairs.max);
   std::printf("%-30s %12.0f %12.1f %12.0f\n", "triangle box tests", box_tests.median, box_tests.mean, box_tests.max);
-  std::printf("%-30s %12.0f %12.1f %12.0f\n", "near pairs skipped", near.median, near.mean, near.max);
   std::printf("%-30s %12.0f %12.1f %12.0f\n", "exact triangle tests", tests.median, tests.mean, tests.max);
   std::printf("%-30s %12.0f %12.1f %12.0f\n", "contacts", hits.median, hits.mean, hits.max);
   std::printf("%-30s %12.1f %12.1f %12.1f  (best of %d)\n", "peer: whole-mesh sweep us", ptime.median, ptime.mean,

@@ -7,12 +7,14 @@
 //     records, for every pair of patches holding a near pair, 16×16 near bits (one bounded Dijkstra per
 //     triangle at the asset's crease; a patch pair where every pair is near — most of a patch with
 //     itself and its neighbours — is marked to skip whole).
-//   - Each frame: the box of each patch from its distinct vertices; the patches swept against each other
-//     along the longest axis of the mesh (sort and sweep), each with itself too; per overlapping pair not
-//     skipped whole, each triangle's box (computed once a frame per patch met) against the 16 boxes of
-//     the other patch, the near bits cleared, and the rest tested exactly (TrianglesIntersect on
-//     prepared triangles). A job wider than the asset's crease also asks the graph (CreaseScratch::Near)
-//     about each intersecting pair the bits let through.
+//   - Each frame: each patch's distinct vertices read once, giving its box and its 16 triangle boxes; the
+//     patches swept against each other along the longest axis of the mesh (sort and sweep; the order kept
+//     from the last frame and re-sorted by insertion), each with itself too; per overlapping pair whose
+//     near block (looked up in a hash table) is not all near: each side kept to its triangles that meet
+//     the other patch's box and have a partner not near in it, then each kept triangle's box against the
+//     other side's kept boxes (16 lanes at a time) with the near bits cleared, and the rest tested exactly
+//     (TrianglesIntersect on prepared triangles). A job wider than the asset's crease also asks the graph
+//     (CreaseScratch::Near) about each intersecting pair the bits let through.
 // So every pair of triangles whose boxes overlap is either near by the bits (skipped: a fold, or
 // neighbours sharing a corner — the two-ring floor covers them) or tested: the same contacts as testing
 // every pair of triangles, each once.
@@ -28,6 +30,11 @@
 #if defined(__GNUC__) && defined(__x86_64__)
 #define SPHERECHAIN_SKIN_SSE2 1
 #include <immintrin.h>
+#endif
+#if defined(__GNUC__)
+#define SPHERECHAIN_SKIN_INLINE inline __attribute__((always_inline))
+#else
+#define SPHERECHAIN_SKIN_INLINE inline
 #endif
 
 namespace spherechain::runtime {
@@ -48,7 +55,7 @@ uint32_t OrderedBits(float f) {
 
 // Bit j (< 16) set when box j of `b` (6 rows of 16: min x, y, z, max x, y, z) overlaps the box (lo, hi)
 // (closed intervals). SSE2 on x86-64 (its baseline), scalar elsewhere; the same answer.
-uint32_t OverlapMask16(const float* b, const float lo[3], const float hi[3]) {
+SPHERECHAIN_SKIN_INLINE uint32_t OverlapMask16(const float* b, const float lo[3], const float hi[3]) {
 #if SPHERECHAIN_SKIN_SSE2
   const __m128 lx = _mm_set1_ps(lo[0]), ly = _mm_set1_ps(lo[1]), lz = _mm_set1_ps(lo[2]);
   const __m128 hx = _mm_set1_ps(hi[0]), hy = _mm_set1_ps(hi[1]), hz = _mm_set1_ps(hi[2]);
@@ -121,10 +128,24 @@ void ContactDepthOf(const float* const a[3], const float* const b[3], ContactDep
 
 struct CreaseSweep {
   struct Counters {
-    uint32_t patch_pairs = 0, box_tests = 0, near = 0, tests = 0, degenerate = 0, folds = 0, contacts = 0;
+    uint32_t patch_pairs = 0, box_tests = 0, tests = 0, degenerate = 0, folds = 0, contacts = 0;
   };
 
   static uint32_t PatchCount(const NarrowPhaseModel& m) { return static_cast<uint32_t>(m.cl_tri_.size() / kPatch); }
+
+  static constexpr uint64_t kEmptyKey = ~uint64_t{0};
+  static size_t NearSlot(uint64_t key, uint32_t bits) { return static_cast<size_t>((key * 0x9E3779B97F4A7C15ull) >> (64 - bits)); }
+  /// The near block of patches a <= b (an index into near_rows_ / near_far_), kAllNear, or kFarPair when no
+  /// pair of the two is near. O(1) expected (the table is at most half full).
+  static uint32_t NearBlock(const NarrowPhaseModel& m, uint32_t a, uint32_t b) {
+    const uint64_t key = uint64_t{a} << 32 | b;
+    const size_t mask = (size_t{1} << m.near_hash_bits_) - 1;
+    for (size_t h = NearSlot(key, m.near_hash_bits_);; h = (h + 1) & mask) {
+      const uint64_t k = m.near_key_[h];
+      if (k == key) return m.near_block_[h];
+      if (k == kEmptyKey) return kFarPair;
+    }
+  }
 
   /// Patches and near bits (file comment) from the bind pose `bind` (#V×3) and the model's graph.
   static Status BuildPatches(NarrowPhaseModel& m, const float* bind) {
@@ -207,18 +228,33 @@ struct CreaseSweep {
     std::vector<uint8_t> slot_of(T, 0);
     for (size_t k = 0; k < m.cl_tri_.size(); ++k)
       if (m.cl_tri_[k] != kNone) slot_of[m.cl_tri_[k]] = static_cast<uint8_t>(k % kPatch);
-    // Each patch's distinct vertices.
+    // Each patch's distinct vertices, its triangles' corners among them, its triangle count (the slots are
+    // filled in order: padding last) and the mask of its slots in use.
     m.cl_vert_offsets_.assign(1, 0);
     m.cl_vert_.clear();
+    m.cl_local_.assign(3 * kPatch * size_t{C}, 0);
+    m.cl_count_.assign(C, 0);
+    m.cl_valid_.assign(C, 0);
     std::vector<uint32_t> verts;
     for (uint32_t p = 0; p < C; ++p) {
       verts.clear();
+      uint32_t n = 0;
       for (uint32_t i = 0; i < kPatch; ++i) {
         const uint32_t t = m.cl_tri_[kPatch * size_t{p} + i];
-        if (t != kNone) verts.insert(verts.end(), &m.tri_v_[3 * size_t{t}], &m.tri_v_[3 * size_t{t}] + 3);
+        if (t == kNone) break;
+        verts.insert(verts.end(), &m.tri_v_[3 * size_t{t}], &m.tri_v_[3 * size_t{t}] + 3);
+        ++n;
       }
       std::sort(verts.begin(), verts.end());
       verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
+      for (uint32_t i = 0; i < n; ++i)
+        for (int k = 0; k < 3; ++k) {
+          const uint32_t v = m.tri_v_[3 * size_t{m.cl_tri_[kPatch * size_t{p} + i]} + k];
+          m.cl_local_[3 * kPatch * size_t{p} + 3 * i + k] =
+              static_cast<uint8_t>(std::lower_bound(verts.begin(), verts.end(), v) - verts.begin());
+        }
+      m.cl_count_[p] = static_cast<uint8_t>(n);
+      m.cl_valid_[p] = static_cast<uint16_t>((1u << n) - 1);
       m.cl_vert_.insert(m.cl_vert_.end(), verts.begin(), verts.end());
       m.cl_vert_offsets_.push_back(static_cast<uint32_t>(m.cl_vert_.size()));
     }
@@ -228,9 +264,10 @@ struct CreaseSweep {
     if (Status s = scratch.Init(g); s != Status::kOk) return s;
     std::vector<uint32_t> entry_of(C, kNone), touched;
     std::vector<uint16_t> rows;
-    std::vector<uint64_t> pairs;  // (p << 32 | q) and (q << 32 | p) for every pair of patches with a near pair
+    std::vector<uint64_t> pairs;  // (p << 32 | q), p <= q, for every pair of patches with a near pair
     std::vector<uint32_t> block;  // per pair in `pairs`: its rows' block in near_rows_, or kAllNear
     m.near_rows_.clear();
+    m.near_far_.clear();
     auto valid_mask = [&](uint32_t p) {
       uint32_t mask = 0;
       for (uint32_t i = 0; i < kPatch; ++i) mask |= uint32_t{m.cl_tri_[kPatch * size_t{p} + i] != kNone} << i;
@@ -267,25 +304,32 @@ struct CreaseSweep {
         if (!all) {
           b = static_cast<uint32_t>(m.near_rows_.size() / kPatch);
           m.near_rows_.insert(m.near_rows_.end(), r, r + kPatch);
+          // The rows (p's slots) with a partner not near, and the columns (q's) with one: the rest of
+          // either patch is never looked at for this pair. Of one patch, pairs j > i only.
+          uint32_t far_rows = 0, far_cols = 0;
+          for (uint32_t i = 0; i < kPatch; ++i) {
+            if (!(mask_p >> i & 1)) continue;
+            uint32_t free = ~uint32_t{r[i]} & 0xffffu;
+            if (q == p) free &= ~((2u << i) - 1);
+            if (free) far_rows |= 1u << i, far_cols |= free;
+          }
+          m.near_far_.push_back(far_rows | far_cols << 16);
         }
         pairs.push_back(uint64_t{p} << 32 | q), block.push_back(b);
-        if (q != p) pairs.push_back(uint64_t{q} << 32 | p), block.push_back(b);
         entry_of[q] = kNone;
       }
     }
-    // Per patch, its partners ascending (CSR).
-    std::vector<uint32_t> idx(pairs.size());
-    for (uint32_t i = 0; i < idx.size(); ++i) idx[i] = i;
-    std::sort(idx.begin(), idx.end(), [&](uint32_t x, uint32_t y) { return pairs[x] < pairs[y]; });
-    m.near_offsets_.assign(size_t{C} + 1, 0);
-    m.near_patch_.resize(pairs.size());
-    m.near_block_.resize(pairs.size());
-    for (size_t i = 0; i < idx.size(); ++i) {
-      ++m.near_offsets_[(pairs[idx[i]] >> 32) + 1];
-      m.near_patch_[i] = static_cast<uint32_t>(pairs[idx[i]]);
-      m.near_block_[i] = block[idx[i]];
+    // The pairs of patches with a near pair (p <= q) in an open-addressing table: NearBlock looks them up.
+    uint32_t bits = 4;
+    while ((size_t{1} << bits) < 2 * pairs.size()) ++bits;
+    m.near_hash_bits_ = bits;
+    m.near_key_.assign(size_t{1} << bits, kEmptyKey);
+    m.near_block_.assign(size_t{1} << bits, 0);
+    for (size_t i = 0; i < pairs.size(); ++i) {
+      size_t h = NearSlot(pairs[i], bits);
+      while (m.near_key_[h] != kEmptyKey) h = (h + 1) & ((size_t{1} << bits) - 1);
+      m.near_key_[h] = pairs[i], m.near_block_[h] = block[i];
     }
-    for (uint32_t p = 0; p < C; ++p) m.near_offsets_[p + 1] += m.near_offsets_[p];
     return Status::kOk;
   }
 
@@ -303,50 +347,149 @@ struct CreaseSweep {
     return !(state & 1);
   }
 
-  /// The 16 triangle boxes of patch p this frame (6 rows of 16: min x, y, z, max x, y, z; padding inverted).
-  static const float* TriangleBoxes(const NarrowPhaseModel& m, NarrowPhaseWorkspace& w, const char* base,
-                                    size_t stride, uint32_t p) {
-    float* box = &w.patch_tri_box_[96 * size_t{p}];
-    if (w.patch_frame_[p] == w.frame_) return box;
-    w.patch_frame_[p] = w.frame_;
-    for (uint32_t i = 0; i < kPatch; ++i) {
-      const uint32_t t = m.cl_tri_[kPatch * size_t{p} + i];
-      float bl[3] = {kInfinity, kInfinity, kInfinity}, bh[3] = {-kInfinity, -kInfinity, -kInfinity};
-      if (t != kNone)
-        for (int j = 0; j < 3; ++j) {
-          const float* q = reinterpret_cast<const float*>(base + stride * m.tri_v_[3 * size_t{t} + j]);
-          for (int k = 0; k < 3; ++k) bl[k] = std::min(bl[k], q[k]), bh[k] = std::max(bh[k], q[k]);
+  /// Pass 1 of a frame: each patch's distinct vertices read once (cl_vert_), its box (patch_box_: 6 rows of
+  /// #C) and its 16 triangle boxes (patch_tri_box_: 6 rows of 16, inverted padding) from them (cl_local_),
+  /// and the box of them all (lo, hi). False when a vertex is NaN or a box not finite (nothing reported).
+  static bool Boxes(const NarrowPhaseModel& m, NarrowPhaseWorkspace& w, const char* base, size_t stride, float lo[3],
+                    float hi[3]) {
+    const uint32_t C = PatchCount(m);
+    float* box = w.patch_box_.data();
+    for (int k = 0; k < 3; ++k) lo[k] = kInfinity, hi[k] = -kInfinity;
+#if SPHERECHAIN_SKIN_SSE2
+    alignas(16) float local[4 * 3 * kPatch];
+    __m128 all_lo = _mm_set1_ps(kInfinity), all_hi = _mm_set1_ps(-kInfinity), nan = _mm_setzero_ps();
+    for (uint32_t p = 0; p < C; ++p) {
+      const uint32_t* vert = &m.cl_vert_[m.cl_vert_offsets_[p]];
+      const uint32_t nv = m.cl_vert_offsets_[p + 1] - m.cl_vert_offsets_[p];
+      const uint8_t* corner = &m.cl_local_[3 * kPatch * size_t{p}];
+      float* tb = &w.patch_tri_box_[6 * kPatch * size_t{p}];
+      __m128 vl = _mm_set1_ps(kInfinity), vh = _mm_set1_ps(-kInfinity);
+      for (uint32_t i = 0; i < nv; ++i) {
+        const float* q = reinterpret_cast<const float*>(base + stride * vert[i]);
+        // x, y, z, 0 without reading past the vertex (the positions are only 4-byte aligned)
+        const __m128 v = _mm_movelh_ps(_mm_unpacklo_ps(_mm_load_ss(q), _mm_load_ss(q + 1)), _mm_load_ss(q + 2));
+        _mm_store_ps(local + 4 * i, v);
+        vl = _mm_min_ps(vl, v), vh = _mm_max_ps(vh, v), nan = _mm_or_ps(nan, _mm_cmpunord_ps(v, v));
+      }
+      alignas(16) float tl[4], th[4];
+      _mm_store_ps(tl, vl), _mm_store_ps(th, vh);
+      for (int k = 0; k < 3; ++k) box[k * size_t{C} + p] = tl[k], box[(3 + k) * size_t{C} + p] = th[k];
+      all_lo = _mm_min_ps(all_lo, vl), all_hi = _mm_max_ps(all_hi, vh);
+      // Four triangles at a time: each box from its corners, then transposed into the rows (padding slots
+      // have corners 0, 0, 0: a box, inverted below).
+      for (uint32_t t = 0; t < kPatch; t += 4) {
+        __m128 l[4], h[4];
+        for (uint32_t k = 0; k < 4; ++k) {
+          const uint8_t* c = corner + 3 * (t + k);
+          const __m128 a = _mm_load_ps(local + 4 * c[0]), b = _mm_load_ps(local + 4 * c[1]), d = _mm_load_ps(local + 4 * c[2]);
+          l[k] = _mm_min_ps(_mm_min_ps(a, b), d), h[k] = _mm_max_ps(_mm_max_ps(a, b), d);
         }
-      for (int k = 0; k < 3; ++k) box[16 * k + i] = bl[k], box[16 * (3 + k) + i] = bh[k];
+        _MM_TRANSPOSE4_PS(l[0], l[1], l[2], l[3]);
+        _MM_TRANSPOSE4_PS(h[0], h[1], h[2], h[3]);
+        for (int k = 0; k < 3; ++k) _mm_storeu_ps(tb + 16 * k + t, l[k]), _mm_storeu_ps(tb + 16 * (3 + k) + t, h[k]);
+      }
+      for (uint32_t t = m.cl_count_[p]; t < kPatch; ++t)
+        for (int k = 0; k < 3; ++k) tb[16 * k + t] = kInfinity, tb[16 * (3 + k) + t] = -kInfinity;
     }
-    return box;
+    // A NaN anywhere (min/max would drop it), or an infinite coordinate (it reaches the box of them all).
+    alignas(16) float tl[4], th[4];
+    _mm_store_ps(tl, all_lo), _mm_store_ps(th, all_hi);
+    if (_mm_movemask_ps(nan)) return false;
+    for (int k = 0; k < 3; ++k) {
+      if (!std::isfinite(tl[k]) || !std::isfinite(th[k])) return false;
+      lo[k] = tl[k], hi[k] = th[k];
+    }
+#else
+    for (uint32_t p = 0; p < C; ++p) {
+      const uint32_t first = m.cl_vert_offsets_[p], nv = m.cl_vert_offsets_[p + 1] - first;
+      const uint8_t* corner = &m.cl_local_[3 * kPatch * size_t{p}];
+      const uint32_t n = m.cl_count_[p];
+      float* tb = &w.patch_tri_box_[6 * kPatch * size_t{p}];
+      float bl[3] = {kInfinity, kInfinity, kInfinity}, bh[3] = {-kInfinity, -kInfinity, -kInfinity};
+      bool nan = false;  // std::min/max would drop a NaN
+      for (uint32_t i = 0; i < nv; ++i) {
+        const float* q = reinterpret_cast<const float*>(base + stride * m.cl_vert_[first + i]);
+        for (int k = 0; k < 3; ++k) bl[k] = std::min(bl[k], q[k]), bh[k] = std::max(bh[k], q[k]), nan |= q[k] != q[k];
+      }
+      if (nan) return false;
+      for (int k = 0; k < 3; ++k) {
+        if (!std::isfinite(bl[k]) || !std::isfinite(bh[k])) return false;
+        box[k * size_t{C} + p] = bl[k];
+        box[(3 + k) * size_t{C} + p] = bh[k];
+        lo[k] = std::min(lo[k], bl[k]), hi[k] = std::max(hi[k], bh[k]);
+      }
+      for (uint32_t t = 0; t < kPatch; ++t) {
+        float l[3] = {kInfinity, kInfinity, kInfinity}, h[3] = {-kInfinity, -kInfinity, -kInfinity};
+        if (t < n)
+          for (int j = 0; j < 3; ++j) {
+            const float* q = reinterpret_cast<const float*>(base + stride * m.cl_vert_[first + corner[3 * t + j]]);
+            for (int k = 0; k < 3; ++k) l[k] = std::min(l[k], q[k]), h[k] = std::max(h[k], q[k]);
+          }
+        for (int k = 0; k < 3; ++k) tb[16 * k + t] = l[k], tb[16 * (3 + k) + t] = h[k];
+      }
+    }
+#endif
+    return true;
   }
 
-  /// Patch pair (a <= b): every triangle pair not near whose boxes overlap, tested exactly.
+  /// The sweep order (w.sweep_: box minimum on `axis` << 32 | patch, ascending). The previous frame's order,
+  /// re-keyed and insertion-sorted, when it was on the same axis (frames of one animation move little: a
+  /// few swaps); a full sort otherwise, or when the insertions pass a budget of 8 moves a patch. Either way
+  /// the unique sorted order of the keys.
+  static void Order(const NarrowPhaseModel& m, NarrowPhaseWorkspace& w, int axis) {
+    const uint32_t C = PatchCount(m);
+    const float* row = w.patch_box_.data() + axis * size_t{C};
+    uint64_t* s = w.sweep_.data();
+    if (axis == w.sweep_axis_) {
+      for (uint32_t i = 0; i < C; ++i) {
+        const uint32_t p = static_cast<uint32_t>(s[i]);
+        s[i] = uint64_t{OrderedBits(row[p])} << 32 | p;
+      }
+      size_t budget = 8 * size_t{C};
+      uint32_t i = 1;
+      for (; i < C; ++i) {
+        const uint64_t key = s[i];
+        uint32_t j = i;
+        for (; j > 0 && s[j - 1] > key && budget; --j, --budget) s[j] = s[j - 1];
+        s[j] = key;
+        if (!budget) break;
+      }
+      if (i >= C) return;
+    }
+    for (uint32_t p = 0; p < C; ++p) s[p] = uint64_t{OrderedBits(row[p])} << 32 | p;
+    std::sort(s, s + C);
+    w.sweep_axis_ = axis;
+  }
+
+  /// Patch pair (a <= b; `rows` their near bits, `far` the rows and columns with a partner not near):
+  /// every triangle pair not near whose boxes overlap, tested exactly. Each side is first kept to its
+  /// triangles that meet the other patch's box and have a partner not near there.
   template <class OnContact>
   static void Pair(const NarrowPhaseModel& m, NarrowPhaseWorkspace& w, const char* base, size_t stride, uint32_t a,
-                   uint32_t b, const uint16_t* rows, float crease, Counters* c, OnContact& on_contact) {
+                   uint32_t b, const uint16_t* rows, uint32_t far, float crease, Counters* c, OnContact& on_contact) {
     ++c->patch_pairs;
-    const float* ba = TriangleBoxes(m, w, base, stride, a);
-    const float* bb = TriangleBoxes(m, w, base, stride, b);
-    const bool wider = crease > m.crease_graph_.crease();
     const size_t C = PatchCount(m);
-    const float* pb = w.patch_box_.data() + b;  // b's patch box: rows of C
-    const float plo[3] = {pb[0], pb[C], pb[2 * C]}, phi[3] = {pb[3 * C], pb[4 * C], pb[5 * C]};
-    // a's triangles that meet b's patch box (padding never does) and have a partner not near (nor paired).
-    uint32_t live = OverlapMask16(ba, plo, phi);
-    for (uint32_t i = 0; i < kPatch; ++i)
-      if ((rows[i] | (a == b ? (2u << i) - 1 : 0u)) == 0xffffu) live &= ~(1u << i);
+    const float* pa = w.patch_box_.data() + a;  // the patch boxes: rows of C
+    const float* pb = w.patch_box_.data() + b;
+    const float alo[3] = {pa[0], pa[C], pa[2 * C]}, ahi[3] = {pa[3 * C], pa[4 * C], pa[5 * C]};
+    const float blo[3] = {pb[0], pb[C], pb[2 * C]}, bhi[3] = {pb[3 * C], pb[4 * C], pb[5 * C]};
+    const float* ba = &w.patch_tri_box_[6 * kPatch * size_t{a}];
+    const float* bb = &w.patch_tri_box_[6 * kPatch * size_t{b}];
+    uint32_t live = OverlapMask16(ba, blo, bhi) & far & 0xffffu;
+    if (!live) return;
+    const uint32_t cols = OverlapMask16(bb, alo, ahi) & far >> 16;
+    if (!cols) return;
+    const bool wider = crease > m.crease_graph_.crease();
     for (; live; live &= live - 1) {
       const uint32_t i = static_cast<uint32_t>(__builtin_ctz(live));
-      const uint32_t t = m.cl_tri_[kPatch * size_t{a} + i];
+      uint32_t want = cols & ~uint32_t{rows[i]};
+      if (a == b) want &= ~((2u << i) - 1);  // each pair of one patch once (j > i)
+      if (!want) continue;
       const float lo[3] = {ba[i], ba[16 + i], ba[32 + i]}, hi[3] = {ba[48 + i], ba[64 + i], ba[80 + i]};
-      uint32_t overlap = OverlapMask16(bb, lo, hi);
+      uint32_t overlap = OverlapMask16(bb, lo, hi) & want;
       c->box_tests += kPatch;
-      if (a == b) overlap &= ~((2u << i) - 1);  // each pair of one patch once (j > i)
-      c->near += static_cast<uint32_t>(__builtin_popcount(overlap & rows[i]));
-      overlap &= ~uint32_t{rows[i]};
       if (!overlap) continue;
+      const uint32_t t = m.cl_tri_[kPatch * size_t{a} + i];
       if (!Prepared(m, w, base, stride, t, c)) continue;  // t degenerate: in no contact
       const uint32_t* tv = &m.tri_v_[3 * size_t{t}];
       for (; overlap; overlap &= overlap - 1) {
@@ -370,46 +513,16 @@ struct CreaseSweep {
                       float crease, Counters* c, OnContact&& on_contact) {
     const uint32_t C = PatchCount(m);
     if (++w.frame_ >= 0x7fffffffu) {  // stamps wrap: forget them all
-      std::fill(w.patch_frame_.begin(), w.patch_frame_.end(), 0u);
       std::fill(w.tri_frame_.begin(), w.tri_frame_.end(), 0u);
       w.frame_ = 1;
     }
-    float* box = w.patch_box_.data();
-    float lo[3] = {kInfinity, kInfinity, kInfinity}, hi[3] = {-kInfinity, -kInfinity, -kInfinity};
-    for (uint32_t p = 0; p < C; ++p) {
-      float bl[3] = {kInfinity, kInfinity, kInfinity}, bh[3] = {-kInfinity, -kInfinity, -kInfinity};
-#if SPHERECHAIN_SKIN_SSE2
-      __m128 vl = _mm_set1_ps(kInfinity), vh = _mm_set1_ps(-kInfinity), vnan = _mm_setzero_ps();
-      for (uint32_t i = m.cl_vert_offsets_[p]; i < m.cl_vert_offsets_[p + 1]; ++i) {
-        const float* q = reinterpret_cast<const float*>(base + stride * m.cl_vert_[i]);
-        // x, y, z, 0 without reading past the vertex (the positions are only 4-byte aligned)
-        const __m128 v = _mm_movelh_ps(_mm_unpacklo_ps(_mm_load_ss(q), _mm_load_ss(q + 1)), _mm_load_ss(q + 2));
-        vl = _mm_min_ps(vl, v), vh = _mm_max_ps(vh, v), vnan = _mm_or_ps(vnan, _mm_cmpunord_ps(v, v));
-      }
-      if (_mm_movemask_ps(vnan)) return false;  // min/max would drop a NaN
-      alignas(16) float tl[4], th[4];
-      _mm_store_ps(tl, vl), _mm_store_ps(th, vh);
-      for (int k = 0; k < 3; ++k) bl[k] = tl[k], bh[k] = th[k];
-#else
-      bool nan = false;  // std::min/max would drop a NaN
-      for (uint32_t i = m.cl_vert_offsets_[p]; i < m.cl_vert_offsets_[p + 1]; ++i) {
-        const float* q = reinterpret_cast<const float*>(base + stride * m.cl_vert_[i]);
-        for (int k = 0; k < 3; ++k) bl[k] = std::min(bl[k], q[k]), bh[k] = std::max(bh[k], q[k]), nan |= q[k] != q[k];
-      }
-      if (nan) return false;
-#endif
-      for (int k = 0; k < 3; ++k) {
-        if (!std::isfinite(bl[k]) || !std::isfinite(bh[k])) return false;
-        box[k * size_t{C} + p] = bl[k];
-        box[(3 + k) * size_t{C} + p] = bh[k];
-        lo[k] = std::min(lo[k], bl[k]), hi[k] = std::max(hi[k], bh[k]);
-      }
-    }
+    float lo[3], hi[3];
+    if (!Boxes(m, w, base, stride, lo, hi)) return false;
+    const float* box = w.patch_box_.data();
     int axis = 0;
     for (int k = 1; k < 3; ++k)
       if (hi[k] - lo[k] > hi[axis] - lo[axis]) axis = k;
-    for (uint32_t p = 0; p < C; ++p) w.sweep_[p] = uint64_t{OrderedBits(box[axis * size_t{C} + p])} << 32 | p;
-    std::sort(w.sweep_.begin(), w.sweep_.begin() + C);
+    Order(m, w, axis);
     // The boxes in sweep order: the sweep's axis first, then the two others (a sentinel after the last).
     const int rows_of[6] = {axis, 3 + axis, (axis + 1) % 3, 3 + (axis + 1) % 3, (axis + 2) % 3, 3 + (axis + 2) % 3};
     float* sb = w.sweep_box_.data();
@@ -421,42 +534,43 @@ struct CreaseSweep {
     static const uint16_t kFar[kPatch] = {};
     for (uint32_t i = 0; i < C; ++i) {
       const uint32_t p = static_cast<uint32_t>(w.sweep_[i]);
-      if (++w.step_ == 0) {  // stamps wrap: forget them
-        std::fill(w.near_stamp_.begin(), w.near_stamp_.end(), 0u);
-        w.step_ = 1;
-      }
-      for (uint32_t k = m.near_offsets_[p]; k < m.near_offsets_[p + 1]; ++k)
-        w.near_at_[m.near_patch_[k]] = m.near_block_[k], w.near_stamp_[m.near_patch_[k]] = w.step_;
       auto pair = [&](uint32_t q) {
-        const uint32_t block = w.near_stamp_[q] == w.step_ ? w.near_at_[q] : kFarPair;
+        const uint32_t a = std::min(p, q), b = std::max(p, q);
+        const uint32_t block = NearBlock(m, a, b);
         if (block == kAllNear) return;
-        const uint16_t* rows = block == kFarPair ? kFar : &m.near_rows_[kPatch * size_t{block}];
-        Pair(m, w, base, stride, std::min(p, q), std::max(p, q), rows, crease, c, on_contact);
+        if (block == kFarPair)
+          Pair(m, w, base, stride, a, b, kFar, m.cl_valid_[a] | m.cl_valid_[b] << 16, crease, c, on_contact);
+        else
+          Pair(m, w, base, stride, a, b, &m.near_rows_[kPatch * size_t{block}], m.near_far_[block], crease, c, on_contact);
       };
       pair(p);
       const float end = sb[pitch + i], l1 = sb[2 * pitch + i], h1 = sb[3 * pitch + i], l2 = sb[4 * pitch + i],
                   h2 = sb[5 * pitch + i];
       // The patches starting before p ends on the axis, then those overlapping it on the two others
       // (branch-free: their sweep positions appended to hits_ as found).
-      const uint32_t last = static_cast<uint32_t>(std::upper_bound(sb + i + 1, sb + C, end) - sb);
       uint32_t n = 0;
       uint32_t* hits = w.sweep_hits_.data();
       uint32_t j = i + 1;
 #if SPHERECHAIN_SKIN_SSE2
       const __m128 vl1 = _mm_set1_ps(l1), vh1 = _mm_set1_ps(h1), vl2 = _mm_set1_ps(l2), vh2 = _mm_set1_ps(h2);
-      for (; j + 4 <= last; j += 4) {
+      const __m128 vend = _mm_set1_ps(end);
+      for (; j + 4 <= C; j += 4) {
+        const __m128 start = _mm_loadu_ps(sb + j);
         const __m128 mk = _mm_and_ps(_mm_and_ps(_mm_cmple_ps(_mm_loadu_ps(sb + 2 * pitch + j), vh1),
                                                 _mm_cmpge_ps(_mm_loadu_ps(sb + 3 * pitch + j), vl1)),
                                      _mm_and_ps(_mm_cmple_ps(_mm_loadu_ps(sb + 4 * pitch + j), vh2),
                                                 _mm_cmpge_ps(_mm_loadu_ps(sb + 5 * pitch + j), vl2)));
-        for (uint32_t bits = static_cast<uint32_t>(_mm_movemask_ps(mk)); bits; bits &= bits - 1)
+        const int in = _mm_movemask_ps(_mm_cmple_ps(start, vend));
+        for (uint32_t bits = static_cast<uint32_t>(_mm_movemask_ps(mk) & in); bits; bits &= bits - 1)
           hits[n++] = j + static_cast<uint32_t>(__builtin_ctz(bits));
+        if (in != 0xf) break;  // sorted: the rest start after p ends
       }
+      if (j + 4 > C)
 #endif
-      for (; j < last; ++j) {
-        hits[n] = j;
-        n += (sb[2 * pitch + j] <= h1) & (sb[3 * pitch + j] >= l1) & (sb[4 * pitch + j] <= h2) & (sb[5 * pitch + j] >= l2);
-      }
+        for (; j < C && sb[j] <= end; ++j) {
+          hits[n] = j;
+          n += (sb[2 * pitch + j] <= h1) & (sb[3 * pitch + j] >= l1) & (sb[4 * pitch + j] <= h2) & (sb[5 * pitch + j] >= l2);
+        }
       for (uint32_t k = 0; k < n; ++k) pair(static_cast<uint32_t>(w.sweep_[hits[k]]));
     }
     return true;
@@ -490,11 +604,9 @@ struct CreaseSweep {
     w.sweep_.assign(C, 0);
     w.sweep_box_.assign(6 * (size_t{C} + 1), 0.0f);
     w.sweep_hits_.assign(size_t{C} + 1, 0);
-    w.near_at_.assign(C, 0);
-    w.near_stamp_.assign(C, 0);
-    w.step_ = 0;
+    for (uint32_t p = 0; p < C; ++p) w.sweep_[p] = p;
+    w.sweep_axis_ = -1;
     w.patch_tri_box_.assign(96 * size_t{C}, 0.0f);
-    w.patch_frame_.assign(C, 0);
     w.tri_prepared_.assign(T, PreparedTriangle{});
     w.tri_frame_.assign(T, 0);
     w.frame_ = 0;
@@ -535,7 +647,7 @@ struct CreaseSweep {
     st.box_tests = c.box_tests;
     st.triangle_tests = c.tests;
     st.degenerate_triangles = c.degenerate;
-    st.crease_folds = c.near + c.folds;
+    st.crease_folds = c.folds;
     st.contacts = c.contacts;
     *job.count = written;
     if (job.stats) *job.stats = st;

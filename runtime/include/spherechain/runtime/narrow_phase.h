@@ -50,8 +50,9 @@ enum class Exclusions : uint8_t {
   /// sphere pairs play no part: the model's patches of 16 triangles are swept against each other, and the
   /// rule is read from near bits NarrowPhaseModel::Init computed once (skin_contacts.cpp); a job with a
   /// crease wider than the asset's also asks the graph about each intersecting pair. Stats: candidate_pairs
-  /// counts the pairs of patches looked at, crease_folds the box-overlapping triangle pairs the rule
-  /// skipped (folds and neighbours). Optional penetration depths (NarrowPhaseJob::depths).
+  /// counts the pairs of patches looked at (boxes overlapping, not every pair near), box_tests the triangle
+  /// boxes tested, crease_folds the intersecting pairs a wider job crease skipped. Optional penetration
+  /// depths (NarrowPhaseJob::depths).
   kCrease = 2,
 };
 
@@ -115,9 +116,9 @@ struct NarrowPhaseStats {
   uint32_t degenerate_triangles = 0;  ///< triangles that reached an exact test and were found degenerate
                                       ///< (zero area, exact; once a frame each): they never make contacts
   uint32_t contacts = 0;              ///< intersecting triangle pairs; > capacity ⇔ truncated
-  uint32_t crease_folds = 0;          ///< kCrease: box-overlapping triangle pairs near on the bind surface (folds
-                                      ///< and neighbours: skipped untested at the asset's crease; at a wider
-                                      ///< job crease also intersecting pairs found near by the graph)
+  uint32_t crease_folds = 0;          ///< kCrease: intersecting pairs found near by the graph at a job crease
+                                      ///< wider than the asset's (pairs near at the asset's crease are
+                                      ///< skipped by their near bits before any box test, and not counted)
   uint32_t bind_contacts = 0;         ///< kCrease: contacts whose triangles intersect at bind pose too (modelling
                                       ///< artefacts; reported, NarrowPhaseModel::IntersectsAtBind names them)
 };
@@ -189,9 +190,9 @@ class NarrowPhaseModel {
   uint32_t crease_patch_count() const { return static_cast<uint32_t>(cl_tri_.size() / 16); }
   /// Bytes the crease rule's patches and near bits take in this model (graph and bind contacts excluded).
   size_t crease_patch_bytes() const {
-    return 4 * (cl_tri_.size() + cl_vert_offsets_.size() + cl_vert_.size() + near_offsets_.size() + near_patch_.size() +
-                near_block_.size()) +
-           2 * near_rows_.size();
+    return 4 * (cl_tri_.size() + cl_vert_offsets_.size() + cl_vert_.size() + near_block_.size() + near_far_.size()) +
+           8 * near_key_.size() +
+           2 * (near_rows_.size() + cl_valid_.size()) + cl_local_.size() + cl_count_.size();
   }
   /// How many such pairs the bind pose has (computed by Init with the crease rule).
   uint32_t bind_contact_count() const { return static_cast<uint32_t>(bind_contacts_.size()); }
@@ -210,13 +211,19 @@ class NarrowPhaseModel {
   std::vector<uint64_t> bind_contacts_;
   // The crease rule's patches (skin_contacts.cpp): the triangles that are not index-degenerate in patches
   // of up to 16 grown over the welded bind surface (cl_tri_: 16 slots per patch, ~0u padding), each
-  // patch's distinct vertices (CSR cl_vert_offsets_ #C+1, cl_vert_), and per patch the patches holding a
-  // triangle near one of its own, itself included (CSR near_offsets_ #C+1, near_patch_ ascending), each
-  // with its block of 16 rows of near bits in near_rows_ (near_block_; bit j of row i set when the lower
-  // patch's slot i is near the higher's slot j, or j is padding) or ~0u when every pair of the two is near
-  // (then the pair of patches is never looked at).
-  std::vector<uint32_t> cl_tri_, cl_vert_offsets_, cl_vert_, near_offsets_, near_patch_, near_block_;
-  std::vector<uint16_t> near_rows_;
+  // patch's distinct vertices (CSR cl_vert_offsets_ #C+1, cl_vert_), and every pair of patches p <= q
+  // holding a near pair, a patch with itself included (an open-addressing table of 2^near_hash_bits_
+  // slots: near_key_ p << 32 | q or ~0 when empty, near_block_), each with its block of 16 rows of near
+  // bits in near_rows_ (bit j of row i set when p's slot i is near q's slot j, or j is padding) or ~0u
+  // when every pair of the two is near (then the pair of patches is never looked at).
+  // Per patch also its triangles' corners as indices into its distinct vertices (cl_local_, 48 per patch),
+  // its triangle count (cl_count_) and the mask of its slots in use (cl_valid_); per block of near rows the
+  // rows and columns (bits 0-15, 16-31) that have a partner not near (near_far_).
+  std::vector<uint32_t> cl_tri_, cl_vert_offsets_, cl_vert_, near_block_, near_far_;
+  std::vector<uint64_t> near_key_;
+  uint32_t near_hash_bits_ = 0;
+  std::vector<uint16_t> near_rows_, cl_valid_;
+  std::vector<uint8_t> cl_local_, cl_count_;
   bool reach_ = false;  // regions from Asset.reach_*: overlapping, owners from the surrounding regions
   uint32_t sphere_count_ = 0, vertex_count_ = 0, triangle_count_ = 0;
   std::vector<uint32_t> behind_offsets_;  // reach_ only: CSR #T+1, the spheres each triangle stands behind
@@ -312,18 +319,15 @@ class NarrowPhaseWorkspace {
                                                // this Run's candidates (a < b); cleared before it returns
   Culled list_a_, list_b_;
   // Exclusions::kCrease (sized only for a model with the crease rule): each patch's box (6 rows of #C: min
-  // x, y, z, max x, y, z), the sweep order, each patch's triangle boxes (96 floats: 6 rows of 16, inverted
-  // padding; computed on first use in a frame, patch_frame_), prepared triangles (tri_frame_: frame << 1 |
+  // x, y, z, max x, y, z), the sweep order (kept from frame to frame: re-sorted by insertion), each patch's
+  // triangle boxes (96 floats: 6 rows of 16, inverted padding; all computed each frame), prepared triangles (tri_frame_: frame << 1 |
   // degenerate, when prepared this frame), the rule's scratch (a job wider than the asset's crease).
   std::vector<float> patch_box_;
   std::vector<uint64_t> sweep_;
   std::vector<float> sweep_box_;        // the patch boxes in sweep order (6 rows of #C + 1)
   std::vector<uint32_t> sweep_hits_;    // one sweep step's overlapping patches (#C + 1)
-  std::vector<uint32_t> near_at_;       // per patch: its near block as a partner of the patch being swept
-  std::vector<uint32_t> near_stamp_;    // per patch: the sweep step near_at_ was written at
-  uint32_t step_ = 0;
+  int sweep_axis_ = -1;                 // the axis sweep_ is sorted on (-1: none yet)
   std::vector<float> patch_tri_box_;
-  std::vector<uint32_t> patch_frame_;
   std::vector<PreparedTriangle> tri_prepared_;
   std::vector<uint32_t> tri_frame_;
   uint32_t frame_ = 0;
