@@ -141,20 +141,21 @@ Status PoseLocals(const Skin& skin, const Pose& pose, std::vector<Transform>* lo
 Status ValidateClip(const Skin& skin, const Clip& clip) {
   for (size_t c = 0; c < clip.channels.size(); ++c) {
     const Channel& ch = clip.channels[c];
-    const std::string where = "clip '" + clip.name + "' channel " + std::to_string(c) + " (" + PathName(ch.path) + ")";
+    // The message's place, built only for an error (SampleClip validates every frame).
+    const auto where = [&] { return "clip '" + clip.name + "' channel " + std::to_string(c) + " (" + PathName(ch.path) + ")"; };
     if (ch.node < 0 || static_cast<size_t>(ch.node) >= skin.nodes.size())
-      return MakeError(Error::Code::kFormat, where + ": node " + std::to_string(ch.node) + " out of range (" +
+      return MakeError(Error::Code::kFormat, where() + ": node " + std::to_string(ch.node) + " out of range (" +
                                                  std::to_string(skin.nodes.size()) + " nodes)");
-    if (ch.times.empty()) return MakeError(Error::Code::kFormat, where + ": no keys");
+    if (ch.times.empty()) return MakeError(Error::Code::kFormat, where() + ": no keys");
     if (ch.values.size() != ch.times.size() * Width(ch.path))
-      return MakeError(Error::Code::kFormat, where + ": " + std::to_string(ch.values.size()) + " values for " +
+      return MakeError(Error::Code::kFormat, where() + ": " + std::to_string(ch.values.size()) + " values for " +
                                                  std::to_string(ch.times.size()) + " keys of " +
                                                  std::to_string(Width(ch.path)) + " floats");
     for (size_t k = 0; k < ch.times.size(); ++k)
       if (!Finite(ch.times[k]) || (k > 0 && ch.times[k] < ch.times[k - 1]))
-        return MakeError(Error::Code::kFormat, where + ": key time " + std::to_string(k) + " not finite or decreasing");
+        return MakeError(Error::Code::kFormat, where() + ": key time " + std::to_string(k) + " not finite or decreasing");
     for (float v : ch.values)
-      if (!Finite(v)) return MakeError(Error::Code::kFormat, where + ": non-finite key value");
+      if (!Finite(v)) return MakeError(Error::Code::kFormat, where() + ": non-finite key value");
   }
   return Ok{};
 }

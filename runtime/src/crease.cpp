@@ -114,6 +114,8 @@ Status CreaseScratch::Init(const CreaseGraph& graph) {
     ring_.assign(graph.node_count_, 0);
     touched_.reserve(graph.node_count_);
     heap_.reserve(graph.adj_.size() + 3);
+    entries_.assign(graph.adj_.size() + 3, 0);
+    next_.assign(graph.adj_.size() + 3, 0);
   }
   SPHERECHAIN_CATCH_BAD_ALLOC {
     *this = CreaseScratch{};
@@ -137,35 +139,85 @@ void CreaseScratch::Search(const CreaseGraph& g, const uint32_t t[3], float crea
       ring_[s] = 1;
       for (uint32_t i = g.offsets_[s]; i < g.offsets_[s + 1]; ++i) touch(g.adj_[i]), ring_[g.adj_[i]] = 1;
     }
-    for (uint32_t s : src) {
-      if (dist_[s] == 0.0f) continue;
-      dist_[s] = 0.0f;
-      heap_.push_back(Key(0.0f, s));
+    for (uint32_t s : src) dist_[s] = 0.0f;
+    const size_t ring_nodes = touched_.size();
+    if (!Buckets(g, crease)) {
+      // The bucket queue's entries ran out (a mesh with many edges far shorter than its crease): the same
+      // search again on a binary heap, whose entries never run out.
+      for (size_t i = 0; i < touched_.size(); ++i)
+        if (dist_[touched_[i]] > 0.0f) dist_[touched_[i]] = kInf;
+      touched_.resize(ring_nodes);
+      heap_.clear();
+      for (uint32_t s : src) heap_.push_back(Key(0.0f, s));
+      std::sort(heap_.begin(), heap_.end());
+      heap_.erase(std::unique(heap_.begin(), heap_.end()), heap_.end());
+      Heap(g, crease);
     }
-    std::make_heap(heap_.begin(), heap_.end(), std::greater<uint64_t>());
-    // Bounded Dijkstra: settle every node closer than the crease. Each push follows a strict improvement
-    // of one adjacency entry's target, so the heap never holds more than #edges + 3 keys (its capacity).
-    while (!heap_.empty()) {
-      std::pop_heap(heap_.begin(), heap_.end(), std::greater<uint64_t>());
-      const uint64_t key = heap_.back();
-      heap_.pop_back();
-      const uint32_t n = static_cast<uint32_t>(key);
-      const float d = KeyDistance(key);
+    for (int k = 0; k < 3; ++k) source_[k] = src[k];
+    source_crease_ = crease;
+  }
+}
+
+// Bounded Dijkstra (Dijkstra 1959) from the nodes at distance 0, every node closer than `crease` settled,
+// on a bucket queue (Dial 1969): 256 buckets of crease / 256, entries chained in entries_ / next_. A node
+// is relaxed from its bucket in any order within it; a relaxation into the same bucket (an edge shorter
+// than a bucket) is processed later in the same bucket, so every node ends at the minimum over paths of its
+// left-to-right float sum, as the binary heap gives (float addition is monotone). False when the entries
+// ran out (the search is then incomplete: the caller runs Heap).
+bool CreaseScratch::Buckets(const CreaseGraph& g, float crease) {
+  const float width = crease / kBuckets;
+  head_.fill(kNil);
+  uint32_t used = 0;
+  const uint32_t capacity = static_cast<uint32_t>(entries_.size());
+  for (uint32_t n : touched_)
+    if (dist_[n] == 0.0f) {
+      if (used == capacity) return false;
+      entries_[used] = Key(0.0f, n), next_[used] = head_[0], head_[0] = used++;
+    }
+  for (uint32_t b = 0; b < kBuckets; ++b)
+    while (head_[b] != kNil) {
+      const uint32_t e = head_[b];
+      head_[b] = next_[e];
+      const uint32_t n = static_cast<uint32_t>(entries_[e]);
+      const float d = KeyDistance(entries_[e]);
       if (d > dist_[n]) continue;  // stale
       for (uint32_t i = g.offsets_[n]; i < g.offsets_[n + 1]; ++i) {
         const uint32_t m = g.adj_[i];
         const float nd = d + g.length_[i];
         if (!(nd < crease) || !(nd < dist_[m])) continue;
-        touch(m);
+        if (dist_[m] == kInf && !ring_[m]) touched_.push_back(m);
         dist_[m] = nd;
-        if (heap_.size() < heap_.capacity()) {
-          heap_.push_back(Key(nd, m));
-          std::push_heap(heap_.begin(), heap_.end(), std::greater<uint64_t>());
-        }
+        if (used == capacity) return false;
+        const uint32_t to = std::max(b, std::min(kBuckets - 1, static_cast<uint32_t>(nd / width)));
+        entries_[used] = Key(nd, m), next_[used] = head_[to], head_[to] = used++;
       }
     }
-    for (int k = 0; k < 3; ++k) source_[k] = src[k];
-    source_crease_ = crease;
+  return true;
+}
+
+// The same search on a binary heap of (distance, node) keys (heap_ holds the sources at distance 0). Each
+// push follows a strict improvement of one adjacency entry's target, so the heap never holds more than
+// #edges + 3 keys (its capacity).
+void CreaseScratch::Heap(const CreaseGraph& g, float crease) {
+  std::make_heap(heap_.begin(), heap_.end(), std::greater<uint64_t>());
+  while (!heap_.empty()) {
+    std::pop_heap(heap_.begin(), heap_.end(), std::greater<uint64_t>());
+    const uint64_t key = heap_.back();
+    heap_.pop_back();
+    const uint32_t n = static_cast<uint32_t>(key);
+    const float d = KeyDistance(key);
+    if (d > dist_[n]) continue;  // stale
+    for (uint32_t i = g.offsets_[n]; i < g.offsets_[n + 1]; ++i) {
+      const uint32_t m = g.adj_[i];
+      const float nd = d + g.length_[i];
+      if (!(nd < crease) || !(nd < dist_[m])) continue;
+      if (dist_[m] == kInf && !ring_[m]) touched_.push_back(m);
+      dist_[m] = nd;
+      if (heap_.size() < heap_.capacity()) {
+        heap_.push_back(Key(nd, m));
+        std::push_heap(heap_.begin(), heap_.end(), std::greater<uint64_t>());
+      }
+    }
   }
 }
 

@@ -5,7 +5,7 @@
 //   - Init groups the triangles into patches of up to 16, grown over the welded bind surface from seeds
 //     in Morton order (each patch the nearest unassigned triangles around its seed that touch it), and
 //     records, for every pair of patches holding a near pair, 16×16 near bits (one bounded Dijkstra per
-//     triangle at the asset's crease; a patch pair where every pair is near — most of a patch with
+//     distinct corner of each patch at the asset's crease; a patch pair where every pair is near — most of a patch with
 //     itself and its neighbours — is marked to skip whole).
 //   - Each frame: each patch's distinct vertices read once, giving its box and its 16 triangle boxes; the
 //     patches swept against each other along the longest axis of the mesh (sort and sweep; the order kept
@@ -258,12 +258,17 @@ struct CreaseSweep {
       m.cl_vert_.insert(m.cl_vert_.end(), verts.begin(), verts.end());
       m.cl_vert_offsets_.push_back(static_cast<uint32_t>(m.cl_vert_.size()));
     }
-    // Near bits: per triangle of patch p, the nodes near it (CreaseScratch::Reach), their triangles in
-    // patches q >= p.
+    // Near bits. A triangle's near nodes (CreaseScratch::Reach) are the union of its corners' (the bounded
+    // Dijkstra from three sources settles each node at its nearest corner; the ring is the corners' edge
+    // neighbours), so per patch p each distinct corner node is searched once, the triangles of patches
+    // q >= p at its near nodes gathered into 16-bit masks per q, and those masks OR-ed into the rows of
+    // p's triangles that have that corner.
     CreaseScratch scratch;
     if (Status s = scratch.Init(g); s != Status::kOk) return s;
     std::vector<uint32_t> entry_of(C, kNone), touched;
-    std::vector<uint16_t> rows;
+    std::vector<uint16_t> rows, node_mask;
+    std::vector<uint32_t> node_entries;
+    std::vector<uint64_t> corners;  // per patch: (node << 32 | vertex << 4 | slot) of each triangle's corners
     std::vector<uint64_t> pairs;  // (p << 32 | q), p <= q, for every pair of patches with a near pair
     std::vector<uint32_t> block;  // per pair in `pairs`: its rows' block in near_rows_, or kAllNear
     m.near_rows_.clear();
@@ -276,10 +281,23 @@ struct CreaseSweep {
     for (uint32_t p = 0; p < C; ++p) {
       touched.clear();
       rows.clear();
+      corners.clear();
       for (uint32_t i = 0; i < kPatch; ++i) {
         const uint32_t t = m.cl_tri_[kPatch * size_t{p} + i];
         if (t == kNone) break;
-        for (uint32_t n : scratch.Reach(g, &m.tri_v_[3 * size_t{t}], g.crease()))
+        for (int k = 0; k < 3; ++k) {
+          const uint32_t v = m.tri_v_[3 * size_t{t} + k];
+          corners.push_back(uint64_t{g.node(v)} << 32 | uint64_t{v} << 4 | i);
+        }
+      }
+      std::sort(corners.begin(), corners.end());
+      for (size_t b = 0; b < corners.size();) {
+        size_t e = b + 1;
+        while (e < corners.size() && corners[e] >> 32 == corners[b] >> 32) ++e;
+        const uint32_t v = static_cast<uint32_t>(corners[b]) >> 4;
+        const uint32_t source[3] = {v, v, v};
+        node_entries.clear();
+        for (uint32_t n : scratch.Reach(g, source, g.crease()))
           for (uint32_t k = nt_off[n]; k < nt_off[n + 1]; ++k) {
             const uint32_t u = nt_tri[k], q = patch_of[u];
             if (q < p) continue;
@@ -287,9 +305,17 @@ struct CreaseSweep {
               entry_of[q] = static_cast<uint32_t>(touched.size());
               touched.push_back(q);
               rows.resize(rows.size() + kPatch, 0);
+              node_mask.resize(touched.size(), 0);
             }
-            rows[kPatch * size_t{entry_of[q]} + i] |= static_cast<uint16_t>(1u << slot_of[u]);
+            if (!node_mask[entry_of[q]]) node_entries.push_back(entry_of[q]);
+            node_mask[entry_of[q]] |= static_cast<uint16_t>(1u << slot_of[u]);
           }
+        for (size_t c = b; c < e; ++c) {
+          const uint32_t i = static_cast<uint32_t>(corners[c]) & 15u;
+          for (uint32_t en : node_entries) rows[kPatch * size_t{en} + i] |= node_mask[en];
+        }
+        for (uint32_t en : node_entries) node_mask[en] = 0;
+        b = e;
       }
       const uint32_t mask_p = valid_mask(p);
       for (uint32_t q : touched) {

@@ -20,6 +20,7 @@
 // Default crease: 3 % of the body height (BakeConfig crease_rel), recorded in the asset (Asset.crease).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -91,7 +92,9 @@ class CreaseScratch {
   /// True when the triangles with corners `t` and `u` (vertex indices < \#V) are near on the bind surface
   /// (file comment) for a fold distance `crease` [Limit: 0 < crease; the graph's own crease or any other].
   /// [Limit: made_for(graph); a scratch used with several graphs of one node count must be Reset between them]
-  /// Searches from t's corners out to `crease` (bounded Dijkstra, once per distinct (t, crease) in a row).
+  /// Searches from t's corners out to `crease` (bounded Dijkstra, once per distinct (t, crease) in a row; on a
+  /// bucket queue of 256 buckets of crease / 256, Dial 1969, or a binary heap should its entries run out:
+  /// the same distances either way).
   /// Cost: O(k log k) for the k edges within the crease of t on a new source, O(1) after. No allocation.
   bool Near(const CreaseGraph& graph, const uint32_t t[3], const uint32_t u[3], float crease);
   /// The nodes near the triangle with corners `t` (vertex indices < \#V) for `crease`: its corners, their
@@ -103,7 +106,13 @@ class CreaseScratch {
   void Reset() { source_crease_ = -1.0f; }
 
  private:
+  friend struct CreaseScratchTestAccess;  // the tests shrink the bucket queue to reach its fallback
+
   void Search(const CreaseGraph& graph, const uint32_t t[3], float crease);
+  bool Buckets(const CreaseGraph& graph, float crease);
+  void Heap(const CreaseGraph& graph, float crease);
+
+  static constexpr uint32_t kBuckets = 256, kNil = ~0u;
 
   uint32_t source_[3] = {~0u, ~0u, ~0u};
   float source_crease_ = -1.0f;
@@ -111,6 +120,9 @@ class CreaseScratch {
   std::vector<uint8_t> ring_;        // per node: 1 when a corner of the source or joined to one by an edge
   std::vector<uint32_t> touched_;    // nodes whose dist_ / ring_ were set (reset on the next source)
   std::vector<uint64_t> heap_;       // (distance bits << 32 | node), min-heap; capacity #edges + 3
+  std::vector<uint64_t> entries_;    // the bucket queue's entries (same keys), #edges + 3 ...
+  std::vector<uint32_t> next_;       // ... each chained to the next of its bucket
+  std::array<uint32_t, kBuckets> head_{};  // per bucket: its last entry, or kNil
 };
 
 }  // namespace spherechain::runtime

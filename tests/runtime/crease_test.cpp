@@ -1,0 +1,122 @@
+// The crease rule's search (CreaseScratch: a bounded Dijkstra on a bucket queue, a binary heap when the
+// bucket entries run out — both paths) against a textbook one (std::priority_queue, the same float edge lengths and
+// left-to-right sums) on every vertex of tubes: its near nodes (Reach) are exactly the nodes closer than the
+// crease plus the corners' edge neighbours, and Near agrees with them.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <queue>
+#include <utility>
+#include <vector>
+
+#include "runtime/asset_builder.h"
+#include "spherechain/runtime/crease.h"
+
+namespace rt = spherechain::runtime;
+namespace st = spherechain::test;
+
+namespace spherechain::runtime {
+// Leaves the bucket queue `entries` entries, so a search that needs more falls back to the binary heap.
+struct CreaseScratchTestAccess {
+  static void ShrinkBuckets(CreaseScratch& s, size_t entries) { s.entries_.resize(entries), s.next_.resize(entries); }
+};
+}  // namespace spherechain::runtime
+
+namespace {
+
+// Nodes (= vertices: no welding) within `crease` of `source` along the mesh edges, and its edge neighbours.
+std::vector<uint32_t> TextbookReach(const st::Mesh& mesh, uint32_t source, float crease) {
+  const uint32_t V = mesh.vertex_count();
+  std::vector<std::vector<std::pair<uint32_t, float>>> adj(V);
+  for (uint32_t t = 0; t < mesh.triangle_count(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = mesh.triangles[3 * t + k], b = mesh.triangles[3 * t + (k + 1) % 3];
+      double d2 = 0;
+      for (int c = 0; c < 3; ++c)
+        d2 += (double(mesh.positions[3 * a + c]) - mesh.positions[3 * b + c]) *
+              (double(mesh.positions[3 * a + c]) - mesh.positions[3 * b + c]);
+      const float len = static_cast<float>(std::sqrt(d2));
+      adj[a].push_back({b, len});
+      adj[b].push_back({a, len});
+    }
+  std::vector<float> dist(V, std::numeric_limits<float>::infinity());
+  using Entry = std::pair<float, uint32_t>;
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
+  dist[source] = 0.0f;
+  queue.push({0.0f, source});
+  while (!queue.empty()) {
+    const auto [d, n] = queue.top();
+    queue.pop();
+    if (d > dist[n]) continue;
+    for (const auto& [m, len] : adj[n]) {
+      const float nd = d + len;
+      if (nd < crease && nd < dist[m]) dist[m] = nd, queue.push({nd, m});
+    }
+  }
+  std::vector<uint32_t> near;
+  for (uint32_t v = 0; v < V; ++v) {
+    bool ring = v == source;
+    for (const auto& e : adj[source]) ring |= e.first == v;
+    if (ring || dist[v] < crease) near.push_back(v);
+  }
+  return near;
+}
+
+void CheckEveryVertex(const st::Mesh& mesh, float crease, size_t bucket_entries = 0) {
+  rt::CreaseGraph graph;
+  REQUIRE(graph.Init(mesh.positions.data(), mesh.vertex_count(), mesh.triangles.data(), mesh.triangle_count(), nullptr,
+                     crease) == rt::Status::kOk);
+  rt::CreaseScratch scratch;
+  REQUIRE(scratch.Init(graph) == rt::Status::kOk);
+  if (bucket_entries) rt::CreaseScratchTestAccess::ShrinkBuckets(scratch, bucket_entries);
+  size_t total = 0;
+  for (uint32_t v = 0; v < mesh.vertex_count(); ++v) {
+    const uint32_t source[3] = {v, v, v};
+    std::vector<uint32_t> reach = scratch.Reach(graph, source, crease);
+    std::sort(reach.begin(), reach.end());
+    const std::vector<uint32_t> truth = TextbookReach(mesh, v, crease);
+    CHECK(reach == truth);
+    total += reach.size();
+    // Near(t, u) for a triangle at v: exactly when a corner of u is among the near nodes.
+    const uint32_t u[3] = {truth.back(), truth.back(), truth.back()};
+    CHECK(scratch.Near(graph, source, u, crease));
+  }
+  MESSAGE(mesh.vertex_count() << " sources, " << total / mesh.vertex_count() << " near nodes on average");
+}
+
+}  // namespace
+
+TEST_CASE("crease rule: the bucketed search equals a textbook Dijkstra on every vertex") {
+  SUBCASE("a tube, crease of a few rings") {
+    st::Mesh mesh;
+    st::Tube tube;
+    tube.rings = 24;
+    tube.sides = 12;
+    tube.spacing = 0.6f;
+    (void)st::MakeTubes({tube}, {}, &mesh);
+    CheckEveryVertex(mesh, 3.0f);
+    CheckEveryVertex(mesh, 1.0f);
+  }
+  SUBCASE("a fine tube: edges far shorter than a bucket of the crease (relaxations within one bucket)") {
+    st::Mesh mesh;
+    st::Tube tube;
+    tube.rings = 40;
+    tube.sides = 16;
+    tube.radius = 0.01f;
+    tube.spacing = 0.002f;
+    (void)st::MakeTubes({tube}, {}, &mesh);
+    CheckEveryVertex(mesh, 0.5f);  // the whole tube within the crease of every vertex
+  }
+  SUBCASE("the binary heap the search falls back to when the bucket queue's entries run out") {
+    st::Mesh mesh;
+    st::Tube tube;
+    tube.rings = 24;
+    tube.sides = 12;
+    tube.spacing = 0.6f;
+    (void)st::MakeTubes({tube}, {}, &mesh);
+    CheckEveryVertex(mesh, 3.0f, 8);  // 8 entries: every search with more than a few nodes falls back
+  }
+}
