@@ -493,3 +493,102 @@ TEST_CASE("narrow phase, crease rule: a bent tube's fold is not a contact, its e
   CHECK(found == truth);
   CHECK(found.size() == contacts.size());
 }
+
+TEST_CASE("narrow phase, crease rule: two tubes joined by a long bridge are far along the skin, however near in space") {
+  // Tubes A and B side by side along x (radius 1, axes 2.2 apart: 0.2 apart at bind), joined at their far ends
+  // by a ribbon that runs 12 units out and back, so along the surface they are ~24 apart — far beyond the
+  // crease (3) — though within it through the air. Pressed together (B moved 0.5 towards A) their facing
+  // sides are contacts: the rule measures along the skin, not through space. Equal to brute force over every
+  // triangle pair with the rule; at bind nothing touches.
+  st::Mesh mesh;
+  st::Tube a, b;
+  a.rings = b.rings = 12;
+  a.sides = b.sides = 12;
+  a.spacing = b.spacing = 0.6f;
+  b.origin[1] = 2.2f;
+  st::AssetData d = st::MakeTubes({a, b}, {}, &mesh);
+  const uint32_t tube_vertices = mesh.vertex_count(), tube_triangles = mesh.triangle_count();
+  // The ribbon: two rails from A's last-ring vertices 0 and 1 out to x + 12, across to B, back to B's same two.
+  const uint32_t a_end = (a.rings - 1) * a.sides, b_end = a.rings * a.sides + (b.rings - 1) * b.sides;
+  std::vector<uint32_t> rail[2];
+  for (int r = 0; r < 2; ++r) {
+    const float* pa = &mesh.positions[3 * size_t{a_end + r}];
+    const float* pb = &mesh.positions[3 * size_t{b_end + r}];
+    const float way[4][3] = {{pa[0], pa[1], pa[2]}, {pa[0] + 12, pa[1], pa[2]}, {pb[0] + 12, pb[1], pb[2]}, {pb[0], pb[1], pb[2]}};
+    rail[r].push_back(a_end + r);
+    for (int s = 0; s < 3; ++s) {
+      const int steps = s == 1 ? 4 : 20;  // stations ~0.6 apart
+      for (int i = 1; i <= steps; ++i) {
+        if (s == 2 && i == steps) break;  // B's vertex itself
+        const float u = float(i) / float(steps);
+        for (int k = 0; k < 3; ++k) mesh.positions.push_back(way[s][k] + u * (way[s + 1][k] - way[s][k]));
+        rail[r].push_back(mesh.vertex_count() - 1);
+      }
+    }
+    rail[r].push_back(b_end + r);
+  }
+  REQUIRE(rail[0].size() == rail[1].size());
+  for (size_t j = 0; j + 1 < rail[0].size(); ++j)
+    for (uint32_t v : {rail[0][j], rail[1][j], rail[0][j + 1], rail[1][j], rail[1][j + 1], rail[0][j + 1]})
+      mesh.triangles.push_back(v);
+  for (uint32_t t = tube_triangles; t < mesh.triangle_count(); ++t) d.triangle_spheres.push_back(0);  // in no region
+  d.vertex_count = mesh.vertex_count();
+  d.triangle_count = mesh.triangle_count();
+  d.triangles = mesh.triangles;
+  d.weld_ids.resize(d.vertex_count);
+  for (uint32_t v = 0; v < d.vertex_count; ++v) d.weld_ids[v] = v;
+  d.bind_positions = mesh.positions;
+  d.crease = 3.0f;
+  Loaded l = Load(d);
+  Narrow ctx;
+  REQUIRE(ctx.Init(l.view) == rt::Status::kOk);
+  REQUIRE(ctx.model.has_crease());
+  CHECK(ctx.model.crease_graph().components() == 1);  // one skin: the bridge joins them
+  CHECK(ctx.model.bind_contact_count() == 0);
+  CHECK(ctx.model.unassigned_triangles() == mesh.triangle_count() - tube_triangles);
+  const uint32_t a_triangles = 2 * (a.rings - 1) * a.sides;
+  auto on_a = [&](uint32_t t) { return t < a_triangles; };
+  auto on_b = [&](uint32_t t) { return t >= a_triangles && t < tube_triangles; };
+  // At bind: nothing touches, and the facing sides, 0.2 apart in space, are not near along the skin.
+  CHECK(RunJob(&ctx, mesh.positions, rt::Exclusions::kCrease).contacts.empty());
+  rt::CreaseScratch scratch;
+  REQUIRE(scratch.Init(ctx.model.crease_graph()) == rt::Status::kOk);
+  uint32_t facing = 0;
+  for (uint32_t t = 0; t < a_triangles; ++t)
+    for (uint32_t u = a_triangles; u < tube_triangles; ++u) {
+      float gap = 1e30f;
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) {
+          const float* p = &mesh.positions[3 * size_t{mesh.triangles[3 * t + i]}];
+          const float* q = &mesh.positions[3 * size_t{mesh.triangles[3 * u + j]}];
+          gap = std::min(gap, std::sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2])));
+        }
+      if (gap > 1.0f) continue;  // well within the crease through the air
+      ++facing;
+      CHECK_FALSE(scratch.Near(ctx.model.crease_graph(), &mesh.triangles[3 * size_t{t}], &mesh.triangles[3 * size_t{u}], 3.0f));
+    }
+  CHECK(facing > 20);
+  // Pressed together: B (its tube, not the ribbon) moved 0.5 towards A.
+  std::vector<float> pressed = mesh.positions;
+  for (uint32_t v = a.rings * a.sides; v < tube_vertices; ++v) pressed[3 * size_t{v} + 1] -= 0.5f;
+  const Run r = RunJob(&ctx, pressed, rt::Exclusions::kCrease);
+  REQUIRE(r.status == rt::Status::kOk);
+  std::set<std::pair<uint32_t, uint32_t>> found, truth;
+  for (const auto& c : r.contacts) {
+    found.insert({std::min(c.triangle_a, c.triangle_b), std::max(c.triangle_a, c.triangle_b)});
+    CHECK(((on_a(c.triangle_a) && on_b(c.triangle_b)) || (on_b(c.triangle_a) && on_a(c.triangle_b))));
+  }
+  auto vtx = [&](uint32_t t, int k) { return &pressed[3 * size_t{mesh.triangles[3 * t + k]}]; };
+  for (uint32_t t = 0; t < mesh.triangle_count(); ++t)
+    for (uint32_t u = t + 1; u < mesh.triangle_count(); ++u) {
+      bool shared = false;
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) shared |= mesh.triangles[3 * t + i] == mesh.triangles[3 * u + j];
+      if (shared || !rt::TrianglesIntersect(vtx(t, 0), vtx(t, 1), vtx(t, 2), vtx(u, 0), vtx(u, 1), vtx(u, 2))) continue;
+      if (!scratch.Near(ctx.model.crease_graph(), &mesh.triangles[3 * size_t{t}], &mesh.triangles[3 * size_t{u}], 3.0f))
+        truth.insert({t, u});
+    }
+  CHECK(!found.empty());
+  CHECK(found == truth);
+  CHECK(found.size() == r.contacts.size());
+}
