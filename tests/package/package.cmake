@@ -1,7 +1,7 @@
 # The runtime as a package, as a game gets it: configure the source tree with the `runtime-noexcept`
 # preset (runtime only, -fno-exceptions -fno-rtti) into WORK, build, install into WORK/prefix, then build
 # tests/package/consumer against it with find_package(spherechain) (also without exceptions or RTTI)
-# and run it on the golden v2 asset.
+# and run it on the golden v2 asset; its C program (consumer_c) links the installed C API, spherechain::c.
 file(REMOVE_RECURSE ${WORK})
 function(run what)
   execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
@@ -22,3 +22,8 @@ if(NOT out MATCHES "spheres 128 chains 6 ")
   message(FATAL_ERROR "the consumer read the golden asset wrongly: ${out}")
 endif()
 message("consumer built against ${WORK}/prefix (no exceptions, no RTTI): ${out}")
+run("run the C consumer" ${WORK}/consumer/consumer_c ${ASSET})
+if(NOT out MATCHES "C: spheres 128 chains 6 joints 0 m2_pairs [0-9]+")
+  message(FATAL_ERROR "the C consumer read the golden asset wrongly: ${out}")
+endif()
+message("C consumer (spherechain::c, shared) built against ${WORK}/prefix: ${out}")
