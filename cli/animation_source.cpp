@@ -11,20 +11,17 @@ namespace fs = std::filesystem;
 
 std::string FindPosesDir(const std::string& character, const std::string& explicit_dir) {
   if (!explicit_dir.empty()) return explicit_dir;
-  std::vector<fs::path> candidates;
+  std::vector<std::string> data_dirs;
   std::error_code ec;
   const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  if (!ec) candidates.push_back(exe.parent_path() / SPHERECHAIN_BIN_TO_DATA / "poses" / character);
-  candidates.push_back(fs::path(SPHERECHAIN_SOURCE_DATA_DIR) / "poses" / character);
-  const fs::path rel = fs::path("data") / "poses" / character;
+  if (!ec) data_dirs.push_back((exe.parent_path() / SPHERECHAIN_BIN_TO_DATA).string());
+  data_dirs.push_back(SPHERECHAIN_SOURCE_DATA_DIR);
   fs::path p = fs::current_path(ec);
   for (int up = 0; up < 6 && !ec && !p.empty(); ++up, p = p.parent_path()) {
-    candidates.push_back(p / rel);
+    data_dirs.push_back((p / "data").string());
     if (p == p.parent_path()) break;
   }
-  for (const fs::path& c : candidates)
-    if (fs::is_directory(c, ec)) return c.lexically_normal().string();
-  return {};
+  return playback::FindPosesDir(character, data_dirs);
 }
 
 void AddAnimationOptions(CLI::App* sub, std::string* asset, std::string* rig, AnimationArgs* anim) {

@@ -14,9 +14,8 @@ namespace spherechain::cli {
 namespace {
 
 struct BakeArgs {
-  std::string input, output, report, config, rig, segmentation, region_map, ray_csv, png, vertices, regions;
-  double disk_step = 0.0;
-  bool force = false;
+  std::string input, output, report, config, ray_csv, png;
+  baker::BakeOptions options;  // --regions, --segmentation, --region-map, --vertices, --rig, --disk-step, --force
 };
 
 void PrintSummary(const baker::BakeResult& r, const import::Context& ctx) {
@@ -83,18 +82,7 @@ int RunBake(const BakeArgs& a) {
     if (!c.ok()) return Fail(c.error());
     config = std::move(c).value();
   }
-  if (!a.rig.empty()) config.import.rig_path = a.rig;
-  if (a.vertices == "joined") config.import.vertices = import::VertexContract::kJoined;
-  if (a.vertices == "source") config.import.vertices = import::VertexContract::kSource;
-  if (!a.region_map.empty()) config.region_map = a.region_map;
-  if (a.regions == "paper") config.regions = baker::RegionSet::kPaper;
-  if (a.regions == "extended") config.regions = baker::RegionSet::kExtended;
-  if (a.disk_step > 0) config.fit.disk_step = a.disk_step;
-  config.force = a.force;
-  if (a.segmentation == "rig") config.segmentation = baker::SegmentMethod::kRig;
-  else if (a.segmentation == "geometry") config.segmentation = baker::SegmentMethod::kGeometry;
-  else if (a.segmentation == "skeleton") config.segmentation = baker::SegmentMethod::kSkeleton;
-  else if (a.segmentation == "map" && config.region_map.empty()) return Fail("--segmentation map needs --region-map");
+  if (auto s = baker::ApplyBakeOptions(a.options, &config); !s.ok()) return Fail(s.error());
 
   // Fail before the work when an output cannot be written.
   for (const std::string* out : {&a.output, &a.report, &a.ray_csv, &a.png}) {
@@ -142,32 +130,32 @@ void RegisterBake(CLI::App& app, Commands* commands) {
   sub->add_option("--report", args->report, "JSON bake report to write");
   sub->add_option("--config", args->config, "JSON bake configuration (parameters, chains, segmentation)")
       ->check(CLI::ExistingFile);
-  sub->add_option("--rig", args->rig, "MakeHuman rig (.mhskel) for an OBJ; default: default.mhskel beside the OBJ");
-  sub->add_option("--segmentation", args->segmentation,
+  sub->add_option("--rig", args->options.rig, "MakeHuman rig (.mhskel) for an OBJ; default: default.mhskel beside the OBJ");
+  sub->add_option("--segmentation", args->options.segmentation,
                   "auto (rig when rigged, else geometry; a rigged creature that is no standing body: skeleton), rig, "
                   "geometry, skeleton (the any-skeleton path: limbs branching off the trunk of the bone tree), map")
       ->check(CLI::IsMember({"auto", "rig", "geometry", "skeleton", "map"}));
-  sub->add_option("--regions", args->regions,
+  sub->add_option("--regions", args->options.regions,
                   "Regions of a standing biped: extended (default: arms, legs, head, hands, feet and the torso, "
                   "ten regions whose chains let a hand meet the face and a foot the other leg) or paper (the "
                   "paper's five: arms, legs, torso with the head; Table 1's six chains); overrides the config's "
                   "\"regions\". Creatures keep their own")
       ->check(CLI::IsMember({"paper", "extended"}));
-  sub->add_option("--vertices", args->vertices,
+  sub->add_option("--vertices", args->options.vertices,
                   "Vertex contract for assimp formats (.x .fbx .dae ...): joined (default; what engines' importers "
                   "give: aiProcess_JoinIdenticalVertices) or source (the importer's own buffer); recorded in the "
                   "asset. glTF/OBJ: no-op with a warning (their buffer is the engine's)")
       ->check(CLI::IsMember({"joined", "source"}));
-  sub->add_flag("--force", args->force,
+  sub->add_flag("--force", args->options.force,
                 "Write the asset even when a plausibility check fails (a limb in pieces or detached from the "
                 "torso, left/right imbalance, the head in a limb, a lying trunk, spheres outside the body, rig "
                 "and geometry segmentations disagreeing). Without it such a bake exits 1 naming each failed "
                 "check (PLAUS-... code, what and where) and writes nothing; with it the findings are printed, "
                 "go to the report as errors and into the asset, where `validate` reports them as errors");
-  sub->add_option("--region-map", args->region_map,
+  sub->add_option("--region-map", args->options.region_map,
                   "JSON region map {\"triangle_regions\": [...]} of region values or names (implies map); "
                   "\"regions\": [names] makes a creature's layout (limbs, the trunk last)");
-  sub->add_option("--disk-step", args->disk_step, "Torso disk step delta in source units (default: relative to height)");
+  sub->add_option("--disk-step", args->options.disk_step, "Torso disk step delta in source units (default: relative to height)");
   sub->add_option("--ray-csv", args->ray_csv, "CSV of the paper's per-ray comparison for the torso spheres");
   sub->add_option("--png", args->png, "PNG views (front and side) of regions and spheres (needs rsvg-convert)");
   commands->handlers.emplace_back(sub, [args] { return RunBake(*args); });

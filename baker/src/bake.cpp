@@ -172,6 +172,37 @@ Result<BakeConfig> LoadBakeConfig(const std::string& path) {
   return ParseBakeConfig(std::string(bytes->begin(), bytes->end()), path);
 }
 
+Status ApplyBakeOptions(const BakeOptions& o, BakeConfig* config) {
+  auto bad = [](const char* option, const std::string& value, const char* choices) {
+    return MakeError(Error::Code::kConfig,
+                     std::string(option) + ": '" + value + "' is not one of " + choices);
+  };
+  if (!o.rig.empty()) config->import.rig_path = o.rig;
+  if (o.vertices == "joined") config->import.vertices = VertexContract::kJoined;
+  else if (o.vertices == "source") config->import.vertices = VertexContract::kSource;
+  else if (!o.vertices.empty()) return bad("vertices", o.vertices, "joined, source");
+  if (!o.region_map.empty()) config->region_map = o.region_map;
+  if (o.regions == "paper") config->regions = RegionSet::kPaper;
+  else if (o.regions == "extended") config->regions = RegionSet::kExtended;
+  else if (!o.regions.empty()) return bad("regions", o.regions, "extended, paper");
+  if (!(o.disk_step >= 0.0) || !std::isfinite(o.disk_step))
+    return MakeError(Error::Code::kConfig, "disk_step: " + std::to_string(o.disk_step) +
+                                               " must be > 0 (source units), or 0 for the default");
+  if (o.disk_step > 0.0) config->fit.disk_step = o.disk_step;
+  config->force = o.force;
+  if (o.segmentation == "auto") config->segmentation = SegmentMethod::kAuto;
+  else if (o.segmentation == "rig") config->segmentation = SegmentMethod::kRig;
+  else if (o.segmentation == "geometry") config->segmentation = SegmentMethod::kGeometry;
+  else if (o.segmentation == "skeleton") config->segmentation = SegmentMethod::kSkeleton;
+  else if (o.segmentation == "map") {
+    if (config->region_map.empty())
+      return MakeError(Error::Code::kConfig, "segmentation 'map' needs a region map (region_map, CLI --region-map)");
+  } else if (!o.segmentation.empty()) {
+    return bad("segmentation", o.segmentation, "auto, rig, geometry, skeleton, map");
+  }
+  return Ok{};
+}
+
 std::string CanonicalConfig(const BakeConfig& c, const RegionLayout* layout) {
   json j;  // nlohmann::json objects are key-sorted: stable
   j["segmentation"] = c.region_map.empty() ? MethodName(c.segmentation) : "map";

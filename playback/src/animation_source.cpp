@@ -12,6 +12,15 @@ std::string DefaultPoseCharacter(const Mesh& mesh, const std::string& mesh_name)
   return mesh.skin && mesh.skin->source == "mhskel" ? "makehuman" : fs::path(mesh_name).stem().string();
 }
 
+std::string FindPosesDir(const std::string& character, const std::vector<std::string>& data_dirs) {
+  std::error_code ec;
+  for (const std::string& d : data_dirs) {
+    const fs::path c = fs::path(d) / "poses" / character;
+    if (fs::is_directory(c, ec)) return c.lexically_normal().string();
+  }
+  return {};
+}
+
 std::string Animation::Describe() const {
   if (clip) return "clip '" + clip->name + "' (" + std::to_string(clip->duration_s) + " s)";
   return "morph through " + std::to_string(poses.size()) + " key poses from " + poses_from;

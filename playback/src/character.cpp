@@ -38,18 +38,23 @@ Status CheckFingerprint(const runtime::AssetView& view, const Mesh& mesh, const 
   return Ok{};
 }
 
-Status OpenCharacter(const std::string& asset_path, const std::string& mesh_path, const std::string& rig_path,
-                     import::LoadedAsset* asset, Mesh* mesh, import::Context* log) {
-  if (auto s = import::LoadAssetFile(asset_path, asset); !s.ok()) return s;
+Status ImportMeshForAsset(const runtime::AssetView& view, const std::string& asset_name, const std::string& mesh_path,
+                          const std::string& rig_path, Mesh* mesh, import::Context* log) {
   import::ImportOptions opts;
   opts.rig_path = rig_path;
-  opts.vertices = import::ContractForReimport(asset->view, mesh_path);  // the buffer the asset was baked from
+  opts.vertices = import::ContractForReimport(view, mesh_path);  // the buffer the asset was baked from
   auto imported = import::ImportMesh(mesh_path, opts, log);
   if (!imported.ok())
     return MakeError(imported.error().code,
                      std::string(import::ToString(imported.error().code)) + ": " + imported.error().message);
   *mesh = std::move(imported).value();
-  return CheckFingerprint(asset->view, *mesh, asset_path, mesh_path);
+  return CheckFingerprint(view, *mesh, asset_name, mesh_path);
+}
+
+Status OpenCharacter(const std::string& asset_path, const std::string& mesh_path, const std::string& rig_path,
+                     import::LoadedAsset* asset, Mesh* mesh, import::Context* log) {
+  if (auto s = import::LoadAssetFile(asset_path, asset); !s.ok()) return s;
+  return ImportMeshForAsset(asset->view, asset_path, mesh_path, rig_path, mesh, log);
 }
 
 }  // namespace spherechain::playback

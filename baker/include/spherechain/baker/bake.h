@@ -98,6 +98,26 @@ struct BakeConfig {
 Result<BakeConfig> LoadBakeConfig(const std::string& path);
 /// Parses JSON text (as LoadBakeConfig) — `where` names the source in messages.
 Result<BakeConfig> ParseBakeConfig(const std::string& json_text, const std::string& where);
+
+/// The options a bake takes besides its configuration: `spherechain bake`'s command-line options and the
+/// keywords of Python's `spherechain.bake(path, config, **options)`. Each one that is set overrides the
+/// configuration's key of the same meaning (ApplyBakeOptions); empty strings and 0 leave it as configured.
+struct BakeOptions {
+  std::string regions;       ///< [opt] "extended" or "paper" (config "regions"; CLI --regions)
+  std::string segmentation;  ///< [opt] "auto", "rig", "geometry", "skeleton" or "map" (config "segmentation")
+  std::string region_map;    ///< [opt] JSON region map path (config "region_map"; implies "map")
+  std::string vertices;      ///< [opt] "joined" or "source" (config "vertices"; assimp formats)
+  std::string rig;           ///< [opt] MakeHuman .mhskel path (config "rig")
+  double disk_step = 0.0;    ///< [opt] torso disk step δ [Units: source] [Limit: 0 (unset) or > 0, finite]
+  bool force = false;        ///< write the asset although a plausibility check fails (BakeConfig::force)
+};
+
+/// Applies `options` over `*config` (the configuration file's, or the defaults). Errors: kConfig, naming the
+/// option: a value outside its choices, a disk step that is negative or not finite, segmentation "map" with
+/// no region map in either. `*config` is unspecified after an error. The one place the CLI and Python turn
+/// options into a BakeConfig, so both bake the same bytes from the same input and options.
+Status ApplyBakeOptions(const BakeOptions& options, BakeConfig* config);
+
 /// The canonical JSON of a configuration (stable key order), hashed into the asset. With `layout`, the
 /// defaults that depend on it are written resolved (skin_spheres: SkinSpheres); without, as configured.
 std::string CanonicalConfig(const BakeConfig& config, const RegionLayout* layout = nullptr);

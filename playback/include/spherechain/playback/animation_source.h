@@ -27,6 +27,12 @@ struct AnimationRequest {
 /// MakeHuman rig (Skin::source "mhskel"), else the stem of `mesh_name`.
 std::string DefaultPoseCharacter(const Mesh& mesh, const std::string& mesh_name);
 
+/// The folder of `character`'s default key poses: the first `<d>/poses/<character>` of `data_dirs` (each a
+/// data folder — the installed share/spherechain/, the source tree's data/, a Python package's data/ — in
+/// the caller's order of preference) that is a folder, lexically normalised; empty when none is.
+/// Cost: one stat per candidate.
+std::string FindPosesDir(const std::string& character, const std::vector<std::string>& data_dirs);
+
 /// The chosen animation. Frame f (< frames) of a clip samples t = duration · f / frames [s] (no wrap:
 /// the last frame is one step before the end); the morph's frames follow MorphFrameAt.
 /// Holds a pointer into the mesh's clips: the Mesh passed to OpenAnimation must outlive it (and not

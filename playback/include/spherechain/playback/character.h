@@ -17,12 +17,19 @@ namespace spherechain::playback {
 Status CheckFingerprint(const runtime::AssetView& view, const Mesh& mesh, const std::string& asset_path,
                         const std::string& mesh_path);
 
+/// Imports `mesh_path` (`rig_path`: a MakeHuman .mhskel for an OBJ, empty = default.mhskel beside it) with the
+/// vertex contract the loaded asset `view` records (import::ContractForReimport) into `mesh`, and checks their
+/// fingerprints (`asset_name` names the asset in messages). Errors: the importer's, with its code in the message
+/// ("format: …"); CheckFingerprint's. `log` [opt] receives the importer's log lines. Cost: one import.
+Status ImportMeshForAsset(const runtime::AssetView& view, const std::string& asset_name, const std::string& mesh_path,
+                          const std::string& rig_path, Mesh* mesh, import::Context* log = nullptr);
+
 /// Loads the asset at `asset_path` (import::LoadAssetFile: read, aligned, verified) into `asset`, imports
 /// `mesh_path` (`rig_path`: a MakeHuman .mhskel for an OBJ, empty = default.mhskel beside it) with the vertex
 /// contract the asset records (import::ContractForReimport) into `mesh`, and checks their fingerprints.
 /// Errors: those of LoadAssetFile (kIo, kFormat); the importer's, with its code in the message
-/// ("format: …"); CheckFingerprint's. `log` [opt] receives the importer's log lines. Cost: one asset read,
-/// one import.
+/// ("format: …"); CheckFingerprint's (ImportMeshForAsset). `log` [opt] receives the importer's log lines.
+/// Cost: one asset read, one import.
 Status OpenCharacter(const std::string& asset_path, const std::string& mesh_path, const std::string& rig_path,
                      import::LoadedAsset* asset, Mesh* mesh, import::Context* log = nullptr);
 
