@@ -11,6 +11,7 @@ $SUDO apt-get install -y -qq --no-install-recommends \
   doctest-dev nlohmann-json3-dev libcli11-dev libspdlog-dev libxxhash-dev \
   libfcl-dev libbullet-dev libtbb-dev libembree-dev \
   clang libclang-rt-14-dev \
+  python3-dev python3-numpy python3-pytest pybind11-dev \
   librsvg2-bin libxml2-utils assimp-testmodels chromium >/dev/null
 # three.js for `spherechain view` (viewer/package.json pins it; the CLI embeds it in the HTML it writes),
 # from the npm registry. Node and npm from Debian when the machine has none.

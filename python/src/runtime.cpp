@@ -1,0 +1,674 @@
+// spherechain Python module — the per-frame side: Model (runtime::Model, and the narrow phase's model built on
+// first use) and Workspace (runtime::Workspace + its output buffers). The per-frame calls read the NumPy
+// array's pointer, shape and strides through the C API (no copy, no Python object made), run the runtime's
+// job with the GIL released and raise StatusError on a failed status. Nothing in the runtime allocates per
+// call; returning a new array allocates in Python (the `out=` forms do not).
+#include <pybind11/stl.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <mutex>
+#include <stdexcept>
+#include <vector>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+#include "common.h"
+#include "spherechain/runtime/detect.h"
+#include "spherechain/runtime/model.h"
+#include "spherechain/runtime/narrow_phase.h"
+#include "spherechain/runtime/refit.h"
+
+namespace spherechain::python {
+
+namespace {
+
+using runtime::Status;
+
+// What every character of one asset shares: the runtime's Model, and the narrow phase's models (surrounding
+// regions, reach regions), each built on first use (NarrowPhaseModel::Init is slow with the crease rule) under
+// a once_flag, so Workspaces on several threads may ask at once.
+struct ModelData {
+  AssetPtr asset;
+  runtime::Model model;
+  uint32_t bound[2] = {0, 0};  // DetectBound for M1, M2
+  runtime::NarrowPhaseModel narrow[2];
+  Status narrow_status[2] = {Status::kOk, Status::kOk};
+  std::once_flag narrow_once[2];
+
+  // Call without the GIL.
+  Status Narrow(int kind, const runtime::NarrowPhaseModel** out) {
+    std::call_once(narrow_once[kind], [&] {
+      narrow_status[kind] = narrow[kind].Init(
+          asset->view(), kind == 0 ? runtime::NarrowPhaseRegions::kSurrounding : runtime::NarrowPhaseRegions::kReach);
+    });
+    *out = &narrow[kind];
+    return narrow_status[kind];
+  }
+};
+using ModelPtr = std::shared_ptr<ModelData>;
+
+struct PyModel {
+  ModelPtr data;
+};
+
+// One character: its spheres and scratch, and the buffers its calls write into. One call at a time (the GIL
+// is released while the runtime runs: `busy` refuses a second thread instead of racing).
+struct PyWorkspace {
+  ModelPtr model;
+  runtime::Workspace ws;
+  std::vector<runtime::Collision> pairs;  // DetectBound of either method: never truncated
+  runtime::NarrowPhaseWorkspace narrow[2];
+  std::vector<runtime::TriangleContact> contacts;
+  std::vector<runtime::ContactDepth> depths;
+  std::atomic<bool> busy{false};
+};
+
+class Exclusive {
+ public:
+  explicit Exclusive(PyWorkspace& w) : busy_(w.busy) {
+    if (busy_.exchange(true, std::memory_order_acquire))
+      throw std::runtime_error("spherechain.Workspace: another thread is using this workspace (one call at a time "
+                               "per workspace: make one workspace per thread from the shared Model)");
+  }
+  ~Exclusive() { busy_.store(false, std::memory_order_release); }
+  Exclusive(const Exclusive&) = delete;
+  Exclusive& operator=(const Exclusive&) = delete;
+
+ private:
+  std::atomic<bool>& busy_;
+};
+
+runtime::DetectMethod MethodOf(const std::string& method) {
+  if (method == "m1") return runtime::DetectMethod::kM1;
+  if (method == "m2") return runtime::DetectMethod::kM2;
+  ThrowValue("method: expected \"m1\" or \"m2\", got \"" + method + "\"");
+}
+
+// The strided positions view of a (#V, 3) float32 array: any row stride, x y z contiguous in a row.
+runtime::PositionsView PositionsOf(PyObject* object, uint32_t vertex_count) {
+  auto expected = [&] {
+    return "positions: expected a numpy.ndarray of float32, shape (" + std::to_string(vertex_count) +
+           ", 3), x y z contiguous in a row (strides[1] == 4, any positive row stride); got " + DescribeArray(object);
+  };
+  if (!PyArray_Check(object)) ThrowValue(expected());
+  auto* a = reinterpret_cast<PyArrayObject*>(object);
+  if (PyArray_TYPE(a) != NPY_FLOAT32 || !PyArray_ISNOTSWAPPED(a) || PyArray_NDIM(a) != 2 || PyArray_DIM(a, 1) != 3)
+    ThrowValue(expected());
+  runtime::PositionsView view;
+  if (PyArray_DIM(a, 0) == 0) {  // no rows: strides mean nothing; the runtime says kErrorVertexCount
+    view.data = PyArray_DATA(a);
+    return view;
+  }
+  if (PyArray_STRIDE(a, 1) != npy_intp(sizeof(float)) || PyArray_STRIDE(a, 0) < 0 ||
+      PyArray_STRIDE(a, 0) > npy_intp(std::numeric_limits<uint32_t>::max()))
+    ThrowValue(expected());
+  view.data = PyArray_DATA(a);
+  // More rows than a uint32 holds: the runtime's kErrorVertexCount, as for any other wrong count.
+  view.count = PyArray_DIM(a, 0) > npy_intp(std::numeric_limits<uint32_t>::max()) ? 0 : uint32_t(PyArray_DIM(a, 0));
+  view.stride_bytes = uint32_t(PyArray_STRIDE(a, 0));
+  return view;
+}
+
+// The runtime's status as StatusError, with what the job was given when it is about the input.
+[[noreturn]] void ThrowJob(Status s, const char* job, PyObject* positions, uint32_t vertex_count) {
+  std::string context = job;
+  if (s == Status::kErrorVertexCount)
+    context += ": positions have " + std::to_string(PyArray_DIM(reinterpret_cast<PyArrayObject*>(positions), 0)) +
+               " rows, the asset " + std::to_string(vertex_count) + " vertices";
+  else if (s == Status::kErrorStride)
+    context += ": row stride " + std::to_string(PyArray_STRIDE(reinterpret_cast<PyArrayObject*>(positions), 0)) +
+               " bytes (>= 12, a multiple of 4)";
+  else if (s == Status::kErrorAlignment)
+    context += ": positions not 4-byte aligned";
+  ThrowStatus(s, context);
+}
+
+// True when every current sphere is finite: x − x is 0 for a finite value and NaN for a NaN or an infinity,
+// and NaN survives the sums. ~40 ns for 128 spheres.
+bool SpheresFinite(const runtime::SphereArrays& s) {
+  uint32_t i = 0;
+  bool finite = true;
+#if defined(__SSE2__)
+  __m128 acc = _mm_setzero_ps();
+  for (; i + 4 <= s.count; i += 4) {
+    const __m128 x = _mm_loadu_ps(s.x + i), y = _mm_loadu_ps(s.y + i), z = _mm_loadu_ps(s.z + i), r = _mm_loadu_ps(s.r + i);
+    acc = _mm_add_ps(acc, _mm_add_ps(_mm_add_ps(_mm_sub_ps(x, x), _mm_sub_ps(y, y)), _mm_add_ps(_mm_sub_ps(z, z), _mm_sub_ps(r, r))));
+  }
+  finite = _mm_movemask_ps(_mm_cmpunord_ps(acc, acc)) == 0;
+#endif
+  for (; i < s.count; ++i)
+    finite = finite && std::isfinite(s.x[i]) && std::isfinite(s.y[i]) && std::isfinite(s.z[i]) && std::isfinite(s.r[i]);
+  return finite;
+}
+
+// A 1-D, C-contiguous, aligned array of exactly `dtype` (its records written or read in place).
+PyArrayObject* RecordArrayOf(PyObject* object, PyArray_Descr* dtype, bool writable, const char* what) {
+  if (PyArray_CheckExact(object)) {  // the usual case first: an array of this very dtype object
+    auto* a = reinterpret_cast<PyArrayObject*>(object);
+    if (PyArray_DESCR(a) == dtype && PyArray_NDIM(a) == 1 && PyArray_IS_C_CONTIGUOUS(a) && PyArray_ISALIGNED(a) &&
+        (!writable || PyArray_ISWRITEABLE(a)))
+      return a;
+  }
+  if (!PyArray_Check(object) || !PyArray_EquivTypes(PyArray_DESCR(reinterpret_cast<PyArrayObject*>(object)), dtype) ||
+      PyArray_NDIM(reinterpret_cast<PyArrayObject*>(object)) != 1 ||
+      !PyArray_IS_C_CONTIGUOUS(reinterpret_cast<PyArrayObject*>(object)) ||
+      !PyArray_ISALIGNED(reinterpret_cast<PyArrayObject*>(object)) ||
+      (writable && !PyArray_ISWRITEABLE(reinterpret_cast<PyArrayObject*>(object))))
+    ThrowValue(std::string(what) + ": expected a one-dimensional, C-contiguous" + (writable ? ", writable" : "") +
+               " numpy.ndarray of dtype spherechain." + (dtype == PairDtype() ? "PAIR_DTYPE" : "CONTACT_DTYPE") +
+               "; got " + DescribeArray(object));
+  return reinterpret_cast<PyArrayObject*>(object);
+}
+
+// A new array of `count` records of `dtype` (uninitialised).
+PyArrayObject* NewRecords(PyArray_Descr* dtype, npy_intp count) {
+  Py_INCREF(dtype);  // PyArray_NewFromDescr steals it
+  PyObject* a = PyArray_NewFromDescr(&PyArray_Type, dtype, 1, &count, nullptr, nullptr, 0, nullptr);
+  if (!a) throw py::error_already_set();
+  return reinterpret_cast<PyArrayObject*>(a);
+}
+
+float MarginOf(PyObject* value, const char* what) {
+  if (!value || value == Py_None) return -1.0f;  // the asset's
+  const double v = PyFloat_AsDouble(value);
+  if (v == -1.0 && PyErr_Occurred()) throw py::error_already_set();
+  if (v < 0.0)
+    ThrowValue(std::string(what) + ": " + std::to_string(v) + " must be >= 0 (source units), or None for the asset's");
+  return static_cast<float>(v);  // NaN and inf: the runtime's kErrorInvalidJob
+}
+
+// ---- the per-frame methods' calling convention ----------------------------------------------------------
+// refit, refit_joints and detect are plain CPython methods (METH_FASTCALL | METH_KEYWORDS) on the Workspace
+// type, not pybind11 functions: pybind11's general dispatcher (overloads, casters, default objects) cost a
+// large part of a refit's own time (docs/performance.md#python). The rest of the API goes through pybind11.
+
+// The PyWorkspace inside a Workspace instance (the method descriptor has checked its type; the class is
+// final, so its layout is pybind11's simple one).
+PyWorkspace& Self(PyObject* self) {
+  auto* inst = reinterpret_cast<py::detail::instance*>(self);
+  void* value = inst->simple_layout ? inst->simple_value_holder[0] : inst->get_value_and_holder().value_ptr();
+  if (!value) throw py::type_error("spherechain.Workspace: not initialised (make one with Model.workspace())");
+  return *static_cast<PyWorkspace*>(value);
+}
+
+// Fills `out[i]` (borrowed; null when not given) from the positional and keyword arguments of a
+// METH_FASTCALL | METH_KEYWORDS call, by `names`; the first `required` must be given.
+template <size_t N>
+void ParseArgs(const char* function, const char* const (&names)[N], size_t required, PyObject* const* args,
+               Py_ssize_t nargs, PyObject* kwnames, PyObject* (&out)[N]) {
+  for (size_t i = 0; i < N; ++i) out[i] = nullptr;
+  if (size_t(nargs) > N)
+    throw py::type_error(std::string(function) + "() takes at most " + std::to_string(N) + " arguments (" +
+                         std::to_string(nargs) + " given)");
+  for (Py_ssize_t i = 0; i < nargs; ++i) out[i] = args[i];
+  const Py_ssize_t nkw = kwnames ? PyTuple_GET_SIZE(kwnames) : 0;
+  for (Py_ssize_t k = 0; k < nkw; ++k) {
+    PyObject* key = PyTuple_GET_ITEM(kwnames, k);
+    size_t i = 0;
+    while (i < N && PyUnicode_CompareWithASCIIString(key, names[i]) != 0) ++i;
+    if (i == N)
+      throw py::type_error(std::string(function) + "() got an unexpected keyword argument '" +
+                           py::str(key).cast<std::string>() + "'");
+    if (out[i]) throw py::type_error(std::string(function) + "() got multiple values for argument '" + names[i] + "'");
+    out[i] = args[nargs + k];
+  }
+  for (size_t i = 0; i < required; ++i)
+    if (!out[i]) throw py::type_error(std::string(function) + "() missing required argument '" + names[i] + "'");
+}
+
+// Which of `choices` the str `value` is (null: `fallback`); ValueError naming them otherwise.
+template <size_t N>
+size_t ChoiceOf(PyObject* value, const char* what, const char* const (&choices)[N], size_t fallback) {
+  if (!value || value == Py_None) return fallback;
+  if (PyUnicode_Check(value))
+    for (size_t i = 0; i < N; ++i)
+      if (PyUnicode_CompareWithASCIIString(value, choices[i]) == 0) return i;
+  std::string list;
+  for (size_t i = 0; i < N; ++i) list += std::string(i ? ", " : "") + "\"" + choices[i] + "\"";
+  ThrowValue(std::string(what) + ": expected one of " + list + ", got " + py::repr(value).cast<std::string>());
+}
+
+// Runs `body` and turns a C++ exception into the Python error it stands for (these functions are called by
+// CPython directly, so nothing may escape).
+template <class Fn>
+PyObject* Guarded(Fn&& body) {
+  try {
+    return body();
+  } catch (py::error_already_set& e) {
+    e.restore();
+  } catch (const py::builtin_exception& e) {
+    e.set_error();
+  } catch (const std::exception& e) {
+    PyErr_SetString(PyExc_RuntimeError, e.what());
+  }
+  return nullptr;
+}
+
+// ---- Workspace calls ------------------------------------------------------------------------------
+void Refit(PyWorkspace& self, py::handle positions, PyObject* mode) {
+  Exclusive exclusive(self);
+  runtime::RefitJob job;
+  job.model = &self.model->model;
+  job.workspace = &self.ws;
+  job.positions = PositionsOf(positions.ptr(), self.model->model.vertex_count());
+  static const char* const kModes[] = {"frame", "paper"};
+  job.mode = ChoiceOf(mode, "mode", kModes, 0) == 0 ? runtime::RefitMode::kPivotFrame : runtime::RefitMode::kPaper;
+  Status s;
+  bool finite;
+  {
+    NoGil release;
+    s = job.Run();
+    finite = runtime::Succeeded(s) && SpheresFinite(self.ws.spheres());
+  }
+  if (runtime::Failed(s)) ThrowJob(s, "refit", positions.ptr(), self.model->model.vertex_count());
+  if (!finite)
+    ThrowStatus(Status::kErrorNonFinitePositions,
+                "refit: a position the refit reads (a corner of a sphere's pivot triangles) is NaN or infinite; the "
+                "workspace's spheres are not finite until the next refit");
+}
+
+void RefitJoints(PyWorkspace& self, py::handle matrices) {
+  Exclusive exclusive(self);
+  PyObject* object = matrices.ptr();
+  const uint32_t joints = self.model->model.joint_count();
+  auto* a = reinterpret_cast<PyArrayObject*>(object);
+  if (!PyArray_Check(object) || PyArray_TYPE(a) != NPY_FLOAT32 || !PyArray_ISNOTSWAPPED(a) || PyArray_NDIM(a) != 3 ||
+      PyArray_DIM(a, 1) != 3 || PyArray_DIM(a, 2) != 4 || !PyArray_IS_C_CONTIGUOUS(a))
+    ThrowValue("matrices: expected a C-contiguous numpy.ndarray of float32, shape (" + std::to_string(joints) +
+               ", 3, 4) (per joint the top three rows of its skinning matrix, row-major); got " + DescribeArray(object));
+  runtime::JointRefitJob job;
+  job.model = &self.model->model;
+  job.workspace = &self.ws;
+  job.joint_matrices = static_cast<const float*>(PyArray_DATA(a));
+  job.joint_count = PyArray_DIM(a, 0) > npy_intp(std::numeric_limits<uint32_t>::max()) ? 0 : uint32_t(PyArray_DIM(a, 0));
+  Status s;
+  {
+    NoGil release;
+    s = job.Run();
+  }
+  if (runtime::Failed(s)) {
+    std::string context = "refit_joints";
+    if (s == Status::kErrorJointCount)
+      context += ": " + std::to_string(PyArray_DIM(a, 0)) + " matrices, the asset " + std::to_string(joints) + " joints";
+    ThrowStatus(s, context);
+  }
+}
+
+PyObject* Detect(PyWorkspace& self, PyObject* method, PyObject* margin, PyObject* fold_margin, PyObject* out) {
+  Exclusive exclusive(self);
+  runtime::DetectStats stats;
+  uint32_t count = 0;
+  runtime::DetectJob job;
+  job.model = &self.model->model;
+  job.workspace = &self.ws;
+  static const char* const kMethods[] = {"m1", "m2"};
+  job.method = ChoiceOf(method, "method", kMethods, 0) == 0 ? runtime::DetectMethod::kM1 : runtime::DetectMethod::kM2;
+  job.margin = MarginOf(margin, "margin");
+  job.fold_margin = MarginOf(fold_margin, "fold_margin");
+  job.count = &count;
+  job.stats = &stats;
+  PyArrayObject* into = nullptr;
+  if (out && out != Py_None) {
+    into = RecordArrayOf(out, PairDtype(), true, "out");
+    job.output = static_cast<runtime::Collision*>(PyArray_DATA(into));
+    job.capacity = uint32_t(std::min<npy_intp>(PyArray_DIM(into, 0), std::numeric_limits<uint32_t>::max()));
+  } else {
+    job.output = self.pairs.data();
+    job.capacity = uint32_t(self.pairs.size());
+  }
+  Status s;
+  {
+    NoGil release;
+    s = job.Run();
+  }
+  if (runtime::Failed(s)) ThrowStatus(s, "detect");
+  if (into) return PyLong_FromUnsignedLong(stats.distinct_pairs);
+  PyArrayObject* result = NewRecords(PairDtype(), count);
+  if (count) std::memcpy(PyArray_DATA(result), self.pairs.data(), size_t(count) * sizeof(runtime::Collision));
+  return reinterpret_cast<PyObject*>(result);
+}
+
+py::object NarrowPhase(PyWorkspace& self, py::handle positions, const py::object& exclusions, const py::object& pairs,
+                       const std::string& regions, const py::object& crease) {
+  Exclusive exclusive(self);
+  int kind = 0;
+  if (regions == "reach") kind = 1;
+  else if (regions != "surrounding") ThrowValue("regions: expected \"surrounding\" or \"reach\", got \"" + regions + "\"");
+  runtime::NarrowPhaseJob job;
+  job.positions = PositionsOf(positions.ptr(), self.model->model.vertex_count());
+  if (!pairs.is_none()) {
+    PyArrayObject* p = RecordArrayOf(pairs.ptr(), PairDtype(), false, "pairs");
+    job.sphere_pairs = static_cast<const runtime::Collision*>(PyArray_DATA(p));
+    job.sphere_pair_count = uint32_t(std::min<npy_intp>(PyArray_DIM(p, 0), std::numeric_limits<uint32_t>::max()));
+  }
+  std::string exclusion = exclusions.is_none() ? "" : exclusions.cast<std::string>();
+  if (!exclusion.empty() && exclusion != "crease" && exclusion != "asset" && exclusion != "none")
+    ThrowValue("exclusions: expected \"crease\", \"asset\", \"none\" or None, got \"" + exclusion + "\"");
+  if (!crease.is_none()) job.crease = static_cast<float>(crease.cast<double>());
+
+  runtime::NarrowPhaseStats stats;
+  uint32_t count = 0;
+  Status s;
+  std::string where = "narrow_phase";
+  {
+    py::gil_scoped_release release;
+    const runtime::NarrowPhaseModel* model = nullptr;
+    s = self.model->Narrow(kind, &model);
+    if (runtime::Failed(s)) where = "narrow_phase: the narrow phase's model (NarrowPhaseModel::Init)";
+    if (runtime::Succeeded(s) && !self.narrow[kind].made_for(*model)) {
+      s = self.narrow[kind].Init(*model);
+      if (runtime::Failed(s)) where = "narrow_phase: NarrowPhaseWorkspace::Init";
+    }
+    if (runtime::Succeeded(s)) {
+      // None: the skin's own definition when the asset carries it and every pair is searched, as `play
+      // --narrow-phase` does; else the asset's exclusions.
+      if (exclusion.empty()) exclusion = model->has_crease() && !job.sphere_pairs ? "crease" : "asset";
+      job.exclusions = exclusion == "crease" ? runtime::Exclusions::kCrease
+                       : exclusion == "none" ? runtime::Exclusions::kNone
+                                             : runtime::Exclusions::kAsset;
+      job.model = model;
+      job.workspace = &self.narrow[kind];
+      job.count = &count;
+      job.stats = &stats;
+      if (self.contacts.empty()) self.contacts.resize(4096), self.depths.resize(4096);
+      for (;;) {  // grows the buffers on the rare frame that needs more (then a second run)
+        job.output = self.contacts.data();
+        job.capacity = uint32_t(self.contacts.size());
+        job.depths = job.exclusions == runtime::Exclusions::kCrease ? self.depths.data() : nullptr;
+        s = job.Run();
+        if (s != Status::kOkTruncated) break;
+        self.contacts.resize(size_t(stats.contacts) + stats.contacts / 4);
+        self.depths.resize(self.contacts.size());
+      }
+    }
+  }
+  if (runtime::Failed(s)) {
+    if (s == Status::kErrorVertexCount || s == Status::kErrorStride || s == Status::kErrorAlignment)
+      ThrowJob(s, "narrow_phase", positions.ptr(), self.model->model.vertex_count());
+    ThrowStatus(s, where + (s == Status::kErrorInvalidJob && job.sphere_pairs && job.exclusions == runtime::Exclusions::kCrease
+                                ? ": exclusions \"crease\" searches every pair (pairs must be None)"
+                                : ""));
+  }
+  PyArrayObject* result = NewRecords(ContactDtype(), count);
+  auto* o = static_cast<unsigned char*>(PyArray_DATA(result));
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const runtime::ContactDepth no_depth = {nan, {nan, nan, nan}};
+  for (uint32_t i = 0; i < count; ++i, o += sizeof(runtime::TriangleContact) + sizeof(runtime::ContactDepth)) {
+    std::memcpy(o, &self.contacts[i], sizeof(runtime::TriangleContact));
+    std::memcpy(o + sizeof(runtime::TriangleContact), job.depths ? &self.depths[i] : &no_depth, sizeof(runtime::ContactDepth));
+  }
+  return py::reinterpret_steal<py::object>(reinterpret_cast<PyObject*>(result));
+}
+
+py::object Spheres(PyWorkspace& self) {
+  Exclusive exclusive(self);
+  const runtime::SphereArrays s = self.ws.spheres();
+  const npy_intp shape[2] = {npy_intp(s.count), 4};
+  PyObject* a = PyArray_SimpleNew(2, const_cast<npy_intp*>(shape), NPY_FLOAT32);
+  if (!a) throw py::error_already_set();
+  auto* o = static_cast<float*>(PyArray_DATA(reinterpret_cast<PyArrayObject*>(a)));
+  for (uint32_t i = 0; i < s.count; ++i) o[4 * i] = s.x[i], o[4 * i + 1] = s.y[i], o[4 * i + 2] = s.z[i], o[4 * i + 3] = s.r[i];
+  return py::reinterpret_steal<py::object>(a);
+}
+
+std::unique_ptr<PyWorkspace> MakeWorkspace(const PyModel& model) {
+  auto w = std::make_unique<PyWorkspace>();
+  w->model = model.data;
+  if (const Status s = w->ws.Init(model.data->model); runtime::Failed(s)) ThrowStatus(s, "Workspace::Init");
+  w->pairs.resize(std::max<size_t>(1, std::max(model.data->bound[0], model.data->bound[1])));
+  return w;
+}
+
+// bench/python_bench.py's C++ rows: the same jobs on the same workspace and arrays, timed in C++ the way
+// bench/runtime_bench does (median over 5 rounds × frames of batches of `reps` calls, per call, µs; detect on
+// each frame's spheres, refitted before its batch).
+py::dict TimeJobs(PyWorkspace& self, const py::list& frames, const py::object& joint_frames, int reps) {
+  Exclusive exclusive(self);
+  std::vector<runtime::PositionsView> views;
+  for (const py::handle& f : frames) views.push_back(PositionsOf(f.ptr(), self.model->model.vertex_count()));
+  std::vector<const float*> joints;
+  if (!joint_frames.is_none())
+    for (const py::handle& f : joint_frames) {
+      PyObject* o = f.ptr();
+      if (!PyArray_Check(o) || PyArray_TYPE(reinterpret_cast<PyArrayObject*>(o)) != NPY_FLOAT32 ||
+          !PyArray_IS_C_CONTIGUOUS(reinterpret_cast<PyArrayObject*>(o)) ||
+          PyArray_SIZE(reinterpret_cast<PyArrayObject*>(o)) != npy_intp(12) * self.model->model.joint_count())
+        ThrowValue("joint_frames: float32 (#J, 3, 4) C-contiguous arrays; got " + DescribeArray(o));
+      joints.push_back(static_cast<const float*>(PyArray_DATA(reinterpret_cast<PyArrayObject*>(o))));
+    }
+  if (views.empty() || reps <= 0) ThrowValue("frames: at least one; reps > 0");
+  runtime::RefitJob refit;
+  refit.model = &self.model->model;
+  refit.workspace = &self.ws;
+  uint32_t count = 0;
+  runtime::DetectJob detect;
+  detect.model = &self.model->model;
+  detect.workspace = &self.ws;
+  detect.output = self.pairs.data();
+  detect.capacity = uint32_t(self.pairs.size());
+  detect.count = &count;
+  volatile uint32_t sink = 0;
+  auto median = [&](size_t frame_count, auto&& prepare, auto&& fn) {
+    std::vector<double> samples;
+    for (int round = 0; round < 5; ++round)
+      for (size_t f = 0; f < frame_count; ++f) {
+        prepare(f);
+        const auto t0 = std::chrono::steady_clock::now();
+        for (int r = 0; r < reps; ++r) fn(f);
+        const auto t1 = std::chrono::steady_clock::now();
+        samples.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count() / reps);
+      }
+    std::nth_element(samples.begin(), samples.begin() + samples.size() / 2, samples.end());
+    return samples[samples.size() / 2];
+  };
+  auto nothing = [](size_t) {};
+  auto refit_frame = [&](size_t f) {
+    refit.positions = views[f];
+    sink = sink + uint32_t(refit.Run());
+  };
+  double us[5] = {0, 0, 0, 0, -1};
+  {
+    py::gil_scoped_release release;
+    us[0] = median(views.size(), nothing, refit_frame);
+    for (int k = 0; k < 2; ++k) {
+      detect.method = k == 0 ? runtime::DetectMethod::kM1 : runtime::DetectMethod::kM2;
+      us[1 + k] = median(views.size(), refit_frame, [&](size_t) { sink = sink + uint32_t(detect.Run()) + count; });
+    }
+    detect.method = runtime::DetectMethod::kM1;
+    us[3] = median(views.size(), nothing, [&](size_t f) {
+      refit_frame(f);
+      sink = sink + uint32_t(detect.Run()) + count;
+    });
+    if (!joints.empty()) {
+      runtime::JointRefitJob jr;
+      jr.model = &self.model->model;
+      jr.workspace = &self.ws;
+      jr.joint_count = self.model->model.joint_count();
+      us[4] = median(joints.size(), nothing, [&](size_t f) {
+        jr.joint_matrices = joints[f];
+        sink = sink + uint32_t(jr.Run());
+      });
+    }
+  }
+  py::dict out;
+  out["refit"] = us[0];
+  out["detect_m1"] = us[1];
+  out["detect_m2"] = us[2];
+  out["refit_m1"] = us[3];
+  if (us[4] >= 0) out["refit_joints"] = us[4];
+  return out;
+}
+
+PyObject* RawRefit(PyObject* self, PyObject* const* args, Py_ssize_t nargs, PyObject* kwnames) {
+  return Guarded([&] {
+    static const char* const kNames[] = {"positions", "mode"};
+    PyObject* a[2];
+    ParseArgs("refit", kNames, 1, args, nargs, kwnames, a);
+    Refit(Self(self), a[0], a[1]);
+    Py_RETURN_NONE;
+  });
+}
+
+PyObject* RawRefitJoints(PyObject* self, PyObject* const* args, Py_ssize_t nargs, PyObject* kwnames) {
+  return Guarded([&] {
+    static const char* const kNames[] = {"matrices"};
+    PyObject* a[1];
+    ParseArgs("refit_joints", kNames, 1, args, nargs, kwnames, a);
+    RefitJoints(Self(self), a[0]);
+    Py_RETURN_NONE;
+  });
+}
+
+PyObject* RawDetect(PyObject* self, PyObject* const* args, Py_ssize_t nargs, PyObject* kwnames) {
+  return Guarded([&] {
+    static const char* const kNames[] = {"method", "margin", "fold_margin", "out"};
+    PyObject* a[4];
+    ParseArgs("detect", kNames, 0, args, nargs, kwnames, a);
+    return Detect(Self(self), a[0], a[1], a[2], a[3]);
+  });
+}
+
+}  // namespace
+
+void RegisterRuntime(py::module_& m) {
+  m.def("_time_jobs", &TimeJobs, py::arg("workspace"), py::arg("frames"), py::arg("joint_frames") = py::none(),
+        py::arg("reps") = 200,
+        "bench/python_bench.py's C++ row: RefitJob, DetectJob M1/M2 (and JointRefitJob) on `workspace` over the "
+        "frames, timed in C++ as bench/runtime_bench does; a dict of µs per call.");
+  py::class_<PyModel>(m, "Model", R"doc(
+What every character of one asset shares (runtime::Model): built once from an Asset, immutable, shared by
+any number of Workspaces and threads. Holds the asset's bytes alive. The narrow phase's model is built on
+the first Workspace.narrow_phase() call that needs it (NarrowPhaseModel::Init: slow with the crease rule).
+)doc")
+      .def(py::init([](const PyAsset& asset) {
+             auto data = std::make_shared<ModelData>();
+             data->asset = asset.Get();
+             Status s;
+             {
+               py::gil_scoped_release release;
+               s = data->model.Init(data->asset->view());
+             }
+             if (runtime::Failed(s)) ThrowStatus(s, "Model::Init");
+             data->bound[0] = runtime::DetectBound(data->asset->view(), runtime::DetectMethod::kM1);
+             data->bound[1] = runtime::DetectBound(data->asset->view(), runtime::DetectMethod::kM2);
+             return PyModel{std::move(data)};
+           }),
+           py::arg("asset"), "Builds the model of `asset` (an Asset). Raises StatusError (kErrorNullArgument for a "
+                             "closed asset, kErrorOutOfMemory).")
+      .def("workspace", &MakeWorkspace, R"doc(
+A new Workspace: one character's spheres (at the bind pose) and scratch, and the buffers its calls write.
+Allocates once (runtime Workspace::Init), and the narrow phase's scratch on its first use.
+)doc")
+      .def("detect_bound", [](const PyModel& self, const std::string& method) {
+             return self.data->bound[MethodOf(method) == runtime::DetectMethod::kM1 ? 0 : 1];
+           }, py::arg("method") = "m1",
+           "Most pairs Workspace.detect(method) can report (runtime DetectBound): an `out` array this long is never "
+           "truncated.")
+      .def_property_readonly("sphere_count", [](const PyModel& self) { return self.data->model.sphere_count(); }, "#S.")
+      .def_property_readonly("vertex_count", [](const PyModel& self) { return self.data->model.vertex_count(); },
+                             "#V: the rows the positions must have.")
+      .def_property_readonly("joint_count", [](const PyModel& self) { return self.data->model.joint_count(); },
+                             "#J: the matrices refit_joints() takes; 0 when the asset has no joint weights.")
+      .def_property_readonly("chain_count", [](const PyModel& self) { return self.data->model.chain_count(); }, "Chains.")
+      .def_property_readonly("contact_margin", [](const PyModel& self) { return self.data->model.contact_margin(); },
+                             "The asset's contact margin [source units]: what detect() grows every radius by by default.")
+      .def_property_readonly("fold_margin", [](const PyModel& self) -> py::object {
+             const float f = self.data->model.fold_margin();
+             return f < 0.0f ? py::object(py::none()) : py::object(py::float_(f));
+           }, "The asset's fold margin [source units] (pairs of one region), or None when it has none.");
+
+  py::class_<PyWorkspace, std::unique_ptr<PyWorkspace>> workspace(m, "Workspace", py::is_final(), R"doc(
+One character's state for a Model (runtime::Workspace): its current spheres and the scratch of the
+per-frame calls. Made by Model.workspace(). One call at a time (a second thread gets RuntimeError): use one
+Workspace per thread. Every call releases the GIL while the runtime runs.
+)doc");
+  workspace
+      .def("narrow_phase", &NarrowPhase, py::arg("positions"), py::arg("exclusions") = py::none(),
+           py::arg("pairs") = py::none(), py::arg("regions") = "surrounding", py::arg("crease") = py::none(), R"doc(
+The exact triangle self-contacts of the deformed mesh (runtime NarrowPhaseJob).
+
+positions: as refit() (float32 (#V, 3), strided rows).
+exclusions: "crease" (the skin's own definition: every intersecting pair not near on the bind surface;
+    needs an asset baked with the crease rule), "asset" (pairs of different spheres, not an excluded pair),
+    "none" (any two spheres); None: "crease" when the asset has the rule and `pairs` is None, else "asset".
+pairs: None (search every pair: the exact answer) or PAIR_DTYPE records from detect() to search behind.
+regions: "surrounding" or "reach" (the triangles behind a sphere; "reach" finds more behind `pairs`).
+crease: the fold distance [source units] of a "crease" search; None: the asset's.
+Returns a new numpy.ndarray of dtype CONTACT_DTYPE: triangle_a, triangle_b (uint32, source triangle indices),
+sphere_a, sphere_b (uint16 owners, 0xFFFF for an unassigned triangle), depth (float32, source units) and
+direction (3 float32, unit) of the separating-axis push — NaN unless exclusions is "crease".
+Raises ValueError, StatusError (kErrorVertexCount, kErrorNonFinitePositions: a vertex of a surrounding region
+is NaN or inf; kErrorMissingField: "crease" on an asset without the rule; kErrorInvalidJob).
+Cost: the runtime's narrow phase (docs/performance.md); the first call builds the narrow phase's model and
+scratch, and each call allocates the returned array.
+)doc")
+      .def("reset", [](PyWorkspace& self) {
+             Exclusive exclusive(self);
+             if (const Status s = self.ws.ResetToBindPose(self.model->model); runtime::Failed(s)) ThrowStatus(s, "reset");
+           }, "Puts the spheres back at the bind pose.")
+      .def_property_readonly("spheres", &Spheres, R"doc(
+The current spheres: a new numpy.ndarray float32, shape (#S, 4), rows (x, y, z, r) [source units, the space
+of the positions last refitted; the bind pose after reset()]. A copy (the runtime keeps them as four arrays).
+)doc")
+      .def_property_readonly("model", [](const PyWorkspace& self) { return PyModel{self.model}; },
+                             "The Model this workspace was made for.");
+
+  // The per-frame methods: plain CPython methods (see RawRefit), documented with a text signature.
+  static const std::string refit_doc = std::string("refit($self, /, positions, mode='frame')\n--\n") + R"doc(
+Refits the spheres to the deformed vertex positions (runtime RefitJob, paper §5.1), read in place.
+
+positions: numpy.ndarray float32, shape (#V, 3) [source units, the asset's model space or any rigid motion
+    of it]: x, y, z contiguous in a row (strides[1] == 4), any positive row stride — a C-contiguous array or
+    a column slice of an interleaved vertex buffer (e.g. buffer[:, 0:3] of a (#V, 8) float32 array). No copy.
+mode: "frame" (default: the pivot frame, exact under rigid motion) or "paper" (the paper's translation).
+Raises ValueError (not such an array: dtype, shape and strides named), StatusError kErrorVertexCount (#V
+wrong), kErrorAlignment, kErrorStride, kErrorNonFinitePositions (a position the refit reads is NaN or
+infinite: the spheres are then not finite).
+Cost: the runtime's refit and a finiteness check of the spheres; no allocation (docs/performance.md#python).
+)doc";
+  static const std::string refit_joints_doc = std::string("refit_joints($self, /, matrices)\n--\n") + R"doc(
+Refits the spheres from the joint skinning matrices (runtime JointRefitJob): each centre skinned like a
+vertex by its four joint weights, radii as baked.
+
+matrices: numpy.ndarray float32, shape (#J, 3, 4), C-contiguous: per joint the top three rows of its
+    skinning matrix (joint's model transform × inverse bind), row-major, in the skin's joint order.
+Raises ValueError (not such an array), StatusError kErrorJointCount (#J wrong), kErrorMissingField (no joint
+weights in the asset), kErrorNonFiniteJoints (a matrix holds NaN or inf: spheres untouched).
+)doc";
+  static const std::string detect_doc = std::string("detect($self, /, method='m1', margin=None, fold_margin=None, out=None)\n--\n") + R"doc(
+The overlapping, non-adjacent sphere pairs of the current spheres (runtime DetectJob, paper §5.2).
+
+method: "m1" (pairs within each chain) or "m2" (every pair).
+margin, fold_margin: contact margins [source units, >= 0]; None: the asset's (Model.contact_margin,
+    Model.fold_margin).
+out: None — returns a new numpy.ndarray of dtype PAIR_DTYPE (a uint16, b uint16, depth float32 [source
+    units: rA + rB − |cA − cB|], chains uint32 bitmask), one record per pair (allocates it);
+    or a writable 1-D array of PAIR_DTYPE — the pairs are written into it and the call returns their total
+    count n (an int; out[:min(n, len(out))] hold them; n > len(out) means truncated: size it with
+    Model.detect_bound(method)). Order: runtime's (M1 by chain, M2 by (a, b)).
+Raises ValueError (unknown method, negative margin, bad out), StatusError kErrorInvalidJob (NaN margin, a
+fold margin on an asset without one).
+)doc";
+  static PyMethodDef methods[] = {
+      {"refit", reinterpret_cast<PyCFunction>(reinterpret_cast<void (*)()>(RawRefit)), METH_FASTCALL | METH_KEYWORDS,
+       refit_doc.c_str()},
+      {"refit_joints", reinterpret_cast<PyCFunction>(reinterpret_cast<void (*)()>(RawRefitJoints)),
+       METH_FASTCALL | METH_KEYWORDS, refit_joints_doc.c_str()},
+      {"detect", reinterpret_cast<PyCFunction>(reinterpret_cast<void (*)()>(RawDetect)), METH_FASTCALL | METH_KEYWORDS,
+       detect_doc.c_str()},
+  };
+  for (PyMethodDef& def : methods) {
+    PyObject* descriptor = PyDescr_NewMethod(reinterpret_cast<PyTypeObject*>(workspace.ptr()), &def);
+    if (!descriptor) throw py::error_already_set();
+    workspace.attr(def.ml_name) = py::reinterpret_steal<py::object>(descriptor);
+  }
+}
+
+}  // namespace spherechain::python

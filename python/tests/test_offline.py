@@ -1,0 +1,121 @@
+"""The offline side against the CLI, on the repository's own inputs (no shared data): bake() gives the CLI's
+bytes for the same input, configuration and options; info() is `inspect --json`; save/load round trips;
+the arrays view what info() counts; the bake report and the log lines."""
+import json
+import logging
+
+import numpy as np
+import pytest
+
+import spherechain
+from conftest import BOXES, CREATURE, FAST, SOURCE_DIR, cli, load_json
+
+LIMBS_DETACHED = SOURCE_DIR / "tests" / "data" / "implausible" / "limbs_detached.json"
+
+
+@pytest.fixture(scope="module")
+def baked(tmp_path_factory):
+    """The creature baked by Python (config dict) and by the CLI (--config file), and the CLI's report."""
+    work = tmp_path_factory.mktemp("baked")
+    (work / "fast.json").write_text(json.dumps(FAST))
+    cli("bake", CREATURE, "-o", work / "cli.sphc", "--config", work / "fast.json", "--report", work / "cli.json")
+    asset = spherechain.bake(CREATURE, FAST)
+    return work, asset
+
+
+def test_bake_gives_the_cli_bytes(baked):
+    work, asset = baked
+    assert asset.to_bytes() == (work / "cli.sphc").read_bytes()
+    assert asset.path is None
+    # The configuration as a file path, as the CLI takes it: the same bytes.
+    assert spherechain.bake(str(CREATURE), work / "fast.json").to_bytes() == asset.to_bytes()
+
+
+def test_bake_options_give_the_cli_bytes(tmp_path):
+    # region_map + force (an implausible body written anyway) through ApplyBakeOptions on both sides.
+    cli("bake", BOXES, "-o", tmp_path / "cli.sphc", "--region-map", LIMBS_DETACHED, "--force")
+    asset = spherechain.bake(BOXES, region_map=LIMBS_DETACHED, force=True)
+    assert asset.to_bytes() == (tmp_path / "cli.sphc").read_bytes()
+    assert asset.info()["forced_findings"], "the forced findings are in the asset"
+    # An option overrides the configuration's key: regions "paper" over a config saying "extended".
+    paper = spherechain.bake(BOXES, {"regions": "extended"}, region_map=LIMBS_DETACHED, force=True, regions="paper")
+    cli("bake", BOXES, "-o", tmp_path / "paper.sphc", "--region-map", LIMBS_DETACHED, "--force", "--regions", "paper")
+    assert paper.to_bytes() == (tmp_path / "paper.sphc").read_bytes()
+
+
+def test_info_is_inspect_json(baked):
+    work, asset = baked
+    inspected = json.loads(cli("inspect", work / "cli.sphc", "--json").stdout)
+    assert asset.info() == inspected
+    assert spherechain.load(work / "cli.sphc").info() == inspected
+
+
+def test_save_and_load_round_trip(baked, tmp_path):
+    _, asset = baked
+    path = tmp_path / "saved.sphc"
+    asset.save(path)
+    assert asset.path == str(path)
+    assert path.read_bytes() == asset.to_bytes()
+    loaded = spherechain.load(str(path))
+    assert loaded.path == str(path) and loaded.to_bytes() == asset.to_bytes()
+    for source in (asset.to_bytes(), bytearray(asset.to_bytes()), memoryview(asset.to_bytes()),
+                   np.frombuffer(asset.to_bytes(), dtype=np.uint8)):
+        from_bytes = spherechain.load(source)
+        assert from_bytes.path is None and from_bytes.to_bytes() == asset.to_bytes()
+    assert "spheres" in repr(loaded) and str(path) in repr(loaded)
+
+
+def test_arrays_view_what_info_counts(baked):
+    _, asset = baked
+    info = asset.info()
+    S, V, T = asset.sphere_count, asset.vertex_count, asset.triangle_count
+    assert (S, V, T) == (info["spheres"], info["vertices"], info["triangles"])
+    spheres = asset.bind_spheres
+    assert spheres.dtype == np.float32 and spheres.shape == (S, 4)
+    assert not spheres.flags.writeable and (spheres[:, 3] > 0).all()
+    regions, tri_regions = asset.sphere_regions, asset.triangle_regions
+    assert regions.dtype == np.uint8 and regions.shape == (S,)
+    assert tri_regions.dtype == np.uint8 and tri_regions.shape == (T,)
+    names = asset.region_names
+    assert names == list(info["regions"].keys()) or sorted(names) == sorted(info["regions"].keys())
+    for k, name in enumerate(names):
+        assert int((regions == k).sum()) == info["regions"][name]["spheres"], name
+        assert int((tri_regions == k).sum()) == info["regions"][name]["triangles"], name
+    bind = asset.bind_positions
+    assert bind.dtype == np.float32 and bind.shape == (V, 3) and not bind.flags.writeable
+    assert asset.schema_version == info["schema_version"] and asset.joint_count == info["joint_refit"]["joints"]
+    assert asset.chain_count == len(info["chains"])
+
+
+def test_views_keep_the_bytes_alive(baked):
+    _, asset = baked
+    copy = spherechain.load(asset.to_bytes())
+    spheres, expected = copy.bind_spheres, copy.bind_spheres.copy()
+    copy.close()
+    del copy
+    import gc
+    gc.collect()
+    np.testing.assert_array_equal(spheres, expected)
+
+
+def test_report_is_the_cli_report(baked):
+    work, asset = baked
+    cli_report, report = load_json(work / "cli.json"), asset.report
+    for r in (cli_report, report):
+        r.pop("timings_ms")
+    assert report == cli_report
+    assert spherechain.load(work / "cli.sphc").report is None
+
+
+def test_bake_logs_to_the_spherechain_logger(caplog):
+    with caplog.at_level(logging.DEBUG, logger="spherechain"):
+        spherechain.bake(CREATURE, FAST)
+    assert any(r.name == "spherechain" for r in caplog.records)
+
+
+def test_version_and_dtypes():
+    assert spherechain.__version__ == "0.1.0"
+    assert spherechain.SCHEMA_VERSION >= 4
+    assert spherechain.PAIR_DTYPE.itemsize == 12 and spherechain.PAIR_DTYPE.names == ("a", "b", "depth", "chains")
+    assert spherechain.CONTACT_DTYPE.itemsize == 28
+    assert spherechain.CONTACT_DTYPE.names == ("triangle_a", "triangle_b", "sphere_a", "sphere_b", "depth", "direction")
