@@ -99,7 +99,7 @@ int RunBake(const BakeArgs& a) {
   // Everything is in memory; write each output atomically (a failure leaves no partial file).
   if (auto s = import::WriteFileAtomic(a.output, r.asset.data(), r.asset.size()); !s.ok()) return Fail(s.error());
   if (!a.report.empty()) {
-    const std::string text = baker::MakeBakeReport(r, config, ctx).dump(2) + "\n";
+    const std::string text = JsonText(baker::MakeBakeReport(r, config, ctx)) + "\n";
     if (auto s = import::WriteFileAtomic(a.report, text); !s.ok()) return Fail(s.error());
   }
   if (!a.ray_csv.empty())

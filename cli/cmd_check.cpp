@@ -336,7 +336,7 @@ int RunCheck(const CheckArgs& a) {
 
   // ---- the reports (each written whole, atomically) ---------------------------------------------------
   if (!a.json.empty()) {
-    if (auto s = import::WriteFileAtomic(a.json, evaluate::CheckReportJson(r).dump(2) + "\n"); !s.ok())
+    if (auto s = import::WriteFileAtomic(a.json, JsonText(evaluate::CheckReportJson(r)) + "\n"); !s.ok())
       return BadInput(s.error().message);
     Out("wrote %s\n", a.json.c_str());
   }

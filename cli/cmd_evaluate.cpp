@@ -69,7 +69,7 @@ int RunEvaluate(const EvaluateArgs& a) {
   if (!Quiet()) std::fputs(e.text.c_str(), stdout);
   if (e.png_frame >= 0) Out("wrote %s (frame %d)\n", a.png.c_str(), e.png_frame);
   if (!a.json.empty()) {
-    if (auto s = import::WriteFileAtomic(a.json, e.report.dump(2) + "\n"); !s.ok()) return Fail(s.error());
+    if (auto s = import::WriteFileAtomic(a.json, JsonText(e.report) + "\n"); !s.ok()) return Fail(s.error());
     Out("wrote %s\n", a.json.c_str());
   }
   if (!std::isnan(a.min_recall)) {

@@ -22,7 +22,7 @@ int RunInspect(const InspectArgs& args) {
   if (!LoadAssetFile(args.asset, &asset, &error)) return Fail(error);
   const nlohmann::json j = evaluate::DescribeAsset(asset.view);
   if (args.json) {
-    std::printf("%s\n", j.dump(2).c_str());
+    std::printf("%s\n", JsonText(j).c_str());
     return 0;
   }
   std::printf("%s: spherechain asset, schema v%u, %zu bytes (%s)\n", args.asset.c_str(), j["schema_version"].get<unsigned>(),

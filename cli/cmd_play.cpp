@@ -232,7 +232,7 @@ int RunPlay(const PlayArgs& a) {
                     {"mean_detect_m1_us", sum.mean_detect_m1_us},
                     {"mean_detect_m2_us", sum.mean_detect_m2_us},
                     {"regions_touching_frames", rf}};
-    const std::string text = j.dump(2) + "\n";
+    const std::string text = JsonText(j) + "\n";
     if (auto s = import::WriteFileAtomic(a.json, text); !s.ok()) return Fail(s.error());
     Out("wrote %s\n", a.json.c_str());
   }

@@ -38,7 +38,7 @@ int RunValidate(const ValidateArgs& a) {
       j["findings"].push_back({{"code", f.code}, {"severity", playback::ToString(f.severity)},
                                {"location", f.location.ToString()}, {"where", where}, {"message", f.message}});
     }
-    if (auto s = import::WriteFileAtomic(a.json, j.dump(2) + "\n"); !s.ok()) return Fail(s.error());
+    if (auto s = import::WriteFileAtomic(a.json, JsonText(j) + "\n"); !s.ok()) return Fail(s.error());
   }
   return errors ? 1 : 0;
 }

@@ -1,5 +1,6 @@
 #include "commands.h"
 
+#include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
 #include <cstdarg>
@@ -16,6 +17,10 @@ void Register(CLI::App& app, Commands* commands) {
   RegisterEvaluate(app, commands);
   RegisterView(app, commands);
   RegisterCheck(app, commands);
+}
+
+std::string JsonText(const nlohmann::json& j, int indent) {
+  return j.dump(indent, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
 int Dispatch(const Commands& commands) {

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include <CLI/CLI.hpp>
+#include <nlohmann/json_fwd.hpp>
 
 #include "spherechain/import/types.h"
 #include "spherechain/playback/debug_export.h"
@@ -29,6 +30,11 @@ void RegisterValidate(CLI::App& app, Commands* commands);
 void RegisterEvaluate(CLI::App& app, Commands* commands);
 void RegisterView(CLI::App& app, Commands* commands);
 void RegisterCheck(CLI::App& app, Commands* commands);
+
+/// `j` as text (`indent` < 0: one line). Strings that are not valid UTF-8 (names from a mesh file or an asset
+/// are bytes as the file had them) come out with U+FFFD in place of the bad bytes, where nlohmann::json would
+/// throw.
+std::string JsonText(const nlohmann::json& j, int indent = 2);
 
 /// A import::Context whose log lines go to spdlog.
 import::Context MakeLoggingContext();

@@ -1,6 +1,8 @@
 // spherechain CLI — what `view` needs to embed a page and its data in one HTML file (html_embed.h).
 #include "html_embed.h"
 
+#include "commands.h"
+
 #include <fstream>
 #include <sstream>
 #include <vector>
@@ -65,7 +67,7 @@ std::string Base64(const void* data, size_t size) {
 
 
 std::string ScriptSafeJson(const nlohmann::json& j) {
-  std::string s = j.dump();
+  std::string s = JsonText(j, -1);
   std::string out;
   out.reserve(s.size());
   for (size_t i = 0; i < s.size(); ++i) {

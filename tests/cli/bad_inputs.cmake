@@ -37,3 +37,27 @@ expect_failure(bad_config "penetration_depth" bake ${WORK}/cube.obj -o ${WORK}/o
 expect_failure(inspect_missing "nothing.sphc" inspect ${WORK}/nothing.sphc)
 expect_failure(inspect_garbage "not_an_asset.sphc" inspect ${WORK}/not_an_asset.sphc)
 expect_failure(no_output_folder "folder|exist" bake ${WORK}/cube.obj -o ${WORK}/no/such/dir/out.sphc)
+
+# Names are bytes as the mesh file had them: an asset whose bone name is not valid UTF-8 (one byte of the
+# golden creature's "ForeLeg_R_01" set to 0xFF; the verifier does not check UTF-8) is still described, the
+# bad byte shown as U+FFFD (the JSON library would otherwise throw and abort the process).
+find_program(PYTHON NAMES python3 PATHS /usr/bin NO_DEFAULT_PATH)
+if(NOT PYTHON)
+  find_program(PYTHON NAMES python3)
+endif()
+execute_process(COMMAND ${PYTHON} -c "import sys; d = bytearray(open(sys.argv[1], 'rb').read()); i = d.find(b'ForeLeg_R_01'); assert i > 0; d[i] = 0xFF; open(sys.argv[2], 'wb').write(d)"
+                        ${GOLDEN} ${WORK}/bad_utf8.sphc RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "could not write bad_utf8.sphc from ${GOLDEN}")
+endif()
+foreach(json "" "--json")
+  execute_process(COMMAND ${CLI} inspect ${WORK}/bad_utf8.sphc ${json} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "inspect ${json} of a name that is not UTF-8: exit ${rc}\n${out}${err}")
+  endif()
+endforeach()
+string(FIND "${out}" "�oreLeg_R_01" at)  # U+FFFD (UTF-8 EF BF BD), then the rest of the name
+if(at LESS 0)
+  message(FATAL_ERROR "inspect --json: the bad byte is not shown as U+FFFD:\n${out}")
+endif()
+message(STATUS "inspect of a name that is not UTF-8: exit 0, shown as U+FFFD")
