@@ -158,6 +158,22 @@ void CreaseScratch::Search(const CreaseGraph& g, const uint32_t t[3], float crea
   }
 }
 
+// The edges of node n, settled at distance d: each neighbour that gets nearer than both its distance and the
+// crease takes the new distance, is recorded as touched, and is pushed (push(distance, node)); false as soon
+// as push refuses.
+template <class Push>
+bool CreaseScratch::Relax(const CreaseGraph& g, uint32_t n, float d, float crease, Push&& push) {
+  for (uint32_t i = g.offsets_[n]; i < g.offsets_[n + 1]; ++i) {
+    const uint32_t m = g.adj_[i];
+    const float nd = d + g.length_[i];
+    if (!(nd < crease) || !(nd < dist_[m])) continue;
+    if (dist_[m] == kInf && !ring_[m]) touched_.push_back(m);
+    dist_[m] = nd;
+    if (!push(nd, m)) return false;
+  }
+  return true;
+}
+
 // Bounded Dijkstra (Dijkstra 1959) from the nodes at distance 0, every node closer than `crease` settled,
 // on a bucket queue (Dial 1969): 256 buckets of crease / 256, entries chained in entries_ / next_. A node
 // is relaxed from its bucket in any order within it; a relaxation into the same bucket (an edge shorter
@@ -181,16 +197,13 @@ bool CreaseScratch::Buckets(const CreaseGraph& g, float crease) {
       const uint32_t n = static_cast<uint32_t>(entries_[e]);
       const float d = KeyDistance(entries_[e]);
       if (d > dist_[n]) continue;  // stale
-      for (uint32_t i = g.offsets_[n]; i < g.offsets_[n + 1]; ++i) {
-        const uint32_t m = g.adj_[i];
-        const float nd = d + g.length_[i];
-        if (!(nd < crease) || !(nd < dist_[m])) continue;
-        if (dist_[m] == kInf && !ring_[m]) touched_.push_back(m);
-        dist_[m] = nd;
+      const bool room = Relax(g, n, d, crease, [&](float nd, uint32_t m) {
         if (used == capacity) return false;
         const uint32_t to = std::max(b, std::min(kBuckets - 1, static_cast<uint32_t>(nd / width)));
         entries_[used] = Key(nd, m), next_[used] = head_[to], head_[to] = used++;
-      }
+        return true;
+      });
+      if (!room) return false;
     }
   return true;
 }
@@ -207,17 +220,13 @@ void CreaseScratch::Heap(const CreaseGraph& g, float crease) {
     const uint32_t n = static_cast<uint32_t>(key);
     const float d = KeyDistance(key);
     if (d > dist_[n]) continue;  // stale
-    for (uint32_t i = g.offsets_[n]; i < g.offsets_[n + 1]; ++i) {
-      const uint32_t m = g.adj_[i];
-      const float nd = d + g.length_[i];
-      if (!(nd < crease) || !(nd < dist_[m])) continue;
-      if (dist_[m] == kInf && !ring_[m]) touched_.push_back(m);
-      dist_[m] = nd;
+    Relax(g, n, d, crease, [&](float nd, uint32_t m) {
       if (heap_.size() < heap_.capacity()) {
         heap_.push_back(Key(nd, m));
         std::push_heap(heap_.begin(), heap_.end(), std::greater<uint64_t>());
       }
-    }
+      return true;
+    });
   }
 }
 

@@ -87,36 +87,29 @@ void CheckEveryVertex(const st::Mesh& mesh, float crease, size_t bucket_entries 
   MESSAGE(mesh.vertex_count() << " sources, " << total / mesh.vertex_count() << " near nodes on average");
 }
 
+st::Mesh TubeMesh(uint32_t rings, uint32_t sides, float spacing, float radius) {
+  st::Mesh mesh;
+  st::Tube tube;
+  tube.rings = rings;
+  tube.sides = sides;
+  tube.spacing = spacing;
+  tube.radius = radius;
+  (void)st::MakeTubes({tube}, {}, &mesh);
+  return mesh;
+}
+
 }  // namespace
 
 TEST_CASE("crease rule: the bucketed search equals a textbook Dijkstra on every vertex") {
   SUBCASE("a tube, crease of a few rings") {
-    st::Mesh mesh;
-    st::Tube tube;
-    tube.rings = 24;
-    tube.sides = 12;
-    tube.spacing = 0.6f;
-    (void)st::MakeTubes({tube}, {}, &mesh);
+    const st::Mesh mesh = TubeMesh(24, 12, 0.6f, 1.0f);
     CheckEveryVertex(mesh, 3.0f);
     CheckEveryVertex(mesh, 1.0f);
   }
   SUBCASE("a fine tube: edges far shorter than a bucket of the crease (relaxations within one bucket)") {
-    st::Mesh mesh;
-    st::Tube tube;
-    tube.rings = 40;
-    tube.sides = 16;
-    tube.radius = 0.01f;
-    tube.spacing = 0.002f;
-    (void)st::MakeTubes({tube}, {}, &mesh);
-    CheckEveryVertex(mesh, 0.5f);  // the whole tube within the crease of every vertex
+    CheckEveryVertex(TubeMesh(40, 16, 0.002f, 0.01f), 0.5f);  // the whole tube within the crease of every vertex
   }
   SUBCASE("the binary heap the search falls back to when the bucket queue's entries run out") {
-    st::Mesh mesh;
-    st::Tube tube;
-    tube.rings = 24;
-    tube.sides = 12;
-    tube.spacing = 0.6f;
-    (void)st::MakeTubes({tube}, {}, &mesh);
-    CheckEveryVertex(mesh, 3.0f, 8);  // 8 entries: every search with more than a few nodes falls back
+    CheckEveryVertex(TubeMesh(24, 12, 0.6f, 1.0f), 3.0f, 8);  // 8 entries: every search with more than a few nodes falls back
   }
 }

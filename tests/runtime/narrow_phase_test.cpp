@@ -121,6 +121,25 @@ std::vector<float> Fold(const st::Mesh& mesh, const st::Tube& tube, uint32_t ben
   return out;
 }
 
+// The skin's contacts by brute force: every pair of triangles of `d` that share no welded corner, intersect at
+// `pos` (#V×3) and are not near on `graph` at `crease`.
+std::set<std::pair<uint32_t, uint32_t>> SkinContactsBruteForce(const st::AssetData& d, const std::vector<float>& pos,
+                                                                const rt::CreaseGraph& graph, float crease) {
+  std::set<std::pair<uint32_t, uint32_t>> truth;
+  rt::CreaseScratch scratch;
+  REQUIRE(scratch.Init(graph) == rt::Status::kOk);
+  auto vtx = [&](uint32_t t, int k) { return &pos[3 * size_t{d.triangles[3 * t + k]}]; };
+  for (uint32_t t = 0; t < d.triangle_count; ++t)
+    for (uint32_t u = t + 1; u < d.triangle_count; ++u) {
+      bool shared = false;
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) shared |= d.weld_ids[d.triangles[3 * t + a]] == d.weld_ids[d.triangles[3 * u + b]];
+      if (shared || !rt::TrianglesIntersect(vtx(t, 0), vtx(t, 1), vtx(t, 2), vtx(u, 0), vtx(u, 1), vtx(u, 2))) continue;
+      if (!scratch.Near(graph, &d.triangles[3 * size_t{t}], &d.triangles[3 * size_t{u}], crease)) truth.insert({t, u});
+    }
+  return truth;
+}
+
 }  // namespace
 
 TEST_CASE("narrow phase: two crossing tubes touch where they cross, and equal brute force") {
@@ -469,19 +488,7 @@ TEST_CASE("narrow phase, crease rule: a bent tube's fold is not a contact, its e
   };
   for (const auto& c : RunJob(&ctx, elbow, rt::Exclusions::kNone).contacts)
     CHECK(geodesic(c.triangle_a, c.triangle_b) < 3.0 + 1.2);  // the elbow's pairs: within the crease
-  std::set<std::pair<uint32_t, uint32_t>> truth;
-  rt::CreaseScratch scratch;
-  REQUIRE(scratch.Init(ctx.model.crease_graph()) == rt::Status::kOk);
-  auto vtx = [&](uint32_t t, int k) { return &hairpin[3 * size_t{d.triangles[3 * t + k]}]; };
-  for (uint32_t t = 0; t < d.triangle_count; ++t)
-    for (uint32_t u = t + 1; u < d.triangle_count; ++u) {
-      bool shared = false;
-      for (int a = 0; a < 3; ++a)
-        for (int b = 0; b < 3; ++b) shared |= d.weld_ids[d.triangles[3 * t + a]] == d.weld_ids[d.triangles[3 * u + b]];
-      if (shared || !rt::TrianglesIntersect(vtx(t, 0), vtx(t, 1), vtx(t, 2), vtx(u, 0), vtx(u, 1), vtx(u, 2))) continue;
-      if (!scratch.Near(ctx.model.crease_graph(), &d.triangles[3 * size_t{t}], &d.triangles[3 * size_t{u}], 3.0f))
-        truth.insert({t, u});
-    }
+  const std::set<std::pair<uint32_t, uint32_t>> truth = SkinContactsBruteForce(d, hairpin, ctx.model.crease_graph(), 3.0f);
   std::set<std::pair<uint32_t, uint32_t>> found;
   for (size_t i = 0; i < contacts.size(); ++i) {
     const auto& c = contacts[i];
@@ -573,21 +580,12 @@ TEST_CASE("narrow phase, crease rule: two tubes joined by a long bridge are far 
   for (uint32_t v = a.rings * a.sides; v < tube_vertices; ++v) pressed[3 * size_t{v} + 1] -= 0.5f;
   const Run r = RunJob(&ctx, pressed, rt::Exclusions::kCrease);
   REQUIRE(r.status == rt::Status::kOk);
-  std::set<std::pair<uint32_t, uint32_t>> found, truth;
+  std::set<std::pair<uint32_t, uint32_t>> found;
   for (const auto& c : r.contacts) {
     found.insert({std::min(c.triangle_a, c.triangle_b), std::max(c.triangle_a, c.triangle_b)});
     CHECK(((on_a(c.triangle_a) && on_b(c.triangle_b)) || (on_b(c.triangle_a) && on_a(c.triangle_b))));
   }
-  auto vtx = [&](uint32_t t, int k) { return &pressed[3 * size_t{mesh.triangles[3 * t + k]}]; };
-  for (uint32_t t = 0; t < mesh.triangle_count(); ++t)
-    for (uint32_t u = t + 1; u < mesh.triangle_count(); ++u) {
-      bool shared = false;
-      for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) shared |= mesh.triangles[3 * t + i] == mesh.triangles[3 * u + j];
-      if (shared || !rt::TrianglesIntersect(vtx(t, 0), vtx(t, 1), vtx(t, 2), vtx(u, 0), vtx(u, 1), vtx(u, 2))) continue;
-      if (!scratch.Near(ctx.model.crease_graph(), &mesh.triangles[3 * size_t{t}], &mesh.triangles[3 * size_t{u}], 3.0f))
-        truth.insert({t, u});
-    }
+  const std::set<std::pair<uint32_t, uint32_t>> truth = SkinContactsBruteForce(d, pressed, ctx.model.crease_graph(), 3.0f);
   CHECK(!found.empty());
   CHECK(found == truth);
   CHECK(found.size() == r.contacts.size());

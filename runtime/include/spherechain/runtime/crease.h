@@ -110,6 +110,8 @@ class CreaseScratch {
 
   void Search(const CreaseGraph& graph, const uint32_t t[3], float crease);
   bool Buckets(const CreaseGraph& graph, float crease);
+  template <class Push>
+  bool Relax(const CreaseGraph& graph, uint32_t n, float d, float crease, Push&& push);
   void Heap(const CreaseGraph& graph, float crease);
 
   static constexpr uint32_t kBuckets = 256, kNil = ~0u;
