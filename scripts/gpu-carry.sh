@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Prepares .carry/ (git-ignored) for the GPU machine, which has CMake, nvcc and a compiler but no
 # package registry: the FlatBuffers and doctest headers from this machine's Debian packages, doctest's
-# CMake package made relocatable, and baked MakeHuman / CesiumMan assets plus MakeHuman's body mesh
-# for the CPU == GPU tests and the bench. Run it here, then on the GPU machine (device tool, carry
+# CMake package made relocatable, baked MakeHuman / CesiumMan / BCN_Epileptic assets with their recorded
+# frames (positions and joint matrices) plus MakeHuman's body mesh, for the CPU == GPU tests and the bench. Run it here, then on the GPU machine (device tool, carry
 # [".carry"]):
 #   FLATBUFFERS_INCLUDE_DIR=$PWD/.carry/include cmake --preset cuda -DSPHERECHAIN_BUILD_BENCH=ON \
 #     -Ddoctest_DIR=$PWD/.carry/lib/cmake/doctest -DSPHERECHAIN_SHARED_DATA_DIR=$PWD/.carry/data &&
@@ -23,8 +23,11 @@ cp $data/makehuman/base.obj $data/makehuman/default.mhskel $data/makehuman/defau
 cp $data/gltf/CesiumMan.gltf .carry/data/gltf/
 "$cli" -q bake $data/makehuman/base.obj -o .carry/mh.sphc >/dev/null
 "$cli" -q bake $data/gltf/CesiumMan.gltf -o .carry/cesiumman.sphc >/dev/null
-mkdir -p .carry/frames/mh .carry/frames/cesiumman
+bcn=/usr/share/assimp/models/X/BCN_Epileptic.X  # Debian's assimp-testmodels
+"$cli" -q bake $bcn -o .carry/bcn.sphc >/dev/null
+mkdir -p .carry/frames/mh .carry/frames/cesiumman .carry/frames/bcn
 "$cli" -q play .carry/mh.sphc --mesh $data/makehuman/base.obj --repeat 1 --dump-frames .carry/frames/mh >/dev/null
 "$cli" -q play .carry/cesiumman.sphc --mesh $data/gltf/CesiumMan.gltf --repeat 1 --dump-frames .carry/frames/cesiumman >/dev/null
-echo "then, on the GPU machine, add: SPHERECHAIN_GPU_FRAMES=\"\$PWD/.carry/mh.sphc=\$PWD/.carry/frames/mh;\$PWD/.carry/cesiumman.sphc=\$PWD/.carry/frames/cesiumman\""
+"$cli" -q play .carry/bcn.sphc --mesh $bcn --repeat 1 --dump-frames .carry/frames/bcn >/dev/null
+echo "then, on the GPU machine, add: SPHERECHAIN_GPU_FRAMES=\"\$PWD/.carry/mh.sphc=\$PWD/.carry/frames/mh;\$PWD/.carry/cesiumman.sphc=\$PWD/.carry/frames/cesiumman;\$PWD/.carry/bcn.sphc=\$PWD/.carry/frames/bcn\""
 du -sh .carry
