@@ -817,8 +817,11 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
   const int torso = int(layout.trunk());
   // A creature's trunk (RegionLayout::paper false) has no up: its spheres are ordered along its axis.
   const Vector3d trunk_axis(layout.trunk_axis[0], layout.trunk_axis[1], layout.trunk_axis[2]);
-  const auto [arm_lo, arm_hi] = JunctionBand(mesh, seg, up, {Region::kLeftArm, Region::kRightArm});
-  const auto [leg_lo, leg_hi] = JunctionBand(mesh, seg, up, {Region::kLeftLeg, Region::kRightLeg});
+  // Plain variables, not structured bindings: lambdas below capture them (clang < 16, the fuzz preset's
+  // compiler, cannot capture a structured binding).
+  const std::pair<double, double> arm_band = JunctionBand(mesh, seg, up, {Region::kLeftArm, Region::kRightArm});
+  const std::pair<double, double> leg_band = JunctionBand(mesh, seg, up, {Region::kLeftLeg, Region::kRightLeg});
+  const double arm_lo = arm_band.first, arm_hi = arm_band.second, leg_lo = leg_band.first, leg_hi = leg_band.second;
 
   std::vector<FittedSphere> out;
   for (int r = 0; r < nreg; ++r) {

@@ -423,11 +423,26 @@ std::array<double, 3> TrunkAxis(const Mesh& mesh, const std::vector<uint8_t>& tr
 
 using namespace segment_detail;
 
+namespace {
+
+/// A JSON value from a region map, for a message: a number, string (cut at 40 characters), boolean or null as
+/// written; an array or object only by its size. Never the whole value: nlohmann's dump() recurses once per
+/// level, and a map entry of "[[[[…" 40,000 deep overflowed the stack printing it (found by fuzz_bake_config).
+std::string Brief(const nlohmann::json& v) {
+  if (v.is_array()) return "an array of " + std::to_string(v.size());
+  if (v.is_object()) return "an object of " + std::to_string(v.size()) + " keys";
+  const std::string text = v.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+  return text.size() <= 40 ? text : text.substr(0, 40) + "...";
+}
+
+}  // namespace
+
 Result<Segmentation> SegmentByMap(const Mesh& mesh, const std::string& map_path, Context* ctx) {
   Context::Timer timer(ctx, "segment.map");
   if (Status s = CheckMeshForSegmentation(mesh); !s) return s.error();
   std::ifstream in(map_path);
   if (!in) return MakeError(Error::Code::kIo, "segment: cannot read region map '" + map_path + "'");
+  if (ctx) ctx->RecordFileRead(map_path);
   nlohmann::json j;
   try {
     in >> j;
@@ -460,7 +475,7 @@ Result<Segmentation> SegmentByMap(const Mesh& mesh, const std::string& map_path,
     layout.regions.clear();
     for (size_t i = 0; i < names.size(); ++i) {
       if (!names[i].is_string() || names[i].get<std::string>().empty())
-        return MakeError(Error::Code::kConfig, where + ": regions[" + std::to_string(i) + "] = " + names[i].dump() +
+        return MakeError(Error::Code::kConfig, where + ": regions[" + std::to_string(i) + "] = " + Brief(names[i]) +
                                                    " is not a region name");
       RegionInfo info;
       info.name = names[i].get<std::string>();
@@ -492,7 +507,7 @@ Result<Segmentation> SegmentByMap(const Mesh& mesh, const std::string& map_path,
                                                    "\" names no region of the map; its regions: " + known_names());
     }
     if (value < 0 || value >= layout.count()) {
-      return MakeError(Error::Code::kConfig, where + ": " + what + "[" + std::to_string(i) + "] = " + e.dump() +
+      return MakeError(Error::Code::kConfig, where + ": " + what + "[" + std::to_string(i) + "] = " + Brief(e) +
                                                  " is not a region 0.." + std::to_string(layout.count() - 1) +
                                                  " or a region name: " + known_names());
     }

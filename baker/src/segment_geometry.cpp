@@ -260,15 +260,19 @@ Result<Segmentation> SegmentByGeometry(const Mesh& mesh, Context* ctx) {
       for (uint32_t v : reps)
         if (side * x(v) > side * x(tip)) tip = v;
       const double span = side * (x(tip) - center_x);
-      if (span < 0.3 * height) {
+      // An arm reaches 0.3 to about 0.5 of the height from the centre; one reaching more than 5 heights is no
+      // arm. The bound also keeps the slab count small: a mesh 8e9 times wider than tall asked for more slabs
+      // than an int holds (found by fuzz_import_gltf).
+      if (span < 0.3 * height || span > 5.0 * height) {
         have_arms = false;
         break;
       }
       const int nslab = int(std::ceil(span / slab));
       std::vector<double> lo(size_t(nslab), 1e300), hi(size_t(nslab), -1e300);
       for (uint32_t v : reps) {
-        const int k = int((side * (x(tip) - x(v))) / slab);
-        if (k < 0 || k >= nslab) continue;
+        const double slab_of_v = (side * (x(tip) - x(v))) / slab;  // the other side may lie any distance away
+        if (!(slab_of_v >= 0.0 && slab_of_v < nslab)) continue;
+        const int k = int(slab_of_v);
         lo[size_t(k)] = std::min(lo[size_t(k)], h(v));
         hi[size_t(k)] = std::max(hi[size_t(k)], h(v));
       }

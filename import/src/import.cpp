@@ -64,6 +64,18 @@ void PackWeights(std::vector<Influences>& per_vertex, Skin& skin) {
   }
 }
 
+Status CheckMeshBudget(const std::string& path, uint64_t vertices, uint64_t triangles, const ImportOptions& options) {
+  const uint64_t max_v = std::min(options.max_vertices, kMaxInputVertices);
+  const uint64_t max_t = std::min(options.max_triangles, kMaxInputTriangles);
+  if (vertices > max_v)
+    return FileError(Error::Code::kInvalidMesh, path,
+                     std::to_string(vertices) + " vertices, over the limit of " + std::to_string(max_v));
+  if (triangles > max_t)
+    return FileError(Error::Code::kInvalidMesh, path,
+                     std::to_string(triangles) + " triangles, over the limit of " + std::to_string(max_t));
+  return Ok{};
+}
+
 }  // namespace detail
 
 Status ValidateMesh(const Mesh& mesh) {
@@ -186,7 +198,8 @@ Result<Mesh> ImportMesh(const std::string& path, const ImportOptions& options, C
     } else if (ext == "obj") {
       mesh = detail::ImportObj(path, options, ctx);
     } else {
-      mesh = detail::ImportAssimp(path, options, ctx);
+      mesh = options.isolate_assimp ? detail::ImportInChild(path, options, ctx, &detail::ImportAssimp)
+                                    : detail::ImportAssimp(path, options, ctx);
     }
     if (!mesh.ok()) return mesh;
     if (mesh->vertex_contract == "file" && options.vertices != VertexContract::kAuto && ctx)
@@ -195,14 +208,8 @@ Result<Mesh> ImportMesh(const std::string& path, const ImportOptions& options, C
                 " file's vertex buffer is already the one engines upload (read as is)");
     mesh->source_path = path;
     if (mesh->source_format.empty()) mesh->source_format = ext;
-    if (mesh->positions.size() / 3 > kMaxInputVertices)
-      return detail::FileError(Error::Code::kInvalidMesh, path,
-                               std::to_string(mesh->positions.size() / 3) + " vertices, over the limit of " +
-                                   std::to_string(kMaxInputVertices));
-    if (mesh->indices.size() / 3 > kMaxInputTriangles)
-      return detail::FileError(Error::Code::kInvalidMesh, path,
-                               std::to_string(mesh->indices.size() / 3) + " triangles, over the limit of " +
-                                   std::to_string(kMaxInputTriangles));
+    if (Status s = detail::CheckMeshBudget(path, mesh->positions.size() / 3, mesh->indices.size() / 3, options); !s.ok())
+      return s.error();
     Status valid = ValidateMesh(mesh.value());
     if (!valid.ok()) return valid.error();
     const MeshIssues issues = InspectMesh(mesh.value());

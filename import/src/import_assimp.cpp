@@ -67,10 +67,12 @@ void KeepAllowedImporters(Assimp::Importer& importer) {
 
 /// assimp's file access confined to the input's folder: every Open / Exists of a file outside it
 /// (after resolving "..", "." and symbolic links), or of a file over kMaxInputBytes, or for writing,
-/// fails and is recorded, so the import either goes on without it or fails with the reason.
+/// fails and is recorded, so the import either goes on without it or fails with the reason. Every file
+/// it does open (the input, and what its format refers to: an MD5 animation, a texture, ...) is recorded
+/// in the Context (files_read).
 class ConfinedIOSystem : public Assimp::DefaultIOSystem {
  public:
-  explicit ConfinedIOSystem(std::string folder) : folder_(std::move(folder)) {}
+  ConfinedIOSystem(std::string folder, Context* ctx) : folder_(std::move(folder)), ctx_(ctx) {}
   bool Exists(const char* file) const override { return file && Allowed(file, nullptr) && DefaultIOSystem::Exists(file); }
   Assimp::IOStream* Open(const char* file, const char* mode) override {
     if (!file) return nullptr;
@@ -80,7 +82,9 @@ class ConfinedIOSystem : public Assimp::DefaultIOSystem {
       refused_.push_back(std::string(file) + " (" + why + ")");
       return nullptr;
     }
-    return DefaultIOSystem::Open(file, mode);
+    Assimp::IOStream* stream = DefaultIOSystem::Open(file, mode);
+    if (stream && ctx_) ctx_->RecordFileRead(file);
+    return stream;
   }
   const std::vector<std::string>& refused() const { return refused_; }
 
@@ -99,21 +103,26 @@ class ConfinedIOSystem : public Assimp::DefaultIOSystem {
     return true;
   }
   std::string folder_;
+  Context* ctx_;  // [opt]
   std::vector<std::string> refused_;
 };
 
-/// #V of the concatenated mesh: every mesh instance of every node (a mesh referenced by several nodes
-/// counts once per instance), as ImportAssimp concatenates them.
-uint64_t InstancedVertexCount(const aiScene* scene) {
-  uint64_t n = 0;
+/// #V (and, in `faces`, the faces) of the concatenated mesh: every mesh instance of every node (a mesh
+/// referenced by several nodes counts once per instance), as ImportAssimp concatenates them.
+uint64_t InstancedVertexCount(const aiScene* scene, uint64_t* faces = nullptr) {
+  uint64_t n = 0, f = 0;
   std::vector<const aiNode*> stack{scene->mRootNode};
   while (!stack.empty()) {
     const aiNode* an = stack.back();
     stack.pop_back();
-    for (unsigned k = 0; k < an->mNumMeshes; ++k)
-      if (an->mMeshes[k] < scene->mNumMeshes) n += scene->mMeshes[an->mMeshes[k]]->mNumVertices;
+    for (unsigned k = 0; k < an->mNumMeshes; ++k) {
+      if (an->mMeshes[k] >= scene->mNumMeshes) continue;
+      n += scene->mMeshes[an->mMeshes[k]]->mNumVertices;
+      f += scene->mMeshes[an->mMeshes[k]]->mNumFaces;
+    }
     for (unsigned c = 0; c < an->mNumChildren; ++c) stack.push_back(an->mChildren[c]);
   }
+  if (faces) *faces = f;
   return n;
 }
 
@@ -147,7 +156,8 @@ Result<Mesh> ImportAssimp(const std::string& path, const ImportOptions& options,
   std::error_code ec;
   auto* io = new ConfinedIOSystem(std::filesystem::weakly_canonical(std::filesystem::absolute(path, ec), ec)
                                       .parent_path()
-                                      .string());
+                                      .string(),
+                                  ctx);
   importer.SetIOHandler(io);  // the importer owns it from here
   const aiScene* scene = importer.ReadFile(path, aiProcess_Triangulate);
   std::string refused;
@@ -162,13 +172,17 @@ Result<Mesh> ImportAssimp(const std::string& path, const ImportOptions& options,
   // The vertex contract (import.h VertexContract): #V is counted before the join and after it, so the
   // asset can tell a game which contract a mismatching buffer looks like.
   const bool join = options.vertices != VertexContract::kSource;
-  const uint64_t source_vertices = InstancedVertexCount(scene);
+  uint64_t source_faces = 0;
+  const uint64_t source_vertices = InstancedVertexCount(scene, &source_faces);
+  // Nodes may instance a mesh many times: the concatenated mesh is checked against the limits before it is built.
+  if (Status s = CheckMeshBudget(path, source_vertices, source_faces, options); !s.ok()) return s.error();
   if (join) {
     scene = importer.ApplyPostProcessing(aiProcess_JoinIdenticalVertices);
     if (!scene || !scene->mRootNode)
       return FileError(Error::Code::kFormat, path,
                        std::string("assimp cannot join identical vertices: ") + importer.GetErrorString());
   }
+  ChildPhase('C');  // assimp is done reading: our conversion of its scene
 
   Mesh mesh;
   mesh.source_format = ext;
@@ -378,7 +392,9 @@ Result<Mesh> ImportAssimp(const std::string& path, const ImportOptions& options,
   if (join) {
     mesh.joined_vertex_count = mesh.vertex_count();
   } else {  // the clips are read: joining the scene now only counts what the joined contract gives
+    ChildPhase('R');
     scene = importer.ApplyPostProcessing(aiProcess_JoinIdenticalVertices);
+    ChildPhase('C');
     mesh.joined_vertex_count =
         scene ? static_cast<uint32_t>(std::min<uint64_t>(InstancedVertexCount(scene), UINT32_MAX)) : 0;
   }

@@ -12,12 +12,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <map>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "import_internal.h"
@@ -32,10 +34,12 @@ bool SkipImage(tinygltf::Image*, const int, std::string*, std::string*, int, int
 
 // Filesystem callbacks (the Debian tinygltf build sets none by default). Reads only; never writes;
 // confined to the input's own folder (`user_data`: its canonical path): a buffer URI with `..`, an
-// absolute path or a symlink that leads outside it is refused, as is a file over kMaxInputBytes.
+// absolute path or a symlink that leads outside it is refused, as is a file over kMaxInputBytes. Every file
+// read (the .gltf/.glb itself, external buffers and images) is recorded in the Context (files_read).
 struct FsRoot {
   std::filesystem::path root;  // canonical folder of the input file
   std::string refused;         // the first path refused for leaving it (for the error message)
+  Context* ctx = nullptr;      // [opt] records the files read
 };
 bool InsideRoot(const std::string& filename, void* user_data) {
   auto* fs_root = static_cast<FsRoot*>(user_data);
@@ -75,11 +79,48 @@ bool FsReadWholeFile(std::vector<unsigned char>* out, std::string* err, const st
     if (err) *err += "cannot read " + filepath + "\n";
     return false;
   }
+  if (auto* fs_root = static_cast<FsRoot*>(user_data); fs_root && fs_root->ctx) fs_root->ctx->RecordFileRead(filepath);
   return true;
 }
 bool FsWriteWholeFile(std::string* err, const std::string&, const std::vector<unsigned char>&, void*) {
   if (err) *err += "the importer never writes files\n";
   return false;
+}
+
+/// Deepest JSON nesting a glTF may have. tinygltf turns every "extras" value into its own Value type by
+/// recursion, so a file of a few kilobytes of "[[[[…" would overflow the stack inside it (found by
+/// fuzz_import_gltf; tinygltf is Debian's header, not ours to patch): such a file is refused before it is parsed.
+/// A real glTF nests about six levels (root, meshes, a mesh, primitives, a primitive, attributes) plus its extras.
+constexpr size_t kMaxJsonDepth = 64;
+
+/// Deepest nesting of arrays and objects in `json` (brackets inside strings do not count); stops counting
+/// past kMaxJsonDepth. Not a validator: broken JSON is left to the parser.
+size_t JsonDepth(std::string_view json) {
+  size_t depth = 0, deepest = 0;
+  bool in_string = false;
+  for (size_t i = 0; i < json.size() && deepest <= kMaxJsonDepth; ++i) {
+    const char c = json[i];
+    if (in_string) {
+      if (c == '\\') ++i;  // the escaped character
+      else if (c == '"') in_string = false;
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      deepest = std::max(deepest, ++depth);
+    } else if ((c == ']' || c == '}') && depth > 0) {
+      --depth;
+    }
+  }
+  return deepest;
+}
+
+/// The JSON chunk of a GLB (glTF 2.0 §4.4: a 12-byte header, then chunk 0 = length, "JSON", data); empty when
+/// the bytes are not laid out so (tinygltf then refuses them).
+std::string_view GlbJsonChunk(const std::vector<unsigned char>& glb) {
+  if (glb.size() < 20 || std::memcmp(glb.data() + 16, "JSON", 4) != 0) return {};
+  uint32_t length = 0;
+  std::memcpy(&length, glb.data() + 12, 4);
+  return {reinterpret_cast<const char*>(glb.data()) + 20, std::min<size_t>(length, glb.size() - 20)};
 }
 
 int ComponentCount(int type) {
@@ -137,59 +178,98 @@ double ReadComponent(const unsigned char* p, int ct, bool normalized) {
   }
 }
 
+bool IsUnsignedInteger(int ct) {
+  return ct == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE || ct == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT ||
+         ct == TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
+}
+
 /// Reads accessor `index` as doubles, #count × components, honouring byteStride, normalisation and
-/// sparse substitution; every read is bounds-checked against the buffer. kFormat on any inconsistency.
+/// sparse substitution. Every offset, length and count comes from the file, so each is checked, without
+/// overflow, before anything is read or allocated: a view inside its buffer, every element inside its view,
+/// sparse indices unsigned integers below count. An accessor without a bufferView (zeros, maybe with sparse
+/// values over them) may hold at most `max_values` values: it takes memory the file does not pay for.
+/// kFormat on any inconsistency.
 Result<std::vector<double>> ReadAccessor(const tinygltf::Model& model, int index, const std::string& path,
-                                         const std::string& what) {
+                                         const std::string& what, size_t max_values) {
   auto fail = [&](const std::string& m) { return FileError(Error::Code::kFormat, path, what + ": " + m); };
   if (index < 0 || index >= static_cast<int>(model.accessors.size())) return fail("accessor index out of range");
   const tinygltf::Accessor& acc = model.accessors[static_cast<size_t>(index)];
-  const int nc = ComponentCount(acc.type);
-  const int cs = ComponentSize(acc.componentType);
+  const size_t nc = static_cast<size_t>(ComponentCount(acc.type));
+  const size_t cs = static_cast<size_t>(ComponentSize(acc.componentType));
   if (nc == 0 || cs == 0) return fail("unsupported accessor type");
   const size_t count = acc.count;
-  const size_t elem = static_cast<size_t>(nc) * static_cast<size_t>(cs);
-  std::vector<double> out(count * static_cast<size_t>(nc), 0.0);
+  const size_t elem = nc * cs;
 
-  auto read_view = [&](int view_index, size_t offset, size_t n, int ct, int ncomp, size_t stride_default,
-                       auto&& sink) -> Status {
+  // Where n elements of `elem_bytes` at `offset` in view `view_index` start: checked against the view and its buffer.
+  struct Span {
+    const unsigned char* base = nullptr;
+    size_t stride = 0;
+  };
+  auto locate = [&](int view_index, size_t offset, size_t n, size_t elem_bytes) -> Result<Span> {
     if (view_index < 0 || view_index >= static_cast<int>(model.bufferViews.size()))
       return fail("bufferView index out of range");
     const tinygltf::BufferView& view = model.bufferViews[static_cast<size_t>(view_index)];
     if (view.buffer < 0 || view.buffer >= static_cast<int>(model.buffers.size())) return fail("buffer index out of range");
     const std::vector<unsigned char>& data = model.buffers[static_cast<size_t>(view.buffer)].data;
-    const size_t csz = static_cast<size_t>(ComponentSize(ct));
-    const size_t stride = view.byteStride ? view.byteStride : stride_default;
-    if (n == 0) return Ok{};
-    const size_t last_end = offset + (n - 1) * stride + csz * static_cast<size_t>(ncomp);
-    if (view.byteOffset + view.byteLength > data.size() || last_end > view.byteLength)
-      return fail("data runs past its buffer");
-    const unsigned char* base = data.data() + view.byteOffset + offset;
-    for (size_t i = 0; i < n; ++i)
-      for (int c = 0; c < ncomp; ++c) sink(i, c, ReadComponent(base + i * stride + static_cast<size_t>(c) * csz, ct, acc.normalized));
-    return Ok{};
+    const size_t stride = view.byteStride ? view.byteStride : elem_bytes;
+    if (view.byteOffset > data.size() || view.byteLength > data.size() - view.byteOffset)
+      return fail("bufferView runs past its buffer");
+    if (n > 0 && (offset > view.byteLength || elem_bytes > view.byteLength - offset ||
+                  n - 1 > (view.byteLength - offset - elem_bytes) / stride))
+      return fail(std::to_string(n) + " elements run past their bufferView");
+    return Span{data.data() + view.byteOffset + offset, stride};
   };
 
+  Span dense;
   if (acc.bufferView >= 0) {
-    Status s = read_view(acc.bufferView, acc.byteOffset, count, acc.componentType, nc, elem,
-                         [&](size_t i, int c, double v) { out[i * static_cast<size_t>(nc) + static_cast<size_t>(c)] = v; });
-    if (!s.ok()) return s.error();
+    Result<Span> at = locate(acc.bufferView, acc.byteOffset, count, elem);
+    if (!at.ok()) return at.error();
+    dense = at.value();
+  } else if (count > max_values / nc) {
+    return fail(std::to_string(count) + " elements without a bufferView, over the limit of " +
+                std::to_string(max_values / nc));
   }
+  std::vector<double> out(count * nc, 0.0);
+  if (dense.base)
+    for (size_t i = 0; i < count; ++i)
+      for (size_t c = 0; c < nc; ++c)
+        out[i * nc + c] = ReadComponent(dense.base + i * dense.stride + c * cs, acc.componentType, acc.normalized);
+
   if (acc.sparse.isSparse) {
-    const size_t n = static_cast<size_t>(acc.sparse.count);
-    std::vector<size_t> idx(n);
-    Status s = read_view(acc.sparse.indices.bufferView, static_cast<size_t>(acc.sparse.indices.byteOffset), n,
-                         acc.sparse.indices.componentType, 1,
-                         static_cast<size_t>(ComponentSize(acc.sparse.indices.componentType)),
-                         [&](size_t i, int, double v) { idx[i] = static_cast<size_t>(v); });
-    if (!s.ok()) return s.error();
-    for (size_t i : idx)
-      if (i >= count) return fail("sparse index out of range");
-    s = read_view(acc.sparse.values.bufferView, static_cast<size_t>(acc.sparse.values.byteOffset), n, acc.componentType,
-                  nc, elem, [&](size_t i, int c, double v) { out[idx[i] * static_cast<size_t>(nc) + static_cast<size_t>(c)] = v; });
-    if (!s.ok()) return s.error();
+    const auto& sp = acc.sparse;
+    if (sp.count < 0 || static_cast<size_t>(sp.count) > count) return fail("sparse count out of range");
+    if (sp.indices.byteOffset < 0 || sp.values.byteOffset < 0) return fail("negative sparse byteOffset");
+    if (!IsUnsignedInteger(sp.indices.componentType)) return fail("sparse indices are not unsigned integers");
+    const size_t n = static_cast<size_t>(sp.count);
+    const size_t ics = static_cast<size_t>(ComponentSize(sp.indices.componentType));
+    Result<Span> idx_at = locate(sp.indices.bufferView, static_cast<size_t>(sp.indices.byteOffset), n, ics);
+    if (!idx_at.ok()) return idx_at.error();
+    Result<Span> val_at = locate(sp.values.bufferView, static_cast<size_t>(sp.values.byteOffset), n, elem);
+    if (!val_at.ok()) return val_at.error();
+    for (size_t k = 0; k < n; ++k) {
+      const double i = ReadComponent(idx_at->base + k * idx_at->stride, sp.indices.componentType, false);
+      if (!(i < static_cast<double>(count))) return fail("sparse index out of range");
+      for (size_t c = 0; c < nc; ++c)
+        out[static_cast<size_t>(i) * nc + c] = ReadComponent(val_at->base + k * val_at->stride + c * cs, acc.componentType,
+                                                             acc.normalized);
+    }
   }
   return out;
+}
+
+/// `d` as a vertex or joint number below `limit`: false when it is not a whole number in [0, limit) (NaN
+/// included), so that converting it is defined.
+bool AsIndex(double d, double limit, uint32_t* out) {
+  if (!(d >= 0.0 && d < limit && d == std::floor(d))) return false;
+  *out = static_cast<uint32_t>(d);
+  return true;
+}
+
+/// A number read from the file, for a message (any double, NaN and infinities included).
+std::string NumberText(double d) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.17g", d);
+  return buf;
 }
 
 Eigen::Matrix4d LocalMatrix(const tinygltf::Node& n) {
@@ -214,6 +294,7 @@ Result<Mesh> ImportGltf(const std::string& path, const ImportOptions& options, C
   loader.SetImageLoader(&SkipImage, nullptr);
   std::error_code ec;
   FsRoot root;
+  root.ctx = ctx;
   root.root = std::filesystem::weakly_canonical(std::filesystem::absolute(path, ec).parent_path(), ec);
   if (ec) return FileError(Error::Code::kIo, path, "cannot resolve the file's folder: " + ec.message());
   loader.SetFsCallbacks(
@@ -221,8 +302,22 @@ Result<Mesh> ImportGltf(const std::string& path, const ImportOptions& options, C
   tinygltf::Model model;
   std::string err, warn;
   const bool binary = LowerExtension(path) == "glb";
-  const bool ok = binary ? loader.LoadBinaryFromFile(&model, &err, &warn, path)
-                         : loader.LoadASCIIFromFile(&model, &err, &warn, path);
+  // Read here (as tinygltf's LoadASCIIFromFile / LoadBinaryFromFile would) so that the JSON's nesting is
+  // checked before tinygltf sees it.
+  std::vector<unsigned char> bytes;
+  if (!FsReadWholeFile(&bytes, &err, path, &root)) return FileError(Error::Code::kIo, path, "cannot read file: " + err);
+  if (bytes.empty()) return FileError(Error::Code::kFormat, path, "not a readable glTF file: empty file");
+  const size_t depth = JsonDepth(binary ? GlbJsonChunk(bytes) : std::string_view(reinterpret_cast<const char*>(bytes.data()),
+                                                                                  bytes.size()));
+  if (depth > kMaxJsonDepth)
+    return FileError(Error::Code::kFormat, path,
+                     "not a readable glTF file: its JSON nests deeper than " + std::to_string(kMaxJsonDepth) + " levels");
+  const size_t slash = path.find_last_of("/\\");
+  const std::string base_dir = slash == std::string::npos ? std::string() : path.substr(0, slash);  // as tinygltf's GetBaseDir
+  const bool ok = binary ? loader.LoadBinaryFromMemory(&model, &err, &warn, bytes.data(),
+                                                       static_cast<unsigned int>(bytes.size()), base_dir)
+                         : loader.LoadASCIIFromString(&model, &err, &warn, reinterpret_cast<const char*>(bytes.data()),
+                                                      static_cast<unsigned int>(bytes.size()), base_dir);
   if (!warn.empty() && ctx) ctx->Warn("import: " + path + ": tinygltf: " + warn);
   if (!ok) {
     while (!err.empty() && (err.back() == '\n' || err.back() == '\r')) err.pop_back();
@@ -290,6 +385,9 @@ Result<Mesh> ImportGltf(const std::string& path, const ImportOptions& options, C
   mesh.unit_scale_m = 1.0f;
   mesh.up_axis = UpAxis::kY;
 
+  // Values an accessor without a bufferView may hold, and key values all clips may hold (import.h max_vertices).
+  const size_t max_values = 3 * size_t{std::max(std::min(options.max_vertices, kMaxInputVertices),
+                                                std::min(options.max_triangles, kMaxInputTriangles))};
   bool any_skin = false;
   for (int gi : order) {
     const auto& gn = model.nodes[static_cast<size_t>(gi)];
@@ -314,7 +412,8 @@ Result<Mesh> ImportGltf(const std::string& path, const ImportOptions& options, C
       if (gn.skin >= static_cast<int>(model.skins.size())) return FileError(Error::Code::kFormat, path, "skin index out of range");
       const tinygltf::Skin& gs = model.skins[static_cast<size_t>(gn.skin)];
       if (gs.inverseBindMatrices >= 0) {
-        Result<std::vector<double>> r = ReadAccessor(model, gs.inverseBindMatrices, path, "skin '" + gs.name + "' inverseBindMatrices");
+        Result<std::vector<double>> r = ReadAccessor(model, gs.inverseBindMatrices, path, "skin '" + gs.name + "' inverseBindMatrices",
+                                                     max_values);
         if (!r.ok()) return r.error();
         ibm = std::move(r.value());
         if (ibm.size() < gs.joints.size() * 16)
@@ -348,17 +447,20 @@ Result<Mesh> ImportGltf(const std::string& path, const ImportOptions& options, C
       }
       auto pos_it = prim.attributes.find("POSITION");
       if (pos_it == prim.attributes.end()) return FileError(Error::Code::kFormat, path, what + " has no POSITION");
-      Result<std::vector<double>> pos = ReadAccessor(model, pos_it->second, path, what + " POSITION");
+      Result<std::vector<double>> pos = ReadAccessor(model, pos_it->second, path, what + " POSITION", max_values);
       if (!pos.ok()) return pos.error();
       if (model.accessors[static_cast<size_t>(pos_it->second)].type != TINYGLTF_TYPE_VEC3)
         return FileError(Error::Code::kFormat, path, what + " POSITION is not VEC3");
       const size_t nv = pos->size() / 3;
       std::vector<uint32_t> idx;
       if (prim.indices >= 0) {
-        Result<std::vector<double>> ir = ReadAccessor(model, prim.indices, path, what + " indices");
+        Result<std::vector<double>> ir = ReadAccessor(model, prim.indices, path, what + " indices", max_values);
         if (!ir.ok()) return ir.error();
-        idx.reserve(ir->size());
-        for (double d : ir.value()) idx.push_back(static_cast<uint32_t>(d));
+        idx.resize(ir->size());
+        for (size_t i = 0; i < idx.size(); ++i)
+          if (!AsIndex(ir.value()[i], 4294967296.0, &idx[i]))
+            return FileError(Error::Code::kFormat, path, what + " indices: index " + std::to_string(i) + " is " +
+                                                             NumberText(ir.value()[i]) + ", not a vertex number");
       } else {
         idx.resize(nv);
         for (size_t i = 0; i < nv; ++i) idx[i] = static_cast<uint32_t>(i);
@@ -383,6 +485,10 @@ Result<Mesh> ImportGltf(const std::string& path, const ImportOptions& options, C
                                " of " + std::to_string(nv));
       }
 
+      if (Status s = CheckMeshBudget(path, uint64_t{mesh.vertex_count()} + nv, uint64_t{mesh.triangle_count()} + tris.size() / 3,
+                                     options);
+          !s.ok())
+        return s.error();
       MeshPart part;
       part.name = gm.name.empty() ? "mesh" + std::to_string(gn.mesh) : gm.name;
       if (gm.primitives.size() > 1) part.name += "#" + std::to_string(pi);
@@ -424,9 +530,9 @@ Result<Mesh> ImportGltf(const std::string& path, const ImportOptions& options, C
           auto ji = prim.attributes.find("JOINTS_" + std::to_string(set));
           auto wi = prim.attributes.find("WEIGHTS_" + std::to_string(set));
           if (ji == prim.attributes.end() || wi == prim.attributes.end()) break;
-          Result<std::vector<double>> jr = ReadAccessor(model, ji->second, path, what + " JOINTS_" + std::to_string(set));
+          Result<std::vector<double>> jr = ReadAccessor(model, ji->second, path, what + " JOINTS_" + std::to_string(set), max_values);
           if (!jr.ok()) return jr.error();
-          Result<std::vector<double>> wr = ReadAccessor(model, wi->second, path, what + " WEIGHTS_" + std::to_string(set));
+          Result<std::vector<double>> wr = ReadAccessor(model, wi->second, path, what + " WEIGHTS_" + std::to_string(set), max_values);
           if (!wr.ok()) return wr.error();
           if (jr->size() != nv * 4 || wr->size() != nv * 4)
             return FileError(Error::Code::kFormat, path, what + ": JOINTS/WEIGHTS are not VEC4 per vertex");
@@ -435,11 +541,12 @@ Result<Mesh> ImportGltf(const std::string& path, const ImportOptions& options, C
               const double w = wr.value()[v * 4 + static_cast<size_t>(k)];
               if (!(w > 0.0)) continue;
               const double j = jr.value()[v * 4 + static_cast<size_t>(k)];
-              if (j < 0 || j >= static_cast<double>(gs.joints.size()))
+              uint32_t joint = 0;
+              if (!AsIndex(j, static_cast<double>(gs.joints.size()), &joint))
                 return FileError(Error::Code::kInvalidMesh, path,
-                                 what + ": vertex " + std::to_string(v) + " names joint " + std::to_string(static_cast<int64_t>(j)) +
-                                     " of " + std::to_string(gs.joints.size()));
-              influences[part.first_vertex + v].emplace_back(base + static_cast<uint32_t>(j), static_cast<float>(w));
+                                 what + ": vertex " + std::to_string(v) + " names joint " + NumberText(j) + " of " +
+                                     std::to_string(gs.joints.size()));
+              influences[part.first_vertex + v].emplace_back(base + joint, static_cast<float>(w));
             }
           }
         }
@@ -467,6 +574,7 @@ Result<Mesh> ImportGltf(const std::string& path, const ImportOptions& options, C
   }
 
   if (options.read_clips && mesh.skin) {
+    size_t clip_values = 0;
     for (size_t ai = 0; ai < model.animations.size(); ++ai) {
       const tinygltf::Animation& ga = model.animations[ai];
       Clip clip;
@@ -486,15 +594,19 @@ Result<Mesh> ImportGltf(const std::string& path, const ImportOptions& options, C
         if (gc.sampler < 0 || gc.sampler >= static_cast<int>(ga.samplers.size()))
           return FileError(Error::Code::kFormat, path, what + ": sampler index out of range");
         const tinygltf::AnimationSampler& gsamp = ga.samplers[static_cast<size_t>(gc.sampler)];
-        Result<std::vector<double>> t = ReadAccessor(model, gsamp.input, path, what + " input");
+        Result<std::vector<double>> t = ReadAccessor(model, gsamp.input, path, what + " input", max_values);
         if (!t.ok()) return t.error();
-        Result<std::vector<double>> v = ReadAccessor(model, gsamp.output, path, what + " output");
+        Result<std::vector<double>> v = ReadAccessor(model, gsamp.output, path, what + " output", max_values);
         if (!v.ok()) return v.error();
         const size_t width = ch.path == Channel::Path::kRotation ? 4 : 3;
         const size_t nk = t->size();
         const bool cubic = gsamp.interpolation == "CUBICSPLINE";
         if (v->size() != nk * width * (cubic ? 3 : 1))
           return FileError(Error::Code::kFormat, path, what + ": output count does not match input count");
+        clip_values += nk * (width + 1);  // channels may share one accessor: the copies are what costs
+        if (clip_values > max_values)
+          return FileError(Error::Code::kFormat, path,
+                           what + ": the clips hold more than " + std::to_string(max_values) + " key values");
         ch.interpolation = gsamp.interpolation == "STEP" ? Channel::Interpolation::kStep : Channel::Interpolation::kLinear;
         if (cubic && ctx) ctx->Warn("import: " + path + ": " + what + ": CUBICSPLINE sampled as LINEAR through its keys");
         for (size_t k = 0; k < nk; ++k) {

@@ -31,6 +31,21 @@ Result<Mesh> ImportAssimp(const std::string& path, const ImportOptions& options,
 /// Errors: kIo, kFormat (unparsable line, broken rig JSON), kInvalidMesh (index 0 / out of range).
 Result<Mesh> ImportObj(const std::string& path, const ImportOptions& options, Context* ctx);
 
+/// An importer ImportInChild can run: ImportAssimp.
+using ChildImporter = Result<Mesh> (*)(const std::string& path, const ImportOptions& options, Context* ctx);
+
+/// Runs `import(path, options, …)` in a child process (fork) and returns its result, its log lines and files
+/// read replayed into `ctx` (import_child.cpp). The child gets options.assimp_seconds of wall-clock time (then
+/// it is killed) and, unless built with AddressSanitizer, options.assimp_memory_bytes of address space. A
+/// child that is killed, crashes or exits without an answer is kFormat ("assimp did not finish reading it
+/// within 120 s", "the assimp importer's process died reading it (signal 11 …)"); kInternal only when no
+/// process can be started. Cost: a fork, and the mesh copied once through a pipe.
+Result<Mesh> ImportInChild(const std::string& path, const ImportOptions& options, Context* ctx, ChildImporter import);
+
+/// In the child of ImportInChild, says what the importer does now ('R': the third-party parser reads,
+/// 'C': our code converts its scene), so a death is reported as the one or the other; a no-op elsewhere.
+void ChildPhase(char phase);
+
 /// True when `file` (relative paths: to the current directory, as fopen reads them), with "..",
 /// "." and symbolic links resolved, lies inside `folder` (resolved the same way). What the assimp
 /// importers may open besides the input itself (import.h kSupportedExtensions).
@@ -40,6 +55,12 @@ bool InsideFolder(const std::string& folder, const std::string& file);
 inline Error FileError(Error::Code code, const std::string& path, const std::string& message) {
   return MakeError(code, path + ": " + message);
 }
+
+/// kInvalidMesh naming the limit when a mesh of `vertices` / `triangles` would exceed options.max_vertices /
+/// max_triangles (and never more than kMaxInputVertices / kMaxInputTriangles). The importers call it before
+/// they grow the mesh, so a small file that multiplies its data (instances, zero accessors) is refused
+/// before the memory is taken.
+Status CheckMeshBudget(const std::string& path, uint64_t vertices, uint64_t triangles, const ImportOptions& options);
 
 /// Column-major float copy of a 4×4 affine matrix (SkinJoint::inverse_bind layout).
 inline std::array<float, 16> ToColumnMajor(const Eigen::Matrix4d& m) {

@@ -32,11 +32,14 @@ struct ObjData {
   bool makehuman_header = false;     ///< a "# basemesh hm08"-style comment was seen
 };
 
-bool ReadWholeFile(const std::string& path, std::string& out) {
+/// Reads `path` whole into `out`; records it in `ctx` (files_read) once read.
+bool ReadWholeFile(const std::string& path, std::string& out, Context* ctx) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return false;
   out.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-  return !in.bad();
+  if (in.bad()) return false;
+  if (ctx) ctx->RecordFileRead(path);
+  return true;
 }
 
 std::string_view Trim(std::string_view s) {
@@ -156,10 +159,20 @@ Result<ObjData> ReadObj(const std::string& path, const std::string& text, const 
   return d;
 }
 
+/// A JSON value from the file, for a message: a number, string (cut at 40 characters), boolean or null as
+/// written; an array or object only by its size. Never the whole value: nlohmann's dump() recurses once per
+/// level, and a rig of "[[[[…" 50,000 deep overflowed the stack printing it (found by fuzz_import_makehuman).
+std::string Brief(const nlohmann::ordered_json& v) {
+  if (v.is_array()) return "an array of " + std::to_string(v.size());
+  if (v.is_object()) return "an object of " + std::to_string(v.size()) + " keys";
+  const std::string text = v.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
+  return text.size() <= 40 ? text : text.substr(0, 40) + "...";
+}
+
 /// Reads a JSON file; kIo when unreadable, kFormat when not JSON.
-Result<nlohmann::ordered_json> ReadJson(const std::string& path) {
+Result<nlohmann::ordered_json> ReadJson(const std::string& path, Context* ctx) {
   std::string text;
-  if (!ReadWholeFile(path, text)) return FileError(Error::Code::kIo, path, "cannot read file");
+  if (!ReadWholeFile(path, text, ctx)) return FileError(Error::Code::kIo, path, "cannot read file");
   nlohmann::ordered_json j = nlohmann::ordered_json::parse(text, nullptr, /*allow_exceptions=*/false);
   if (j.is_discarded()) return FileError(Error::Code::kFormat, path, "not valid JSON");
   return j;
@@ -173,7 +186,7 @@ Result<nlohmann::ordered_json> ReadJson(const std::string& path) {
 Result<Skin> ReadMakeHumanRig(const std::string& skel_path, const std::string& weights_path_opt,
                               const std::vector<float>& all_positions, const std::vector<int64_t>& remap,
                               uint32_t vertex_count, Context* ctx) {
-  Result<nlohmann::ordered_json> skel_r = ReadJson(skel_path);
+  Result<nlohmann::ordered_json> skel_r = ReadJson(skel_path, ctx);
   if (!skel_r.ok()) return skel_r.error();
   const nlohmann::ordered_json& skel = skel_r.value();
   if (!skel.is_object() || !skel.contains("bones") || !skel["bones"].is_object() || !skel.contains("joints") ||
@@ -182,11 +195,16 @@ Result<Skin> ReadMakeHumanRig(const std::string& skel_path, const std::string& w
 
   std::string weights_path = weights_path_opt;
   if (weights_path.empty()) {
+    // The skeleton's own `weights_file` is data, not the user's choice: like a glTF's buffers it may name only
+    // a file in the skeleton's folder.
     const fs::path dir = fs::path(skel_path).parent_path();
     if (skel.contains("weights_file") && skel["weights_file"].is_string())
       weights_path = (dir / skel["weights_file"].get<std::string>()).string();
     else
       weights_path = (dir / "default_weights.mhw").string();
+    if (!InsideFolder(dir.empty() ? "." : dir.string(), weights_path))
+      return FileError(Error::Code::kFormat, skel_path,
+                       "weights file " + weights_path + " is outside the skeleton's folder (a rig may only name files beside it)");
   }
 
   // Joint positions: mean of the listed base.obj vertices.
@@ -199,7 +217,7 @@ Result<Skin> ReadMakeHumanRig(const std::string& skel_path, const std::string& w
     for (const auto& v : verts) {
       if (!v.is_number_integer() || v.get<int64_t>() < 0 || static_cast<size_t>(v.get<int64_t>()) >= nv_file)
         return FileError(Error::Code::kFormat, skel_path,
-                         "joint '" + name + "' lists vertex " + v.dump() + ", the OBJ has " + std::to_string(nv_file));
+                         "joint '" + name + "' lists vertex " + Brief(v) + ", the OBJ has " + std::to_string(nv_file));
       const size_t i = static_cast<size_t>(v.get<int64_t>());
       sum += Eigen::Vector3d(all_positions[i * 3], all_positions[i * 3 + 1], all_positions[i * 3 + 2]);
     }
@@ -272,7 +290,7 @@ Result<Skin> ReadMakeHumanRig(const std::string& skel_path, const std::string& w
   }
 
   // Weights.
-  Result<nlohmann::ordered_json> w_r = ReadJson(weights_path);
+  Result<nlohmann::ordered_json> w_r = ReadJson(weights_path, ctx);
   if (!w_r.ok()) return w_r.error();
   const nlohmann::ordered_json& wj = w_r.value();
   if (!wj.is_object() || !wj.contains("weights") || !wj["weights"].is_object())
@@ -286,7 +304,7 @@ Result<Skin> ReadMakeHumanRig(const std::string& skel_path, const std::string& w
     if (!list.is_array()) return FileError(Error::Code::kFormat, weights_path, "weights of '" + bone + "' not a list");
     for (const auto& pair : list) {
       if (!pair.is_array() || pair.size() != 2 || !pair[0].is_number_integer() || !pair[1].is_number())
-        return FileError(Error::Code::kFormat, weights_path, "weights of '" + bone + "': entry " + pair.dump() +
+        return FileError(Error::Code::kFormat, weights_path, "weights of '" + bone + "': entry " + Brief(pair) +
                                                                   " is not [vertex, weight]");
       const int64_t v = pair[0].get<int64_t>();
       if (v < 0 || static_cast<size_t>(v) >= remap.size())
@@ -308,7 +326,7 @@ Result<Skin> ReadMakeHumanRig(const std::string& skel_path, const std::string& w
 
 Result<Mesh> ImportObj(const std::string& path, const ImportOptions& options, Context* ctx) {
   std::string text;
-  if (!ReadWholeFile(path, text)) return FileError(Error::Code::kIo, path, "cannot read file");
+  if (!ReadWholeFile(path, text, ctx)) return FileError(Error::Code::kIo, path, "cannot read file");
   Result<ObjData> obj_r = ReadObj(path, text, options.obj_group);
   if (!obj_r.ok()) return obj_r.error();
   ObjData& obj = obj_r.value();

@@ -38,6 +38,42 @@ expect_failure(inspect_missing "nothing.sphc" inspect ${WORK}/nothing.sphc)
 expect_failure(inspect_garbage "not_an_asset.sphc" inspect ${WORK}/not_an_asset.sphc)
 expect_failure(no_output_folder "folder|exist" bake ${WORK}/cube.obj -o ${WORK}/no/such/dir/out.sphc)
 
+# What fuzzing the importers and the configuration found (fuzz/README.md "Findings", docs/guide.md "Bad input"):
+# exit 1 exactly, the message, nothing written. 30,000 nested arrays overflowed the stack (in tinygltf, and in
+# nlohmann's dump() printing a bad rig or region map entry); offsets near 2^64 wrapped round a bounds check; an
+# accessor without data asked for gigabytes.
+function(expect_exit1 name pattern)
+  execute_process(COMMAND ${CLI} ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 1 OR NOT "${err}" MATCHES "${pattern}" OR EXISTS ${WORK}/out.sphc)
+    message(FATAL_ERROR "${name}: expected exit 1, '${pattern}' and no output; got exit ${rc}:\n${out}${err}")
+  endif()
+  message(STATUS "${name}: exit 1: ${err}")
+endfunction()
+string(REPEAT "[" 30000 _open)
+string(REPEAT "]" 30000 _close)
+string(REPEAT "A" 48 _zeros36)  # base64 of 36 zero bytes
+set(_tri "\"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0}}]}], \"nodes\": [{\"mesh\": 0}], \"scenes\": [{\"nodes\": [0]}], \"buffers\": [{\"byteLength\": 36, \"uri\": \"data:application/octet-stream;base64,${_zeros36}\"}]")
+file(WRITE ${WORK}/deep.gltf "{\"extras\": ${_open}${_close}, \"asset\": {\"version\": \"2.0\"}}")
+file(WRITE ${WORK}/wrapped_offset.gltf "{\"asset\": {\"version\": \"2.0\"}, ${_tri}, \"bufferViews\": [{\"buffer\": 0, \"byteOffset\": 18446744073709551600, \"byteLength\": 36}], \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC3\"}]}")
+file(WRITE ${WORK}/zero_accessor.gltf "{\"asset\": {\"version\": \"2.0\"}, ${_tri}, \"accessors\": [{\"componentType\": 5126, \"count\": 1000000000, \"type\": \"VEC3\"}]}")
+file(WRITE ${WORK}/rig/deep.mhskel "{\"bones\": {}, \"joints\": {\"j\": [${_open}${_close}]}}")
+file(WRITE ${WORK}/secret.mhw "{\"weights\": {}}")
+file(WRITE ${WORK}/rig/escape.mhskel "{\"bones\": {\"root\": {\"head\": \"h\"}}, \"joints\": {\"h\": [0]}, \"weights_file\": \"../secret.mhw\"}")
+string(REPEAT ", 0" 11 _eleven)
+file(WRITE ${WORK}/deep_map.json "{\"triangle_regions\": [${_open}${_close}${_eleven}]}")
+expect_exit1(deep_gltf "format: .*deep.gltf: not a readable glTF file: its JSON nests deeper than 64 levels"
+             bake ${WORK}/deep.gltf -o ${WORK}/out.sphc)
+expect_exit1(wrapped_offset "format: .*wrapped_offset.gltf: .*POSITION: bufferView runs past its buffer"
+             bake ${WORK}/wrapped_offset.gltf -o ${WORK}/out.sphc)
+expect_exit1(zero_accessor "format: .*zero_accessor.gltf: .*POSITION: 1000000000 elements without a bufferView, over the limit"
+             bake ${WORK}/zero_accessor.gltf -o ${WORK}/out.sphc)
+expect_exit1(deep_rig "format: .*deep.mhskel: joint 'j' lists vertex an array of 1, the OBJ has 8"
+             bake ${WORK}/cube.obj --rig ${WORK}/rig/deep.mhskel -o ${WORK}/out.sphc)
+expect_exit1(rig_weights_escape "format: .*escape.mhskel: weights file .*secret.mhw is outside the skeleton's folder"
+             bake ${WORK}/cube.obj --rig ${WORK}/rig/escape.mhskel -o ${WORK}/out.sphc)
+expect_exit1(deep_region_map "config: .*triangle_regions.0. = an array of 1 is not a region 0..4"
+             bake ${WORK}/cube.obj --region-map ${WORK}/deep_map.json -o ${WORK}/out.sphc)
+
 # Names are bytes as the mesh file had them: an asset whose bone name is not valid UTF-8 (one byte of the
 # golden creature's "ForeLeg_R_01" set to 0xFF; the verifier does not check UTF-8) is still described, the
 # bad byte shown as U+FFFD (the JSON library would otherwise throw and abort the process).

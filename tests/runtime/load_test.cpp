@@ -309,7 +309,9 @@ TEST_CASE("ToString names every status and Succeeded/Failed split them") {
       {Status::kErrorSkinWeights, "kErrorSkinWeights"},
       {Status::kErrorRegions, "kErrorRegions"},
   };
-  for (const auto& [status, name] : all) {
+  for (const auto& entry : all) {
+    const Status status = entry.first;
+    const char* const name = entry.second;  // not a structured binding: CAPTURE's lambda takes it (clang 14)
     CAPTURE(name);
     CHECK(std::string(ToString(status)).rfind(name, 0) == 0);
     CHECK(Failed(status) == (std::string(name).rfind("kError", 0) == 0));

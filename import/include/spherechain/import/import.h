@@ -62,6 +62,22 @@ struct ImportOptions {
   std::string obj_group = "body";
   /// Read animation clips (skins are always read when present).
   bool read_clips = true;
+  /// Most vertices / triangles the imported mesh may have; more is refused (kInvalidMesh) while importing,
+  /// before the memory for them is taken, however the file reaches them (a glTF mesh instanced by many nodes,
+  /// an accessor without a bufferView, assimp's instanced meshes). Clips may hold at most 3 × max_vertices
+  /// key values in all. [Limit: 1..kMaxInputVertices / kMaxInputTriangles] [opt] default: those caps.
+  /// A pipeline (or a fuzzer) that wants a smaller bound sets it here.
+  uint32_t max_vertices = kMaxInputVertices;
+  uint32_t max_triangles = kMaxInputTriangles;
+  /// assimp's parsers run in a child process (fork), so that one that crashes or never returns on a hostile
+  /// file (fuzzing found a PLY that loops) fails the import with kFormat instead of ending or hanging the
+  /// caller. The child gets `assimp_seconds` of wall-clock time [Units: s] [Limit: > 0] and then is killed,
+  /// and `assimp_memory_bytes` of address space [Limit: 0 = none; not applied under AddressSanitizer].
+  /// false: assimp runs in this process (a fork saved; its crash is then the caller's). Cost of true: a fork
+  /// and one copy of the mesh through a pipe. [opt] default true, 120 s, 16 GiB.
+  bool isolate_assimp = true;
+  double assimp_seconds = 120.0;
+  uint64_t assimp_memory_bytes = uint64_t{16} << 30;
 };
 
 /// Reads a character file.
@@ -78,10 +94,15 @@ struct ImportOptions {
 /// - MakeHuman `base.obj`: only group `obj_group` ("body"); its vertices are the OBJ's vertices in file
 ///   order restricted to those the group references (for base.obj: the first 13,380, order kept).
 ///   The rig (mhskel + mhw) becomes Mesh::skin.
-/// Policy: only kSupportedExtensions; files over kMaxInputBytes and meshes over kMaxInputVertices /
-/// kMaxInputTriangles are refused; glTF may read only files inside the input's own folder (URIs with
-/// `..` or absolute paths that leave it are refused) and never decodes images; degenerate triangles
-/// and non-manifold edges are kept and reported through `ctx` (InspectMesh).
+/// Policy: only kSupportedExtensions; files over kMaxInputBytes and meshes over options.max_vertices /
+/// max_triangles (default kMaxInputVertices / kMaxInputTriangles) are refused; a glTF whose JSON nests
+/// deeper than 64 levels is refused before it is parsed; glTF may read only files inside the input's own
+/// folder (URIs with `..` or absolute paths that leave it are refused) and never decodes images; a MakeHuman
+/// skeleton's `weights_file` must lie in the skeleton's folder; degenerate triangles and non-manifold edges
+/// are kept and reported through `ctx` (InspectMesh).
+/// Files: each file read — the input; glTF's external buffers and images; whatever assimp's importer opened;
+/// the MakeHuman .mhskel and .mhw — is added to ctx->files_read once read (Context::RecordFileRead), also when
+/// the import then fails.
 /// Errors: kIo (missing / unreadable), kFormat (unsupported, too large or corrupt), kInvalidMesh (no
 /// triangles, too many vertices / triangles, NaN/Inf coordinates, index out of range). Nothing is written.
 Result<Mesh> ImportMesh(const std::string& path, const ImportOptions& options = {}, Context* ctx = nullptr);
