@@ -1,12 +1,15 @@
-// spherechain bake INPUT -o OUT.sphc [--report R.json] [--config C.json] ...
+// spherechain bake INPUT -o OUT.sphc [--report R.json] [--config C.json] [--depfile OUT.d] ...
+// spherechain bake INPUT... --out-dir DIR [-j N]   (several inputs: bake_batch.cpp)
 #include <cstdio>
 #include <filesystem>
 
 #include <spdlog/spdlog.h>
 
+#include "bake_batch.h"
 #include "commands.h"
 #include "spherechain/baker/coverage.h"
 #include "spherechain/baker/bake.h"
+#include "spherechain/import/file_io.h"
 #include "spherechain/playback/debug_export.h"
 
 namespace spherechain::cli {
@@ -14,7 +17,9 @@ namespace spherechain::cli {
 namespace {
 
 struct BakeArgs {
-  std::string input, output, report, config, ray_csv, png;
+  std::vector<std::string> inputs;
+  std::string output, out_dir, report, config, ray_csv, png, depfile;
+  unsigned jobs = 1;
   baker::BakeOptions options;  // --regions, --segmentation, --region-map, --vertices, --rig, --disk-step, --force
 };
 
@@ -75,26 +80,50 @@ void PrintSummary(const baker::BakeResult& r, const import::Context& ctx) {
   Out("  total=%.1f\n", total);
 }
 
+/// Usage errors found after parsing (which outputs go with how many inputs): exit 2, as CLI11's own.
+int UsageError(const std::string& message) {
+  Fail(message);
+  return 2;
+}
+
 int RunBake(const BakeArgs& a) {
+  const bool batch = !a.out_dir.empty();
+  if (batch && !a.output.empty()) return UsageError("bake: give -o (one input) or --out-dir (any number), not both");
+  if (!batch && a.output.empty()) return UsageError("bake: -o OUT.sphc is required (or --out-dir DIR)");
+  if (!batch && a.inputs.size() > 1)
+    return UsageError("bake: " + std::to_string(a.inputs.size()) + " inputs need --out-dir DIR (-o names one asset)");
+  if (batch)
+    for (const std::string* per_file : {&a.report, &a.ray_csv, &a.png, &a.depfile})
+      if (!per_file->empty())
+        return UsageError("bake: --report, --ray-csv, --png and --depfile name one file: with --out-dir, bake each "
+                          "input on its own with -o to get them");
+
+  import::Context ctx = MakeLoggingContext();  // records the files read, the configuration's too (--depfile)
   baker::BakeConfig config;
   if (!a.config.empty()) {
-    auto c = baker::LoadBakeConfig(a.config);
+    auto c = baker::LoadBakeConfig(a.config, &ctx);
     if (!c.ok()) return Fail(c.error());
     config = std::move(c).value();
   }
   if (auto s = baker::ApplyBakeOptions(a.options, &config); !s.ok()) return Fail(s.error());
+  if (batch) return RunBatchBake(a.inputs, a.out_dir, a.jobs, config);
 
   // Fail before the work when an output cannot be written.
-  for (const std::string* out : {&a.output, &a.report, &a.ray_csv, &a.png}) {
+  for (const std::string* out : {&a.output, &a.report, &a.ray_csv, &a.png, &a.depfile}) {
     if (out->empty()) continue;
     const std::filesystem::path dir = std::filesystem::path(*out).parent_path();
     if (!dir.empty() && !std::filesystem::is_directory(dir))
       return Fail("cannot write '" + *out + "': folder '" + dir.string() + "' does not exist");
   }
-  import::Context ctx = MakeLoggingContext();
-  auto result = baker::Bake(a.input, config, &ctx);
+  auto result = baker::Bake(a.inputs.front(), config, &ctx);
   if (!result.ok()) return Fail(result.error());
   const baker::BakeResult& r = result.value();
+  std::string depfile;  // made before anything is written: a path it cannot name fails the bake
+  if (!a.depfile.empty()) {
+    auto d = import::MakeDepfile(a.output, ctx.files_read);
+    if (!d.ok()) return Fail(d.error());
+    depfile = std::move(d).value();
+  }
 
   // Everything is in memory; write each output atomically (a failure leaves no partial file).
   if (auto s = import::WriteFileAtomic(a.output, r.asset.data(), r.asset.size()); !s.ok()) return Fail(s.error());
@@ -110,11 +139,15 @@ int RunBake(const BakeArgs& a) {
       return Fail("internal: the baked asset does not load");
     if (auto s = playback::RenderDebugPng(r.mesh, view, a.png); !s.ok()) return Fail(s.error());
   }
+  // Last: a depfile names an asset that is there (a build system reads it once the command succeeded).
+  if (!a.depfile.empty())
+    if (auto s = import::WriteFileAtomic(a.depfile, depfile); !s.ok()) return Fail(s.error());
   PrintSummary(r, ctx);
   Out("\nwrote %s (%zu bytes)", a.output.c_str(), r.asset.size());
   if (!a.report.empty()) Out(", %s", a.report.c_str());
   if (!a.ray_csv.empty()) Out(", %s", a.ray_csv.c_str());
   if (!a.png.empty()) Out(", %s", a.png.c_str());
+  if (!a.depfile.empty()) Out(", %s", a.depfile.c_str());
   Out("\n");
   return 0;
 }
@@ -124,9 +157,18 @@ int RunBake(const BakeArgs& a) {
 void RegisterBake(CLI::App& app, Commands* commands) {
   auto args = std::make_shared<BakeArgs>();
   CLI::App* sub = app.add_subcommand("bake", "Bake a character into a .sphc sphere-chain asset (paper §3-§5.1)");
-  sub->add_option("input", args->input, "Character file: .gltf/.glb (tinygltf); .obj .fbx .dae .x .blend ... (assimp)")
-      ->required()->check(CLI::ExistingFile);
-  sub->add_option("-o,--output", args->output, "Asset to write (.sphc); written atomically")->required();
+  sub->add_option("input", args->inputs,
+                  "Character file(s): .gltf/.glb (tinygltf); .obj .fbx .dae .x .blend ... (assimp). Several: with --out-dir")
+      ->required();
+  sub->add_option("-o,--output", args->output, "Asset to write (.sphc); written atomically");
+  sub->add_option("--out-dir", args->out_dir,
+                  "Bake each input into DIR/<input stem>.sphc (created when missing), each on its own: a failed input "
+                  "writes nothing and stops nothing; a summary table at the end; exit 1 when any failed");
+  sub->add_option("-j,--jobs", args->jobs, "With --out-dir: bakes at a time (default 1; 0: one per core)");
+  sub->add_option("--depfile", args->depfile,
+                  "Makefile-syntax dependency file to write: the asset's rule naming every file the bake read (input, "
+                  "glTF buffers and images, rig and weights, config, region map), for Make, Ninja and CMake DEPFILE; "
+                  "written last, atomically, and only when the bake succeeded");
   sub->add_option("--report", args->report, "JSON bake report to write");
   sub->add_option("--config", args->config, "JSON bake configuration (parameters, chains, segmentation)")
       ->check(CLI::ExistingFile);

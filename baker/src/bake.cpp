@@ -166,9 +166,10 @@ Result<BakeConfig> ParseBakeConfig(const std::string& text, const std::string& w
   return c;
 }
 
-Result<BakeConfig> LoadBakeConfig(const std::string& path) {
+Result<BakeConfig> LoadBakeConfig(const std::string& path, Context* ctx) {
   auto bytes = ReadFileBytes(path, 16u << 20);
   if (!bytes.ok()) return bytes.error();
+  if (ctx) ctx->RecordFileRead(path);
   return ParseBakeConfig(std::string(bytes->begin(), bytes->end()), path);
 }
 

@@ -75,6 +75,42 @@ Status WriteFileAtomic(const std::string& path, const void* bytes, size_t size) 
   return Ok{};
 }
 
+Result<std::string> MakeDepfile(const std::string& target, const std::vector<std::string>& prerequisites) {
+  std::string text;
+  // gcc's mkdeps.c quoting, which GNU make and Ninja's depfile parser read back.
+  auto append = [&text](const std::string& path) -> Status {
+    if (path.empty()) return MakeError(Error::Code::kIo, "depfile: an empty path cannot be a dependency");
+    for (size_t i = 0; i < path.size(); ++i) {
+      const char c = path[i];
+      if (c == '\n' || c == '\r')
+        return MakeError(Error::Code::kIo, "depfile: '" + path + "' holds a line break, which a depfile cannot name");
+      if (c == ' ' || c == '\t') {
+        for (size_t k = i; k > 0 && path[k - 1] == '\\'; --k) text += '\\';  // 2N+1 backslashes: N, then the blank
+        text += '\\';
+      } else if (c == '#') {
+        text += '\\';
+      } else if (c == '$') {
+        text += '$';
+      }
+      text += c;
+    }
+    return Ok{};
+  };
+  if (Status s = append(target); !s.ok()) return s.error();
+  text += ':';
+  for (const std::string& p : prerequisites) {
+    text += " \\\n ";
+    if (Status s = append(p); !s.ok()) return s.error();
+  }
+  text += '\n';
+  for (const std::string& p : prerequisites) {
+    text += '\n';
+    if (Status s = append(p); !s.ok()) return s.error();
+    text += ":\n";
+  }
+  return text;
+}
+
 Result<std::vector<uint8_t>> ReadFileBytes(const std::string& path, size_t max_size) {
   namespace fs = std::filesystem;
   std::error_code ec;

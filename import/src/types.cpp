@@ -1,6 +1,18 @@
 #include "spherechain/import/types.h"
 
+#include <algorithm>
+#include <filesystem>
+#include <system_error>
+
 namespace spherechain::import {
+
+void Context::RecordFileRead(const std::string& path) {
+  if (path.empty()) return;
+  std::error_code ec;
+  std::filesystem::path p = std::filesystem::absolute(path, ec);
+  const std::string abs = ec ? path : p.lexically_normal().string();
+  if (std::find(files_read.begin(), files_read.end(), abs) == files_read.end()) files_read.push_back(abs);
+}
 
 const char* RegionName(Region r) {
   switch (r) {

@@ -93,9 +93,9 @@ struct BakeConfig {
   PlausibilityLimits plausibility;  ///< bounds of the checks (plausibility.h defaults; not a JSON key)
 };
 
-/// Parses a JSON configuration file. Errors: kIo, kConfig (unknown key, wrong type, value out of range —
-/// the message names the key).
-Result<BakeConfig> LoadBakeConfig(const std::string& path);
+/// Parses a JSON configuration file; records it in `ctx` (Context::files_read) once read. Errors: kIo,
+/// kConfig (unknown key, wrong type, value out of range — the message names the key).
+Result<BakeConfig> LoadBakeConfig(const std::string& path, Context* ctx = nullptr);
 /// Parses JSON text (as LoadBakeConfig) — `where` names the source in messages.
 Result<BakeConfig> ParseBakeConfig(const std::string& json_text, const std::string& where);
 
@@ -172,6 +172,11 @@ struct BakeResult {
 /// CODE: what and where; CODE: ...", every failed check of that point named. With config.force the bake
 /// succeeds, the findings are in BakeResult::plausibility and the asset, and each is logged as a warning
 /// on `ctx`.
+/// Files: every file the bake read is added to ctx->files_read (the character file, glTF buffers and
+/// images, whatever assimp opened, the MakeHuman rig and weights, the region map; LoadBakeConfig adds the
+/// configuration when given the same Context): the inputs a build system's depfile names.
+/// Threads: independent bakes may run at once on different threads, each with its own Context; the result
+/// is the same bytes as a bake run alone (no global state; the parallel loops work in fixed chunks).
 Result<BakeResult> Bake(const std::string& input_path, const BakeConfig& config, Context* ctx = nullptr);
 
 /// The JSON bake report: vertices, triangles, spheres, regions{name: {triangles, spheres}}, chains[{name,

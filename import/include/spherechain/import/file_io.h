@@ -40,6 +40,14 @@ inline Status WriteFileAtomic(const std::string& path, const std::string& text) 
   return WriteFileAtomic(path, text.data(), text.size());
 }
 
+/// A dependency file in Makefile syntax ("depfile", what `gcc -MD -MP` writes), read by Make, Ninja and CMake
+/// (add_custom_command DEPFILE): the rule `target: prerequisites...`, then an empty rule per prerequisite so
+/// that Make does not stop when one is deleted. Every path is escaped as Make reads it: a space or tab as
+/// `\ ` (the backslashes before it doubled), `#` as `\#`, `$` as `$$`. `target` is written as given (the
+/// output path as the build system named it); `prerequisites` in order (Context::files_read: absolute).
+/// Errors: kIo when a path holds a line break (no depfile can name it) or is empty. Allocates.
+Result<std::string> MakeDepfile(const std::string& target, const std::vector<std::string>& prerequisites);
+
 /// Reads a whole file. Errors: kIo. `max_size` caps what is read (kIo "file too large").
 Result<std::vector<uint8_t>> ReadFileBytes(const std::string& path, size_t max_size = size_t(1) << 31);
 

@@ -148,12 +148,24 @@ using Status = Result<Ok>;
 inline Error MakeError(Error::Code code, std::string message) { return Error{code, std::move(message)}; }
 
 // ---------------------------------------------------------------------------------------------------
-/// Injected logging and per-stage timing (Recast's rcContext). All members optional; not thread-safe.
+/// Injected logging, per-stage timing (Recast's rcContext) and the record of the files read. All members
+/// optional; not thread-safe (one Context per bake: concurrent bakes each take their own).
 class Context {
  public:
   enum class Level : uint8_t { kDebug, kInfo, kWarn };
   std::function<void(Level, const std::string&)> sink;  ///< [opt] receives every log line
   std::vector<std::pair<std::string, double>> timings_ms;  ///< stage name → milliseconds, in order
+  /// Every file the work done with this Context read, in the order first read, each once: absolute and
+  /// lexically normal (symbolic links kept as named). Recorded where files are opened — the glTF reader's
+  /// file callbacks (the .gltf/.glb, external buffers and images), assimp's file system (the input and
+  /// every file its importer opens), the OBJ and MakeHuman rig readers (.obj, .mhskel, .mhw), the bake
+  /// configuration and region-map readers — and only for files that were opened and read. What `spherechain
+  /// bake --depfile` writes (import/file_io.h MakeDepfile); a build system rebakes when one of them changes.
+  std::vector<std::string> files_read;
+
+  /// Adds `path` to files_read (made absolute against the current directory; a path already there is not
+  /// added again). Called by the readers after they opened `path`. Allocates.
+  void RecordFileRead(const std::string& path);
 
   void Log(Level level, const std::string& message) const {
     if (sink) sink(level, message);
