@@ -105,7 +105,7 @@ int main(int argc, char** argv) {
   test::Mesh mesh;
   runtime::AssetView view;
   std::string source;
-  if (!synthetic && test::ReadAligned(asset_path, &bytes) &&
+  if (!synthetic && test::ReadAlignedFile(asset_path, &bytes) &&
       runtime::LoadAsset(bytes.data(), bytes.size, &view) == runtime::Status::kOk) {
     mesh.positions = test::ObjPositions(obj_path, view.vertex_count);
     source = "MakeHuman " + asset_path;

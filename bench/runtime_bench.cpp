@@ -149,6 +149,7 @@ Workload Synthetic(uint32_t frame_count) {
   return w;
 }
 
+// A raw frame file (play --dump-frames); the asset goes through test::ReadAlignedFile.
 bool ReadFile(const std::string& path, std::vector<char>* out) {
   std::ifstream f(path, std::ios::binary);
   if (!f) return false;
@@ -157,9 +158,8 @@ bool ReadFile(const std::string& path, std::vector<char>* out) {
 }
 
 bool FromFiles(const std::string& asset, const std::string& frames, Workload* w) {
+  if (!test::ReadAlignedFile(asset, &w->bytes)) return std::fprintf(stderr, "cannot read %s\n", asset.c_str()), false;
   std::vector<char> raw;
-  if (!ReadFile(asset, &raw)) return std::fprintf(stderr, "cannot read %s\n", asset.c_str()), false;
-  w->bytes.assign(reinterpret_cast<const uint8_t*>(raw.data()), raw.size());
   sc::AssetView view;
   if (sc::Status s = sc::LoadAsset(w->bytes.data(), w->bytes.size, &view); s != sc::Status::kOk)
     return std::fprintf(stderr, "%s: %s\n", asset.c_str(), sc::ToString(s)), false;

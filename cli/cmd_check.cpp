@@ -17,7 +17,7 @@
 
 #include "animation_source.h"
 #include "commands.h"
-#include "html_embed.h"
+#include "check_html.h"
 #include "spherechain/baker/bake.h"
 #include "spherechain/evaluate/check.h"
 #include "spherechain/import/import.h"
@@ -136,118 +136,6 @@ bool OpenOrBake(const CheckArgs& a, LoadedAsset* asset, import::Mesh* mesh, std:
   return true;
 }
 
-// "1.23 cm (0.7 %)" with units, else "0.0123 (0.7 %)".
-std::string DepthText(double d, const evaluate::CheckReport& r) {
-  char b[64];
-  if (r.unit_scale_m > 0) std::snprintf(b, sizeof b, "%.2f cm (%.2f %%)", d * r.unit_scale_m * 100.0, 100.0 * d / r.height);
-  else std::snprintf(b, sizeof b, "%.4g (%.2f %%)", d, 100.0 * d / r.height);
-  return b;
-}
-
-// "150.66 cm" with units, else "1.507 units".
-std::string LengthText(double d, const evaluate::CheckReport& r) {
-  char b[48];
-  if (r.unit_scale_m > 0) std::snprintf(b, sizeof b, "%.2f cm", d * r.unit_scale_m * 100.0);
-  else std::snprintf(b, sizeof b, "%.4g units", d);
-  return b;
-}
-
-// The command that writes a viewer page of `clip` (its frames are CheckClips' frames).
-std::string ViewCommand(const CheckArgs& a, const std::string& asset_name, const evaluate::CheckClip& clip,
-                        const std::vector<std::string>& poses) {
-  std::string cmd = "spherechain view " + asset_name + " --mesh " + a.character;
-  if (clip.name == "morph" && !poses.empty()) {
-    cmd += " --morph";
-    for (const std::string& p : poses) cmd += " " + p;
-  } else {
-    cmd += " --clip '" + clip.name + "'";
-  }
-  if (a.key_times) return cmd + " -o view.html  # (--key-times: the viewer's frames are uniform, not these)";
-  return cmd + " --frames " + std::to_string(clip.frames) + " -o view.html";
-}
-
-std::string Html(const std::string& s) {
-  std::string o;
-  for (const char c : s) {
-    if (c == '<') o += "&lt;";
-    else if (c == '>') o += "&gt;";
-    else if (c == '&') o += "&amp;";
-    else if (c == '"') o += "&quot;";
-    else o += c;
-  }
-  return o;
-}
-
-// One self-contained page: the summary table, then per failing event its picture at the deepest frame.
-bool WriteHtml(const CheckArgs& a, const std::string& asset_name, const runtime::AssetView& view,
-               const import::Mesh& mesh, const evaluate::CheckOptions& options, const evaluate::CheckReport& r,
-               std::string* error) {
-  std::string page =
-      "<!doctype html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>spherechain check: " + Html(a.character) +
-      "</title><style>body{font:14px system-ui,sans-serif;margin:24px;color:#222}table{border-collapse:collapse}"
-      "td,th{padding:4px 10px;border-bottom:1px solid #ddd;text-align:left}.FAIL{color:#b00;font-weight:bold}"
-      ".PASS{color:#070;font-weight:bold}figure{margin:16px 0 32px}img{max-width:100%;border:1px solid #ccc}"
-      "code{background:#f4f4f4;padding:2px 4px}</style></head><body>\n";
-  page += "<h1>spherechain check: " + Html(fs::path(a.character).filename().string()) + "</h1>\n<p>" +
-          Html(a.character) + ", asset " + Html(asset_name) + ". Height " + LengthText(r.height, r) +
-          "; default threshold " + DepthText(r.max_depth, r) + ". " + (r.failed() ? "<span class=FAIL>FAIL</span>" : "<span class=PASS>PASS</span>") +
-          "</p>\n<table><tr><th>clip</th><th>frames</th><th>events</th><th>failing</th><th>deepest</th><th>result</th></tr>\n";
-  for (const evaluate::CheckClip& c : r.clips) {
-    size_t failing = 0;
-    for (const auto& e : c.events) failing += e.failed;
-    page += "<tr><td>" + Html(c.name) + "</td><td>" + std::to_string(c.frames) + "</td><td>" +
-            std::to_string(c.events.size()) + "</td><td>" + std::to_string(failing) + "</td><td>" +
-            DepthText(c.deepest(), r) + "</td><td class=" + (c.failed() ? "FAIL>FAIL" : "PASS>PASS") + "</td></tr>\n";
-  }
-  page += "</table>\n";
-  std::vector<float> positions;
-  const fs::path png = fs::temp_directory_path() / ("spherechain-check-" + std::to_string(getpid()) + ".png");
-  for (const evaluate::CheckClip& c : r.clips) {
-    if (!c.failed()) continue;
-    page += "<h2>" + Html(c.name) + "</h2>\n<p>Viewer of this clip: <code>" + Html(ViewCommand(a, asset_name, c, options.poses)) +
-            "</code>, then open the links below.</p>\n";
-    for (const evaluate::CheckEvent& e : c.events) {
-      if (!e.failed) continue;
-      if (auto s = evaluate::CheckFrame(mesh, options, c, e.deepest_frame, &positions); !s.ok())
-        return *error = s.error().message, false;
-      std::vector<uint8_t> marks(mesh.triangle_count(), 0);
-      for (const auto& [ta, tb] : e.contacts) marks[ta] = marks[tb] = 1;
-      char caption[256];
-      std::snprintf(caption, sizeof caption, "%s frame %u (%.3f s): %s, depth %s", c.name.c_str(), e.deepest_frame,
-                    e.deepest_time, e.name.c_str(), DepthText(e.depth, r).c_str());
-      const std::string svg = playback::RenderFrameSvg(mesh, view, positions.data(), {}, marks, caption, 1200);
-      if (auto s = playback::SvgToPng(svg, png.string()); !s.ok()) return *error = s.error().message, false;
-      std::string bytes;
-      const bool read = ReadText(png, &bytes);
-      std::error_code ec;
-      fs::remove(png, ec);
-      if (!read) return *error = "cannot read the picture " + png.string(), false;
-      char line[512];
-      std::snprintf(line, sizeof line,
-                    "frames %u–%u (%.3f–%.3f s), deepest at frame %u; triangles %u / %u, joints %s / %s; %u contacts "
-                    "there%s",
-                    e.first_frame, e.last_frame, e.first_time, e.last_time, e.deepest_frame, e.triangles[0],
-                    e.triangles[1], e.joints[0].c_str(), e.joints[1].c_str(), unsigned(e.contacts.size()),
-                    e.baseline.empty() ? "" : ("; baseline: " + e.baseline).c_str());
-      page += "<figure class=event><figcaption><b>" + Html(e.name) + "</b> depth " + DepthText(e.depth, r) +
-              " over " + DepthText(e.threshold, r) + ": " + Html(line) + "." +
-              (a.key_times ? std::string()
-                           : " <a href=\"view.html#frame=" + std::to_string(e.deepest_frame) + "\">view at frame " +
-                                 std::to_string(e.deepest_frame) + "</a>") +
-              "</figcaption>\n<img alt=\"" + Html(e.name) + " at frame " + std::to_string(e.deepest_frame) +
-              "\" src=\"data:image/png;base64," + Base64(bytes.data(), bytes.size()) + "\"></figure>\n";
-    }
-    if (!c.fixed.empty()) {
-      page += "<p>Fixed since the baseline:";
-      for (const std::string& f : c.fixed) page += " " + Html(f);
-      page += "</p>\n";
-    }
-  }
-  page += "</body></html>\n";
-  if (auto s = import::WriteFileAtomic(a.html, page); !s.ok()) return *error = s.error().message, false;
-  return true;
-}
-
 int RunCheck(const CheckArgs& a) {
   // ---- what needs no file -----------------------------------------------------------------------------
   if (!(a.fps > 0 && a.fps <= 1000)) return BadInput("--fps " + std::to_string(a.fps) + " is outside (0, 1000]");
@@ -345,7 +233,7 @@ int RunCheck(const CheckArgs& a) {
     Out("wrote %s\n", a.junit.c_str());
   }
   if (!a.html.empty()) {
-    if (!WriteHtml(a, asset_name, asset.view, mesh, options, r, &error)) return BadInput("--html: " + error);
+    if (!WriteCheckHtml({a.html, a.character, asset_name, a.key_times}, asset.view, mesh, options, r, &error)) return BadInput("--html: " + error);
     Out("wrote %s\n", a.html.c_str());
   }
   return r.failed() ? kExitFailed : 0;

@@ -38,61 +38,14 @@ nlohmann::json RegionsJson(const std::vector<std::pair<int, int>>& pairs) {
   return a;
 }
 
-int RunPlay(const PlayArgs& a) {
-  LoadedAsset asset;
-  import::Mesh mesh;
-  std::string error;
-  if (!OpenAssetAndMesh(a.asset, a.anim.mesh, a.rig, &asset, &mesh, &error)) return Fail(error);
-  const runtime::AssetView& view = asset.view;
-  AnimationSource anim;
-  if (!OpenAnimation(mesh, a.anim, &anim, &error)) return Fail(error);
+/// The per-frame table and the summary, on stdout.
+void PrintReport(const PlayArgs& a, const runtime::AssetView& view, const AnimationSource& anim,
+                 const playback::PlayOptions& opts, const playback::PlayReport& report) {
   const uint32_t frames = anim.frames;
-
-  playback::PlayOptions opts;
-  opts.m1 = a.method != "m2";
-  opts.m2 = a.method != "m1";
-  opts.refit = a.refit == "paper" ? playback::PlayRefit::kPaper
-               : a.refit == "joints" ? playback::PlayRefit::kJoints
-                                     : playback::PlayRefit::kPivotFrame;
-  opts.repeat = a.repeat;
-  opts.narrow_phase = a.narrow_phase || a.narrow_behind > 0.0f;
-  opts.crease = !a.asset_exclusions;
-  opts.narrow_behind_margin = a.narrow_behind;
   const bool joints = opts.refit == playback::PlayRefit::kJoints;
-  if (joints && !view.asset->sphere_joints())
-    return Fail("'" + a.asset + "' has no joint weights (schema v" + std::to_string(view.asset->schema_version()) +
-                ", or baked from a mesh without a skin): --refit joints needs an asset baked by this version from a "
-                "rigged character; re-bake it");
-  if (joints && view.asset->joint_count() != mesh.skin->joints.size())
-    return Fail("'" + a.asset + "' was baked for " + std::to_string(view.asset->joint_count()) + " joints, '" + a.anim.mesh +
-                "' has " + std::to_string(mesh.skin->joints.size()));
-  if (!a.dump_frames.empty()) {
-    // One raw frame per file: #V×3 little-endian float32, for bench/runtime_bench and the CUDA bench; and
-    // its joint matrices (frame_NNNN.joints: #J × 12 float32, JointRefitJob's layout) when the asset can
-    // refit from them.
-    opts.on_frame = [&a](uint32_t f, const std::vector<float>& positions, const std::vector<float>* joint_matrices) {
-      char name[32];
-      std::snprintf(name, sizeof name, "frame_%04u.f32", f);
-      if (auto s = import::WriteFileAtomic((fs::path(a.dump_frames) / name).string(), positions.data(),
-                                          positions.size() * sizeof(float));
-          !s.ok())
-        return s;
-      if (joint_matrices) {
-        std::snprintf(name, sizeof name, "frame_%04u.joints", f);
-        return import::WriteFileAtomic((fs::path(a.dump_frames) / name).string(), joint_matrices->data(),
-                                      joint_matrices->size() * sizeof(float));
-      }
-      return import::Status(import::Ok{});
-    };
-  }
-  auto played = playback::Play(mesh, view, anim, opts);
-  if (!played.ok()) return Fail(played.error());
-  const playback::PlayReport& report = played.value();
   const playback::PlaySummary& sum = report.summary;
   const std::vector<playback::FrameReport>& rows = report.frames;
   const playback::FrameReport& bind = report.bind;
-
-  // ---- report ------------------------------------------------------------------------------------
   Out("play: %s + %s — %s, %u frames, %u spheres, %u chains, refit %s, timings = min of %u runs\n",
               a.asset.c_str(), a.anim.mesh.c_str(), report.animation.c_str(), frames, view.sphere_count,
               view.chain_count, a.refit.c_str(), std::max(1u, a.repeat));
@@ -151,87 +104,152 @@ int RunPlay(const PlayArgs& a) {
   for (const auto& [p, c] : sum.region_frames) Out(" %s(%u)", RegionPairName(view, p.first, p.second).c_str(), c);
   Out("\n");
 
-  if (!a.json.empty()) {
-    nlohmann::json j;
-    j["asset"] = a.asset;
-    if (view.asset->regions()) {  // a creature (schema v4): what R0..R(n-1) are
-      nlohmann::json names = nlohmann::json::array();
-      for (uint32_t r = 0; r < runtime::RegionCount(view); ++r) names.push_back(runtime::RegionName(view, r));
-      j["regions"] = names;
+}
+
+/// What --json writes: the options, the animation, every frame (the bind pose first) and the summary.
+nlohmann::json PlayJson(const PlayArgs& a, const runtime::AssetView& view, const AnimationSource& anim,
+                        const playback::PlayOptions& opts, const playback::PlayReport& report) {
+  const uint32_t frames = anim.frames;
+  const bool joints = opts.refit == playback::PlayRefit::kJoints;
+  const playback::PlaySummary& sum = report.summary;
+  const std::vector<playback::FrameReport>& rows = report.frames;
+  const playback::FrameReport& bind = report.bind;
+  nlohmann::json j;
+  j["asset"] = a.asset;
+  if (view.asset->regions()) {  // a creature (schema v4): what R0..R(n-1) are
+    nlohmann::json names = nlohmann::json::array();
+    for (uint32_t r = 0; r < runtime::RegionCount(view); ++r) names.push_back(runtime::RegionName(view, r));
+    j["regions"] = names;
+  }
+  j["mesh"] = a.anim.mesh;
+  j["method"] = a.method;
+  j["refit"] = a.refit;
+  j["repeat"] = std::max(1u, a.repeat);
+  if (anim.clip) {
+    j["animation"] = {{"kind", "clip"}, {"name", anim.clip->name}, {"duration_s", anim.clip->duration_s}};
+  } else {
+    nlohmann::json keys = nlohmann::json::array();
+    for (size_t k = 0; k < anim.poses.size(); ++k)
+      keys.push_back({{"name", anim.poses[k].name},
+                      {"frame", playback::MorphKeyFrame(uint32_t(k), frames, uint32_t(anim.poses.size()))}});
+    j["animation"] = {{"kind", "morph"}, {"poses_from", anim.poses_from}, {"keys", keys}};
+  }
+  const auto* sr = view.asset->sphere_regions();
+  auto row_json = [&](const playback::FrameReport& r) {
+    nlohmann::json o = {{"label", r.label},
+                        {"tests_m1", r.m1.tests},
+                        {"pairs_m1_raw", r.m1.raw_pairs},
+                        {"pairs_m1", r.m1.distinct_pairs},
+                        {"tests_m2", r.m2.tests},
+                        {"pairs_m2", r.m2.distinct_pairs},
+                        {"refit_us", r.refit_us},
+                        {"detect_m1_us", r.detect_m1_us},
+                        {"detect_m2_us", r.detect_m2_us},
+                        {"tracking_mean_abs_dF", r.tracking_mean},
+                        {"tracking_max_abs_dF", r.tracking_max},
+                        {"regions_touching", RegionsJson(r.regions)}};
+    if (opts.narrow_phase)
+      o["narrow_phase"] = {{"contacts", r.narrow.contacts},
+                           {"candidate_pairs", r.narrow.candidate_pairs},
+                           {"triangle_tests", r.narrow.triangle_tests},
+                           {"degenerate_triangles", r.narrow.degenerate_triangles},
+                           {"us", r.narrow_us},
+                           {"regions_in_contact", RegionsJson(r.contact_regions)}};
+    if (opts.narrow_phase && !r.contact_region_depth.empty())
+      o["narrow_phase"]["regions_in_contact_depth"] = r.contact_region_depth;
+    if (opts.narrow_behind_margin > 0.0f) {
+      o["narrow_phase"]["behind_m2_pairs"] = r.narrow_pairs;
+      o["narrow_phase"]["behind_margin_scale"] = opts.narrow_behind_margin;
     }
-    j["mesh"] = a.anim.mesh;
-    j["method"] = a.method;
-    j["refit"] = a.refit;
-    j["repeat"] = std::max(1u, a.repeat);
-    if (anim.clip) {
-      j["animation"] = {{"kind", "clip"}, {"name", anim.clip->name}, {"duration_s", anim.clip->duration_s}};
-    } else {
-      nlohmann::json keys = nlohmann::json::array();
-      for (size_t k = 0; k < anim.poses.size(); ++k)
-        keys.push_back({{"name", anim.poses[k].name},
-                        {"frame", playback::MorphKeyFrame(uint32_t(k), frames, uint32_t(anim.poses.size()))}});
-      j["animation"] = {{"kind", "morph"}, {"poses_from", anim.poses_from}, {"keys", keys}};
-    }
-    const auto* sr = view.asset->sphere_regions();
-    auto row_json = [&](const playback::FrameReport& r) {
-      nlohmann::json o = {{"label", r.label},
-                          {"tests_m1", r.m1.tests},
-                          {"pairs_m1_raw", r.m1.raw_pairs},
-                          {"pairs_m1", r.m1.distinct_pairs},
-                          {"tests_m2", r.m2.tests},
-                          {"pairs_m2", r.m2.distinct_pairs},
-                          {"refit_us", r.refit_us},
-                          {"detect_m1_us", r.detect_m1_us},
-                          {"detect_m2_us", r.detect_m2_us},
-                          {"tracking_mean_abs_dF", r.tracking_mean},
-                          {"tracking_max_abs_dF", r.tracking_max},
-                          {"regions_touching", RegionsJson(r.regions)}};
-      if (opts.narrow_phase)
-        o["narrow_phase"] = {{"contacts", r.narrow.contacts},
-                             {"candidate_pairs", r.narrow.candidate_pairs},
-                             {"triangle_tests", r.narrow.triangle_tests},
-                             {"degenerate_triangles", r.narrow.degenerate_triangles},
-                             {"us", r.narrow_us},
-                             {"regions_in_contact", RegionsJson(r.contact_regions)}};
-      if (opts.narrow_phase && !r.contact_region_depth.empty())
-        o["narrow_phase"]["regions_in_contact_depth"] = r.contact_region_depth;
-      if (opts.narrow_behind_margin > 0.0f) {
-        o["narrow_phase"]["behind_m2_pairs"] = r.narrow_pairs;
-        o["narrow_phase"]["behind_margin_scale"] = opts.narrow_behind_margin;
+    nlohmann::json pairs = nlohmann::json::array();
+    for (const runtime::Collision& c : r.pairs)
+      pairs.push_back({{"a", c.a}, {"b", c.b}, {"region_a", sr ? int(sr->Get(c.a)) : -1},
+                       {"region_b", sr ? int(sr->Get(c.b)) : -1}, {"depth", c.depth}});
+    o["pairs"] = pairs;  // M2's when run, else M1's
+    return o;
+  };
+  j["bind"] = row_json(bind);
+  nlohmann::json fr = nlohmann::json::array();
+  for (const playback::FrameReport& r : rows) {
+    nlohmann::json o = row_json(r);
+    o["frame"] = r.frame;
+    fr.push_back(o);
+  }
+  j["frames"] = fr;
+  nlohmann::json rf = nlohmann::json::object();
+  for (const auto& [p, c] : sum.region_frames) rf["R" + std::to_string(p.first) + "-R" + std::to_string(p.second)] = c;
+  j["summary"] = {{"frames", frames},
+                  {"frames_with_collisions", sum.frames_with_pairs},
+                  {"mean_pairs_m1_raw", sum.mean_pairs_m1_raw},
+                  {"mean_pairs_m1", sum.mean_pairs_m1},
+                  {"mean_pairs_m2", sum.mean_pairs_m2},
+                  {"mean_refit_us", sum.mean_refit_us},
+                  {"tracking_mean_abs_dF", sum.tracking_mean},
+                  {"tracking_max_abs_dF", sum.tracking_max},
+                  {"joint_vs_vertex_centre_error_pct",
+                   joints ? nlohmann::json{{"median", sum.joint_error_median},
+                                           {"p95", sum.joint_error_p95},
+                                           {"max", sum.joint_error_max}}
+                          : nlohmann::json()},
+                  {"mean_detect_m1_us", sum.mean_detect_m1_us},
+                  {"mean_detect_m2_us", sum.mean_detect_m2_us},
+                  {"regions_touching_frames", rf}};
+  return j;
+}
+
+int RunPlay(const PlayArgs& a) {
+  LoadedAsset asset;
+  import::Mesh mesh;
+  std::string error;
+  if (!OpenAssetAndMesh(a.asset, a.anim.mesh, a.rig, &asset, &mesh, &error)) return Fail(error);
+  const runtime::AssetView& view = asset.view;
+  AnimationSource anim;
+  if (!OpenAnimation(mesh, a.anim, &anim, &error)) return Fail(error);
+
+  playback::PlayOptions opts;
+  opts.m1 = a.method != "m2";
+  opts.m2 = a.method != "m1";
+  opts.refit = a.refit == "paper" ? playback::PlayRefit::kPaper
+               : a.refit == "joints" ? playback::PlayRefit::kJoints
+                                     : playback::PlayRefit::kPivotFrame;
+  opts.repeat = a.repeat;
+  opts.narrow_phase = a.narrow_phase || a.narrow_behind > 0.0f;
+  opts.crease = !a.asset_exclusions;
+  opts.narrow_behind_margin = a.narrow_behind;
+  const bool joints = opts.refit == playback::PlayRefit::kJoints;
+  if (joints && !view.asset->sphere_joints())
+    return Fail("'" + a.asset + "' has no joint weights (schema v" + std::to_string(view.asset->schema_version()) +
+                ", or baked from a mesh without a skin): --refit joints needs an asset baked by this version from a "
+                "rigged character; re-bake it");
+  if (joints && view.asset->joint_count() != mesh.skin->joints.size())
+    return Fail("'" + a.asset + "' was baked for " + std::to_string(view.asset->joint_count()) + " joints, '" + a.anim.mesh +
+                "' has " + std::to_string(mesh.skin->joints.size()));
+  if (!a.dump_frames.empty()) {
+    // One raw frame per file: #V×3 little-endian float32, for bench/runtime_bench and the CUDA bench; and
+    // its joint matrices (frame_NNNN.joints: #J × 12 float32, JointRefitJob's layout) when the asset can
+    // refit from them.
+    opts.on_frame = [&a](uint32_t f, const std::vector<float>& positions, const std::vector<float>* joint_matrices) {
+      char name[32];
+      std::snprintf(name, sizeof name, "frame_%04u.f32", f);
+      if (auto s = import::WriteFileAtomic((fs::path(a.dump_frames) / name).string(), positions.data(),
+                                          positions.size() * sizeof(float));
+          !s.ok())
+        return s;
+      if (joint_matrices) {
+        std::snprintf(name, sizeof name, "frame_%04u.joints", f);
+        return import::WriteFileAtomic((fs::path(a.dump_frames) / name).string(), joint_matrices->data(),
+                                      joint_matrices->size() * sizeof(float));
       }
-      nlohmann::json pairs = nlohmann::json::array();
-      for (const runtime::Collision& c : r.pairs)
-        pairs.push_back({{"a", c.a}, {"b", c.b}, {"region_a", sr ? int(sr->Get(c.a)) : -1},
-                         {"region_b", sr ? int(sr->Get(c.b)) : -1}, {"depth", c.depth}});
-      o["pairs"] = pairs;  // M2's when run, else M1's
-      return o;
+      return import::Status(import::Ok{});
     };
-    j["bind"] = row_json(bind);
-    nlohmann::json fr = nlohmann::json::array();
-    for (const playback::FrameReport& r : rows) {
-      nlohmann::json o = row_json(r);
-      o["frame"] = r.frame;
-      fr.push_back(o);
-    }
-    j["frames"] = fr;
-    nlohmann::json rf = nlohmann::json::object();
-    for (const auto& [p, c] : sum.region_frames) rf["R" + std::to_string(p.first) + "-R" + std::to_string(p.second)] = c;
-    j["summary"] = {{"frames", frames},
-                    {"frames_with_collisions", sum.frames_with_pairs},
-                    {"mean_pairs_m1_raw", sum.mean_pairs_m1_raw},
-                    {"mean_pairs_m1", sum.mean_pairs_m1},
-                    {"mean_pairs_m2", sum.mean_pairs_m2},
-                    {"mean_refit_us", sum.mean_refit_us},
-                    {"tracking_mean_abs_dF", sum.tracking_mean},
-                    {"tracking_max_abs_dF", sum.tracking_max},
-                    {"joint_vs_vertex_centre_error_pct",
-                     joints ? nlohmann::json{{"median", sum.joint_error_median},
-                                             {"p95", sum.joint_error_p95},
-                                             {"max", sum.joint_error_max}}
-                            : nlohmann::json()},
-                    {"mean_detect_m1_us", sum.mean_detect_m1_us},
-                    {"mean_detect_m2_us", sum.mean_detect_m2_us},
-                    {"regions_touching_frames", rf}};
+  }
+  auto played = playback::Play(mesh, view, anim, opts);
+  if (!played.ok()) return Fail(played.error());
+  const playback::PlayReport& report = played.value();
+
+  PrintReport(a, view, anim, opts, report);
+  if (!a.json.empty()) {
+    const nlohmann::json j = PlayJson(a, view, anim, opts, report);
     const std::string text = JsonText(j) + "\n";
     if (auto s = import::WriteFileAtomic(a.json, text); !s.ok()) return Fail(s.error());
     Out("wrote %s\n", a.json.c_str());

@@ -2,8 +2,8 @@
 //                  [--three DIR] [--poses-dir DIR] [--rig MHSKEL]
 //
 // Writes one self-contained HTML file that shows the animation as the runtime sees it: the mesh coloured
-// by region, the refit spheres (RefitJob, §5.1), the colliding sphere pairs (DetectJob, M1 or M2, §5.2)
-// and the triangles in contact (NarrowPhaseJob) frame by frame, with a timeline of the per-frame counts,
+// by region, the refit spheres (§5.1), the colliding sphere pairs (M1 or M2, §5.2) and the triangles in
+// contact (narrow phase) frame by frame — playback::Session's frames —, with a timeline of the per-frame counts,
 // play / pause / step and an orbit camera. three.js (viewer/package.json, `npm ci` there) is embedded in
 // the file, so it opens offline from disk. The page itself is viewer/page.html, compiled in.
 //
@@ -15,6 +15,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <span>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -23,9 +24,9 @@
 #include "commands.h"
 #include "spherechain/playback/animation.h"
 #include "spherechain/playback/debug_export.h"
+#include "spherechain/playback/session.h"
 #include "spherechain/import/import.h"
 #include "spherechain/baker/write.h"
-#include "spherechain/runtime/narrow_phase.h"
 #include "spherechain/runtime/runtime.h"
 #include "html_embed.h"
 #include "view_page.h"  // generated from viewer/page.html: kViewPage
@@ -69,20 +70,17 @@ int RunView(const ViewArgs& a) {
   AnimationSource anim;
   if (!OpenAnimation(mesh, anim_args, &anim, &error)) return Fail(error);
 
-  runtime::Model model;
-  runtime::Workspace ws;
-  if (runtime::Status s = model.Init(view); runtime::Failed(s) || runtime::Failed(s = ws.Init(model)))
-    return Fail(std::string("runtime Model / Workspace::Init: ") + runtime::ToString(s));
-  runtime::NarrowPhaseModel narrow;
-  runtime::NarrowPhaseWorkspace narrow_ws;
-  if (runtime::Status s = narrow.Init(view); runtime::Failed(s) || runtime::Failed(s = narrow_ws.Init(narrow)))
-    return Fail("'" + a.asset + "': narrow phase: " + runtime::ToString(s) +
-                (s == runtime::Status::kErrorMissingField ? " (baked before the narrow phase existed: re-bake it)" : ""));
-  const runtime::DetectMethod method = a.method == "m1" ? runtime::DetectMethod::kM1 : runtime::DetectMethod::kM2;
-  std::vector<runtime::Collision> pairs(runtime::DetectBound(view, method));
-  std::vector<runtime::TriangleContact> contacts(1u << 14);
-  std::vector<runtime::ContactDepth> depths;  // with the crease rule: the skin's definition, with depths
-  const bool crease = narrow.has_crease();
+  // The frame pipeline (playback::Session): refit, the method's pairs, and every contact of the frame (the
+  // crease rule with depths on an asset baked with it), the contact buffer grown until all fit.
+  playback::SessionOptions so;
+  so.m1 = a.method == "m1";
+  so.m2 = !so.m1;
+  so.narrow = playback::SessionNarrow::kEvery;
+  so.contact_capacity = 1u << 14;
+  so.grow_contacts = true;
+  playback::Session session;
+  if (auto s = session.Init(view, mesh, so); !s.ok()) return Fail("'" + a.asset + "': " + s.error().message);
+  const bool crease = session.exclusions() == runtime::Exclusions::kCrease;
 
   const uint32_t V = view.vertex_count, T = view.triangle_count, S = view.sphere_count, F = anim.frames;
   std::vector<std::vector<float>> frames(F);
@@ -105,14 +103,10 @@ int RunView(const ViewArgs& a) {
   uint64_t total_contacts = 0;
   uint32_t max_pairs = 0, max_contacts = 0;
   for (uint32_t f = 0; f < F; ++f) {
-    const runtime::PositionsView positions{frames[f].data(), V, 12};
-    runtime::RefitJob refit;
-    refit.model = &model;
-    refit.workspace = &ws;
-    refit.positions = positions;
-    if (runtime::Status s = refit.Run(); runtime::Failed(s))
-      return Fail("view: frame " + std::to_string(f) + ": refit: " + runtime::ToString(s));
-    const runtime::SphereArrays sp = ws.spheres();
+    if (auto s = session.Run(frames[f].data(), nullptr, f, labels[f]); !s.ok())
+      return Fail("view: frame " + std::to_string(f) + ": " + s.error().message);
+    const playback::SessionFrame& fr = session.frame();
+    const runtime::SphereArrays& sp = fr.spheres;
     std::vector<float> spheres(4 * size_t(S));
     for (uint32_t s = 0; s < S; ++s) {
       spheres[4 * s] = sp.x[s];
@@ -120,37 +114,11 @@ int RunView(const ViewArgs& a) {
       spheres[4 * s + 2] = sp.z[s];
       spheres[4 * s + 3] = sp.r[s];
     }
-    uint32_t pair_count = 0;
-    runtime::DetectJob detect;
-    detect.model = &model;
-    detect.workspace = &ws;
-    detect.method = method;
-    detect.output = pairs.data();
-    detect.capacity = static_cast<uint32_t>(pairs.size());
-    detect.count = &pair_count;
-    if (runtime::Status s = detect.Run(); runtime::Failed(s))
-      return Fail("view: frame " + std::to_string(f) + ": detect: " + runtime::ToString(s));
-    uint32_t contact_count = 0;
-    runtime::NarrowPhaseStats stats;
-    runtime::NarrowPhaseJob job;
-    job.model = &narrow;
-    job.workspace = &narrow_ws;
-    job.positions = positions;
-    job.count = &contact_count;
-    job.stats = &stats;
-    if (crease) job.exclusions = runtime::Exclusions::kCrease;
-    for (;;) {  // no useful bound exists: grow the buffer until every contact fits
-      if (crease) depths.resize(contacts.size()), job.depths = depths.data();
-      job.output = contacts.data();
-      job.capacity = static_cast<uint32_t>(contacts.size());
-      const runtime::Status s = job.Run();
-      if (runtime::Failed(s)) return Fail("view: frame " + std::to_string(f) + ": narrow phase: " + runtime::ToString(s));
-      if (!runtime::IsTruncated(s)) break;
-      contacts.resize(std::max<size_t>(2 * contacts.size(), stats.contacts));
-    }
+    const std::span<const runtime::Collision> pairs = so.m1 ? fr.m1 : fr.m2;
+    const uint32_t pair_count = uint32_t(pairs.size()), contact_count = uint32_t(fr.contacts.size());
     nlohmann::json pj = nlohmann::json::array(), cj = nlohmann::json::array();
-    for (uint32_t i = 0; i < pair_count; ++i) pj.push_back(pairs[i].a), pj.push_back(pairs[i].b);
-    for (uint32_t i = 0; i < contact_count; ++i) cj.push_back(contacts[i].triangle_a), cj.push_back(contacts[i].triangle_b);
+    for (const runtime::Collision& p : pairs) pj.push_back(p.a), pj.push_back(p.b);
+    for (const runtime::TriangleContact& c : fr.contacts) cj.push_back(c.triangle_a), cj.push_back(c.triangle_b);
     std::vector<int16_t> q(3 * size_t(V));
     for (uint32_t v = 0; v < V; ++v)
       for (int k = 0; k < 3; ++k) {
@@ -163,7 +131,7 @@ int RunView(const ViewArgs& a) {
                            {"spheres", Base64(spheres)},
                            {"pairs", pj},
                            {"contacts", cj},
-                           {"deepest", crease && contact_count ? std::max_element(depths.begin(), depths.begin() + contact_count,
+                           {"deepest", crease && contact_count ? std::max_element(fr.depths.begin(), fr.depths.end(),
                                                                                    [](const auto& x, const auto& y) { return x.depth < y.depth; })->depth
                                                                : 0.0f}});
     total_contacts += contact_count;

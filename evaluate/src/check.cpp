@@ -8,11 +8,13 @@
 #include <fstream>
 #include <limits>
 #include <set>
+#include <span>
 #include <sstream>
 
 #include "spherechain/import/file_io.h"
 #include "spherechain/playback/animation_source.h"
 #include "spherechain/playback/character.h"
+#include "spherechain/playback/session.h"
 #include "spherechain/runtime/narrow_phase.h"
 
 namespace spherechain::evaluate {
@@ -103,35 +105,16 @@ std::string XmlEscape(const std::string& s) {
 
 const char* const kMorphClip = "morph";
 
-// What CheckClips plays for one clip: a playback::Animation sampled uniformly, or (CheckOptions::key_times)
-// at the clip's own key times.
-struct CheckAnimation {
-  playback::Animation anim;
-  std::vector<float> times;  // key_times: the clip's key times in [0, duration], ascending; else empty
-
-  uint32_t frames() const { return times.empty() ? anim.frames : uint32_t(times.size()); }
-  float Time(uint32_t f) const { return times.empty() ? anim.FrameTime(f) : times[f]; }
-  import::Status Frame(const import::Mesh& mesh, uint32_t f, playback::SkinningScratch* scratch,
-                       std::vector<float>* out) const {
-    if (times.empty()) return anim.Frame(mesh, f, scratch, out);
-    out->resize(mesh.positions.size());
-    return playback::SkinClip(mesh, *anim.clip, times[f], scratch, out->data(), out->size());
-  }
-};
-
 // The animation CheckClips plays for clip `name` (kMorphClip: the morph through options.poses).
-import::Result<CheckAnimation> OpenCheckAnimation(const import::Mesh& mesh, const CheckOptions& o,
-                                                  const std::string& name) {
+// (CheckOptions::key_times: a clip at its own key times, playback::Animation::times.)
+import::Result<playback::Animation> OpenCheckAnimation(const import::Mesh& mesh, const CheckOptions& o,
+                                                       const std::string& name) {
   playback::AnimationRequest request;
   request.mesh_name = o.mesh_name;
-  CheckAnimation out;
   if (name == kMorphClip && !o.poses.empty()) {
     request.morph = o.poses;
     request.frames = o.morph_frames;
-    auto anim = playback::OpenAnimation(mesh, request);
-    if (!anim.ok()) return anim.error();
-    out.anim = std::move(anim).value();
-    return out;
+    return playback::OpenAnimation(mesh, request);
   }
   const import::Clip* clip = nullptr;
   for (const import::Clip& c : mesh.clips)
@@ -156,9 +139,8 @@ import::Result<CheckAnimation> OpenCheckAnimation(const import::Mesh& mesh, cons
   request.frames = uint32_t(frames);
   auto anim = playback::OpenAnimation(mesh, request);  // an unknown clip: the message lists the clips
   if (!anim.ok()) return anim.error();
-  out.anim = std::move(anim).value();
-  out.times = std::move(times);
-  return out;
+  anim->times = std::move(times);
+  return anim;
 }
 
 }  // namespace
@@ -167,8 +149,8 @@ import::Status CheckFrame(const import::Mesh& mesh, const CheckOptions& options,
                           uint32_t frame, std::vector<float>* positions) {
   auto anim = OpenCheckAnimation(mesh, options, clip.name);
   if (!anim.ok()) return anim.error();
-  if (frame >= anim->frames())
-    return Fail(Code::kConfig, "clip '" + clip.name + "' has " + std::to_string(anim->frames()) + " frames, not " +
+  if (frame >= anim->frames)
+    return Fail(Code::kConfig, "clip '" + clip.name + "' has " + std::to_string(anim->frames) + " frames, not " +
                                    std::to_string(frame + 1));
   playback::SkinningScratch scratch;
   return anim->Frame(mesh, frame, &scratch, positions);
@@ -298,7 +280,7 @@ import::Result<CheckReport> CheckClips(const runtime::AssetView& view, const imp
   if (names.empty() && o.poses.empty())
     return Fail(Code::kConfig, "the character has no animation clips: nothing to check (a static mesh; give key poses "
                                "to check a morph through them)");
-  std::vector<CheckAnimation> animations;
+  std::vector<playback::Animation> animations;
   for (const std::string& name : names) {
     auto anim = OpenCheckAnimation(mesh, o, name);
     if (!anim.ok()) return anim.error();
@@ -311,52 +293,36 @@ import::Result<CheckReport> CheckClips(const runtime::AssetView& view, const imp
     names.push_back(kMorphClip);
   }
 
-  runtime::NarrowPhaseModel model;
-  runtime::NarrowPhaseWorkspace workspace;
-  if (runtime::Status s = model.Init(view); runtime::Failed(s))
-    return Fail(s == runtime::Status::kErrorMissingField ? Code::kFormat : Code::kInternal,
-                std::string("narrow phase: ") + runtime::ToString(s) +
-                    (s == runtime::Status::kErrorMissingField ? " (the asset predates the narrow phase: re-bake it)" : ""));
+  // The frame pipeline without spheres: skin each frame, then every skin contact (the crease rule) with depths.
+  playback::SessionOptions so;
+  so.spheres = false;
+  so.narrow = playback::SessionNarrow::kEvery;
+  playback::Session session;
+  if (auto s = session.Init(view, mesh, so); !s.ok()) return s.error();
+  const runtime::NarrowPhaseModel& model = session.narrow_model();
   if (!model.has_crease())
     return Fail(Code::kConfig, "the asset has no crease rule (baked before skin contacts existed): re-bake it");
-  if (runtime::Status s = workspace.Init(model); runtime::Failed(s))
-    return Fail(Code::kInternal, std::string("narrow phase workspace: ") + runtime::ToString(s));
   report.crease = model.crease();
 
   const auto* tri_regions = view.asset->triangle_regions();
   const auto region_of = [&](uint32_t t) { return tri_regions && t < tri_regions->size() ? int(tri_regions->Get(t)) : -1; };
-  std::vector<runtime::TriangleContact> contacts(1u << 16);
-  std::vector<runtime::ContactDepth> depths(contacts.size());
-  std::vector<float> positions;
-  playback::SkinningScratch scratch;
 
   for (size_t c = 0; c < animations.size(); ++c) {
-    const CheckAnimation& anim = animations[c];
+    const playback::Animation& anim = animations[c];
     CheckClip clip;
     clip.name = names[c];
-    clip.frames = anim.frames();
-    clip.duration = anim.anim.clip ? anim.anim.clip->duration_s : anim.frames() / playback::Animation::kMorphFps;
+    clip.frames = anim.frames;
+    clip.duration = anim.clip ? anim.clip->duration_s : anim.frames / playback::Animation::kMorphFps;
     std::map<CheckPair, size_t> open;  // region pair → index of its event running up to the previous frame
     const auto t0 = std::chrono::steady_clock::now();
-    for (uint32_t f = 0; f < anim.frames(); ++f) {
-      if (auto s = anim.Frame(mesh, f, &scratch, &positions); !s.ok())
-        return Fail(s.error().code, "clip '" + clip.name + "' frame " + std::to_string(f) + ": " + s.error().message);
-      uint32_t count = 0;
-      runtime::NarrowPhaseStats stats;
-      runtime::NarrowPhaseJob job;
-      job.model = &model;
-      job.workspace = &workspace;
-      job.positions = {positions.data(), model.vertex_count(), 12};
-      job.exclusions = runtime::Exclusions::kCrease;
-      job.output = contacts.data();
-      job.depths = depths.data();
-      job.capacity = uint32_t(contacts.size());
-      job.count = &count;
-      job.stats = &stats;
-      if (runtime::Status s = job.Run(); runtime::Failed(s))
-        return Fail(Code::kInternal, "clip '" + clip.name + "' frame " + std::to_string(f) + ": NarrowPhaseJob: " +
-                                         runtime::ToString(s));
-      const uint32_t kept = std::min(count, uint32_t(contacts.size()));
+    uint32_t done = 0;  // frames consumed: a failing step is frame `done`
+    auto played = session.Play(anim, [&](const playback::SessionFrame& fr) -> import::Status {
+      const uint32_t f = fr.frame;
+      ++done;
+      const std::span<const runtime::TriangleContact> contacts = fr.contacts;
+      const std::span<const runtime::ContactDepth> depths = fr.depths;
+      const std::span<const float> positions = fr.positions;
+      const uint32_t kept = uint32_t(contacts.size());
       // Per region pair: contacts this frame and the deepest.
       std::map<CheckPair, std::pair<uint32_t, uint32_t>> here;  // pair → (count, index of the deepest)
       for (uint32_t i = 0; i < kept; ++i) {
@@ -385,20 +351,20 @@ import::Result<CheckReport> CheckClips(const runtime::AssetView& view, const imp
           ev.regions = pair;
           ev.name = PairLabel(view, pair);
           ev.first_frame = f;
-          ev.first_time = anim.Time(f);
+          ev.first_time = anim.FrameTime(f);
           ev.depth = -1;
           clip.events.push_back(ev);
         }
         CheckEvent& ev = clip.events[e];
         ev.last_frame = f;
-        ev.last_time = anim.Time(f);
+        ev.last_time = anim.FrameTime(f);
         ev.max_contacts = std::max(ev.max_contacts, n);
         if (depths[deepest].depth > ev.depth) {
           const runtime::TriangleContact& k = contacts[deepest];
           const bool swap = region_of(k.triangle_a) > region_of(k.triangle_b);  // the pair's order
           ev.depth = depths[deepest].depth;
           ev.deepest_frame = f;
-          ev.deepest_time = anim.Time(f);
+          ev.deepest_time = anim.FrameTime(f);
           ev.triangles[0] = swap ? k.triangle_b : k.triangle_a;
           ev.triangles[1] = swap ? k.triangle_a : k.triangle_b;
           ev.contacts.clear();
@@ -418,8 +384,12 @@ import::Result<CheckReport> CheckClips(const runtime::AssetView& view, const imp
         next[pair] = e;
       }
       open.swap(next);
-      if (o.progress) o.progress(c, animations.size(), f + 1, anim.frames());
-    }
+      if (o.progress) o.progress(c, animations.size(), f + 1, anim.frames);
+      return import::Ok{};
+    });
+    if (!played.ok())
+      return Fail(played.error().code, "clip '" + clip.name + "' frame " + std::to_string(done) + ": " +
+                                           played.error().message);
     clip.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     for (CheckEvent& ev : clip.events) {
       ev.depth = std::max(ev.depth, 0.0f);

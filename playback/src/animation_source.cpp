@@ -27,6 +27,7 @@ std::string Animation::Describe() const {
 }
 
 float Animation::FrameTime(uint32_t f) const {
+  if (clip && !times.empty()) return times[f];
   if (clip) return clip->duration_s * float(f) / float(frames);
   return float(f) / kMorphFps;
 }

@@ -10,6 +10,7 @@
 #include <tiny_gltf.h>
 
 #include "spherechain/playback/debug_export.h"
+#include "spherechain/playback/session.h"
 #include "spherechain/import/file_io.h"
 #include "spherechain/runtime/runtime.h"
 
@@ -108,36 +109,30 @@ Status ExportAnimatedGltf(const Mesh& mesh, const runtime::AssetView& asset, con
     if (j.node < 0 || uint32_t(j.node) >= N) return Fail(Error::Code::kConfig, "a skin joint's node is out of range");
 
   // ---- per frame: locals (skeleton channels) and the refit spheres (sphere channels) ----------------
-  runtime::Model model;
-  runtime::Workspace workspace;
-  if (runtime::Status s = model.Init(asset); runtime::Failed(s))
-    return Fail(Error::Code::kInternal, std::string("runtime Model::Init: ") + runtime::ToString(s));
-  if (runtime::Status s = workspace.Init(model); runtime::Failed(s))
-    return Fail(Error::Code::kInternal, std::string("runtime Workspace::Init: ") + runtime::ToString(s));
+  SessionOptions so;  // the frame pipeline: skin, refit; no broad or narrow phase
+  so.refit = refit_mode == runtime::RefitMode::kPaper ? PlayRefit::kPaper : PlayRefit::kPivotFrame;
+  so.m1 = so.m2 = false;
+  Session session;
+  if (auto s = session.Init(asset, mesh, so); !s.ok()) return Fail(s.error().code, s.error().message);
   std::vector<float> times(F), node_t(size_t(F) * N * 3), node_r(size_t(F) * N * 4), node_s(size_t(F) * N * 3);
   std::vector<float> sphere_t(size_t(F) * S * 3), sphere_s(size_t(F) * S * 3);
-  SkinningScratch scratch;
-  std::vector<float> positions;
   const bool clip_timed = anim.clip && anim.clip->duration_s > 0.0f;
   for (uint32_t f = 0; f < F; ++f) {
     times[f] = clip_timed ? anim.FrameTime(f) : float(f) / Animation::kMorphFps;
-    if (auto s = anim.Frame(mesh, f, &scratch, &positions); !s.ok()) return s;
-    // Frame() leaves the frame's locals in scratch.locals (SkinLocals' input).
-    if (scratch.locals.size() != N) return Fail(Error::Code::kInternal, "the frame's locals do not cover the skeleton");
+    if (auto s = session.Step(anim, f); !s.ok()) {
+      if (session.runtime_status() == runtime::Status::kOk) return s;  // the skinning's error, as it is
+      return Fail(Error::Code::kInternal, "frame " + std::to_string(f) + ": runtime " + s.error().message);
+    }
+    // The skinning left the frame's locals in its scratch (SkinLocals' input).
+    const std::vector<Transform>& locals = session.skinning().locals;
+    if (locals.size() != N) return Fail(Error::Code::kInternal, "the frame's locals do not cover the skeleton");
     for (uint32_t n = 0; n < N; ++n) {
-      const Transform& t = scratch.locals[n];
+      const Transform& t = locals[n];
       std::copy(t.translation.begin(), t.translation.end(), node_t.begin() + (size_t(n) * F + f) * 3);
       std::copy(t.rotation.begin(), t.rotation.end(), node_r.begin() + (size_t(n) * F + f) * 4);
       std::copy(t.scale.begin(), t.scale.end(), node_s.begin() + (size_t(n) * F + f) * 3);
     }
-    runtime::RefitJob job;
-    job.model = &model;
-    job.workspace = &workspace;
-    job.mode = refit_mode;
-    job.positions = {positions.data(), V, 12};
-    if (runtime::Status s = job.Run(); runtime::Failed(s))
-      return Fail(Error::Code::kInternal, "runtime refit of frame " + std::to_string(f) + ": " + runtime::ToString(s));
-    const runtime::SphereArrays sp = workspace.spheres();
+    const runtime::SphereArrays& sp = session.frame().spheres;
     for (uint32_t s = 0; s < S; ++s) {
       const float c[4] = {sp.x[s], sp.y[s], sp.z[s], sp.r[s]};
       for (float v : c)

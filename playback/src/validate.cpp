@@ -4,10 +4,12 @@
 #include <cmath>
 #include <cstring>
 #include <memory>
+#include <span>
 
 #include "spherechain/import/import.h"
 #include "spherechain/import/vertex_contract.h"
 #include "spherechain/import/file_io.h"
+#include "spherechain/playback/session.h"
 #include "spherechain/runtime/runtime.h"
 
 namespace spherechain::playback {
@@ -137,7 +139,7 @@ void CheckAsset(const runtime::AssetView& view, const std::string& file, std::ve
   }
 }
 
-/// Fingerprint, then the bind pose through the runtime (refit + M2 detect).
+/// Fingerprint, then the bind pose through the frame pipeline (refit + M2 detect).
 void CheckMesh(const runtime::AssetView& view, const import::Mesh& mesh, const ValidateNames& names,
                std::vector<Finding>* out) {
   const import::Fingerprint fp = import::ComputeFingerprint(mesh);
@@ -158,30 +160,18 @@ void CheckMesh(const runtime::AssetView& view, const import::Mesh& mesh, const V
   if (fp.positions_hash != f->positions_hash())
     out->push_back(Make("FP-POSITIONS", Severity::kWarning, At(names.mesh, -1, -1, "fingerprint.positions_hash"),
                         "bind positions differ from the baked mesh (moved vertices?)"));
-  // The bind pose must report no self-collision.
-  runtime::Model model;
-  runtime::Workspace workspace;
-  runtime::Status s = model.Init(view);
-  if (runtime::Succeeded(s)) s = workspace.Init(model);
-  std::vector<runtime::Collision> pairs(runtime::DetectBound(view, runtime::DetectMethod::kM2));
-  uint32_t count = 0;
-  if (runtime::Succeeded(s)) {
-    runtime::RefitJob refit;
-    refit.model = &model;
-    refit.workspace = &workspace;
-    refit.positions = {mesh.positions.data(), mesh.vertex_count(), 12};
-    s = refit.Run();
-  }
-  if (runtime::Succeeded(s)) {
-    runtime::DetectJob detect;
-    detect.model = &model;
-    detect.workspace = &workspace;
-    detect.method = runtime::DetectMethod::kM2;
-    detect.output = pairs.data();
-    detect.capacity = uint32_t(pairs.size());
-    detect.count = &count;
-    s = detect.Run();
-  }
+  // The bind pose must report no self-collision: the frame pipeline (Session) on the bind positions, M2 alone.
+  SessionOptions so;
+  so.m1 = false;
+  Session session;
+  runtime::Status s = runtime::Status::kOk;
+  if (!session.Init(view, mesh, so).ok() ||
+      !session.Run(mesh.positions.data(), nullptr, SessionFrame::kBind, "bind").ok())
+    // A runtime job's status; else the one configuration error reachable here: the vertex counts differ.
+    s = session.runtime_status() != runtime::Status::kOk ? session.runtime_status() : runtime::Status::kErrorVertexCount;
+  const std::span<const runtime::Collision> pairs =
+      runtime::Succeeded(s) ? session.frame().m2 : std::span<const runtime::Collision>();
+  const uint32_t count = uint32_t(pairs.size());
   if (runtime::Failed(s)) out->push_back(Make("RUNTIME", Severity::kError, At(names.asset), runtime::ToString(s)));
   for (uint32_t i = 0; i < count; ++i) {
     FindingLocation where = At(names.asset, pairs[i].a);

@@ -9,8 +9,6 @@
 
 #include <algorithm>
 #include <filesystem>
-#include <fstream>
-#include <iterator>
 #include <limits>
 #include <cstring>
 #include <set>
@@ -20,6 +18,7 @@
 #include "spherechain/playback/animation.h"
 #include "spherechain/baker/bake.h"
 #include "spherechain/baker/contacts.h"
+#include "spherechain/import/file_io.h"
 #include "spherechain/playback/morph.h"
 #include "spherechain/runtime/narrow_phase.h"
 #include "spherechain/runtime/triangle_intersect.h"
@@ -31,7 +30,7 @@ namespace {
 
 struct Baked {
   baker::BakeResult bake;
-  std::vector<uint64_t> storage;
+  import::LoadedAsset loaded;  // the baked bytes, aligned and verified (import::LoadAssetBytes)
   runtime::AssetView view;
   runtime::NarrowPhaseModel narrow, reach;
   runtime::NarrowPhaseWorkspace narrow_ws, reach_ws;
@@ -43,9 +42,8 @@ bool BakeAndLoad(const std::string& path, Baked* b, const baker::BakeConfig& con
   auto r = baker::Bake(path, config, &ctx);
   REQUIRE_MESSAGE(r.ok(), (r.ok() ? "" : r.error().message));
   b->bake = std::move(r).value();
-  b->storage.assign((b->bake.asset.size() + 7) / 8, 0);
-  std::memcpy(b->storage.data(), b->bake.asset.data(), b->bake.asset.size());
-  REQUIRE(runtime::LoadAsset(b->storage.data(), b->bake.asset.size(), &b->view) == runtime::Status::kOk);
+  REQUIRE(import::LoadAssetBytes(b->bake.asset.data(), b->bake.asset.size(), "the bake", &b->loaded).ok());
+  b->view = b->loaded.view;
   REQUIRE(b->narrow.Init(b->view) == runtime::Status::kOk);
   REQUIRE(b->narrow_ws.Init(b->narrow) == runtime::Status::kOk);
   REQUIRE(b->reach.Init(b->view, runtime::NarrowPhaseRegions::kReach) == runtime::Status::kOk);
@@ -417,12 +415,9 @@ TEST_CASE("the crease rule: the synthetic creature's crossing fore legs are cont
   // job gets kErrorMissingField.
   const std::string golden = test::SourceFile("tests/data/golden/v4/creature.sphc");
   REQUIRE(std::filesystem::exists(golden));
-  std::ifstream in(golden, std::ios::binary);
-  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  std::vector<uint64_t> storage((bytes.size() + 7) / 8);
-  std::memcpy(storage.data(), bytes.data(), bytes.size());
-  runtime::AssetView old_view;
-  REQUIRE(runtime::LoadAsset(storage.data(), bytes.size(), &old_view) == runtime::Status::kOk);
+  import::LoadedAsset old_asset;
+  REQUIRE(import::LoadAssetFile(golden, &old_asset).ok());
+  const runtime::AssetView& old_view = old_asset.view;
   runtime::NarrowPhaseModel old_model;
   runtime::NarrowPhaseWorkspace old_ws;
   REQUIRE(old_model.Init(old_view) == runtime::Status::kOk);

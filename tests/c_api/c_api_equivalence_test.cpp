@@ -8,11 +8,11 @@
 
 #include <cmath>
 #include <cstring>
-#include <fstream>
 #include <random>
 #include <string>
 #include <vector>
 
+#include "runtime/asset_builder.h"
 #include "spherechain/runtime/runtime.h"
 #include "spherechain/spherechain.h"
 #include "test_data.h"
@@ -21,22 +21,11 @@ using namespace spherechain::runtime;
 
 namespace {
 
-std::vector<uint64_t> ReadAsset(const std::string& path, size_t* size) {
-  std::ifstream in(path, std::ios::binary | std::ios::ate);
-  REQUIRE(in);
-  *size = static_cast<size_t>(in.tellg());
-  std::vector<uint64_t> bytes((*size + 7) / 8);  // 8-byte aligned
-  in.seekg(0);
-  in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(*size));
-  return bytes;
-}
-
 std::string RealAsset() { return SPHERECHAIN_C_API_ASSET; }  // CesiumMan, baked by the fixture
 
 // The C and the C++ side of one asset: a C model + workspace, a C++ Model + Workspace (+ narrow phase).
 struct Both {
-  std::vector<uint64_t> bytes;
-  size_t size = 0;
+  spherechain::test::AlignedBytes bytes;  // 8-byte aligned
   AssetView view;
   Model model;
   Workspace ws;
@@ -46,8 +35,8 @@ struct Both {
   sc_workspace* c_ws = nullptr;
 
   Both(const std::string& path, uint32_t flags) {
-    bytes = ReadAsset(path, &size);
-    REQUIRE(LoadAsset(bytes.data(), size, &view) == Status::kOk);
+    REQUIRE_MESSAGE(spherechain::test::ReadAlignedFile(path, &bytes), path);
+    REQUIRE(LoadAsset(bytes.data(), bytes.size, &view) == Status::kOk);
     REQUIRE(model.Init(view) == Status::kOk);
     REQUIRE(ws.Init(model) == Status::kOk);
     if (flags & SC_MODEL_NARROW_PHASE) {
@@ -56,7 +45,7 @@ struct Both {
       REQUIRE(narrow.Init(view, regions) == Status::kOk);
       REQUIRE(narrow_ws.Init(narrow) == Status::kOk);
     }
-    REQUIRE(sc_model_create(bytes.data(), size, flags, &c_model) == SC_OK);
+    REQUIRE(sc_model_create(bytes.data(), bytes.size, flags, &c_model) == SC_OK);
     REQUIRE(sc_workspace_create(c_model, &c_ws) == SC_OK);
   }
   ~Both() {

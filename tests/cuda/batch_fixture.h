@@ -57,7 +57,7 @@ inline void LoadSet(AssetSet* s, AssetData d) {
 
 /// A baked .sphc file (e.g. /tmp/mh.sphc).
 inline void LoadFile(AssetSet* s, const std::string& path) {
-  REQUIRE_MESSAGE(ReadAligned(path, &s->bytes), path);
+  REQUIRE_MESSAGE(ReadAlignedFile(path, &s->bytes), path);
   LoadBytes(s);
 }
 

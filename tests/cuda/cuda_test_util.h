@@ -21,15 +21,6 @@
 
 namespace spherechain::test {
 
-/// Reads a whole file into 8-byte aligned storage (LoadAsset's requirement). False when unreadable.
-inline bool ReadAligned(const std::string& path, AlignedBytes* out) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return false;
-  std::vector<uint8_t> b((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  out->assign(b.data(), b.size());
-  return !b.empty();
-}
-
 /// Rest positions of an OBJ in the baker's vertex order for `vertex_count` vertices: every `v` when
 /// the file has exactly that many, else the vertices referenced by faces of group `group`, in file
 /// order (the MakeHuman importer's compaction). Empty when neither matches.

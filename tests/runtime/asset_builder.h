@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <functional>
 #include <string>
@@ -67,6 +68,27 @@ struct AlignedBytes {
     if (n) std::memcpy(storage.data(), p, n);
   }
 };
+
+/// Reads the whole file at `path` into `out` (8-byte aligned, as LoadAsset requires). False when it cannot
+/// be opened or read, or is empty (`out` then holds what was read, possibly nothing). The one asset-file
+/// reader of the runtime-level tests, the C API tests, the CUDA tests and the benches: they link the runtime
+/// alone, not spherechain::import, whose import::LoadAssetFile every offline tool uses.
+inline bool ReadAlignedFile(const std::string& path, AlignedBytes* out) {
+  out->storage.clear();
+  out->size = 0;
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) return false;
+  bool ok = std::fseek(f, 0, SEEK_END) == 0;
+  const long end = ok ? std::ftell(f) : -1L;
+  ok = ok && end > 0 && std::fseek(f, 0, SEEK_SET) == 0;
+  if (ok) {
+    out->storage.assign((size_t(end) + 7) / 8, 0);
+    out->size = size_t(end);
+    ok = std::fread(out->storage.data(), 1, out->size, f) == out->size;
+  }
+  std::fclose(f);
+  return ok;
+}
 
 struct Mesh {
   std::vector<float> positions;     // #V×3

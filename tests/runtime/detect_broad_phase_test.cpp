@@ -10,8 +10,6 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
-#include <fstream>
-#include <iterator>
 #include <random>
 #include <string>
 #include <vector>
@@ -140,11 +138,6 @@ void PoseTubes(const test::AssetData& d, test::Character* ctx, std::mt19937* rng
   }
 }
 
-std::vector<uint8_t> ReadFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
 }  // namespace
 
 TEST_CASE("DetectJob broad phase equals brute force on moving limb-like bodies, margins, fold margins and parallel_for") {
@@ -253,9 +246,8 @@ TEST_CASE("DetectJob broad phase equals brute force on the repository's real ass
                                 std::string("tests/data/golden/v2/cesium_man.sphc")}) {
     const std::string path = test::SourceFile(rel);
     REQUIRE_MESSAGE(std::filesystem::exists(path), "the asset is part of the repository");
-    const std::vector<uint8_t> raw = ReadFile(path);
     test::AlignedBytes bytes;
-    bytes.assign(raw.data(), raw.size());
+    REQUIRE(test::ReadAlignedFile(path, &bytes));
     AssetView view;
     REQUIRE(LoadAsset(bytes.data(), bytes.size, &view) == Status::kOk);
     test::Character ctx;

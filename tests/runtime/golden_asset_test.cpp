@@ -5,7 +5,6 @@
 #include <filesystem>
 
 #include <cstring>
-#include <fstream>
 #include <vector>
 
 #include "runtime/asset_builder.h"
@@ -16,13 +15,12 @@ using namespace spherechain::runtime;
 
 namespace {
 
+/// The file's bytes, 8-byte aligned (test::ReadAlignedFile), and their size (0 when unreadable).
 std::vector<uint64_t> ReadAligned(const std::string& path, size_t* size) {
-  std::ifstream in(path, std::ios::binary | std::ios::ate);
-  *size = in ? static_cast<size_t>(in.tellg()) : 0;
-  std::vector<uint64_t> bytes((*size + 7) / 8);
-  in.seekg(0);
-  in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(*size));
-  return bytes;
+  spherechain::test::AlignedBytes bytes;
+  spherechain::test::ReadAlignedFile(path, &bytes);
+  *size = bytes.size;
+  return std::move(bytes.storage);
 }
 
 /// Pairs M2 reports on the context's current spheres with the given margin (−1: the asset's).

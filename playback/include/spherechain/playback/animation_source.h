@@ -34,7 +34,8 @@ std::string DefaultPoseCharacter(const Mesh& mesh, const std::string& mesh_name)
 std::string FindPosesDir(const std::string& character, const std::vector<std::string>& data_dirs);
 
 /// The chosen animation. Frame f (< frames) of a clip samples t = duration · f / frames [s] (no wrap:
-/// the last frame is one step before the end); the morph's frames follow MorphFrameAt.
+/// the last frame is one step before the end), or times[f] when `times` is given; the morph's frames follow
+/// MorphFrameAt.
 /// Holds a pointer into the mesh's clips: the Mesh passed to OpenAnimation must outlive it (and not
 /// move). Copyable; every method is const and thread-safe given distinct scratch.
 struct Animation {
@@ -42,14 +43,17 @@ struct Animation {
   std::vector<Pose> poses;     ///< the morph's key poses (empty for a clip)
   std::string poses_from;      ///< the folder they came from, or "--morph"
   uint32_t frames = 0;         ///< frames to play (> 0)
+  /// [opt] A clip's own sample times [Units: s] (ascending, in [0, duration]; `frames` == times.size()):
+  /// frame f samples times[f] (`check --key-times`: a clip at its key times). Empty: uniform sampling.
+  std::vector<float> times;
 
   /// Frame rate the morph's frames are shown at in timed outputs (animated glTF) [Units: frames/s].
   static constexpr float kMorphFps = 20.0f;
 
   /// One line: "clip 'Walk' (2.0 s)" or "morph through 8 key poses from DIR".
   std::string Describe() const;
-  /// When frame `f` plays [Units: s]: the clip's sample time, or f / kMorphFps for the morph. Strictly
-  /// increasing in f (for a clip of duration > 0).
+  /// When frame `f` plays [Units: s]: the clip's sample time (times[f] when given), or f / kMorphFps for
+  /// the morph. Strictly increasing in f (for a clip of duration > 0).
   float FrameTime(uint32_t f) const;
   /// Frame `f`'s label: "t=0.533s" (clip) or "arms_crossed t=0.500" (morph key and Bézier parameter).
   std::string FrameLabel(uint32_t f) const;

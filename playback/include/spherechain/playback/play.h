@@ -1,7 +1,8 @@
 // spherechain playback — Play(): an animation of the character an asset was baked from, run through the
 // runtime frame by frame (refit the spheres to the skinned vertices §5.1, detect overlapping sphere pairs
 // with M1 and/or M2 §5.2, optionally the exact narrow phase), with per-job timings — what `spherechain
-// play` prints, as a report a C++ caller (a test, a tool) can read.
+// play` prints, as a report a C++ caller (a test, a tool) can read. A consumer of the frame pipeline
+// (Session, session.h): it keeps each frame's results and adds the tracking measure and the summary.
 //
 // The bind pose is played first (the undeformed Mesh::positions: a correct asset reports no pair there),
 // then frames 0..N−1 of the animation (animation_source.h).
@@ -14,6 +15,7 @@
 #include <vector>
 
 #include "spherechain/playback/animation_source.h"
+#include "spherechain/playback/session.h"
 #include "spherechain/playback/types.h"
 #include "spherechain/runtime/detect.h"
 #include "spherechain/runtime/narrow_phase.h"
@@ -21,20 +23,12 @@
 
 namespace spherechain::playback {
 
-/// How the spheres follow the frame.
-enum class PlayRefit : uint8_t {
-  kPaper,       ///< RefitJob, RefitMode::kPaper (centre = bind centre + mean pivot displacement)
-  kPivotFrame,  ///< RefitJob, RefitMode::kPivotFrame (default)
-  kJoints,      ///< JointRefitJob from the frame's skinning matrices (schema v3 asset of a rigged bake);
-                ///< the pivot-frame refit of the same frame is its reference (FrameReport::joint_error)
-};
-/// "paper", "frame", "joints".
-const char* ToString(PlayRefit r);
-
 /// What Play() runs.
 struct PlayOptions {
   bool m1 = true;                         ///< run DetectJob M1 (chains)
   bool m2 = true;                         ///< run DetectJob M2 (all spheres)
+  /// How the spheres follow the frame (PlayRefit, session.h); under kJoints the pivot-frame refit of the same
+  /// frame is its reference (FrameReport::joint_error).
   PlayRefit refit = PlayRefit::kPivotFrame;
   uint32_t repeat = 5;                    ///< runs per job per frame; timings are the minimum [Limit: 0 counts as 1]
   bool narrow_phase = false;              ///< also NarrowPhaseJob (exact triangle contacts of the surrounding regions)
@@ -111,11 +105,11 @@ struct PlayReport {
 /// Plays `animation` over `mesh` [Limit: the mesh the asset was baked from — vertex count equal to
 /// the asset's; a skin] with `asset` (a loaded view; borrowed for the call) as described above.
 /// Errors: kConfig — the vertex count differs; kJoints without centre joint weights in the asset
-/// ("... has no joint weights ...: re-bake it") or with another joint count than the skin's; the
-/// narrow phase on an asset without its data (kErrorMissingField: "re-bake it"), a narrow_behind_margin that is
-/// negative or not finite (an asset baked before reach regions runs behind its surrounding regions: runtime
-/// ReachTriangles); kInternal — a runtime
-/// job failed (the message names the job and its status); the skinning's errors; on_frame's errors.
+/// ("... has no joint weights ...: re-bake it") or with another joint count than the skin's; a
+/// narrow_behind_margin that is negative or not finite (an asset baked before reach regions runs behind its
+/// surrounding regions: runtime ReachTriangles); kFormat — the narrow phase on an asset without its data
+/// ("narrow phase: kErrorMissingField (...: re-bake it)"); kInternal — a runtime job failed (the message names
+/// the job and its status); the skinning's errors; on_frame's errors.
 /// Cost: per frame one skinning (O(Σ influences)), (repeat ×) refit and detect runs, the tracking
 /// measure O(Σ surrounding-region vertices); allocates (report, runtime Model/Workspace, scratch); owns
 /// no threads; thread-safe for distinct arguments (on_frame is called on the calling thread). Timings are
