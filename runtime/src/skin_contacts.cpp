@@ -265,9 +265,27 @@ struct CreaseSweep {
     // p's triangles that have that corner.
     CreaseScratch scratch;
     if (Status s = scratch.Init(g); s != Status::kOk) return s;
+    // A node is a corner in two or three patches, and its search and the gathering of the triangles near it
+    // are most of Init's time: each node's result is kept from its first patch to its last (patches_left),
+    // then dropped, so every node is searched once and only a band of nodes (the patches are in Morton order)
+    // is held at a time. Same patches, same masks, same order as a search per patch: the same model.
+    std::vector<uint32_t> patches_left(N, 0);
+    for (uint32_t p = 0; p < C; ++p) {
+      uint32_t nodes[3 * kPatch], n_nodes = 0;
+      for (uint32_t i = 0; i < kPatch && m.cl_tri_[kPatch * size_t{p} + i] != kNone; ++i)
+        for (int k = 0; k < 3; ++k) nodes[n_nodes++] = g.node(m.tri_v_[3 * size_t{m.cl_tri_[kPatch * size_t{p} + i]} + k]);
+      std::sort(nodes, nodes + n_nodes);
+      for (uint32_t i = 0; i < n_nodes; ++i)
+        if (i == 0 || nodes[i] != nodes[i - 1]) ++patches_left[nodes[i]];
+    }
+    // Kept per node: the patches q its near nodes' triangles lie in, each with the 16-bit mask of those
+    // triangles' slots (q << 16 | mask), in the order first met.
+    std::vector<std::vector<uint64_t>> kept_near(N);
+    std::vector<uint64_t> fresh;
+    std::vector<uint32_t> fresh_of(C, kNone);
     std::vector<uint32_t> entry_of(C, kNone), touched;
-    std::vector<uint16_t> rows, node_mask;
-    std::vector<uint32_t> node_entries;
+    std::vector<uint16_t> rows;
+    std::vector<uint64_t> node_entries;  // this corner node's patches q >= p: (entry << 16 | mask)
     std::vector<uint64_t> corners;  // per patch: (node << 32 | vertex << 4 | slot) of each triangle's corners
     std::vector<uint64_t> pairs;  // (p << 32 | q), p <= q, for every pair of patches with a near pair
     std::vector<uint32_t> block;  // per pair in `pairs`: its rows' block in near_rows_, or kAllNear
@@ -294,27 +312,38 @@ struct CreaseSweep {
       for (size_t b = 0; b < corners.size();) {
         size_t e = b + 1;
         while (e < corners.size() && corners[e] >> 32 == corners[b] >> 32) ++e;
-        const uint32_t v = static_cast<uint32_t>(corners[b]) >> 4;
-        const uint32_t source[3] = {v, v, v};
-        node_entries.clear();
-        for (uint32_t n : scratch.Reach(g, source, g.crease()))
-          for (uint32_t k = nt_off[n]; k < nt_off[n + 1]; ++k) {
-            const uint32_t u = nt_tri[k], q = patch_of[u];
-            if (q < p) continue;
-            if (entry_of[q] == kNone) {
-              entry_of[q] = static_cast<uint32_t>(touched.size());
-              touched.push_back(q);
-              rows.resize(rows.size() + kPatch, 0);
-              node_mask.resize(touched.size(), 0);
+        const uint32_t v = static_cast<uint32_t>(corners[b]) >> 4, node = static_cast<uint32_t>(corners[b] >> 32);
+        std::vector<uint64_t>& kept = kept_near[node];
+        const std::vector<uint64_t>* near = &kept;
+        if (kept.empty()) {  // a node is near its own triangles: empty means not searched yet
+          const uint32_t source[3] = {v, v, v};
+          fresh.clear();
+          for (uint32_t n : scratch.Reach(g, source, g.crease()))
+            for (uint32_t k = nt_off[n]; k < nt_off[n + 1]; ++k) {
+              const uint32_t u = nt_tri[k], q = patch_of[u];
+              if (fresh_of[q] == kNone) fresh_of[q] = static_cast<uint32_t>(fresh.size()), fresh.push_back(uint64_t{q} << 16);
+              fresh[fresh_of[q]] |= uint64_t{1} << slot_of[u];
             }
-            if (!node_mask[entry_of[q]]) node_entries.push_back(entry_of[q]);
-            node_mask[entry_of[q]] |= static_cast<uint16_t>(1u << slot_of[u]);
+          for (uint64_t f : fresh) fresh_of[f >> 16] = kNone;
+          near = &fresh;
+          if (patches_left[node] > 1) kept = fresh;
+        }
+        node_entries.clear();
+        for (uint64_t f : *near) {
+          const uint32_t q = static_cast<uint32_t>(f >> 16);
+          if (q < p) continue;
+          if (entry_of[q] == kNone) {
+            entry_of[q] = static_cast<uint32_t>(touched.size());
+            touched.push_back(q);
+            rows.resize(rows.size() + kPatch, 0);
           }
+          node_entries.push_back(uint64_t{entry_of[q]} << 16 | (f & 0xffffu));
+        }
         for (size_t c = b; c < e; ++c) {
           const uint32_t i = static_cast<uint32_t>(corners[c]) & 15u;
-          for (uint32_t en : node_entries) rows[kPatch * size_t{en} + i] |= node_mask[en];
+          for (uint64_t en : node_entries) rows[kPatch * size_t(en >> 16) + i] |= static_cast<uint16_t>(en);
         }
-        for (uint32_t en : node_entries) node_mask[en] = 0;
+        if (--patches_left[node] == 0) std::vector<uint64_t>().swap(kept);
         b = e;
       }
       const uint32_t mask_p = valid_mask(p);
