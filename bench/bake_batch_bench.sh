@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Batch bake timing: the same ten inputs baked one process after another (how a script bakes them today), then
-# in one call with `--out-dir` at -j 1 and at -j N, ROUNDS times in alternation; prints each wall time and the
+# in one call with `--out-dir` at -j 1 and at -j N, ROUNDS times in alternation, and once one process after another on
+# one core (taskset -c 0: what the bakes cost without the cover fit's own threads); prints each wall time and the
 # assets' bytes compared with the one-at-a-time bakes (cmp). The ten: the nine characters the default
 # configuration bakes (MakeHuman, CesiumMan, BCN_Epileptic, human.zae, HUMAN.blend, mrfixit.iqm, Testwuson.X, and
 # tests/data/creature's creature and figure) and the SMD Wuson, which is refused (a failing input costs its
@@ -42,4 +43,13 @@ for r in $(seq 1 "$ROUNDS"); do
     printf "round %d: one process each %.2f s, --out-dir -j 1 %.2f s, -j %d %.2f s (%.2fx of one process each); %d assets identical\n",
            r, b - a, c - b, j, d - c, (d - c) / (b - a), same }'
 done
+if command -v taskset >/dev/null; then
+  rm -rf "$WORK/one" && mkdir -p "$WORK/one"
+  t0=$(now)
+  for f in "${INPUTS[@]}"; do
+    taskset -c 0 "$CLI" -q bake "$f" -o "$WORK/one/$(basename "${f%.*}").sphc" 2>/dev/null || true
+  done
+  t1=$(now)
+  awk -v a="$t0" -v b="$t1" 'BEGIN { printf "one process each on one core (taskset -c 0): %.2f s\n", b - a }'
+fi
 echo "load average after: $(cut -d' ' -f1-3 /proc/loadavg)"

@@ -108,7 +108,7 @@ struct SessionFrame {
 /// The frame pipeline of one character, built once and stepped frame by frame (see the file comment).
 /// Ownership: owns its runtime models, workspaces and buffers; borrows the AssetView (its bytes) and the
 /// Mesh given to Init, which must outlive it and not move. Move-only. Thread safety: one call at a time;
-/// two sessions are independent. Cost: Init allocates (the models: NarrowPhaseModel::Init dominates, ~0.45 s
+/// two sessions are independent. Cost: Init allocates (the models: NarrowPhaseModel::Init dominates, ~0.26 s
 /// for MakeHuman with the crease rule); a step skins the frame (O(Σ influences)) and runs the jobs, and
 /// allocates only when a buffer grows (grow_contacts, the first frame's positions).
 class Session {

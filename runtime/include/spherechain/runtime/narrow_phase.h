@@ -150,9 +150,9 @@ class NarrowPhaseModel {
   /// kErrorInvalidJob for an unknown `regions`. The model is empty (not initialised) after a failure.
   /// Cost: O(\#T + \#V + \#S log) time; memory ~40 B per region triangle + 4 B per vertex + 4 B per
   /// (sphere, region vertex) + ~20 B per sphere; kReach also 2 B per (triangle, sphere it stands behind).
-  /// An asset with the crease rule adds the rule's patches and near bits: one bounded Dijkstra per distinct
-  /// corner of each patch (~0.45 s for MakeHuman's 26,756 triangles, RelWithDebInfo, one core) and their memory
-  /// (crease_patch_bytes(): 1.95 MB in 1,722 patches for MakeHuman).
+  /// An asset with the crease rule adds the rule's patches and near bits: one bounded Dijkstra per welded
+  /// node (~0.26 s for MakeHuman's 26,756 triangles, RelWithDebInfo, one core) and their memory
+  /// (crease_patch_bytes(): 2.90 MB in 1,722 patches for MakeHuman).
   /// Not thread-safe on one object (nothing may use the model meanwhile).
   Status Init(const AssetView& view, NarrowPhaseRegions regions = NarrowPhaseRegions::kSurrounding);
   /// kReach when built from reach regions, else kSurrounding.
