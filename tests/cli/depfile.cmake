@@ -9,13 +9,7 @@
 #   4. With ../shared/data: CesiumMan split into .gltf + .bin + image (tests/package/split_gltf.py): all three.
 file(REMOVE_RECURSE ${WORK})
 file(MAKE_DIRECTORY ${WORK})
-function(run what)
-  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-  if(NOT rc EQUAL 0)
-    message(FATAL_ERROR "${what} failed (${rc}):\n${out}${err}")
-  endif()
-  set(out "${out}${err}" PARENT_SCOPE)
-endfunction()
+include(${CMAKE_CURRENT_LIST_DIR}/../run_step.cmake)  # run()
 # The prerequisites a depfile names (one per line after the first, "\ "-escaped; the empty rules after the
 # blank line are not read): `deps` in `var`.
 function(read_deps depfile var)

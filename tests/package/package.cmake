@@ -3,13 +3,7 @@
 # tests/package/consumer against it with find_package(spherechain) (also without exceptions or RTTI)
 # and run it on the golden v2 asset; its C program (consumer_c) links the installed C API, spherechain::c.
 file(REMOVE_RECURSE ${WORK})
-function(run what)
-  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-  if(NOT rc EQUAL 0)
-    message(FATAL_ERROR "${what} failed (${rc}):\n${out}${err}")
-  endif()
-  set(out "${out}" PARENT_SCOPE)
-endfunction()
+include(${CMAKE_CURRENT_LIST_DIR}/../run_step.cmake)  # run()
 run("configure (preset runtime-noexcept)" ${CMAKE_COMMAND} -S ${SRC} --preset runtime-noexcept -B ${WORK}/build
     -DCMAKE_INSTALL_PREFIX=${WORK}/prefix)
 run("build" ${CMAKE_COMMAND} --build ${WORK}/build -j 2)

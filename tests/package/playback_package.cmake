@@ -4,13 +4,7 @@
 # consumer imports it through the installed import library — a glTF import in a find_package consumer used to bind
 # to libdraco's older tinygltf and crash), and on a truncated copy (SPHC-LOAD, exit 1).
 file(REMOVE_RECURSE ${WORK})
-function(run what)
-  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-  if(NOT rc EQUAL 0)
-    message(FATAL_ERROR "${what} failed (${rc}):\n${out}${err}")
-  endif()
-  set(out "${out}" PARENT_SCOPE)
-endfunction()
+include(${CMAKE_CURRENT_LIST_DIR}/../run_step.cmake)  # run()
 run("install" ${CMAKE_COMMAND} --install ${BUILD} --prefix ${WORK}/prefix)
 foreach(f lib/libspherechain_playback.a lib/libspherechain_baker.a include/spherechain/playback/play.h
           include/spherechain/import/types.h)
