@@ -6,6 +6,9 @@
 // waits at most the time limit, then kills the child; a child that dies or is killed is a kFormat error
 // naming what happened, never the caller's death. The child ends with _exit (no destructors, atexit
 // handlers or leak check: its heap is the parent's copy).
+#include "import_internal.h"
+
+#if defined(__linux__)  // fork, pipe2 and poll; elsewhere assimp runs in the caller's process (below)
 #include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
@@ -23,8 +26,6 @@
 #include <string>
 #include <type_traits>
 #include <vector>
-
-#include "import_internal.h"
 
 #if defined(__SANITIZE_ADDRESS__)
 #define SPHERECHAIN_ASAN 1
@@ -314,3 +315,17 @@ Result<Mesh> ImportInChild(const std::string& path, const ImportOptions& options
 }
 
 }  // namespace spherechain::import::detail
+
+#else  // not Linux: no child process; the import runs in this process, as with isolate_assimp false
+
+namespace spherechain::import::detail {
+
+void ChildPhase(char) {}
+
+Result<Mesh> ImportInChild(const std::string& path, const ImportOptions& options, Context* ctx, ChildImporter import) {
+  return import(path, options, ctx);
+}
+
+}  // namespace spherechain::import::detail
+
+#endif

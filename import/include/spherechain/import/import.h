@@ -74,7 +74,8 @@ struct ImportOptions {
   /// caller. The child gets `assimp_seconds` of wall-clock time [Units: s] [Limit: > 0] and then is killed,
   /// and `assimp_memory_bytes` of address space [Limit: 0 = none; not applied under AddressSanitizer].
   /// false: assimp runs in this process (a fork saved; its crash is then the caller's). Cost of true: a fork
-  /// and one copy of the mesh through a pipe. [opt] default true, 120 s, 16 GiB.
+  /// and one copy of the mesh through a pipe. Linux only: elsewhere assimp runs in this process whatever
+  /// this says. [opt] default true, 120 s, 16 GiB.
   bool isolate_assimp = true;
   double assimp_seconds = 120.0;
   uint64_t assimp_memory_bytes = uint64_t{16} << 30;
