@@ -34,6 +34,9 @@
 #define SPHERECHAIN_ASAN 1
 #endif
 #endif
+#ifdef SPHERECHAIN_ASAN
+#include <sanitizer/common_interface_defs.h>
+#endif
 
 namespace spherechain::import::detail {
 namespace {
@@ -210,6 +213,13 @@ bool Decode(const std::string& bytes, Context* ctx, Result<Mesh>* out) {
 
 [[noreturn]] void RunChild(int fd, const std::string& path, const ImportOptions& options, ChildImporter import) {
   g_child_fd = fd;
+  // A crash in the child is its death and nothing more: the host's handlers, inherited through fork (a crash
+  // reporter, a sanitizer's or libFuzzer's report and artifact), must not run for it. The parent names the
+  // signal or the exit status.
+  for (const int sig : {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT, SIGTRAP, SIGSYS}) ::signal(sig, SIG_DFL);
+#ifdef SPHERECHAIN_ASAN
+  __sanitizer_set_death_callback(nullptr);  // ASan's own reports (an interceptor's) end the child with exit 1
+#endif
   const double seconds = std::max(1.0, options.assimp_seconds);
   const rlimit cpu{static_cast<rlim_t>(std::ceil(seconds)) + 1, static_cast<rlim_t>(std::ceil(seconds)) + 2};
   ::setrlimit(RLIMIT_CPU, &cpu);  // a backstop: the parent's clock decides
