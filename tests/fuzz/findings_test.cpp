@@ -243,6 +243,22 @@ TEST_CASE("Fuzz findings: a PLY on which assimp never returns is stopped in its 
   CHECK(took < 10.0);
 }
 
+TEST_CASE("Fuzz findings: a PLY on which assimp's reader crashes is a kFormat error naming the signal") {
+  // fuzz_import_assimp: a 134-byte ASCII PLY with a mangled property line; assimp's PLY reader dereferences
+  // null (SIGSEGV inside libassimp). In its child process the crash ends the child only.
+  const fs::path repro = fs::path(SPHERECHAIN_SOURCE_DIR) / "fuzz/corpus/import_assimp/crash_assimp_ply_segv.ply";
+  std::ifstream in(repro, std::ios::binary);
+  const std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  REQUIRE(bytes.size() > 1);
+  Dir d;
+  auto r = ImportMesh(d.Write("crash.ply", bytes.substr(1)));  // the first byte picks the fuzzer's format
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().code == Error::Code::kFormat);
+  CAPTURE(r.error().message);
+  CHECK(r.error().message.find("the assimp importer's process died reading it (signal 11") != std::string::npos);
+  CHECK(r.error().message.find("crash.ply") != std::string::npos);
+}
+
 TEST_CASE("Fuzz findings: assimp in its child process gives the same mesh, skin and clips as in this one") {
   // Every assimp seed of the fuzz corpus (the first byte picks the format), and BCN_Epileptic (skinned, a clip).
   std::vector<std::pair<std::string, std::string>> files;  // (name, bytes)
