@@ -266,18 +266,12 @@ struct CreaseSweep {
     CreaseScratch scratch;
     if (Status s = scratch.Init(g); s != Status::kOk) return s;
     // A node is a corner in two or three patches, and its search and the gathering of the triangles near it
-    // are most of Init's time: each node's result is kept from its first patch to its last (patches_left),
-    // then dropped, so every node is searched once and only a band of nodes (the patches are in Morton order)
-    // is held at a time. Same patches, same masks, same order as a search per patch: the same model.
-    std::vector<uint32_t> patches_left(N, 0);
-    for (uint32_t p = 0; p < C; ++p) {
-      uint32_t nodes[3 * kPatch], n_nodes = 0;
-      for (uint32_t i = 0; i < kPatch && m.cl_tri_[kPatch * size_t{p} + i] != kNone; ++i)
-        for (int k = 0; k < 3; ++k) nodes[n_nodes++] = g.node(m.tri_v_[3 * size_t{m.cl_tri_[kPatch * size_t{p} + i]} + k]);
-      std::sort(nodes, nodes + n_nodes);
-      for (uint32_t i = 0; i < n_nodes; ++i)
-        if (i == 0 || nodes[i] != nodes[i - 1]) ++patches_left[nodes[i]];
-    }
+    // are most of Init's time: each node's result is kept from its first patch to its last (last_patch), then
+    // dropped, so every node is searched once and only a band of nodes (the patches are in Morton order) is
+    // held at a time. Same patches, same masks, same order as a search per patch: the same model.
+    std::vector<uint32_t> last_patch(N, 0);
+    for (uint32_t p = 0; p < C; ++p)
+      for (uint32_t k = m.cl_vert_offsets_[p]; k < m.cl_vert_offsets_[p + 1]; ++k) last_patch[g.node(m.cl_vert_[k])] = p;
     // Kept per node: the patches q its near nodes' triangles lie in, each with the 16-bit mask of those
     // triangles' slots (q << 16 | mask), in the order first met.
     std::vector<std::vector<uint64_t>> kept_near(N);
@@ -326,7 +320,7 @@ struct CreaseSweep {
             }
           for (uint64_t f : fresh) fresh_of[f >> 16] = kNone;
           near = &fresh;
-          if (patches_left[node] > 1) kept = fresh;
+          if (last_patch[node] != p) kept = fresh;
         }
         node_entries.clear();
         for (uint64_t f : *near) {
@@ -343,7 +337,7 @@ struct CreaseSweep {
           const uint32_t i = static_cast<uint32_t>(corners[c]) & 15u;
           for (uint64_t en : node_entries) rows[kPatch * size_t(en >> 16) + i] |= static_cast<uint16_t>(en);
         }
-        if (--patches_left[node] == 0) std::vector<uint64_t>().swap(kept);
+        if (last_patch[node] == p) std::vector<uint64_t>().swap(kept);
         b = e;
       }
       const uint32_t mask_p = valid_mask(p);
