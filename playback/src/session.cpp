@@ -80,27 +80,30 @@ Status Session::Init(const runtime::AssetView& view, const Mesh& mesh, const Ses
   mesh_ = &mesh;
   repeat_ = std::max(1u, o.repeat);
 
-  if (o.spheres) {
-    if (runtime::Status s = model_.Init(view); runtime::Failed(s)) return RuntimeFailure("runtime Model::Init", s);
+  // One Model and one Workspace: the refit and broad phase, and the narrow phase in the same blocks.
+  const bool behind = o.narrow == SessionNarrow::kBehindM2;
+  runtime::ModelOptions model_options;
+  model_options.narrow_phase = o.narrow != SessionNarrow::kNone;
+  model_options.narrow_phase_regions =
+      behind ? runtime::NarrowPhaseRegions::kReach : runtime::NarrowPhaseRegions::kSurrounding;
+  if (o.spheres || model_options.narrow_phase) {
+    if (runtime::Status s = model_.Init(view, model_options); runtime::Failed(s)) {
+      if (s != runtime::Status::kErrorMissingField) return RuntimeFailure("runtime Model::Init", s);
+      runtime_status_ = s;  // only the narrow phase needs fields an asset may lack
+      return MakeError(Error::Code::kFormat, std::string("narrow phase: ") + runtime::ToString(s) +
+                                                 " (baked before the narrow phase existed: re-bake it)");
+    }
     if (runtime::Status s = workspace_.Init(model_); runtime::Failed(s))
       return RuntimeFailure("runtime Workspace::Init", s);
+  }
+  if (o.spheres) {
     if (o.m1) out_m1_.resize(runtime::DetectBound(view, runtime::DetectMethod::kM1));
     if (o.m2) out_m2_.resize(runtime::DetectBound(view, runtime::DetectMethod::kM2));
   }
   if (o.narrow != SessionNarrow::kNone) {
-    const bool behind = o.narrow == SessionNarrow::kBehindM2;
-    const runtime::NarrowPhaseRegions kind =
-        behind ? runtime::NarrowPhaseRegions::kReach : runtime::NarrowPhaseRegions::kSurrounding;
-    runtime::Status s = narrow_.Init(view, kind);
-    if (runtime::Succeeded(s)) s = narrow_ws_.Init(narrow_);
-    if (runtime::Failed(s)) {
-      if (s != runtime::Status::kErrorMissingField) return RuntimeFailure("narrow phase", s);
-      runtime_status_ = s;
-      return MakeError(Error::Code::kFormat, std::string("narrow phase: ") + runtime::ToString(s) +
-                                                 " (baked before the narrow phase existed: re-bake it)");
-    }
     if (behind) out_behind_.resize(runtime::DetectBound(view, runtime::DetectMethod::kM2));
-    if (o.narrow == SessionNarrow::kEvery && o.crease && narrow_.has_crease()) exclusions_ = runtime::Exclusions::kCrease;
+    if (o.narrow == SessionNarrow::kEvery && o.crease && narrow_model().has_crease())
+      exclusions_ = runtime::Exclusions::kCrease;
     contacts_.resize(o.contact_capacity);
     if (exclusions_ == runtime::Exclusions::kCrease) depths_.resize(o.contact_capacity);
   }
@@ -111,6 +114,16 @@ Status Session::Init(const runtime::AssetView& view, const Mesh& mesh, const Ses
   }
   view_ = view;
   return Ok{};
+}
+
+const runtime::NarrowPhaseModel& Session::narrow_model() const {
+  static const runtime::NarrowPhaseModel kNoNarrowPhase;
+  return model_.narrow_phase() ? *model_.narrow_phase() : kNoNarrowPhase;
+}
+
+runtime::NarrowPhaseWorkspace& Session::narrow_workspace() {
+  static runtime::NarrowPhaseWorkspace no_narrow_phase;  // uninitialised: every job refuses it, writes nothing
+  return workspace_.narrow_phase() ? *workspace_.narrow_phase() : no_narrow_phase;
 }
 
 Status Session::Step(const Animation& animation, uint32_t f) {
@@ -224,8 +237,8 @@ Status Session::Detect() {
 Status Session::Narrow(const float* positions) {
   uint32_t count = 0;
   runtime::NarrowPhaseJob job;
-  job.model = &narrow_;
-  job.workspace = &narrow_ws_;
+  job.model = model_.narrow_phase();
+  job.workspace = workspace_.narrow_phase();
   job.positions = {positions, view_.vertex_count, 12};
   job.exclusions = exclusions_;
   job.count = &count;

@@ -15,15 +15,12 @@
 namespace rt = spherechain::runtime;
 
 struct sc_model {
-  rt::AssetView view;           // borrows the caller's bytes
-  rt::Model model;              // broad phase and refit
-  rt::NarrowPhaseModel narrow;  // initialised only with SC_MODEL_NARROW_PHASE
-  bool has_narrow = false;
+  rt::AssetView view;  // borrows the caller's bytes
+  rt::Model model;     // refit, broad phase and, with SC_MODEL_NARROW_PHASE, the narrow phase: one block
 };
 
 struct sc_workspace {
-  rt::Workspace ws;
-  rt::NarrowPhaseWorkspace narrow;  // initialised only when the model has the narrow phase
+  rt::Workspace ws;  // one block, the narrow phase's scratch included when the model has it
 };
 
 namespace {
@@ -153,12 +150,11 @@ SC_API sc_status sc_model_create(const void* bytes, size_t size, uint32_t flags,
   sc_model* m = new (std::nothrow) sc_model;
   if (!m) return SC_ERROR_OUT_OF_MEMORY;
   m->view = view;
-  rt::Status s = m->model.Init(view);
-  if (rt::Succeeded(s) && (flags & SC_MODEL_NARROW_PHASE)) {
-    s = m->narrow.Init(view, (flags & SC_MODEL_NARROW_PHASE_REACH) ? rt::NarrowPhaseRegions::kReach
-                                                                   : rt::NarrowPhaseRegions::kSurrounding);
-    m->has_narrow = rt::Succeeded(s);
-  }
+  rt::ModelOptions options;
+  options.narrow_phase = (flags & SC_MODEL_NARROW_PHASE) != 0;
+  options.narrow_phase_regions =
+      (flags & SC_MODEL_NARROW_PHASE_REACH) ? rt::NarrowPhaseRegions::kReach : rt::NarrowPhaseRegions::kSurrounding;
+  const rt::Status s = m->model.Init(view, options);
   if (rt::Failed(s)) {
     delete m;
     return C(s);
@@ -181,7 +177,7 @@ SC_API sc_status sc_model_get_info(const sc_model* model, sc_model_info* info) {
   i.joint_count = model->model.joint_count();
   i.region_count = rt::RegionCount(model->view);
   i.schema_version = a.schema_version();
-  i.has_narrow_phase = model->has_narrow ? 1u : 0u;
+  i.has_narrow_phase = model->model.narrow_phase() ? 1u : 0u;
   i.has_crease = crease ? 1u : 0u;
   i.contact_margin = model->model.contact_margin();
   i.crease = crease ? a.crease() : 0.0f;
@@ -231,8 +227,7 @@ SC_API sc_status sc_workspace_create(const sc_model* model, sc_workspace** out) 
   if (!model || !out) return SC_ERROR_NULL_ARGUMENT;
   sc_workspace* w = new (std::nothrow) sc_workspace;
   if (!w) return SC_ERROR_OUT_OF_MEMORY;
-  rt::Status s = w->ws.Init(model->model);
-  if (rt::Succeeded(s) && model->has_narrow) s = w->narrow.Init(model->narrow);
+  const rt::Status s = w->ws.Init(model->model);
   if (rt::Failed(s)) {
     delete w;
     return C(s);
@@ -319,7 +314,7 @@ SC_API sc_status sc_narrow_phase(const sc_model* model, sc_workspace* workspace,
   const sc_narrow_phase_options& o = options ? *options : defaults;
   if (!o.sphere_pairs && o.sphere_pair_count > 0) return SC_ERROR_NULL_ARGUMENT;
   if (!workspace->ws.made_for(model->model)) return SC_ERROR_WORKSPACE_MODEL;
-  if (!model->has_narrow) return SC_ERROR_INVALID_JOB;
+  if (!model->model.narrow_phase()) return SC_ERROR_INVALID_JOB;
   if (!StrideFits(stride_bytes)) return SC_ERROR_STRIDE;
   rt::Exclusions exclusions;
   switch (o.exclusions) {
@@ -331,8 +326,8 @@ SC_API sc_status sc_narrow_phase(const sc_model* model, sc_workspace* workspace,
   uint32_t written = 0;
   rt::NarrowPhaseStats stats;
   rt::NarrowPhaseJob job;
-  job.model = &model->narrow;
-  job.workspace = &workspace->narrow;
+  job.model = model->model.narrow_phase();
+  job.workspace = workspace->ws.narrow_phase();
   job.positions = {positions, vertex_count, static_cast<uint32_t>(stride_bytes)};
   job.exclusions = exclusions;
   job.crease = o.crease;

@@ -106,10 +106,11 @@ Status CreaseGraph::Init(const float* bind, uint32_t V, const uint32_t* tris, ui
   return Status::kOk;
 }
 
-Status CreaseScratch::Init(const CreaseGraph& graph) {
+Status CreaseScratch::Init(const CreaseGraph& graph, BlockArena* arena) {
   *this = CreaseScratch{};
   if (!graph.initialized()) return Status::kErrorInvalidJob;
   SPHERECHAIN_TRY {
+    ForEachArray([&](auto& v) { UseBlock(v, arena); });
     dist_.assign(graph.node_count_, kInf);
     ring_.assign(graph.node_count_, 0);
     touched_.reserve(graph.node_count_);
@@ -230,7 +231,7 @@ void CreaseScratch::Heap(const CreaseGraph& g, float crease) {
   }
 }
 
-const std::vector<uint32_t>& CreaseScratch::Reach(const CreaseGraph& g, const uint32_t t[3], float crease) {
+const BlockVector<uint32_t>& CreaseScratch::Reach(const CreaseGraph& g, const uint32_t t[3], float crease) {
   Search(g, t, crease);
   return touched_;
 }

@@ -9,7 +9,9 @@
 #include <new>
 #include <utility>
 
+#include "alloc_guard.h"
 #include "internal.h"
+#include "spherechain/runtime/narrow_phase.h"
 
 namespace spherechain::runtime {
 namespace {
@@ -133,7 +135,7 @@ Model& Model::operator=(Model&& o) noexcept {
   if (this != &o) {
     Release();
     std::memcpy(static_cast<void*>(this), static_cast<const void*>(&o), sizeof(Model));
-    o.storage_ = nullptr, o.owned_ = false;
+    o.storage_ = nullptr, o.owned_ = false, o.narrow_ = nullptr;
     o.Release();
   }
   return *this;
@@ -142,6 +144,8 @@ Model& Model::operator=(Model&& o) noexcept {
 Model::~Model() { Release(); }
 
 void Model::Release() {
+  if (narrow_) narrow_->~NarrowPhaseModel();  // its arrays live in the block: nothing freed one by one
+  narrow_ = nullptr;
   if (owned_ && storage_) ::operator delete(storage_, std::align_val_t{kAlign});
   storage_ = nullptr, owned_ = false, bytes_ = 0, id_ = 0;
   sphere_count_ = vertex_count_ = chain_count_ = joint_count_ = 0;
@@ -170,7 +174,7 @@ Status Model::Init(const AssetView& view) {
   const size_t bytes = RequiredBytes(view);
   auto* memory = static_cast<unsigned char*>(::operator new(bytes, std::align_val_t{kAlign}, std::nothrow));
   if (!memory) return Status::kErrorOutOfMemory;
-  const Status s = Build(view, memory, bytes);
+  const Status s = Build(view, memory, bytes, nullptr);
   if (s != Status::kOk) {
     ::operator delete(memory, std::align_val_t{kAlign});
     return s;
@@ -184,18 +188,71 @@ Status Model::InitInPlace(const AssetView& view, void* memory, size_t bytes) {
   if (!view.valid() || !memory) return Status::kErrorNullArgument;
   if (reinterpret_cast<uintptr_t>(memory) % kMinAlign != 0) return Status::kErrorAlignment;
   if (bytes < RequiredBytes(view)) return Status::kErrorBufferTooSmall;
-  return Build(view, static_cast<unsigned char*>(memory), bytes);
+  return Build(view, static_cast<unsigned char*>(memory), bytes, nullptr);
+}
+
+// The narrow phase of a Model, built on the heap: without its own index of excluded pairs (it reads the
+// Model's), and the bytes it takes in the Model's block (the object, then its arrays in a BlockArena).
+Status Model::BuildNarrow(const AssetView& view, const ModelOptions& options, NarrowPhaseModel& out, size_t& bytes) {
+  if (Status s = out.Build(view, options.narrow_phase_regions); s != Status::kOk) return s;
+  BlockVector<uint32_t>().swap(out.excl_offsets_);
+  BlockVector<uint16_t>().swap(out.excl_partners_);
+  bytes = AlignUp(sizeof(NarrowPhaseModel)) + BlockArena::BlockBytes(out.ArrayBytes());
+  return Status::kOk;
+}
+
+size_t Model::RequiredBytes(const AssetView& view, const ModelOptions& options) {
+  if (!view.valid()) return 0;
+  if (!options.narrow_phase) return RequiredBytes(view);
+  NarrowPhaseModel narrow;
+  size_t narrow_bytes = 0;
+  if (BuildNarrow(view, options, narrow, narrow_bytes) != Status::kOk) return 0;
+  return RequiredBytes(view) + narrow_bytes;
+}
+
+Status Model::Init(const AssetView& view, const ModelOptions& options) {
+  Release();
+  if (!view.valid()) return Status::kErrorNullArgument;
+  if (!options.narrow_phase) return Init(view);
+  NarrowPhaseModel narrow;
+  size_t narrow_bytes = 0;
+  if (Status s = BuildNarrow(view, options, narrow, narrow_bytes); s != Status::kOk) return s;
+  const size_t bytes = RequiredBytes(view) + narrow_bytes;
+  auto* memory = static_cast<unsigned char*>(::operator new(bytes, std::align_val_t{kAlign}, std::nothrow));
+  if (!memory) return Status::kErrorOutOfMemory;
+  const Status s = Build(view, memory, bytes, &narrow);
+  if (s != Status::kOk) {
+    ::operator delete(memory, std::align_val_t{kAlign});
+    return s;
+  }
+  owned_ = true;
+  return Status::kOk;
+}
+
+Status Model::InitInPlace(const AssetView& view, const ModelOptions& options, void* memory, size_t bytes) {
+  Release();
+  if (!options.narrow_phase) return InitInPlace(view, memory, bytes);
+  if (!view.valid() || !memory) return Status::kErrorNullArgument;
+  if (reinterpret_cast<uintptr_t>(memory) % kMinAlign != 0) return Status::kErrorAlignment;
+  if (bytes < RequiredBytes(view)) return Status::kErrorBufferTooSmall;
+  NarrowPhaseModel narrow;
+  size_t narrow_bytes = 0;
+  if (Status s = BuildNarrow(view, options, narrow, narrow_bytes); s != Status::kOk) return s;
+  if (bytes < RequiredBytes(view) + narrow_bytes) return Status::kErrorBufferTooSmall;
+  return Build(view, static_cast<unsigned char*>(memory), bytes, &narrow);
 }
 
 // Fills the block: the SoA refit data, chain masks and lists, the excluded pairs as per-sphere sorted
 // partner lists, the joint weights, and the broad-phase layout. Sections start on 64 bytes from `memory`,
 // so a 16-byte aligned block keeps every array aligned for its type. No allocation.
-Status Model::Build(const AssetView& view, unsigned char* memory, size_t bytes) {
+Status Model::Build(const AssetView& view, unsigned char* memory, size_t bytes, NarrowPhaseModel* narrow) {
   const schema::Asset& a = *view.asset;
   const uint32_t S = view.sphere_count, C = view.chain_count;
   const uint32_t B = CountBlocks(view);
   ModelSections k(view, B, memory);
   if (k.size > bytes) return Status::kErrorBufferTooSmall;
+  if (narrow && AlignUp(k.size) + AlignUp(sizeof(NarrowPhaseModel)) + BlockArena::BlockBytes(narrow->ArrayBytes()) > bytes)
+    return Status::kErrorBufferTooSmall;
   std::memset(memory, 0, k.size);
 
   if (k.fold_region)  // LoadAsset: a fold margin comes with sphere_regions
@@ -349,6 +406,18 @@ Status Model::Build(const AssetView& view, unsigned char* memory, size_t bytes) 
   storage_ = memory;
   owned_ = false;
   bytes_ = k.size;
+  if (narrow) {  // after the sections: the object, then its arrays (BuildNarrow measured both)
+    unsigned char* at = memory + AlignUp(k.size);
+    const size_t arrays = BlockArena::BlockBytes(narrow->ArrayBytes());
+    narrow_ = new (at) NarrowPhaseModel(std::move(*narrow));
+    BlockArena* arena = BlockArena::Create(at + AlignUp(sizeof(NarrowPhaseModel)), arrays);
+    narrow_->MoveInto(arena);
+    arena->cursor = arena->end;  // sealed
+    narrow_->excl_off_ = k.a.excl_offsets;  // one index of excluded pairs: the model's
+    narrow_->excl_nb_ = k.a.excl_neighbors;
+    narrow_->bytes_ = arrays;
+    bytes_ = AlignUp(k.size) + AlignUp(sizeof(NarrowPhaseModel)) + arrays;
+  }
   id_ = g_next_model_id.fetch_add(1, std::memory_order_relaxed);
   sphere_count_ = S;
   vertex_count_ = view.vertex_count;
@@ -410,7 +479,7 @@ Workspace& Workspace::operator=(Workspace&& o) noexcept {
   if (this != &o) {
     Release();
     std::memcpy(static_cast<void*>(this), static_cast<const void*>(&o), sizeof(Workspace));
-    o.storage_ = nullptr, o.owned_ = false;
+    o.storage_ = nullptr, o.owned_ = false, o.narrow_ = nullptr;
     o.Release();
   }
   return *this;
@@ -419,6 +488,8 @@ Workspace& Workspace::operator=(Workspace&& o) noexcept {
 Workspace::~Workspace() { Release(); }
 
 void Workspace::Release() {
+  if (narrow_) narrow_->~NarrowPhaseWorkspace();  // its arrays live in the block
+  narrow_ = nullptr;
   if (owned_ && storage_) ::operator delete(storage_, std::align_val_t{kAlign});
   storage_ = nullptr, owned_ = false, model_id_ = 0, sphere_count_ = 0;
   x_ = y_ = z_ = r_ = gx_ = gy_ = gz_ = gr_ = tx_ = ty_ = tz_ = tr_ = box_ = nullptr;
@@ -428,7 +499,8 @@ void Workspace::Release() {
 
 size_t Workspace::RequiredBytes(const Model& m) {
   if (!m.initialized()) return 0;
-  return WorkspaceSections(m.sphere_count_, m.blocks_, m.box_pitch_, m.key_slots_, nullptr).size;
+  const size_t broad = WorkspaceSections(m.sphere_count_, m.blocks_, m.box_pitch_, m.key_slots_, nullptr).size;
+  return broad + (m.narrow_ ? AlignUp(sizeof(NarrowPhaseWorkspace)) + m.narrow_->workspace_bytes() : 0);
 }
 
 Status Workspace::Init(const Model& model) {
@@ -437,7 +509,10 @@ Status Workspace::Init(const Model& model) {
   const size_t bytes = RequiredBytes(model);
   auto* memory = static_cast<unsigned char*>(::operator new(bytes, std::align_val_t{kAlign}, std::nothrow));
   if (!memory) return Status::kErrorOutOfMemory;
-  (void)Build(model, memory);
+  if (Status s = Build(model, memory); s != Status::kOk) {
+    ::operator delete(memory, std::align_val_t{kAlign});
+    return s;
+  }
   owned_ = true;
   return Status::kOk;
 }
@@ -476,6 +551,15 @@ Status Workspace::Build(const Model& m, unsigned char* memory) {
   box_ = k.box;
   keys_ = k.keys;
   row_hits_ = k.row_hits;
+  if (m.narrow_) {  // after the sections: the narrow phase's scratch, its arrays carved from the rest
+    unsigned char* at = memory + k.size;
+    narrow_ = new (at) NarrowPhaseWorkspace();
+    BlockArena* arena = BlockArena::Create(at + AlignUp(sizeof(NarrowPhaseWorkspace)), m.narrow_->workspace_bytes());
+    if (Status s = narrow_->Build(*m.narrow_, arena); s != Status::kOk) {
+      Release();  // not owned yet: the caller's memory, or Init frees its own
+      return s;
+    }
+  }
   return ResetToBindPose(m);
 }
 

@@ -20,7 +20,7 @@ namespace spherechain::runtime {
 
 // Exclusions::kCrease (skin_contacts.cpp).
 Status InitCreaseModel(NarrowPhaseModel& m, const AssetView& view);
-Status InitCreaseWorkspace(NarrowPhaseWorkspace& w, const NarrowPhaseModel& m);
+Status InitCreaseWorkspace(NarrowPhaseWorkspace& w, const NarrowPhaseModel& m, BlockArena* arena);
 Status RunCrease(const NarrowPhaseJob& job);
 
 namespace {
@@ -206,8 +206,8 @@ struct NarrowPhaseInternal {
       const float* ba = &c.w.box_[8 * size_t{a}];
       const F4 alo_x = Set1(ba[0]), alo_y = Set1(ba[1]), alo_z = Set1(ba[2]);
       const F4 ahi_x = Set1(ba[4]), ahi_y = Set1(ba[5]), ahi_z = Set1(ba[6]);
-      const uint16_t* ex = c.m.excl_partners_.data() + c.m.excl_offsets_[a];
-      const uint16_t* ex_end = c.m.excl_partners_.data() + c.m.excl_offsets_[a + 1];
+      const uint16_t* ex = c.m.excl_nb_ + c.m.excl_off_[a];
+      const uint16_t* ex_end = c.m.excl_nb_ + c.m.excl_off_[a + 1];
       for (uint32_t b0 = a + 1; b0 < S; b0 += 4) {
         uint32_t hit = Bits(And(And(And(Le(Load4(soa + b0), ahi_x), Le(alo_x, Load4(soa + 3 * P + b0))),
                                     And(Le(Load4(soa + P + b0), ahi_y), Le(alo_y, Load4(soa + 4 * P + b0)))),
@@ -616,7 +616,48 @@ struct NarrowPhaseInternal {
   }
 };
 
+template <class F>
+void NarrowPhaseModel::ForEachArray(F&& f) {
+  crease_graph_.ForEachArray(f);
+  f(tri_v_), f(bind_contacts_);
+  f(cl_tri_), f(cl_vert_offsets_), f(cl_vert_), f(near_block_), f(near_far_), f(near_key_), f(near_rows_);
+  f(cl_valid_), f(cl_local_), f(cl_count_);
+  f(behind_offsets_), f(behind_), f(weld_), f(tri_sphere_);
+  f(region_offsets_), f(region_tri_), f(region_v_), f(region_w_), f(vert_offsets_), f(vert_ids_), f(region_local_);
+  f(excl_offsets_), f(excl_partners_), f(pool_offsets_), f(chunk_offsets_);
+}
+
+size_t NarrowPhaseModel::ArrayBytes() {
+  size_t n = 0;
+  ForEachArray([&](auto& v) { n += BlockBytesOf(v); });
+  return n;
+}
+
+void NarrowPhaseModel::MoveInto(BlockArena* arena) {
+  ForEachArray([&](auto& v) { MoveIntoBlock(v, arena); });
+  excl_off_ = excl_offsets_.data();
+  excl_nb_ = excl_partners_.data();
+}
+
 Status NarrowPhaseModel::Init(const AssetView& view, NarrowPhaseRegions regions) {
+  *this = NarrowPhaseModel{};
+  if (Status s = Build(view, regions); s != Status::kOk) return s;
+  SPHERECHAIN_TRY {
+    const size_t bytes = BlockArena::BlockBytes(ArrayBytes());
+    BlockPtr block = AllocateBlock(bytes);
+    BlockArena* arena = BlockArena::Create(block.get(), bytes);
+    MoveInto(arena);
+    arena->cursor = arena->end;  // sealed
+    block_ = std::move(block);
+    bytes_ = bytes;
+  } SPHERECHAIN_CATCH_BAD_ALLOC {
+    *this = NarrowPhaseModel{};
+    return Status::kErrorOutOfMemory;
+  }
+  return Status::kOk;
+}
+
+Status NarrowPhaseModel::Build(const AssetView& view, NarrowPhaseRegions regions) {
   *this = NarrowPhaseModel{};
   if (!view.valid()) return Status::kErrorNullArgument;
   if (regions != NarrowPhaseRegions::kSurrounding && regions != NarrowPhaseRegions::kReach) return Status::kErrorInvalidJob;
@@ -713,7 +754,17 @@ Status NarrowPhaseModel::Init(const AssetView& view, NarrowPhaseRegions regions)
       *this = NarrowPhaseModel{};
       return cs;
     }
+    excl_off_ = excl_offsets_.data();
+    excl_nb_ = excl_partners_.data();
     id_ = g_next_narrow_model_id.fetch_add(1, std::memory_order_relaxed);
+    NarrowPhaseWorkspace sizing;  // on the heap: what its block must hold
+    if (Status ws = sizing.Build(*this, nullptr); ws != Status::kOk) {
+      *this = NarrowPhaseModel{};
+      return ws;
+    }
+    workspace_bytes_ = 0;
+    sizing.ForEachArray([&](auto& v) { workspace_bytes_ += BlockBytesOf(v); });
+    workspace_bytes_ = BlockArena::BlockBytes(workspace_bytes_);
   } SPHERECHAIN_CATCH_BAD_ALLOC {
     *this = NarrowPhaseModel{};
     return Status::kErrorOutOfMemory;
@@ -721,10 +772,37 @@ Status NarrowPhaseModel::Init(const AssetView& view, NarrowPhaseRegions regions)
   return Status::kOk;
 }
 
+template <class F>
+void NarrowPhaseWorkspace::ForEachArray(F&& f) {
+  f(box_), f(box_soa_), f(clip_), f(kept_), f(prepared_at_), f(prepared_), f(outcode_), f(corner_);
+  f(kept_slot_), f(kept_box_), f(chunk_box_), f(records_), f(hits_), f(candidates_), f(listed_);
+  for (Culled* l : {&list_a_, &list_b_}) {
+    f(l->key), f(l->kept), f(l->rank), f(l->start), f(l->bucket), f(l->bucket_of), f(l->slot);
+    for (int k = 0; k < 3; ++k) f(l->lo[k]), f(l->hi[k]);
+  }
+  f(patch_box_), f(sweep_), f(sweep_box_), f(sweep_hits_), f(patch_tri_box_), f(tri_prepared_), f(tri_frame_);
+  crease_scratch_.ForEachArray(f);
+}
+
 Status NarrowPhaseWorkspace::Init(const NarrowPhaseModel& model) {
   *this = NarrowPhaseWorkspace{};
   if (!model.initialized()) return Status::kErrorInvalidJob;
   SPHERECHAIN_TRY {
+    BlockPtr block = AllocateBlock(model.workspace_bytes_);
+    if (Status s = Build(model, BlockArena::Create(block.get(), model.workspace_bytes_)); s != Status::kOk) return s;
+    block_ = std::move(block);
+  } SPHERECHAIN_CATCH_BAD_ALLOC {
+    *this = NarrowPhaseWorkspace{};
+    return Status::kErrorOutOfMemory;
+  }
+  return Status::kOk;
+}
+
+Status NarrowPhaseWorkspace::Build(const NarrowPhaseModel& model, BlockArena* arena) {
+  *this = NarrowPhaseWorkspace{};
+  if (!model.initialized()) return Status::kErrorInvalidJob;
+  SPHERECHAIN_TRY {
+    ForEachArray([&](auto& v) { UseBlock(v, arena); });
     const uint32_t S = model.sphere_count_;
     const uint32_t largest = model.largest_region_, largest_verts = model.largest_region_vertices_;
     const size_t box_pitch = model.box_pitch_;
@@ -756,10 +834,11 @@ Status NarrowPhaseWorkspace::Init(const NarrowPhaseModel& model) {
       l->slot.assign(largest + kSentinels, 0);
       for (int k = 0; k < 3; ++k) l->lo[k].assign(largest + kSentinels, 0.0f), l->hi[k].assign(largest + kSentinels, 0.0f);
     }
-    if (Status cs = InitCreaseWorkspace(*this, model); cs != Status::kOk) {
+    if (Status cs = InitCreaseWorkspace(*this, model, arena); cs != Status::kOk) {
       *this = NarrowPhaseWorkspace{};
       return cs;
     }
+    if (arena) arena->cursor = arena->end;  // sealed
     model_id_ = model.id_;
   } SPHERECHAIN_CATCH_BAD_ALLOC {
     *this = NarrowPhaseWorkspace{};
@@ -771,8 +850,8 @@ Status NarrowPhaseWorkspace::Init(const NarrowPhaseModel& model) {
 bool NarrowPhaseModel::IsExcluded(uint32_t a, uint32_t b) const {
   if (a > b) std::swap(a, b);
   if (b >= sphere_count_) return false;
-  const uint16_t* begin = excl_partners_.data() + excl_offsets_[a];
-  const uint16_t* end = excl_partners_.data() + excl_offsets_[a + 1];
+  const uint16_t* begin = excl_nb_ + excl_off_[a];
+  const uint16_t* end = excl_nb_ + excl_off_[a + 1];
   return std::binary_search(begin, end, static_cast<uint16_t>(b));
 }
 

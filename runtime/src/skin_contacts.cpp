@@ -638,7 +638,7 @@ struct CreaseSweep {
       return s;
     if (Status s = BuildPatches(m, bind->data()); s != Status::kOk) return s;
     NarrowPhaseWorkspace w;
-    if (Status s = InitWorkspace(w, m); s != Status::kOk) return s;
+    if (Status s = InitWorkspace(w, m, nullptr); s != Status::kOk) return s;
     Counters c;
     Collide(m, w, reinterpret_cast<const char*>(bind->data()), 12, m.crease_graph_.crease(), &c,
             [&](uint32_t t, uint32_t u) { m.bind_contacts_.push_back(uint64_t{std::min(t, u)} << 32 | std::max(t, u)); });
@@ -646,7 +646,7 @@ struct CreaseSweep {
     return Status::kOk;
   }
 
-  static Status InitWorkspace(NarrowPhaseWorkspace& w, const NarrowPhaseModel& m) {
+  static Status InitWorkspace(NarrowPhaseWorkspace& w, const NarrowPhaseModel& m, BlockArena* arena) {
     if (!m.crease_graph_.initialized()) return Status::kOk;
     const uint32_t C = PatchCount(m), T = static_cast<uint32_t>(m.tri_v_.size() / 3);
     w.patch_box_.assign(6 * size_t{C}, 0.0f);
@@ -659,7 +659,7 @@ struct CreaseSweep {
     w.tri_prepared_.assign(T, PreparedTriangle{});
     w.tri_frame_.assign(T, 0);
     w.frame_ = 0;
-    return w.crease_scratch_.Init(m.crease_graph_);
+    return w.crease_scratch_.Init(m.crease_graph_, arena);
   }
 
   static Status Run(const NarrowPhaseJob& job) {
@@ -710,8 +710,8 @@ bool NarrowPhaseModel::IntersectsAtBind(uint32_t t, uint32_t u) const {
 }
 
 Status InitCreaseModel(NarrowPhaseModel& m, const AssetView& view) { return CreaseSweep::InitModel(m, view); }
-Status InitCreaseWorkspace(NarrowPhaseWorkspace& w, const NarrowPhaseModel& m) {
-  return CreaseSweep::InitWorkspace(w, m);
+Status InitCreaseWorkspace(NarrowPhaseWorkspace& w, const NarrowPhaseModel& m, BlockArena* arena) {
+  return CreaseSweep::InitWorkspace(w, m, arena);
 }
 Status RunCrease(const NarrowPhaseJob& job) { return CreaseSweep::Run(job); }
 

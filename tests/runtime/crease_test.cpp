@@ -75,7 +75,8 @@ void CheckEveryVertex(const st::Mesh& mesh, float crease, size_t bucket_entries 
   size_t total = 0;
   for (uint32_t v = 0; v < mesh.vertex_count(); ++v) {
     const uint32_t source[3] = {v, v, v};
-    std::vector<uint32_t> reach = scratch.Reach(graph, source, crease);
+    const auto& found = scratch.Reach(graph, source, crease);
+    std::vector<uint32_t> reach(found.begin(), found.end());
     std::sort(reach.begin(), reach.end());
     const std::vector<uint32_t> truth = TextbookReach(mesh, v, crease);
     CHECK(reach == truth);

@@ -5,11 +5,13 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <set>
 #include <tuple>
 #include <vector>
 
 #include "runtime/asset_builder.h"
+#include "spherechain/runtime/model.h"
 #include "spherechain/runtime/narrow_phase.h"
 #include "spherechain/runtime/triangle_intersect.h"
 
@@ -589,4 +591,112 @@ TEST_CASE("narrow phase, crease rule: two tubes joined by a long bridge are far 
   CHECK(!found.empty());
   CHECK(found == truth);
   CHECK(found.size() == r.contacts.size());
+}
+
+TEST_CASE("narrow phase held by the runtime Model: one block each, the same contacts as a NarrowPhaseModel of its own") {
+  // The bent tube with the crease rule (crease 3): its elbow (100°) folds adjacent spheres, an excluded
+  // pair, into each other; its hairpin (178°) brings far rings together. A Model built with the narrow
+  // phase and a Workspace of it must give, for every Exclusions, the contacts a NarrowPhaseModel and
+  // NarrowPhaseWorkspace of their own give; its kAsset must read the excluded pairs from the Model's index
+  // (kNone sees the elbow's pairs of adjacent spheres, kAsset does not). Built in caller memory too.
+  st::Mesh mesh;
+  st::Tube tube;
+  tube.rings = 30;
+  tube.sides = 12;
+  tube.spacing = 0.6f;
+  st::AssetData d = st::MakeTubes({tube}, {}, &mesh);
+  d.bind_positions = mesh.positions;
+  d.crease = 3.0f;
+  Loaded l = Load(d);
+  Narrow alone;
+  REQUIRE(alone.Init(l.view) == rt::Status::kOk);
+  CHECK(alone.model.bytes() > 0);
+  CHECK(alone.model.workspace_bytes() > 0);
+
+  rt::ModelOptions options;
+  options.narrow_phase = true;
+  rt::Model model;
+  REQUIRE(model.Init(l.view, options) == rt::Status::kOk);
+  REQUIRE(model.narrow_phase() != nullptr);
+  const rt::NarrowPhaseModel& held = *model.narrow_phase();
+  CHECK(held.has_crease());
+  CHECK(held.triangle_count() == alone.model.triangle_count());
+  CHECK(held.bind_contact_count() == alone.model.bind_contact_count());
+  CHECK(held.IsExcluded(3, 4));
+  CHECK(!held.IsExcluded(3, 5));
+  // Its block is the model's: the broad phase's sections, then the narrow phase (which shares the excluded
+  // pairs instead of indexing them again: smaller than a model of its own).
+  const size_t broad = rt::Model::RequiredBytes(l.view);
+  CHECK(model.bytes() == rt::Model::RequiredBytes(l.view, options));
+  CHECK(model.bytes() > broad);
+  CHECK(held.bytes() < alone.model.bytes());
+  CHECK(reinterpret_cast<const unsigned char*>(&held) >= reinterpret_cast<const unsigned char*>(model.arrays().bind_x));
+  rt::Workspace ws;
+  REQUIRE(ws.Init(model) == rt::Status::kOk);
+  REQUIRE(ws.narrow_phase() != nullptr);
+  CHECK(rt::Workspace::RequiredBytes(model) > held.workspace_bytes());
+  CHECK(ws.narrow_phase()->made_for(held));
+  CHECK(!ws.narrow_phase()->made_for(alone.model));
+
+  // The same again in caller memory (16-byte aligned, not 64: the arrays are aligned inside).
+  std::vector<unsigned char> model_memory(rt::Model::RequiredBytes(l.view, options) + 16);
+  std::vector<unsigned char> too_small(rt::Model::RequiredBytes(l.view, options) - 1 + 16);
+  auto at16 = [](std::vector<unsigned char>& v) {
+    void* p = v.data();
+    size_t room = v.size();
+    return std::align(16, 1, p, room);
+  };
+  rt::Model in_place;
+  CHECK(in_place.InitInPlace(l.view, options, at16(too_small), too_small.size() - 16) == rt::Status::kErrorBufferTooSmall);
+  CHECK(in_place.narrow_phase() == nullptr);
+  REQUIRE(in_place.InitInPlace(l.view, options, at16(model_memory), model_memory.size() - 16) == rt::Status::kOk);
+  REQUIRE(in_place.narrow_phase() != nullptr);
+  std::vector<unsigned char> ws_memory(rt::Workspace::RequiredBytes(in_place) + 16);
+  rt::Workspace in_place_ws;
+  REQUIRE(in_place_ws.InitInPlace(in_place, at16(ws_memory), ws_memory.size() - 16) == rt::Status::kOk);
+  // Moving keeps the narrow phase where it is (in the block).
+  rt::Model moved = std::move(model);
+  rt::Workspace moved_ws = std::move(ws);
+  CHECK(model.narrow_phase() == nullptr);
+  CHECK(ws.narrow_phase() == nullptr);
+  CHECK(moved.narrow_phase() == &held);
+
+  auto contacts = [&](const rt::NarrowPhaseModel& m, rt::NarrowPhaseWorkspace& w, const std::vector<float>& pos,
+                      rt::Exclusions ex) {
+    std::vector<rt::TriangleContact> out(1u << 16);
+    uint32_t n = 0;
+    rt::NarrowPhaseJob job;
+    job.model = &m;
+    job.workspace = &w;
+    job.exclusions = ex;
+    job.positions = {pos.data(), static_cast<uint32_t>(pos.size() / 3), 12};
+    job.output = out.data();
+    job.capacity = static_cast<uint32_t>(out.size());
+    job.count = &n;
+    REQUIRE(job.Run() == rt::Status::kOk);
+    out.resize(n);
+    return AsSet(out);
+  };
+  const std::vector<float> elbow = Fold(mesh, tube, 15, 100.0f), hairpin = Fold(mesh, tube, 15, 178.0f);
+  for (const std::vector<float>* pos : {&elbow, &hairpin})
+    for (rt::Exclusions ex : {rt::Exclusions::kAsset, rt::Exclusions::kNone, rt::Exclusions::kCrease}) {
+      const std::set<Contact> expect = contacts(alone.model, alone.ws, *pos, ex);
+      CHECK(contacts(held, *moved_ws.narrow_phase(), *pos, ex) == expect);
+      CHECK(contacts(*in_place.narrow_phase(), *in_place_ws.narrow_phase(), *pos, ex) == expect);
+    }
+  const std::set<Contact> elbow_all = contacts(held, *moved_ws.narrow_phase(), elbow, rt::Exclusions::kNone);
+  const std::set<Contact> elbow_asset = contacts(held, *moved_ws.narrow_phase(), elbow, rt::Exclusions::kAsset);
+  CHECK(elbow_asset.size() < elbow_all.size());
+  for (const Contact& c : elbow_all)
+    CHECK((elbow_asset.count(c) == 1) == !held.IsExcluded(std::get<0>(c), std::get<1>(c)));
+  CHECK(!contacts(held, *moved_ws.narrow_phase(), hairpin, rt::Exclusions::kCrease).empty());
+
+  // A model without the option has none, and its workspaces neither.
+  rt::Model plain;
+  REQUIRE(plain.Init(l.view) == rt::Status::kOk);
+  CHECK(plain.narrow_phase() == nullptr);
+  CHECK(plain.bytes() == broad);
+  rt::Workspace plain_ws;
+  REQUIRE(plain_ws.Init(plain) == rt::Status::kOk);
+  CHECK(plain_ws.narrow_phase() == nullptr);
 }

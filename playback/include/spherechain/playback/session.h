@@ -157,15 +157,16 @@ class Session {
   /// The narrow phase's exclusions under kEvery (kCrease when the rule is on), else kAsset.
   runtime::Exclusions exclusions() const { return exclusions_; }
 
-  /// The sphere model and the character's workspace (uninitialised without SessionOptions::spheres). A
-  /// consumer may run its own jobs on them between steps (a sweep of margins): the workspace's spheres are
-  /// the last refit's until the next step.
+  /// The character's Model and Workspace: the spheres' (refit, broad phase) and, with a narrow phase, the
+  /// narrow phase's in the same blocks (Model::narrow_phase()); uninitialised with neither spheres nor a
+  /// narrow phase. A consumer may run its own jobs on them between steps (a sweep of margins): the
+  /// workspace's spheres are the last refit's until the next step.
   const runtime::Model& model() const { return model_; }
   runtime::Workspace& workspace() { return workspace_; }
-  /// The narrow phase's model and workspace (surrounding regions; reach regions under kBehindM2), or
-  /// uninitialised under kNone.
-  const runtime::NarrowPhaseModel& narrow_model() const { return narrow_; }
-  runtime::NarrowPhaseWorkspace& narrow_workspace() { return narrow_ws_; }
+  /// The narrow phase's model and workspace, held by model() and workspace() (surrounding regions; reach
+  /// regions under kBehindM2), or uninitialised ones under kNone.
+  const runtime::NarrowPhaseModel& narrow_model() const;
+  runtime::NarrowPhaseWorkspace& narrow_workspace();
   /// The reach regions' model and workspace of SessionOptions::reach_model (else uninitialised).
   const runtime::NarrowPhaseModel& reach_model() const { return reach_; }
   runtime::NarrowPhaseWorkspace& reach_workspace() { return reach_ws_; }
@@ -186,8 +187,8 @@ class Session {
   const Mesh* mesh_ = nullptr;
   runtime::Model model_;
   runtime::Workspace workspace_;
-  runtime::NarrowPhaseModel narrow_, reach_;
-  runtime::NarrowPhaseWorkspace narrow_ws_, reach_ws_;
+  runtime::NarrowPhaseModel reach_;
+  runtime::NarrowPhaseWorkspace reach_ws_;
   runtime::Exclusions exclusions_ = runtime::Exclusions::kAsset;
   runtime::Status runtime_status_ = runtime::Status::kOk;
   uint32_t repeat_ = 1;

@@ -24,6 +24,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "spherechain/runtime/block_vector.h"
 #include "spherechain/runtime/status.h"
 
 namespace spherechain::runtime {
@@ -31,8 +32,8 @@ namespace spherechain::runtime {
 /// The welded bind surface as a weighted edge graph, and the crease rule on it (file comment). Built from
 /// plain arrays so the asset (Asset.bind_positions, triangles, weld_ids) and a mesh that has no asset
 /// (spherechain evaluate's ground truth) use the same rule.
-/// Ownership: owns its memory (std::vector, allocated by Init only). Immutable after Init: shared by any
-/// number of CreaseScratch and threads. Move-only.
+/// Ownership: owns its memory (BlockVector: allocated by Init on the heap; a NarrowPhaseModel moves them
+/// into its block). Immutable after Init: shared by any number of CreaseScratch and threads. Move-only.
 class CreaseGraph {
  public:
   CreaseGraph() = default;
@@ -67,13 +68,19 @@ class CreaseGraph {
 
   friend class CreaseScratch;
 
+  /// Calls f(array) on each of its arrays (BlockVector): how an owner sizes its block and moves them in.
+  template <class F>
+  void ForEachArray(F&& f) {
+    f(node_of_), f(offsets_), f(adj_), f(length_);
+  }
+
  private:
   float crease_ = 0.0f;
   uint32_t node_count_ = 0, components_ = 0;
-  std::vector<uint32_t> node_of_;   // #V → welded node
-  std::vector<uint32_t> offsets_;   // CSR, node_count_ + 1
-  std::vector<uint32_t> adj_;       // neighbour nodes
-  std::vector<float> length_;       // bind length of each adjacency entry
+  BlockVector<uint32_t> node_of_;   // #V → welded node
+  BlockVector<uint32_t> offsets_;   // CSR, node_count_ + 1
+  BlockVector<uint32_t> adj_;       // neighbour nodes
+  BlockVector<float> length_;       // bind length of each adjacency entry
 };
 
 /// Scratch of the crease rule for one thread: the distances from the last source triangle's corners. Keep
@@ -81,9 +88,11 @@ class CreaseGraph {
 /// Ownership: owns its memory (allocated by Init only). Not thread-safe (one caller at a time).
 class CreaseScratch {
  public:
-  /// Sizes the scratch for `graph`. Returns kOk, kErrorInvalidJob (graph not initialised),
-  /// kErrorOutOfMemory. Cost O(\#nodes + \#edges).
-  Status Init(const CreaseGraph& graph);
+  /// Sizes the scratch for `graph`: its arrays on the heap, or carved from `arena` [opt] (a workspace's
+  /// block, which must outlive the scratch; what does not fit goes to the heap). Returns kOk,
+  /// kErrorInvalidJob (graph not initialised), kErrorOutOfMemory. Cost O(\#nodes + \#edges); memory 5 B
+  /// per node + 20 B per directed edge.
+  Status Init(const CreaseGraph& graph, BlockArena* arena = nullptr);
   /// True when sized for a graph of `graph`'s node count (what Near needs of it).
   bool made_for(const CreaseGraph& graph) const {
     return graph.initialized() && dist_.size() == graph.node_count() && heap_.capacity() >= graph.edge_count() * 2 + 3;
@@ -101,9 +110,15 @@ class CreaseScratch {
   /// edge neighbours and every node within `crease` of a corner (unordered, no repeats). A triangle u is
   /// near t (Near) exactly when one of u's corners' nodes (CreaseGraph::node) is in this list. The span
   /// is the scratch's own and valid until the next Near, Reach or Reset. Same search and cost as Near.
-  const std::vector<uint32_t>& Reach(const CreaseGraph& graph, const uint32_t t[3], float crease);
+  const BlockVector<uint32_t>& Reach(const CreaseGraph& graph, const uint32_t t[3], float crease);
   /// Forgets the last source (the next Near searches again). O(1).
   void Reset() { source_crease_ = -1.0f; }
+
+  /// Calls f(array) on each of its arrays (BlockVector).
+  template <class F>
+  void ForEachArray(F&& f) {
+    f(dist_), f(ring_), f(touched_), f(heap_), f(entries_), f(next_);
+  }
 
  private:
   friend struct CreaseScratchTestAccess;  // the tests shrink the bucket queue to reach its fallback
@@ -118,12 +133,12 @@ class CreaseScratch {
 
   uint32_t source_[3] = {~0u, ~0u, ~0u};
   float source_crease_ = -1.0f;
-  std::vector<float> dist_;          // per node: distance from the source's corners, +inf when unreached
-  std::vector<uint8_t> ring_;        // per node: 1 when a corner of the source or joined to one by an edge
-  std::vector<uint32_t> touched_;    // nodes whose dist_ / ring_ were set (reset on the next source)
-  std::vector<uint64_t> heap_;       // (distance bits << 32 | node), min-heap; capacity #edges + 3
-  std::vector<uint64_t> entries_;    // the bucket queue's entries (same keys), #edges + 3 ...
-  std::vector<uint32_t> next_;       // ... each chained to the next of its bucket
+  BlockVector<float> dist_;          // per node: distance from the source's corners, +inf when unreached
+  BlockVector<uint8_t> ring_;        // per node: 1 when a corner of the source or joined to one by an edge
+  BlockVector<uint32_t> touched_;    // nodes whose dist_ / ring_ were set (reset on the next source)
+  BlockVector<uint64_t> heap_;       // (distance bits << 32 | node), min-heap; capacity #edges + 3
+  BlockVector<uint64_t> entries_;    // the bucket queue's entries (same keys), #edges + 3 ...
+  BlockVector<uint32_t> next_;       // ... each chained to the next of its bucket
   std::array<uint32_t, kBuckets> head_{};  // per bucket: its last entry, or kNil
 };
 

@@ -62,6 +62,34 @@ struct ModelArrays {
   uint32_t max_chain_length;      ///< longest chain [spheres]
 };
 
+/// Which triangles stand behind a sphere in a NarrowPhaseModel.
+enum class NarrowPhaseRegions : uint8_t {
+  /// Its surrounding region (Asset.surrounding_*: each triangle behind its one owner). Unrestricted, the
+  /// exact answer; restricted to the proxy's pairs, the contacts whose two owners were reported.
+  kSurrounding = 0,
+  /// Its reach region (ReachTriangles: also the triangles of its region within the bake's reach of it,
+  /// so a triangle may stand behind two or three spheres). For a job restricted to the proxy's pairs
+  /// (NarrowPhaseJob::sphere_pairs): a contact is found when its triangles stand behind a reported pair,
+  /// whichever spheres own them — on a coarse mesh the sphere that overlaps is often a neighbour of the
+  /// owner (README "Behind the proxy's pairs"). Contacts are still defined by the owners (different, not
+  /// an excluded pair) and each is reported once, under the candidate pair of lowest (a, b) that covers
+  /// it. Unrestricted it gives the same contacts as kSurrounding, at more cost.
+  kReach = 1,
+};
+
+class NarrowPhaseModel;
+class NarrowPhaseWorkspace;
+
+/// What a Model builds besides the broad phase (Model::Init, Model::InitInPlace).
+struct ModelOptions {
+  /// Also build the narrow phase (the asset's NarrowPhaseModel, narrow_phase.h) into the model's block,
+  /// sharing the model's index of excluded pairs; every Workspace of the model then holds its scratch
+  /// (NarrowPhaseWorkspace). Needs Asset.triangles and weld_ids (else kErrorMissingField).
+  bool narrow_phase = false;
+  /// The triangles behind each sphere in that narrow phase (NarrowPhaseModel::Init's `regions`).
+  NarrowPhaseRegions narrow_phase_regions = NarrowPhaseRegions::kSurrounding;
+};
+
 /// What every character of one asset shares, built once per asset from its AssetView: the refit data
 /// in SoA (pivot vertices, pivot-frame coordinates, radius scales, bind spheres), the chain masks, the
 /// excluded pairs as per-sphere neighbour lists, the centre joint weights (schema v3) and, for
@@ -69,6 +97,8 @@ struct ModelArrays {
 /// fixed count per group, no branch per sphere), and the broad phase's static layout — spheres in blocks of 8 (grouped by body region, Asset.sphere_regions, else by
 /// chain mask; each group split at bind pose by a kd split), per pair of blocks and per method the lanes
 /// to test (excluded pairs, M1's pairs sharing no chain and padding masked out).
+/// With ModelOptions::narrow_phase the same block also holds the narrow phase (narrow_phase()): one
+/// character is then one Model and one Workspace for every job, the narrow phase's included.
 /// Immutable after Init: any number of Workspaces (characters) and threads may use one Model at once.
 /// Ownership: one block of memory, the Model's own (Init) or the caller's (InitInPlace); after Init it
 /// no longer reads the asset bytes (jobs never touch the AssetView). Move-only; moving keeps id().
@@ -84,6 +114,10 @@ class Model {
   /// Bytes InitInPlace needs for `view` (the exact size of the Model's block), or 0 when `!view.valid()`.
   /// Cost: O(\#S · (\#C log n + \#groups)), no allocation; thread-safe.
   static size_t RequiredBytes(const AssetView& view);
+  /// The same for a model built with `options`. With options.narrow_phase it builds the narrow phase on
+  /// the heap to measure it (NarrowPhaseModel::Init's cost: ~0.26 s for MakeHuman), so it allocates and
+  /// may return 0 also when that build fails (the asset lacks its fields, out of memory). Thread-safe.
+  static size_t RequiredBytes(const AssetView& view, const ModelOptions& options);
 
   /// Builds the model of `view` in one allocation of RequiredBytes(view) bytes (the only allocation),
   /// aligned to 64. Returns kOk; kErrorNullArgument (`!view.valid()`); kErrorOutOfMemory (allocation
@@ -94,6 +128,11 @@ class Model {
   /// best the CPU runs (SPHERECHAIN_ISA=sse2|avx caps it), all giving the same bits.
   /// Not thread-safe on one object (nothing may use the model meanwhile).
   Status Init(const AssetView& view);
+  /// The same with `options`: with options.narrow_phase also the narrow phase (narrow_phase()), built on
+  /// the heap and moved into the model's one block (6.1 MB more for MakeHuman with the crease rule). Also
+  /// returns what NarrowPhaseModel::Init returns (kErrorMissingField, kErrorInvalidJob for unknown
+  /// regions); the model is empty after a failure.
+  Status Init(const AssetView& view, const ModelOptions& options);
 
   /// The same in caller memory (meshoptimizer-style): `memory` [Limit: 16-byte aligned, else
   /// kErrorAlignment] of `bytes` [Limit: >= RequiredBytes(view), else kErrorBufferTooSmall]; nothing is
@@ -102,6 +141,9 @@ class Model {
   /// kErrorBufferTooSmall, kErrorOutOfMemory (candidate lanes exceed 2^32); the model is empty after a
   /// failure (and the memory unspecified).
   Status InitInPlace(const AssetView& view, void* memory, size_t bytes);
+  /// The same with `options` [Limit: bytes >= RequiredBytes(view, options)]. With options.narrow_phase the
+  /// narrow phase is built on the heap (temporaries freed before it returns) and moved into `memory`.
+  Status InitInPlace(const AssetView& view, const ModelOptions& options, void* memory, size_t bytes);
 
   /// Frees the model's block (none when it lives in caller memory); the model is empty after.
   void Release();
@@ -127,6 +169,9 @@ class Model {
   /// [Limit: s < \#S]
   uint8_t fold_region(uint32_t s) const { return fold_region_ ? fold_region_[s] : uint8_t{0}; }
   size_t bytes() const { return bytes_; }  ///< size of the model's block
+  /// The narrow phase built into the model (ModelOptions::narrow_phase), or null. Give it to a
+  /// NarrowPhaseJob with Workspace::narrow_phase(); valid for the model's lifetime.
+  const NarrowPhaseModel* narrow_phase() const { return narrow_; }
 
   /// The bind spheres (Asset.spheres), SoA; valid for the model's lifetime.
   SphereArrays bind_spheres() const { return {a_.bind_x, a_.bind_y, a_.bind_z, a_.bind_r, sphere_count_}; }
@@ -148,7 +193,8 @@ class Model {
   friend class Workspace;
 
  private:
-  Status Build(const AssetView& view, unsigned char* memory, size_t bytes);
+  Status Build(const AssetView& view, unsigned char* memory, size_t bytes, NarrowPhaseModel* narrow);
+  static Status BuildNarrow(const AssetView& view, const ModelOptions& options, NarrowPhaseModel& out, size_t& bytes);
 
   unsigned char* storage_ = nullptr;  // the block (owned when owned_)
   bool owned_ = false;
@@ -160,6 +206,7 @@ class Model {
   float fold_margin_ = -1.0f;              // Asset.fold_margin when set (>= 0), else -1
   const uint8_t* fold_region_ = nullptr;   // #S sphere regions, only with a fold margin
   ModelArrays a_{};
+  NarrowPhaseModel* narrow_ = nullptr;     // in the block, after the broad phase's sections, or null
   uint8_t isa_ = 0;  // kernels::Isa picked at Init (runtime dispatch: SSE2, AVX or AVX-512)
   uint32_t m1_tests_ = 0;  // Σ_chains n(n−1)/2 (DetectStats::tests of M1)
   // Broad-phase layout (DetectJob, both methods): B blocks of 8 slots.
@@ -182,8 +229,11 @@ class Model {
 /// per-frame scratch of DetectJob (spheres gathered in block order, block boxes, hit keys, per-row-block
 /// counters). Records the id() of the Model it was made for: a job given this workspace and another
 /// model answers kErrorWorkspaceModel and writes nothing.
+/// With a model holding the narrow phase (ModelOptions::narrow_phase) the block also holds its scratch
+/// (narrow_phase()).
 /// Ownership: one block of memory (~100 B per sphere + 8 B per candidate lane of the model: 70 KB for
-/// MakeHuman's 128 spheres, 8,128 lanes), its own (Init) or the caller's (InitInPlace). Move-only.
+/// MakeHuman's 128 spheres, 8,128 lanes; plus NarrowPhaseModel::workspace_bytes() with the narrow phase:
+/// 7.6 MB for MakeHuman with the crease rule), its own (Init) or the caller's (InitInPlace). Move-only.
 /// Thread safety: one job at a time per workspace; different workspaces are independent, also when they
 /// share a model.
 class Workspace {
@@ -195,10 +245,11 @@ class Workspace {
   Workspace& operator=(Workspace&& o) noexcept;
   ~Workspace();
 
-  /// Bytes InitInPlace needs for `model`; 0 when the model is not initialised. O(1).
+  /// Bytes InitInPlace needs for `model` (its narrow phase's scratch included); 0 when the model is not
+  /// initialised. O(1).
   static size_t RequiredBytes(const Model& model);
-  /// Sizes the workspace for `model` (one allocation), records model.id() and sets the spheres to the
-  /// bind pose. Returns kOk; kErrorInvalidJob (model not initialised); kErrorOutOfMemory (workspace left
+  /// Sizes the workspace for `model` (one allocation, the narrow phase's scratch included when the model
+  /// has one), records model.id() and sets the spheres to the bind pose. Returns kOk; kErrorInvalidJob (model not initialised); kErrorOutOfMemory (workspace left
   /// empty). Cost: O(\#S + lanes) time.
   Status Init(const Model& model);
   /// The same in caller memory: `memory` [Limit: 16-byte aligned, else kErrorAlignment] of `bytes`
@@ -212,6 +263,9 @@ class Workspace {
   uint64_t model_id() const { return model_id_; }          ///< Model::id() it was made for
   bool made_for(const Model& model) const { return model_id_ != 0 && model_id_ == model.id(); }
   uint32_t sphere_count() const { return sphere_count_; }  ///< \#S
+  /// The narrow phase's scratch when the model has a narrow phase (Model::narrow_phase()), else null.
+  /// Valid for the workspace's lifetime.
+  NarrowPhaseWorkspace* narrow_phase() { return narrow_; }
 
   /// Current spheres (see SphereArrays for lifetime).
   SphereArrays spheres() const { return {x_, y_, z_, r_, sphere_count_}; }
@@ -242,6 +296,7 @@ class Workspace {
   float* box_ = nullptr;          // 7 × (box pitch + 8): block boxes
   uint64_t* keys_ = nullptr;      // Model::key_slots_ hit keys
   uint32_t* row_hits_ = nullptr;  // 3 × B: keys, box tests, sphere tests per row block
+  NarrowPhaseWorkspace* narrow_ = nullptr;  // in the block after the sections, with a narrow-phase model
 };
 
 }  // namespace spherechain::runtime

@@ -27,9 +27,10 @@
 #pragma once
 
 #include <cstdint>
-#include <vector>
+#include <memory>
 
 #include "spherechain/runtime/asset.h"
+#include "spherechain/runtime/block_vector.h"
 #include "spherechain/runtime/crease.h"
 #include "spherechain/runtime/model.h"
 #include "spherechain/runtime/detect.h"
@@ -54,21 +55,6 @@ enum class Exclusions : uint8_t {
   /// boxes tested, crease_folds the intersecting pairs a wider job crease skipped. Optional penetration
   /// depths (NarrowPhaseJob::depths).
   kCrease = 2,
-};
-
-/// Which triangles stand behind a sphere in a NarrowPhaseModel.
-enum class NarrowPhaseRegions : uint8_t {
-  /// Its surrounding region (Asset.surrounding_*: each triangle behind its one owner). Unrestricted, the
-  /// exact answer; restricted to the proxy's pairs, the contacts whose two owners were reported.
-  kSurrounding = 0,
-  /// Its reach region (ReachTriangles: also the triangles of its region within the bake's reach of it,
-  /// so a triangle may stand behind two or three spheres). For a job restricted to the proxy's pairs
-  /// (NarrowPhaseJob::sphere_pairs): a contact is found when its triangles stand behind a reported pair,
-  /// whichever spheres own them — on a coarse mesh the sphere that overlaps is often a neighbour of the
-  /// owner (README "Behind the proxy's pairs"). Contacts are still defined by the owners (different, not
-  /// an excluded pair) and each is reported once, under the candidate pair of lowest (a, b) that covers
-  /// it. Unrestricted it gives the same contacts as kSurrounding, at more cost.
-  kReach = 1,
 };
 
 /// One contact: two intersecting triangles (of different surrounding regions, except with
@@ -132,8 +118,10 @@ struct NarrowPhaseInternal;  // the job's stages (narrow_phase.cpp; not API)
 /// Asset.surrounding_*), each region's distinct vertices, the excluded pairs (Asset.excluded_pairs), and
 /// the sizes of the per-character scratch (NarrowPhaseWorkspace).
 /// Immutable after Init: any number of NarrowPhaseWorkspaces (characters) and threads may use one at
-/// once. Ownership: owns its memory (std::vector, allocated by Init only); after Init it no longer reads
-/// the asset bytes. Move-only; moving keeps id() and leaves the source uninitialised.
+/// once. Ownership: one block of memory, its own (Init: built on the heap, then moved into a block of
+/// bytes()) or, for the narrow phase a runtime::Model holds (ModelOptions::narrow_phase), the Model's
+/// block, where it also shares the Model's index of excluded pairs; after Init it no longer reads the
+/// asset bytes. Move-only; moving keeps id() and leaves the source uninitialised.
 class NarrowPhaseModel {
  public:
   NarrowPhaseModel() = default;
@@ -196,8 +184,14 @@ class NarrowPhaseModel {
   }
   /// How many such pairs the bind pose has (computed by Init with the crease rule).
   uint32_t bind_contact_count() const { return static_cast<uint32_t>(bind_contacts_.size()); }
+  /// Bytes of the model's arrays in their block (the whole block when the model owns it).
+  size_t bytes() const { return bytes_; }
+  /// Bytes a NarrowPhaseWorkspace for this model takes (its block: what NarrowPhaseWorkspace::Init
+  /// allocates, and what a runtime::Workspace adds for it).
+  size_t workspace_bytes() const { return workspace_bytes_; }
 
   friend class NarrowPhaseWorkspace;
+  friend class Model;
   friend struct NarrowPhaseJob;
   friend struct NarrowPhaseInternal;
   friend struct CreaseSweep;
@@ -206,9 +200,23 @@ class NarrowPhaseModel {
   uint64_t id_ = 0;
   // The crease rule (Asset.bind_positions, crease; empty without): the bind surface's graph, every
   // triangle's corners (#T×3, the index buffer), and the bind pose's own contacts (t << 32 | u, t < u, sorted).
+  // Builds the model's arrays on the heap (Init's work before they move into a block).
+  Status Build(const AssetView& view, NarrowPhaseRegions regions);
+  // Calls f(array) on each of its arrays (BlockVector), the graph's included.
+  template <class F>
+  void ForEachArray(F&& f);
+  // Σ of its arrays' bytes in a block; moves them into `arena` and points the jobs at its own index
+  // of excluded pairs (a Model then points them at its own).
+  size_t ArrayBytes();
+  void MoveInto(BlockArena* arena);
+
+  BlockPtr block_;                  // its own block (null when its arrays live in a Model's)
+  size_t bytes_ = 0, workspace_bytes_ = 0;
+  const uint32_t* excl_off_ = nullptr;    // the excluded-pair index the jobs read: its own or the Model's
+  const uint16_t* excl_nb_ = nullptr;
   CreaseGraph crease_graph_;
-  std::vector<uint32_t> tri_v_;
-  std::vector<uint64_t> bind_contacts_;
+  BlockVector<uint32_t> tri_v_;
+  BlockVector<uint64_t> bind_contacts_;
   // The crease rule's patches (skin_contacts.cpp): the triangles that are not index-degenerate in patches
   // of up to 16 grown over the welded bind surface (cl_tri_: 16 slots per patch, ~0u padding), each
   // patch's distinct vertices (CSR cl_vert_offsets_ #C+1, cl_vert_), and every pair of patches p <= q
@@ -219,32 +227,32 @@ class NarrowPhaseModel {
   // Per patch also its triangles' corners as indices into its distinct vertices (cl_local_, 48 per patch),
   // its triangle count (cl_count_) and the mask of its slots in use (cl_valid_); per block of near rows the
   // rows and columns (bits 0-15, 16-31) that have a partner not near (near_far_).
-  std::vector<uint32_t> cl_tri_, cl_vert_offsets_, cl_vert_, near_block_, near_far_;
-  std::vector<uint64_t> near_key_;
+  BlockVector<uint32_t> cl_tri_, cl_vert_offsets_, cl_vert_, near_block_, near_far_;
+  BlockVector<uint64_t> near_key_;
   uint32_t near_hash_bits_ = 0;
-  std::vector<uint16_t> near_rows_, cl_valid_;
-  std::vector<uint8_t> cl_local_, cl_count_;
+  BlockVector<uint16_t> near_rows_, cl_valid_;
+  BlockVector<uint8_t> cl_local_, cl_count_;
   bool reach_ = false;  // regions from Asset.reach_*: overlapping, owners from the surrounding regions
   uint32_t sphere_count_ = 0, vertex_count_ = 0, triangle_count_ = 0;
-  std::vector<uint32_t> behind_offsets_;  // reach_ only: CSR #T+1, the spheres each triangle stands behind
-  std::vector<uint16_t> behind_;
+  BlockVector<uint32_t> behind_offsets_;  // reach_ only: CSR #T+1, the spheres each triangle stands behind
+  BlockVector<uint16_t> behind_;
   uint32_t index_degenerate_ = 0, unassigned_ = 0;
   uint32_t largest_region_ = 0, largest_region_vertices_ = 0;  // triangles / distinct vertices (scratch sizes)
-  std::vector<uint32_t> weld_;                 // #V
-  std::vector<uint16_t> tri_sphere_;           // #T source triangle → owning sphere (0xFFFF none)
+  BlockVector<uint32_t> weld_;                 // #V
+  BlockVector<uint16_t> tri_sphere_;           // #T source triangle → owning sphere (0xFFFF none)
   // Surrounding regions in sphere order (CSR, region_offsets_ #S+1): source triangle id, its three
   // vertex indices and three weld ids; index-degenerate triangles left out.
-  std::vector<uint32_t> region_offsets_, region_tri_, region_v_, region_w_;
-  std::vector<uint32_t> vert_offsets_, vert_ids_;  // CSR #S+1: distinct vertices of each region, ascending
-  std::vector<uint32_t> region_local_;             // per slot: its corners' indices in the region's vertex list
-  std::vector<uint32_t> excl_offsets_;             // CSR #S+1: excluded partners b > a of each a
-  std::vector<uint16_t> excl_partners_;
+  BlockVector<uint32_t> region_offsets_, region_tri_, region_v_, region_w_;
+  BlockVector<uint32_t> vert_offsets_, vert_ids_;  // CSR #S+1: distinct vertices of each region, ascending
+  BlockVector<uint32_t> region_local_;             // per slot: its corners' indices in the region's vertex list
+  BlockVector<uint32_t> excl_offsets_;             // CSR #S+1: excluded partners b > a of each a
+  BlockVector<uint16_t> excl_partners_;
   size_t box_pitch_ = 0;                       // #S + 4: the SoA region boxes' rows (inverted boxes after the last)
   // Per region, its pool offset (pool_offsets_, #S+1: its triangle count rounded up to a chunk of 8) into
   // the workspace's kept triangles, and its chunk offset (chunk_offsets_, #S+1: its chunk count rounded
   // up to 4) into the workspace's chunk boxes (six rows of chunk_pitch_).
-  std::vector<uint32_t> pool_offsets_;
-  std::vector<uint32_t> chunk_offsets_;
+  BlockVector<uint32_t> pool_offsets_;
+  BlockVector<uint32_t> chunk_offsets_;
   size_t chunk_pitch_ = 0;
 };
 
@@ -253,10 +261,11 @@ class NarrowPhaseModel {
 /// pairs, sweep lists — rewritten by every Run (nothing in it outlives a Run; the job's outputs are the
 /// caller's). Records the id() of the model it was made for: a job given this workspace and another
 /// model answers kErrorWorkspaceModel and writes nothing.
-/// Ownership: owns its memory (std::vector, allocated by Init only): ~110 B per region triangle (a
-/// prepared triangle 64 B, a box 32 B, indices) + ~90 B per sphere + ~150 B per triangle and 17 B per
-/// vertex of the largest region (≈ 2.9 MB for MakeHuman's 26,756 triangles by that count). Move-only;
-/// moving leaves the source uninitialised.
+/// Ownership: one block of memory (NarrowPhaseModel::workspace_bytes()), its own (Init) or a
+/// runtime::Workspace's: ~110 B per region triangle (a prepared triangle 64 B, a box 32 B, indices) +
+/// ~90 B per sphere + ~150 B per triangle and 17 B per vertex of the largest region (≈ 2.9 MB for
+/// MakeHuman's 26,756 triangles by that count); with the crease rule also ~100 B per triangle and ~45 B
+/// per welded vertex (7.5 MB in all for MakeHuman). Move-only; moving leaves the source uninitialised.
 /// Thread safety: one job at a time per workspace; different workspaces are independent, also when they
 /// share a model.
 class NarrowPhaseWorkspace {
@@ -267,9 +276,9 @@ class NarrowPhaseWorkspace {
   NarrowPhaseWorkspace(NarrowPhaseWorkspace&&) noexcept = default;
   NarrowPhaseWorkspace& operator=(NarrowPhaseWorkspace&&) noexcept = default;
 
-  /// Sizes the scratch for `model` and records model.id(). The only allocating call (catches
-  /// std::bad_alloc). Returns kOk; kErrorInvalidJob (model not initialised); kErrorOutOfMemory (left
-  /// empty). Cost: O(\#T + \#S) time.
+  /// Sizes the scratch for `model` in one block of model.workspace_bytes() and records model.id(). The
+  /// only allocating call (catches std::bad_alloc). Returns kOk; kErrorInvalidJob (model not
+  /// initialised); kErrorOutOfMemory (left empty). Cost: O(\#T + \#S) time.
   Status Init(const NarrowPhaseModel& model);
 
   /// True after a successful Init (false when moved from).
@@ -280,56 +289,64 @@ class NarrowPhaseWorkspace {
   friend struct NarrowPhaseJob;
   friend struct NarrowPhaseInternal;
   friend struct CreaseSweep;
+  friend class NarrowPhaseModel;
+  friend class Workspace;
 
   struct Culled {                     // culled triangles of one side of a candidate pair
-    std::vector<uint64_t> key;        // sweep order: ordered bits of the box minimum on the axis << 32 | n
-    std::vector<uint32_t> kept;       // per n (cull order): index into the region's kept triangles
-    std::vector<uint32_t> rank;       // per n (cull order): rank among those meeting the other region's box
-    std::vector<float> start;         // per n (cull order): box minimum on the axis
-    std::vector<uint32_t> bucket;     // counting-sort counters
-    std::vector<uint32_t> bucket_of;  // per n (cull order): its bucket
-    std::vector<uint32_t> slot;       // sweep order: region-order slot; 4 more (read, unused)
-    std::vector<float> lo[3], hi[3];  // sweep order: box per axis; 4 sentinels (lo +inf, hi −inf) after
+    BlockVector<uint64_t> key;        // sweep order: ordered bits of the box minimum on the axis << 32 | n
+    BlockVector<uint32_t> kept;       // per n (cull order): index into the region's kept triangles
+    BlockVector<uint32_t> rank;       // per n (cull order): rank among those meeting the other region's box
+    BlockVector<float> start;         // per n (cull order): box minimum on the axis
+    BlockVector<uint32_t> bucket;     // counting-sort counters
+    BlockVector<uint32_t> bucket_of;  // per n (cull order): its bucket
+    BlockVector<uint32_t> slot;       // sweep order: region-order slot; 4 more (read, unused)
+    BlockVector<float> lo[3], hi[3];  // sweep order: box per axis; 4 sentinels (lo +inf, hi −inf) after
   };
 
  private:
+  // Sizes its arrays for `model`, carved from `arena` (null: the heap), and records model.id().
+  Status Build(const NarrowPhaseModel& model, BlockArena* arena);
+  template <class F>
+  void ForEachArray(F&& f);
+
+  BlockPtr block_;  // its own block (null when its arrays live in a Workspace's)
   uint64_t model_id_ = 0;
   // Boxes are 8 floats: min xyz, 0, max xyz, 0 (four-wide loads).
-  std::vector<float> box_;                     // #S×8 region boxes
-  std::vector<float> box_soa_;                 // the same, 6 rows (min x, y, z, max x, y, z) of the model's box pitch
-  std::vector<float> clip_;                    // #S×8: box of the candidate partners' boxes ∩ its own (or inverted)
-  std::vector<uint32_t> kept_;                 // #S: triangles of the region kept by its clip, or kNotCulled
-  std::vector<uint32_t> prepared_at_;          // per region-order triangle: its index in prepared_, or unprepared
+  BlockVector<float> box_;                     // #S×8 region boxes
+  BlockVector<float> box_soa_;                 // the same, 6 rows (min x, y, z, max x, y, z) of the model's box pitch
+  BlockVector<float> clip_;                    // #S×8: box of the candidate partners' boxes ∩ its own (or inverted)
+  BlockVector<uint32_t> kept_;                 // #S: triangles of the region kept by its clip, or kNotCulled
+  BlockVector<uint32_t> prepared_at_;          // per region-order triangle: its index in prepared_, or unprepared
                                                // or degenerate (reset with its region's cull: only those reach a test)
-  std::vector<PreparedTriangle> prepared_;     // the triangles prepared this frame, in the order tests met them
+  BlockVector<PreparedTriangle> prepared_;     // the triangles prepared this frame, in the order tests met them
   uint32_t prepared_count_ = 0;                // (a pool the size of the regions, its used part small and hot)
-  std::vector<uint8_t> outcode_;               // per vertex of the largest region: cull outcodes
-  std::vector<float> corner_;                  // per vertex of the largest region: its position, 4 floats
+  BlockVector<uint8_t> outcode_;               // per vertex of the largest region: cull outcodes
+  BlockVector<float> corner_;                  // per vertex of the largest region: its position, 4 floats
   // Per region, from its pool offset (the model's): its triangles kept by its clip, in slot order: their
   // slot, and their box (8 floats), inverted boxes padding the last chunk.
-  std::vector<uint32_t> kept_slot_;
-  std::vector<float> kept_box_;
+  BlockVector<uint32_t> kept_slot_;
+  BlockVector<float> kept_box_;
   // The box of each chunk of 8 kept boxes, six rows of the model's chunk pitch from the region's chunk
   // offset, inverted boxes padding.
-  std::vector<float> chunk_box_;
-  std::vector<uint64_t> records_;              // sweep steps with a hit: element << 32 | side << 31 | box << 4 | lanes
-  std::vector<uint64_t> hits_;                 // records → exact tests: position in a's list << 32 | in b's
-  std::vector<uint32_t> candidates_;           // candidate pairs a << 16 | b, up to min(#S(#S−1)/2, 16·#S + 64)
-  std::vector<uint64_t> listed_;               // reach models: #S rows of ⌈#S/64⌉ words, bit (a, b) set for
+  BlockVector<float> chunk_box_;
+  BlockVector<uint64_t> records_;              // sweep steps with a hit: element << 32 | side << 31 | box << 4 | lanes
+  BlockVector<uint64_t> hits_;                 // records → exact tests: position in a's list << 32 | in b's
+  BlockVector<uint32_t> candidates_;           // candidate pairs a << 16 | b, up to min(#S(#S−1)/2, 16·#S + 64)
+  BlockVector<uint64_t> listed_;               // reach models: #S rows of ⌈#S/64⌉ words, bit (a, b) set for
                                                // this Run's candidates (a < b); cleared before it returns
   Culled list_a_, list_b_;
   // Exclusions::kCrease (sized only for a model with the crease rule): each patch's box (6 rows of #C: min
   // x, y, z, max x, y, z), the sweep order (kept from frame to frame: re-sorted by insertion), each patch's
   // triangle boxes (96 floats: 6 rows of 16, inverted padding; all computed each frame), prepared triangles (tri_frame_: frame << 1 |
   // degenerate, when prepared this frame), the rule's scratch (a job wider than the asset's crease).
-  std::vector<float> patch_box_;
-  std::vector<uint64_t> sweep_;
-  std::vector<float> sweep_box_;        // the patch boxes in sweep order (6 rows of #C + 1)
-  std::vector<uint32_t> sweep_hits_;    // one sweep step's overlapping patches (#C + 1)
+  BlockVector<float> patch_box_;
+  BlockVector<uint64_t> sweep_;
+  BlockVector<float> sweep_box_;        // the patch boxes in sweep order (6 rows of #C + 1)
+  BlockVector<uint32_t> sweep_hits_;    // one sweep step's overlapping patches (#C + 1)
   int sweep_axis_ = -1;                 // the axis sweep_ is sorted on (-1: none yet)
-  std::vector<float> patch_tri_box_;
-  std::vector<PreparedTriangle> tri_prepared_;
-  std::vector<uint32_t> tri_frame_;
+  BlockVector<float> patch_tri_box_;
+  BlockVector<PreparedTriangle> tri_prepared_;
+  BlockVector<uint32_t> tri_frame_;
   uint32_t frame_ = 0;
   CreaseScratch crease_scratch_;
 };
