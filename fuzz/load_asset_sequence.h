@@ -3,8 +3,10 @@
 //
 // Bytes → LoadAsset → (if it loads) Model::Init (and InitInPlace) → Workspace::Init → RefitJob (both modes, positions derived from the
 // input, NaN/Inf/huge/denormal included) → DetectJob M1 and M2 into DetectBound-sized buffers (and
-// once more truncated) → SurroundingTriangles / PivotTriangles for every sphere, checking the
-// documented invariants of each output. Header-only; needs only spherechain::runtime.
+// once more truncated) → SurroundingTriangles / PivotTriangles for every sphere → the narrow phase in the
+// Model (ModelOptions::narrow_phase, also in caller memory) and its NarrowPhaseJob under each Exclusions, on
+// the derived positions and on the asset's bind pose, checking the documented invariants of each output.
+// Header-only; needs only spherechain::runtime.
 #pragma once
 
 #include <spherechain/runtime/runtime.h>
@@ -15,6 +17,8 @@
 #include <cstring>
 #include <limits>
 #include <memory>
+#include <set>
+#include <utility>
 #include <vector>
 
 namespace spherechain::fuzz {
@@ -24,12 +28,105 @@ namespace spherechain::fuzz {
 inline constexpr uint32_t kMaxHarnessVertices = uint32_t{1} << 22;
 inline constexpr uint32_t kMaxHarnessCollisions = uint32_t{1} << 22;
 
+/// Biggest mesh the harness gives the narrow phase (its Init is O(#T log #T) plus a bounded Dijkstra per
+/// patch node: an asset's triangle count is bounded by its bytes, but a dense 4 MB one would be slow).
+inline constexpr uint32_t kMaxHarnessNarrowTriangles = uint32_t{1} << 13;
+
+/// The narrow phase of `view` held by a Model, run on `positions` (\#V×3, packed) under every Exclusions
+/// the model supports, each output checked. nullptr when everything behaved as documented. `*crease_ran`
+/// (opt) is set when a kCrease job ran to completion.
+inline const char* RunNarrowPhaseSequence(const runtime::AssetView& view, const std::vector<float>* positions_or_null,
+                                          bool* crease_ran = nullptr) {
+  using namespace spherechain::runtime;
+  ModelOptions options;
+  options.narrow_phase = true;
+  Model model;
+  const Status init = model.Init(view, options);
+  if (init == Status::kErrorMissingField || init == Status::kErrorOutOfMemory) return nullptr;  // documented
+  if (init != Status::kOk) return "Model::Init with the narrow phase failed on a loaded asset";
+  if (!model.narrow_phase()) return "Model::Init with the narrow phase gave no narrow phase";
+  const NarrowPhaseModel& np = *model.narrow_phase();
+  const uint32_t S = view.sphere_count, T = view.triangle_count;
+  if (np.triangle_count() != T || np.sphere_count() != S) return "NarrowPhaseModel counts differ from the view";
+  if (model.bytes() != Model::RequiredBytes(view, options)) return "Model::RequiredBytes(options) differs from the model's size";
+  {  // the caller-memory variant: same size, too small refused
+    const size_t need = model.bytes();
+    std::unique_ptr<uint64_t[]> mem(new uint64_t[need / 8 + 2]);
+    Model in_place;
+    if (in_place.InitInPlace(view, options, mem.get(), need - 1) != Status::kErrorBufferTooSmall)
+      return "Model::InitInPlace(options) accepted a buffer one byte short";
+    if (in_place.InitInPlace(view, options, mem.get(), need) != Status::kOk) return "Model::InitInPlace(options) failed";
+    if (!in_place.narrow_phase()) return "Model::InitInPlace(options) gave no narrow phase";
+  }
+  Workspace ws;
+  if (ws.Init(model) != Status::kOk || !ws.narrow_phase()) return "Workspace::Init failed for a narrow-phase model";
+  const auto* bind = view.asset->bind_positions();
+  std::vector<float> bind_pose;
+  if (np.has_crease() && bind) bind_pose.assign(bind->begin(), bind->end());
+  std::vector<TriangleContact> out(4096);
+  std::vector<ContactDepth> depths(out.size());
+  const std::vector<float>* frames[2] = {positions_or_null, bind_pose.empty() ? nullptr : &bind_pose};
+  for (const std::vector<float>* pos : frames) {
+    if (!pos) continue;
+    const bool at_bind = pos == &bind_pose;
+    for (Exclusions ex : {Exclusions::kAsset, Exclusions::kNone, Exclusions::kCrease}) {
+      if (ex == Exclusions::kCrease && !np.has_crease()) continue;
+      uint32_t n = ~0u;
+      NarrowPhaseStats stats;
+      NarrowPhaseJob job;
+      job.model = &np;
+      job.workspace = ws.narrow_phase();
+      job.positions = {pos->data(), view.vertex_count, 12};
+      job.exclusions = ex;
+      job.output = out.data();
+      job.capacity = static_cast<uint32_t>(out.size());
+      job.depths = depths.data();
+      job.count = &n;
+      job.stats = &stats;
+      const Status s = job.Run();
+      if (s == Status::kErrorNonFinitePositions) {
+        if (n != 0) return "NarrowPhaseJob: non-finite positions with contacts written";
+        continue;
+      }
+      if (Failed(s)) return "NarrowPhaseJob failed on valid arguments";
+      if (n > out.size() || n > stats.contacts) return "NarrowPhaseJob wrote more than capacity or than it counted";
+      if ((s == Status::kOkTruncated) != (stats.contacts > out.size())) return "NarrowPhaseJob truncation flag inconsistent";
+      std::set<std::pair<uint32_t, uint32_t>> seen;
+      for (uint32_t i = 0; i < n; ++i) {
+        const TriangleContact& c = out[i];
+        if (c.triangle_a >= T || c.triangle_b >= T || c.triangle_a == c.triangle_b)
+          return "NarrowPhaseJob: a contact's triangle out of range or twice";
+        if (!seen.insert({std::min(c.triangle_a, c.triangle_b), std::max(c.triangle_a, c.triangle_b)}).second)
+          return "NarrowPhaseJob: a triangle pair reported twice";
+        if (ex == Exclusions::kCrease) {
+          if (c.sphere_a != np.triangle_sphere(c.triangle_a) || c.sphere_b != np.triangle_sphere(c.triangle_b))
+            return "NarrowPhaseJob kCrease: a contact's spheres are not its triangles' owners";
+          if (!(depths[i].depth >= 0.0f)) return "NarrowPhaseJob: a depth NaN or negative";
+          if (at_bind && !np.IntersectsAtBind(c.triangle_a, c.triangle_b))
+            return "NarrowPhaseJob kCrease: a contact at bind pose that Init did not find";
+        } else {
+          if (!(c.sphere_a < c.sphere_b) || c.sphere_b >= S) return "NarrowPhaseJob: spheres not a < b < #S";
+          if (ex == Exclusions::kAsset && np.IsExcluded(c.sphere_a, c.sphere_b))
+            return "NarrowPhaseJob kAsset: reported an excluded pair";
+        }
+      }
+      if (ex == Exclusions::kCrease && at_bind && stats.contacts != np.bind_contact_count())
+        return "NarrowPhaseJob kCrease at bind pose: not the bind contacts Init found";
+      if (ex == Exclusions::kCrease && crease_ran) *crease_ran = true;
+    }
+  }
+  return nullptr;
+}
+
 /// Runs the sequence on `data[0..size)`. Returns nullptr when every runtime call behaved as
 /// documented (including a clean rejection by LoadAsset), else a static description of the broken
-/// invariant. `*loaded` (opt) receives whether LoadAsset accepted the bytes.
-inline const char* RunLoadAssetSequence(const uint8_t* data, size_t size, bool* loaded = nullptr) {
+/// invariant. `*loaded` (opt) receives whether LoadAsset accepted the bytes, `*crease_ran` (opt) whether a
+/// narrow phase under the crease rule ran.
+inline const char* RunLoadAssetSequence(const uint8_t* data, size_t size, bool* loaded = nullptr,
+                                        bool* crease_ran = nullptr) {
   using namespace spherechain::runtime;
   if (loaded) *loaded = false;
+  if (crease_ran) *crease_ran = false;
   // Exact-size heap copy: operator new[] is at least 16-byte aligned (LoadAsset needs 8), and ASan
   // still sees a 1-byte over-read past the end.
   std::unique_ptr<uint8_t[]> buf(new uint8_t[size ? size : 1]);
@@ -120,6 +217,15 @@ inline const char* RunLoadAssetSequence(const uint8_t* data, size_t size, bool* 
     }
   }
   if (ctx.ResetToBindPose(model) != Status::kOk) return "ResetToBindPose failed";
+
+  // The narrow phase, on finite positions derived from the input (the specials above would only reach its
+  // kErrorNonFinitePositions) and at the bind pose.
+  if (T > 0 && T <= kMaxHarnessNarrowTriangles && V > 0 && V <= kMaxHarnessVertices) {
+    std::vector<float> pos(size_t{V} * 3);
+    for (size_t i = 0; i < pos.size(); ++i)
+      pos[i] = (static_cast<float>(data[(i * 5 + 1) % size]) - 128.0f) * 0.0625f;
+    if (const char* why = RunNarrowPhaseSequence(view, &pos, crease_ran)) return why;
+  }
   return nullptr;
 }
 

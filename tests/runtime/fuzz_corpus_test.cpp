@@ -1,6 +1,6 @@
 // Replays the libFuzzer seed corpus (fuzz/corpus/load_asset/) through the fuzzer's own sequence
-// (fuzz/load_asset_sequence.h): LoadAsset → Context::Init → RefitJob → DetectJob M1/M2 →
-// SurroundingTriangles. Built in every configuration (no libFuzzer needed); under the asan preset it
+// (fuzz/load_asset_sequence.h): LoadAsset → Model::Init → RefitJob → DetectJob M1/M2 →
+// SurroundingTriangles → the narrow phase held by the Model (every Exclusions, at the bind pose too). Built in every configuration (no libFuzzer needed); under the asan preset it
 // runs with ASan + UBSan. A crash the fuzzer finds is fixed, then its input is added to the corpus.
 #include <doctest/doctest.h>
 
@@ -31,15 +31,18 @@ TEST_CASE("Fuzz corpus (fuzz/corpus/load_asset): every input runs the fuzzer's s
     if (e.is_regular_file()) files.push_back(e.path());
   std::sort(files.begin(), files.end());
   REQUIRE(files.size() >= 3);
-  size_t loaded_count = 0;
+  size_t loaded_count = 0, crease_count = 0;
   for (const auto& f : files) {
     const std::vector<uint8_t> bytes = ReadAll(f);
     CAPTURE(f.filename().string());
-    bool loaded = false;
-    const char* broken = spherechain::fuzz::RunLoadAssetSequence(bytes.data(), bytes.size(), &loaded);
+    bool loaded = false, crease = false;
+    const char* broken = spherechain::fuzz::RunLoadAssetSequence(bytes.data(), bytes.size(), &loaded, &crease);
     CHECK_MESSAGE(broken == nullptr, (broken ? broken : ""));
     loaded_count += loaded;
+    crease_count += crease;
   }
-  // The untouched real assets (bcn_epileptic.sphc, cesium_man.sphc) must load.
-  CHECK(loaded_count >= 2);
+  // The untouched real assets (bcn_epileptic.sphc, cesium_man.sphc) must load, and the two baked with the
+  // crease rule (creature_crease.sphc, figure_crease.sphc) reach the narrow phase under it.
+  CHECK(loaded_count >= 4);
+  CHECK(crease_count >= 2);
 }
