@@ -2,6 +2,7 @@
 #include "spherechain/runtime/model.h"
 
 #include <algorithm>
+#include <cassert>
 #include <atomic>
 #include <bit>
 #include <cstring>
@@ -412,6 +413,7 @@ Status Model::Build(const AssetView& view, unsigned char* memory, size_t bytes, 
     narrow_ = new (at) NarrowPhaseModel(std::move(*narrow));
     BlockArena* arena = BlockArena::Create(at + AlignUp(sizeof(NarrowPhaseModel)), arrays);
     narrow_->MoveInto(arena);
+    assert(arena->fallbacks == 0);  // BuildNarrow measured every array: all of them fit
     arena->cursor = arena->end;  // sealed
     narrow_->excl_off_ = k.a.excl_offsets;  // one index of excluded pairs: the model's
     narrow_->excl_nb_ = k.a.excl_neighbors;
@@ -555,7 +557,9 @@ Status Workspace::Build(const Model& m, unsigned char* memory) {
     unsigned char* at = memory + k.size;
     narrow_ = new (at) NarrowPhaseWorkspace();
     BlockArena* arena = BlockArena::Create(at + AlignUp(sizeof(NarrowPhaseWorkspace)), m.narrow_->workspace_bytes());
-    if (Status s = narrow_->Build(*m.narrow_, arena); s != Status::kOk) {
+    const Status s = narrow_->Build(*m.narrow_, arena);
+    assert(s != Status::kOk || arena->fallbacks == 0);  // workspace_bytes() measured the same arrays
+    if (s != Status::kOk) {
       Release();  // not owned yet: the caller's memory, or Init frees its own
       return s;
     }

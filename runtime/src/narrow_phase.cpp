@@ -1,6 +1,7 @@
 #include "spherechain/runtime/narrow_phase.h"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <atomic>
 #include <bit>
@@ -647,6 +648,7 @@ Status NarrowPhaseModel::Init(const AssetView& view, NarrowPhaseRegions regions)
     BlockPtr block = AllocateBlock(bytes);
     BlockArena* arena = BlockArena::Create(block.get(), bytes);
     MoveInto(arena);
+    assert(arena->fallbacks == 0);
     arena->cursor = arena->end;  // sealed
     block_ = std::move(block);
     bytes_ = bytes;
@@ -789,7 +791,9 @@ Status NarrowPhaseWorkspace::Init(const NarrowPhaseModel& model) {
   if (!model.initialized()) return Status::kErrorInvalidJob;
   SPHERECHAIN_TRY {
     BlockPtr block = AllocateBlock(model.workspace_bytes_);
-    if (Status s = Build(model, BlockArena::Create(block.get(), model.workspace_bytes_)); s != Status::kOk) return s;
+    BlockArena* arena = BlockArena::Create(block.get(), model.workspace_bytes_);
+    if (Status s = Build(model, arena); s != Status::kOk) return s;
+    assert(arena->fallbacks == 0);  // workspace_bytes() measured the same arrays
     block_ = std::move(block);
   } SPHERECHAIN_CATCH_BAD_ALLOC {
     *this = NarrowPhaseWorkspace{};
