@@ -142,6 +142,18 @@ std::set<std::pair<uint32_t, uint32_t>> SkinContactsBruteForce(const st::AssetDa
   return truth;
 }
 
+/// A tube of 30 rings of 12 sides 0.6 apart (radius 1, length 17.4), its straight bind pose carried by the
+/// asset with a crease of 3 (the crease rule on).
+st::AssetData CreaseTube(st::Mesh* mesh, st::Tube* tube) {
+  tube->rings = 30;
+  tube->sides = 12;
+  tube->spacing = 0.6f;
+  st::AssetData d = st::MakeTubes({*tube}, {}, mesh);
+  d.bind_positions = mesh->positions;
+  d.crease = 3.0f;
+  return d;
+}
+
 }  // namespace
 
 TEST_CASE("narrow phase: two crossing tubes touch where they cross, and equal brute force") {
@@ -423,12 +435,7 @@ TEST_CASE("narrow phase, crease rule: a bent tube's fold is not a contact, its e
   // Both equal brute force over every triangle pair with the rule.
   st::Mesh mesh;
   st::Tube tube;
-  tube.rings = 30;
-  tube.sides = 12;
-  tube.spacing = 0.6f;
-  st::AssetData d = st::MakeTubes({tube}, {}, &mesh);
-  d.bind_positions = mesh.positions;
-  d.crease = 3.0f;
+  const st::AssetData d = CreaseTube(&mesh, &tube);
   Loaded l = Load(d);
   Narrow ctx;
   REQUIRE(ctx.Init(l.view) == rt::Status::kOk);
@@ -601,12 +608,7 @@ TEST_CASE("narrow phase held by the runtime Model: one block each, the same cont
   // (kNone sees the elbow's pairs of adjacent spheres, kAsset does not). Built in caller memory too.
   st::Mesh mesh;
   st::Tube tube;
-  tube.rings = 30;
-  tube.sides = 12;
-  tube.spacing = 0.6f;
-  st::AssetData d = st::MakeTubes({tube}, {}, &mesh);
-  d.bind_positions = mesh.positions;
-  d.crease = 3.0f;
+  const st::AssetData d = CreaseTube(&mesh, &tube);
   Loaded l = Load(d);
   Narrow alone;
   REQUIRE(alone.Init(l.view) == rt::Status::kOk);
