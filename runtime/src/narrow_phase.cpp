@@ -622,6 +622,7 @@ void NarrowPhaseModel::ForEachArray(F&& f) {
   crease_graph_.ForEachArray(f);
   f(tri_v_), f(bind_contacts_);
   f(cl_tri_), f(cl_vert_offsets_), f(cl_vert_), f(near_block_), f(near_far_), f(near_key_), f(near_rows_);
+  f(near_win_), f(near_base_);
   f(cl_valid_), f(cl_local_), f(cl_count_);
   f(behind_offsets_), f(behind_), f(weld_), f(tri_sphere_);
   f(region_offsets_), f(region_tri_), f(region_v_), f(region_w_), f(vert_offsets_), f(vert_ids_), f(region_local_);

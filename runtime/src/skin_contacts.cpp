@@ -10,7 +10,8 @@
 //   - Each frame: each patch's distinct vertices read once, giving its box and its 16 triangle boxes; the
 //     patches swept against each other along the longest axis of the mesh (sort and sweep; the order kept
 //     from the last frame and re-sorted by insertion), each with itself too; per overlapping pair whose
-//     near block (looked up in a hash table) is not all near: each side kept to its triangles that meet
+//     near block (from window masks when the two patches are fewer than 64 apart in Morton order, else
+//     from a hash table) is not all near: each side kept to its triangles that meet
 //     the other patch's box and have a partner not near in it, then each kept triangle's box against the
 //     other side's kept boxes (16 lanes at a time) with the near bits cleared, and the rest tested exactly
 //     (TrianglesIntersect on prepared triangles). A job wider than the asset's crease also asks the graph
@@ -134,10 +135,20 @@ struct CreaseSweep {
   static uint32_t PatchCount(const NarrowPhaseModel& m) { return static_cast<uint32_t>(m.cl_tri_.size() / kPatch); }
 
   static constexpr uint64_t kEmptyKey = ~uint64_t{0};
+  static constexpr uint32_t kWindow = 64;  // pairs of patches fewer than this apart: in near_win_, not hashed
   static size_t NearSlot(uint64_t key, uint32_t bits) { return static_cast<size_t>((key * 0x9E3779B97F4A7C15ull) >> (64 - bits)); }
   /// The near block of patches a <= b (an index into near_rows_ / near_far_), kAllNear, or kFarPair when no
-  /// pair of the two is near. O(1) expected (the table is at most half full).
+  /// pair of the two is near. Pairs fewer than kWindow patches apart (the patches are in Morton order:
+  /// 94 % of the pairs a MakeHuman frame looks up) from a's two window masks, in L1; the others from the
+  /// open-addressing table, O(1) expected (at most half full).
   static uint32_t NearBlock(const NarrowPhaseModel& m, uint32_t a, uint32_t b) {
+    const uint32_t d = b - a;
+    if (d < kWindow) {
+      const uint64_t bit = uint64_t{1} << d, blocks = m.near_win_[2 * size_t{a} + 1];
+      if (m.near_win_[2 * size_t{a}] & bit) return kAllNear;
+      if (!(blocks & bit)) return kFarPair;
+      return m.near_base_[a] + static_cast<uint32_t>(__builtin_popcountll(blocks & (bit - 1)));
+    }
     const uint64_t key = uint64_t{a} << 32 | b;
     const size_t mask = (size_t{1} << m.near_hash_bits_) - 1;
     for (size_t h = NearSlot(key, m.near_hash_bits_);; h = (h + 1) & mask) {
@@ -368,16 +379,45 @@ struct CreaseSweep {
         entry_of[q] = kNone;
       }
     }
-    // The pairs of patches with a near pair (p <= q) in an open-addressing table: NearBlock looks them up.
+    // The blocks renumbered in the order of their pairs (p, then q): a patch's blocks are consecutive from
+    // near_base_[p], those fewer than kWindow apart first, so NearBlock counts them in the window masks.
+    std::vector<uint32_t> by(pairs.size());
+    for (uint32_t i = 0; i < by.size(); ++i) by[i] = i;
+    std::sort(by.begin(), by.end(), [&](uint32_t i, uint32_t j) { return pairs[i] < pairs[j]; });
+    const std::vector<uint16_t> rows_built(m.near_rows_.begin(), m.near_rows_.end());
+    const std::vector<uint32_t> far_built(m.near_far_.begin(), m.near_far_.end());
+    m.near_rows_.clear();
+    m.near_far_.clear();
+    m.near_win_.assign(2 * size_t{C}, 0);
+    m.near_base_.assign(C, 0);
+    std::vector<uint64_t> hashed;  // pairs kWindow or more apart, and their blocks
+    std::vector<uint32_t> hashed_block;
+    uint32_t row = kNone;
+    for (uint32_t i : by) {
+      const uint32_t p = static_cast<uint32_t>(pairs[i] >> 32), q = static_cast<uint32_t>(pairs[i]);
+      if (p != row) row = p, m.near_base_[p] = static_cast<uint32_t>(m.near_far_.size());
+      uint32_t b = block[i];
+      if (b != kAllNear) {
+        const uint32_t renumbered = static_cast<uint32_t>(m.near_far_.size());
+        m.near_rows_.insert(m.near_rows_.end(), &rows_built[kPatch * size_t{b}], &rows_built[kPatch * size_t{b}] + kPatch);
+        m.near_far_.push_back(far_built[b]);
+        b = renumbered;
+      }
+      if (q - p < kWindow)
+        m.near_win_[2 * size_t{p} + (b == kAllNear ? 0 : 1)] |= uint64_t{1} << (q - p);
+      else
+        hashed.push_back(pairs[i]), hashed_block.push_back(b);
+    }
+    // The other pairs with a near pair in an open-addressing table: NearBlock looks them up.
     uint32_t bits = 4;
-    while ((size_t{1} << bits) < 2 * pairs.size()) ++bits;
+    while ((size_t{1} << bits) < 2 * hashed.size()) ++bits;
     m.near_hash_bits_ = bits;
     m.near_key_.assign(size_t{1} << bits, kEmptyKey);
     m.near_block_.assign(size_t{1} << bits, 0);
-    for (size_t i = 0; i < pairs.size(); ++i) {
-      size_t h = NearSlot(pairs[i], bits);
+    for (size_t i = 0; i < hashed.size(); ++i) {
+      size_t h = NearSlot(hashed[i], bits);
       while (m.near_key_[h] != kEmptyKey) h = (h + 1) & ((size_t{1} << bits) - 1);
-      m.near_key_[h] = pairs[i], m.near_block_[h] = block[i];
+      m.near_key_[h] = hashed[i], m.near_block_[h] = hashed_block[i];
     }
     return Status::kOk;
   }

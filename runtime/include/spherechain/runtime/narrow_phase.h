@@ -178,8 +178,9 @@ class NarrowPhaseModel {
   uint32_t crease_patch_count() const { return static_cast<uint32_t>(cl_tri_.size() / 16); }
   /// Bytes the crease rule's patches and near bits take in this model (graph and bind contacts excluded).
   size_t crease_patch_bytes() const {
-    return 4 * (cl_tri_.size() + cl_vert_offsets_.size() + cl_vert_.size() + near_block_.size() + near_far_.size()) +
-           8 * near_key_.size() +
+    return 4 * (cl_tri_.size() + cl_vert_offsets_.size() + cl_vert_.size() + near_block_.size() + near_far_.size() +
+                near_base_.size()) +
+           8 * (near_key_.size() + near_win_.size()) +
            2 * (near_rows_.size() + cl_valid_.size()) + cl_local_.size() + cl_count_.size();
   }
   /// How many such pairs the bind pose has (computed by Init with the crease rule).
@@ -220,15 +221,18 @@ class NarrowPhaseModel {
   // The crease rule's patches (skin_contacts.cpp): the triangles that are not index-degenerate in patches
   // of up to 16 grown over the welded bind surface (cl_tri_: 16 slots per patch, ~0u padding), each
   // patch's distinct vertices (CSR cl_vert_offsets_ #C+1, cl_vert_), and every pair of patches p <= q
-  // holding a near pair, a patch with itself included (an open-addressing table of 2^near_hash_bits_
-  // slots: near_key_ p << 32 | q or ~0 when empty, near_block_), each with its block of 16 rows of near
-  // bits in near_rows_ (bit j of row i set when p's slot i is near q's slot j, or j is padding) or ~0u
-  // when every pair of the two is near (then the pair of patches is never looked at).
+  // holding a near pair, a patch with itself included, each with its block of 16 rows of near bits in
+  // near_rows_ (bit j of row i set when p's slot i is near q's slot j, or j is padding) or ~0u when every
+  // pair of the two is near (then the pair of patches is never looked at). The blocks are in the order of
+  // their pairs (p, then q). The pairs q - p < 64: two masks per p (near_win_ #C×2: bit q - p of the first
+  // set when all near, of the second when q has a block, which is near_base_[p] + the second's bits below
+  // it); the others in an open-addressing table of 2^near_hash_bits_ slots (near_key_ p << 32 | q or ~0
+  // when empty, near_block_).
   // Per patch also its triangles' corners as indices into its distinct vertices (cl_local_, 48 per patch),
   // its triangle count (cl_count_) and the mask of its slots in use (cl_valid_); per block of near rows the
   // rows and columns (bits 0-15, 16-31) that have a partner not near (near_far_).
-  BlockVector<uint32_t> cl_tri_, cl_vert_offsets_, cl_vert_, near_block_, near_far_;
-  BlockVector<uint64_t> near_key_;
+  BlockVector<uint32_t> cl_tri_, cl_vert_offsets_, cl_vert_, near_block_, near_far_, near_base_;
+  BlockVector<uint64_t> near_key_, near_win_;
   uint32_t near_hash_bits_ = 0;
   BlockVector<uint16_t> near_rows_, cl_valid_;
   BlockVector<uint8_t> cl_local_, cl_count_;
