@@ -621,8 +621,8 @@ template <class F>
 void NarrowPhaseModel::ForEachArray(F&& f) {
   crease_graph_.ForEachArray(f);
   f(tri_v_), f(bind_contacts_);
-  f(cl_tri_), f(cl_vert_offsets_), f(cl_vert_), f(near_block_), f(near_far_), f(near_key_), f(near_rows_);
-  f(near_win_), f(near_base_);
+  f(cl_tri_), f(cl_vert_offsets_), f(cl_vert_), f(near_far_), f(near_rows_);
+  f(near_win_), f(near_base_), f(near_out_offsets_), f(near_out_), f(group_near_);
   f(cl_valid_), f(cl_local_), f(cl_count_);
   f(behind_offsets_), f(behind_), f(weld_), f(tri_sphere_);
   f(region_offsets_), f(region_tri_), f(region_v_), f(region_w_), f(vert_offsets_), f(vert_ids_), f(region_local_);
@@ -783,7 +783,7 @@ void NarrowPhaseWorkspace::ForEachArray(F&& f) {
     f(l->key), f(l->kept), f(l->rank), f(l->start), f(l->bucket), f(l->bucket_of), f(l->slot);
     for (int k = 0; k < 3; ++k) f(l->lo[k]), f(l->hi[k]);
   }
-  f(patch_box_), f(sweep_), f(sweep_box_), f(sweep_hits_), f(patch_tri_box_), f(tri_prepared_), f(tri_frame_);
+  f(patch_box_), f(group_box_), f(sweep_), f(sweep_box_), f(sweep_hits_), f(patch_tri_box_), f(tri_prepared_), f(tri_frame_);
   crease_scratch_.ForEachArray(f);
 }
 

@@ -8,10 +8,11 @@
 //     distinct corner of each patch at the asset's crease; a patch pair where every pair is near — most of a patch with
 //     itself and its neighbours — is marked to skip whole).
 //   - Each frame: each patch's distinct vertices read once, giving its box and its 16 triangle boxes; the
-//     patches swept against each other along the longest axis of the mesh (sort and sweep; the order kept
-//     from the last frame and re-sorted by insertion), each with itself too; per overlapping pair whose
-//     near block (from window masks when the two patches are fewer than 64 apart in Morton order, else
-//     from a hash table) is not all near: each side kept to its triangles that meet
+//     groups of 4 patches (consecutive in Morton order) swept against each other along the longest axis of
+//     the mesh (sort and sweep; the order kept from the last frame and re-sorted by insertion), each with
+//     itself too, and per overlapping pair of groups their patch boxes 4 at a time; per overlapping pair of
+//     patches whose near block (from window masks when the two are fewer than 64 apart in Morton order,
+//     else from the lower one's sorted row of partners) is not all near: each side kept to its triangles that meet
 //     the other patch's box and have a partner not near in it, then each kept triangle's box against the
 //     other side's kept boxes (16 lanes at a time) with the near bits cleared, and the rest tested exactly
 //     (TrianglesIntersect on prepared triangles). A job wider than the asset's crease also asks the graph
@@ -43,6 +44,8 @@ namespace spherechain::runtime {
 namespace {
 constexpr float kInfinity = std::numeric_limits<float>::infinity();
 constexpr uint32_t kPatch = 16;     // triangles per patch (one uint16_t of near bits per row)
+constexpr uint32_t kGroup = 4;      // patches per group (consecutive in Morton order): what the sweep sorts
+constexpr uint32_t kGroupWindow = 16;  // pairs of groups fewer than this apart: skip masks in group_near_
 constexpr uint32_t kNone = ~0u;
 constexpr uint32_t kAllNear = ~0u;      // a near block: every pair of the two patches is near
 constexpr uint32_t kFarPair = ~0u - 1;  // no near block: no pair of the two patches is near
@@ -75,6 +78,28 @@ SPHERECHAIN_SKIN_INLINE uint32_t OverlapMask16(const float* b, const float lo[3]
     mask |= static_cast<uint32_t>((b[j] <= hi[0]) & (b[48 + j] >= lo[0]) & (b[16 + j] <= hi[1]) & (b[64 + j] >= lo[1]) &
                                   (b[32 + j] <= hi[2]) & (b[80 + j] >= lo[2]))
             << j;
+  return mask;
+#endif
+}
+
+// Bit i (< 4) set when box i of `b` (6 rows of 4: min x, y, z, max x, y, z) overlaps the box (lo, hi)
+// (closed intervals). SSE2 on x86-64, scalar elsewhere; the same answer.
+SPHERECHAIN_SKIN_INLINE uint32_t OverlapMask4(const float* b, const float lo[3], const float hi[3]) {
+#if SPHERECHAIN_SKIN_SSE2
+  __m128 in = _mm_cmple_ps(_mm_loadu_ps(b), _mm_set1_ps(hi[0]));
+  in = _mm_and_ps(in, _mm_cmple_ps(_mm_loadu_ps(b + 4), _mm_set1_ps(hi[1])));
+  in = _mm_and_ps(in, _mm_cmple_ps(_mm_loadu_ps(b + 8), _mm_set1_ps(hi[2])));
+  in = _mm_and_ps(in, _mm_cmpge_ps(_mm_loadu_ps(b + 12), _mm_set1_ps(lo[0])));
+  in = _mm_and_ps(in, _mm_cmpge_ps(_mm_loadu_ps(b + 16), _mm_set1_ps(lo[1])));
+  in = _mm_and_ps(in, _mm_cmpge_ps(_mm_loadu_ps(b + 20), _mm_set1_ps(lo[2])));
+  return static_cast<uint32_t>(_mm_movemask_ps(in));
+#else
+  uint32_t mask = 0;
+  for (uint32_t i = 0; i < 4; ++i) {
+    bool in = true;
+    for (int k = 0; k < 3; ++k) in &= b[4 * k + i] <= hi[k] && b[4 * (3 + k) + i] >= lo[k];
+    mask |= uint32_t{in} << i;
+  }
   return mask;
 #endif
 }
@@ -133,14 +158,14 @@ struct CreaseSweep {
   };
 
   static uint32_t PatchCount(const NarrowPhaseModel& m) { return static_cast<uint32_t>(m.cl_tri_.size() / kPatch); }
+  static uint32_t GroupCount(const NarrowPhaseModel& m) { return (PatchCount(m) + kGroup - 1) / kGroup; }
 
-  static constexpr uint64_t kEmptyKey = ~uint64_t{0};
-  static constexpr uint32_t kWindow = 64;  // pairs of patches fewer than this apart: in near_win_, not hashed
-  static size_t NearSlot(uint64_t key, uint32_t bits) { return static_cast<size_t>((key * 0x9E3779B97F4A7C15ull) >> (64 - bits)); }
+  static constexpr uint32_t kWindow = 64;  // pairs of patches fewer than this apart: in near_win_
   /// The near block of patches a <= b (an index into near_rows_ / near_far_), kAllNear, or kFarPair when no
   /// pair of the two is near. Pairs fewer than kWindow patches apart (the patches are in Morton order:
-  /// 94 % of the pairs a MakeHuman frame looks up) from a's two window masks, in L1; the others from the
-  /// open-addressing table, O(1) expected (at most half full).
+  /// 87 % of the pairs a MakeHuman frame looks up) from a's two window masks; the others from a's sorted
+  /// row of partners further apart (near_out_: 12 a patch on average, the pairs of a patch it holds a near
+  /// pair with), both a few hundred KB for MakeHuman, where a hash table's random reads missed the caches.
   static uint32_t NearBlock(const NarrowPhaseModel& m, uint32_t a, uint32_t b) {
     const uint32_t d = b - a;
     if (d < kWindow) {
@@ -149,13 +174,12 @@ struct CreaseSweep {
       if (!(blocks & bit)) return kFarPair;
       return m.near_base_[a] + static_cast<uint32_t>(__builtin_popcountll(blocks & (bit - 1)));
     }
-    const uint64_t key = uint64_t{a} << 32 | b;
-    const size_t mask = (size_t{1} << m.near_hash_bits_) - 1;
-    for (size_t h = NearSlot(key, m.near_hash_bits_);; h = (h + 1) & mask) {
-      const uint64_t k = m.near_key_[h];
-      if (k == key) return m.near_block_[h];
-      if (k == kEmptyKey) return kFarPair;
+    const uint64_t key = uint64_t{b} << 32;
+    for (uint32_t k = m.near_out_offsets_[a], end = m.near_out_offsets_[a + 1]; k < end; ++k) {
+      const uint64_t entry = m.near_out_[k];
+      if (entry >= key) return entry >> 32 == b ? static_cast<uint32_t>(entry) : kFarPair;
     }
+    return kFarPair;
   }
 
   /// Patches and near bits (file comment) from the bind pose `bind` (#V×3) and the model's graph.
@@ -390,12 +414,13 @@ struct CreaseSweep {
     m.near_far_.clear();
     m.near_win_.assign(2 * size_t{C}, 0);
     m.near_base_.assign(C, 0);
-    std::vector<uint64_t> hashed;  // pairs kWindow or more apart, and their blocks
-    std::vector<uint32_t> hashed_block;
+    m.near_out_offsets_.assign(size_t{C} + 1, 0);
+    m.near_out_.clear();
     uint32_t row = kNone;
     for (uint32_t i : by) {
       const uint32_t p = static_cast<uint32_t>(pairs[i] >> 32), q = static_cast<uint32_t>(pairs[i]);
       if (p != row) row = p, m.near_base_[p] = static_cast<uint32_t>(m.near_far_.size());
+      m.near_out_offsets_[p + 1] += q - p >= kWindow;
       uint32_t b = block[i];
       if (b != kAllNear) {
         const uint32_t renumbered = static_cast<uint32_t>(m.near_far_.size());
@@ -406,19 +431,24 @@ struct CreaseSweep {
       if (q - p < kWindow)
         m.near_win_[2 * size_t{p} + (b == kAllNear ? 0 : 1)] |= uint64_t{1} << (q - p);
       else
-        hashed.push_back(pairs[i]), hashed_block.push_back(b);
+        m.near_out_.push_back(uint64_t{q} << 32 | b);  // in pair order: each row sorted by q
     }
-    // The other pairs with a near pair in an open-addressing table: NearBlock looks them up.
-    uint32_t bits = 4;
-    while ((size_t{1} << bits) < 2 * hashed.size()) ++bits;
-    m.near_hash_bits_ = bits;
-    m.near_key_.assign(size_t{1} << bits, kEmptyKey);
-    m.near_block_.assign(size_t{1} << bits, 0);
-    for (size_t i = 0; i < hashed.size(); ++i) {
-      size_t h = NearSlot(hashed[i], bits);
-      while (m.near_key_[h] != kEmptyKey) h = (h + 1) & ((size_t{1} << bits) - 1);
-      m.near_key_[h] = hashed[i], m.near_block_[h] = hashed_block[i];
-    }
+    for (uint32_t p = 0; p < C; ++p) m.near_out_offsets_[p + 1] += m.near_out_offsets_[p];
+    // Per pair of groups g <= h fewer than kGroupWindow apart, bit i + 4j set when the sweep skips patches
+    // 4g + i and 4h + j whole: all near, padding, or (g == h) i > j, each pair of one group once.
+    const uint32_t G = GroupCount(m);
+    m.group_near_.assign(kGroupWindow * size_t{G}, 0);
+    for (uint32_t g = 0; g < G; ++g)
+      for (uint32_t h = g; h < G && h - g < kGroupWindow; ++h) {
+        uint32_t skip = 0;
+        for (uint32_t j = 0; j < kGroup; ++j)
+          for (uint32_t i = 0; i < kGroup; ++i) {
+            const uint32_t a = kGroup * g + i, b = kGroup * h + j;
+            const bool whole = a >= C || b >= C || (g == h && i > j) || NearBlock(m, a, b) == kAllNear;
+            skip |= uint32_t{whole} << (i + kGroup * j);
+          }
+        m.group_near_[kGroupWindow * size_t{g} + (h - g)] = static_cast<uint16_t>(skip);
+      }
     return Status::kOk;
   }
 
@@ -436,17 +466,20 @@ struct CreaseSweep {
     return !(state & 1);
   }
 
-  /// Pass 1 of a frame: each patch's distinct vertices read once (cl_vert_), its box (patch_box_: 6 rows of
-  /// #C) and its 16 triangle boxes (patch_tri_box_: 6 rows of 16, inverted padding) from them (cl_local_),
-  /// and the box of them all (lo, hi). False when a vertex is NaN or a box not finite (nothing reported).
+  /// Pass 1 of a frame: each patch's distinct vertices read once (cl_vert_), its box (patch_box_: per group
+  /// of 4 patches 6 rows of 4) and its 16 triangle boxes (patch_tri_box_: 6 rows of 16, inverted padding)
+  /// from them (cl_local_), each group's box (group_box_: 6 rows of #G), and the box of them all (lo, hi).
+  /// False when a vertex is NaN or a box not finite (nothing reported).
   static bool Boxes(const NarrowPhaseModel& m, NarrowPhaseWorkspace& w, const char* base, size_t stride, float lo[3],
                     float hi[3]) {
-    const uint32_t C = PatchCount(m);
+    const uint32_t C = PatchCount(m), G = GroupCount(m);
     float* box = w.patch_box_.data();
+    float* group = w.group_box_.data();
     for (int k = 0; k < 3; ++k) lo[k] = kInfinity, hi[k] = -kInfinity;
 #if SPHERECHAIN_SKIN_SSE2
     alignas(16) float local[4 * 3 * kPatch];
     __m128 all_lo = _mm_set1_ps(kInfinity), all_hi = _mm_set1_ps(-kInfinity), nan = _mm_setzero_ps();
+    __m128 group_lo = all_lo, group_hi = all_hi;
     for (uint32_t p = 0; p < C; ++p) {
       const uint32_t* vert = &m.cl_vert_[m.cl_vert_offsets_[p]];
       const uint32_t nv = m.cl_vert_offsets_[p + 1] - m.cl_vert_offsets_[p];
@@ -462,8 +495,15 @@ struct CreaseSweep {
       }
       alignas(16) float tl[4], th[4];
       _mm_store_ps(tl, vl), _mm_store_ps(th, vh);
-      for (int k = 0; k < 3; ++k) box[k * size_t{C} + p] = tl[k], box[(3 + k) * size_t{C} + p] = th[k];
-      all_lo = _mm_min_ps(all_lo, vl), all_hi = _mm_max_ps(all_hi, vh);
+      float* pb = box + 6 * kGroup * size_t{p / kGroup} + p % kGroup;
+      for (int k = 0; k < 3; ++k) pb[kGroup * k] = tl[k], pb[kGroup * (3 + k)] = th[k];
+      group_lo = _mm_min_ps(group_lo, vl), group_hi = _mm_max_ps(group_hi, vh);
+      if (p % kGroup == kGroup - 1 || p + 1 == C) {
+        _mm_store_ps(tl, group_lo), _mm_store_ps(th, group_hi);
+        for (int k = 0; k < 3; ++k) group[k * size_t{G} + p / kGroup] = tl[k], group[(3 + k) * size_t{G} + p / kGroup] = th[k];
+        all_lo = _mm_min_ps(all_lo, group_lo), all_hi = _mm_max_ps(all_hi, group_hi);
+        group_lo = _mm_set1_ps(kInfinity), group_hi = _mm_set1_ps(-kInfinity);
+      }
       // Four triangles at a time: each box from its corners, then transposed into the rows (padding slots
       // have corners 0, 0, 0: a box, inverted below).
       for (uint32_t t = 0; t < kPatch; t += 4) {
@@ -501,10 +541,13 @@ struct CreaseSweep {
         for (int k = 0; k < 3; ++k) bl[k] = std::min(bl[k], q[k]), bh[k] = std::max(bh[k], q[k]), nan |= q[k] != q[k];
       }
       if (nan) return false;
+      float* pb = box + 6 * kGroup * size_t{p / kGroup} + p % kGroup;
+      float* gb = group + p / kGroup;
       for (int k = 0; k < 3; ++k) {
         if (!std::isfinite(bl[k]) || !std::isfinite(bh[k])) return false;
-        box[k * size_t{C} + p] = bl[k];
-        box[(3 + k) * size_t{C} + p] = bh[k];
+        pb[kGroup * k] = bl[k], pb[kGroup * (3 + k)] = bh[k];
+        if (p % kGroup == 0) gb[k * size_t{G}] = kInfinity, gb[(3 + k) * size_t{G}] = -kInfinity;
+        gb[k * size_t{G}] = std::min(gb[k * size_t{G}], bl[k]), gb[(3 + k) * size_t{G}] = std::max(gb[(3 + k) * size_t{G}], bh[k]);
         lo[k] = std::min(lo[k], bl[k]), hi[k] = std::max(hi[k], bh[k]);
       }
       for (uint32_t t = 0; t < kPatch; ++t) {
@@ -521,13 +564,13 @@ struct CreaseSweep {
     return true;
   }
 
-  /// The sweep order (w.sweep_: box minimum on `axis` << 32 | patch, ascending). The previous frame's order,
-  /// re-keyed and insertion-sorted, when it was on the same axis (frames of one animation move little: a
-  /// few swaps); a full sort otherwise, or when the insertions pass a budget of 8 moves a patch. Either way
+  /// The sweep order (w.sweep_: group box minimum on `axis` << 32 | group, ascending). The previous frame's
+  /// order, re-keyed and insertion-sorted, when it was on the same axis (frames of one animation move little:
+  /// a few swaps); a full sort otherwise, or when the insertions pass a budget of 8 moves a group. Either way
   /// the unique sorted order of the keys.
   static void Order(const NarrowPhaseModel& m, NarrowPhaseWorkspace& w, int axis) {
-    const uint32_t C = PatchCount(m);
-    const float* row = w.patch_box_.data() + axis * size_t{C};
+    const uint32_t C = GroupCount(m);
+    const float* row = w.group_box_.data() + axis * size_t{C};
     uint64_t* s = w.sweep_.data();
     if (axis == w.sweep_axis_) {
       for (uint32_t i = 0; i < C; ++i) {
@@ -557,11 +600,10 @@ struct CreaseSweep {
   static void Pair(const NarrowPhaseModel& m, NarrowPhaseWorkspace& w, const char* base, size_t stride, uint32_t a,
                    uint32_t b, const uint16_t* rows, uint32_t far, float crease, Counters* c, OnContact& on_contact) {
     ++c->patch_pairs;
-    const size_t C = PatchCount(m);
-    const float* pa = w.patch_box_.data() + a;  // the patch boxes: rows of C
-    const float* pb = w.patch_box_.data() + b;
-    const float alo[3] = {pa[0], pa[C], pa[2 * C]}, ahi[3] = {pa[3 * C], pa[4 * C], pa[5 * C]};
-    const float blo[3] = {pb[0], pb[C], pb[2 * C]}, bhi[3] = {pb[3 * C], pb[4 * C], pb[5 * C]};
+    const float* pa = w.patch_box_.data() + 6 * kGroup * size_t{a / kGroup} + a % kGroup;  // 6 rows of kGroup
+    const float* pb = w.patch_box_.data() + 6 * kGroup * size_t{b / kGroup} + b % kGroup;
+    const float alo[3] = {pa[0], pa[kGroup], pa[2 * kGroup]}, ahi[3] = {pa[3 * kGroup], pa[4 * kGroup], pa[5 * kGroup]};
+    const float blo[3] = {pb[0], pb[kGroup], pb[2 * kGroup]}, bhi[3] = {pb[3 * kGroup], pb[4 * kGroup], pb[5 * kGroup]};
     const float* ba = &w.patch_tri_box_[6 * kPatch * size_t{a}];
     const float* bb = &w.patch_tri_box_[6 * kPatch * size_t{b}];
     uint32_t live = OverlapMask16(ba, blo, bhi) & far & 0xffffu;
@@ -600,19 +642,20 @@ struct CreaseSweep {
   template <class OnContact>
   static bool Collide(const NarrowPhaseModel& m, NarrowPhaseWorkspace& w, const char* base, size_t stride,
                       float crease, Counters* c, OnContact&& on_contact) {
-    const uint32_t C = PatchCount(m);
+    const uint32_t C = GroupCount(m);
     if (++w.frame_ >= 0x7fffffffu) {  // stamps wrap: forget them all
       std::fill(w.tri_frame_.begin(), w.tri_frame_.end(), 0u);
       w.frame_ = 1;
     }
     float lo[3], hi[3];
     if (!Boxes(m, w, base, stride, lo, hi)) return false;
-    const float* box = w.patch_box_.data();
+    const float* box = w.group_box_.data();
+    const float* patch_box = w.patch_box_.data();
     int axis = 0;
     for (int k = 1; k < 3; ++k)
       if (hi[k] - lo[k] > hi[axis] - lo[axis]) axis = k;
     Order(m, w, axis);
-    // The boxes in sweep order: the sweep's axis first, then the two others (a sentinel after the last).
+    // The group boxes in sweep order: the sweep's axis first, then the two others (a sentinel after the last).
     const int rows_of[6] = {axis, 3 + axis, (axis + 1) % 3, 3 + (axis + 1) % 3, (axis + 2) % 3, 3 + (axis + 2) % 3};
     float* sb = w.sweep_box_.data();
     const size_t pitch = size_t{C} + 1;
@@ -621,21 +664,38 @@ struct CreaseSweep {
       for (int r = 0; r < 6; ++r) sb[r * pitch + i] = box[rows_of[r] * size_t{C} + p];
     }
     static const uint16_t kFar[kPatch] = {};
-    for (uint32_t i = 0; i < C; ++i) {
-      const uint32_t p = static_cast<uint32_t>(w.sweep_[i]);
-      auto pair = [&](uint32_t q) {
-        const uint32_t a = std::min(p, q), b = std::max(p, q);
+    // Groups g and h (g == h: each pair of its patches once, a patch with itself included): unless the
+    // model marks all their patch pairs to skip, their patches' boxes 4 at a time, then each overlapping
+    // pair of patches not skipped whole.
+    auto groups = [&](uint32_t g, uint32_t h) {
+      if (g > h) std::swap(g, h);
+      const uint32_t skip = h - g < kGroupWindow ? m.group_near_[kGroupWindow * size_t{g} + (h - g)] : 0u;
+      if (skip == 0xffffu) return;
+      const float* bg = patch_box + 6 * kGroup * size_t{g};
+      const float* bh = patch_box + 6 * kGroup * size_t{h};
+      uint32_t overlap = 0;
+      for (uint32_t j = 0; j < kGroup; ++j) {
+        const float lo[3] = {bh[j], bh[kGroup + j], bh[2 * kGroup + j]};
+        const float hi[3] = {bh[3 * kGroup + j], bh[4 * kGroup + j], bh[5 * kGroup + j]};
+        overlap |= OverlapMask4(bg, lo, hi) << (kGroup * j);
+      }
+      for (overlap &= ~skip; overlap; overlap &= overlap - 1) {
+        const uint32_t bit = static_cast<uint32_t>(__builtin_ctz(overlap));
+        const uint32_t a = kGroup * g + bit % kGroup, b = kGroup * h + bit / kGroup;
         const uint32_t block = NearBlock(m, a, b);
-        if (block == kAllNear) return;
+        if (block == kAllNear) continue;
         if (block == kFarPair)
           Pair(m, w, base, stride, a, b, kFar, m.cl_valid_[a] | m.cl_valid_[b] << 16, crease, c, on_contact);
         else
           Pair(m, w, base, stride, a, b, &m.near_rows_[kPatch * size_t{block}], m.near_far_[block], crease, c, on_contact);
-      };
-      pair(p);
+      }
+    };
+    for (uint32_t i = 0; i < C; ++i) {
+      const uint32_t p = static_cast<uint32_t>(w.sweep_[i]);
+      groups(p, p);
       const float end = sb[pitch + i], l1 = sb[2 * pitch + i], h1 = sb[3 * pitch + i], l2 = sb[4 * pitch + i],
                   h2 = sb[5 * pitch + i];
-      // The patches starting before p ends on the axis, then those overlapping it on the two others
+      // The groups starting before p ends on the axis, then those overlapping it on the two others
       // (branch-free: their sweep positions appended to hits_ as found).
       uint32_t n = 0;
       uint32_t* hits = w.sweep_hits_.data();
@@ -660,7 +720,7 @@ struct CreaseSweep {
           hits[n] = j;
           n += (sb[2 * pitch + j] <= h1) & (sb[3 * pitch + j] >= l1) & (sb[4 * pitch + j] <= h2) & (sb[5 * pitch + j] >= l2);
         }
-      for (uint32_t k = 0; k < n; ++k) pair(static_cast<uint32_t>(w.sweep_[hits[k]]));
+      for (uint32_t k = 0; k < n; ++k) groups(p, static_cast<uint32_t>(w.sweep_[hits[k]]));
     }
     return true;
   }
@@ -688,14 +748,17 @@ struct CreaseSweep {
 
   static Status InitWorkspace(NarrowPhaseWorkspace& w, const NarrowPhaseModel& m, BlockArena* arena) {
     if (!m.crease_graph_.initialized()) return Status::kOk;
-    const uint32_t C = PatchCount(m), T = static_cast<uint32_t>(m.tri_v_.size() / 3);
-    w.patch_box_.assign(6 * size_t{C}, 0.0f);
+    const uint32_t C = GroupCount(m), T = static_cast<uint32_t>(m.tri_v_.size() / 3);
+    w.patch_box_.assign(6 * kGroup * size_t{C}, 0.0f);
+    for (size_t g = 0; g < C; ++g)  // inverted: the padding patches of the last group (never written)
+      for (uint32_t k = 0; k < 3 * kGroup; ++k) w.patch_box_[6 * kGroup * g + k] = kInfinity, w.patch_box_[6 * kGroup * g + 3 * kGroup + k] = -kInfinity;
+    w.group_box_.assign(6 * size_t{C}, 0.0f);
     w.sweep_.assign(C, 0);
     w.sweep_box_.assign(6 * (size_t{C} + 1), 0.0f);
     w.sweep_hits_.assign(size_t{C} + 1, 0);
     for (uint32_t p = 0; p < C; ++p) w.sweep_[p] = p;
     w.sweep_axis_ = -1;
-    w.patch_tri_box_.assign(96 * size_t{C}, 0.0f);
+    w.patch_tri_box_.assign(96 * size_t{PatchCount(m)}, 0.0f);
     w.tri_prepared_.assign(T, PreparedTriangle{});
     w.tri_frame_.assign(T, 0);
     w.frame_ = 0;

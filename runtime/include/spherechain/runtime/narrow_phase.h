@@ -178,10 +178,10 @@ class NarrowPhaseModel {
   uint32_t crease_patch_count() const { return static_cast<uint32_t>(cl_tri_.size() / 16); }
   /// Bytes the crease rule's patches and near bits take in this model (graph and bind contacts excluded).
   size_t crease_patch_bytes() const {
-    return 4 * (cl_tri_.size() + cl_vert_offsets_.size() + cl_vert_.size() + near_block_.size() + near_far_.size() +
-                near_base_.size()) +
-           8 * (near_key_.size() + near_win_.size()) +
-           2 * (near_rows_.size() + cl_valid_.size()) + cl_local_.size() + cl_count_.size();
+    return 4 * (cl_tri_.size() + cl_vert_offsets_.size() + cl_vert_.size() + near_far_.size() + near_base_.size() +
+                near_out_offsets_.size()) +
+           8 * (near_out_.size() + near_win_.size()) +
+           2 * (near_rows_.size() + cl_valid_.size() + group_near_.size()) + cl_local_.size() + cl_count_.size();
   }
   /// How many such pairs the bind pose has (computed by Init with the crease rule).
   uint32_t bind_contact_count() const { return static_cast<uint32_t>(bind_contacts_.size()); }
@@ -226,15 +226,15 @@ class NarrowPhaseModel {
   // pair of the two is near (then the pair of patches is never looked at). The blocks are in the order of
   // their pairs (p, then q). The pairs q - p < 64: two masks per p (near_win_ #C×2: bit q - p of the first
   // set when all near, of the second when q has a block, which is near_base_[p] + the second's bits below
-  // it); the others in an open-addressing table of 2^near_hash_bits_ slots (near_key_ p << 32 | q or ~0
-  // when empty, near_block_).
+  // it); the others in rows sorted by q (CSR near_out_offsets_ #C+1, near_out_: q << 32 | block or ~0u).
+  // Per group g of 4 consecutive patches (#G = ⌈#C/4⌉) and h = g … g + 15 (group_near_ #G×16): bit i + 4j
+  // set when patches 4g + i and 4h + j are skipped whole (every pair near, padding, or g == h and i > j).
   // Per patch also its triangles' corners as indices into its distinct vertices (cl_local_, 48 per patch),
   // its triangle count (cl_count_) and the mask of its slots in use (cl_valid_); per block of near rows the
   // rows and columns (bits 0-15, 16-31) that have a partner not near (near_far_).
-  BlockVector<uint32_t> cl_tri_, cl_vert_offsets_, cl_vert_, near_block_, near_far_, near_base_;
-  BlockVector<uint64_t> near_key_, near_win_;
-  uint32_t near_hash_bits_ = 0;
-  BlockVector<uint16_t> near_rows_, cl_valid_;
+  BlockVector<uint32_t> cl_tri_, cl_vert_offsets_, cl_vert_, near_far_, near_base_, near_out_offsets_;
+  BlockVector<uint64_t> near_win_, near_out_;
+  BlockVector<uint16_t> near_rows_, cl_valid_, group_near_;
   BlockVector<uint8_t> cl_local_, cl_count_;
   bool reach_ = false;  // regions from Asset.reach_*: overlapping, owners from the surrounding regions
   uint32_t sphere_count_ = 0, vertex_count_ = 0, triangle_count_ = 0;
@@ -339,14 +339,16 @@ class NarrowPhaseWorkspace {
   BlockVector<uint64_t> listed_;               // reach models: #S rows of ⌈#S/64⌉ words, bit (a, b) set for
                                                // this Run's candidates (a < b); cleared before it returns
   Culled list_a_, list_b_;
-  // Exclusions::kCrease (sized only for a model with the crease rule): each patch's box (6 rows of #C: min
-  // x, y, z, max x, y, z), the sweep order (kept from frame to frame: re-sorted by insertion), each patch's
-  // triangle boxes (96 floats: 6 rows of 16, inverted padding; all computed each frame), prepared triangles (tri_frame_: frame << 1 |
-  // degenerate, when prepared this frame), the rule's scratch (a job wider than the asset's crease).
-  BlockVector<float> patch_box_;
+  // Exclusions::kCrease (sized only for a model with the crease rule): each patch's box (per group of 4
+  // consecutive patches, #G = ⌈#C/4⌉, 6 rows of 4: min x, y, z, max x, y, z; inverted padding), each
+  // group's box (6 rows of #G), the sweep order of the groups (kept from frame to frame: re-sorted by
+  // insertion), each patch's triangle boxes (96 floats: 6 rows of 16, inverted padding; all computed each
+  // frame), prepared triangles (tri_frame_: frame << 1 | degenerate, when prepared this frame), the rule's
+  // scratch (a job wider than the asset's crease).
+  BlockVector<float> patch_box_, group_box_;
   BlockVector<uint64_t> sweep_;
-  BlockVector<float> sweep_box_;        // the patch boxes in sweep order (6 rows of #C + 1)
-  BlockVector<uint32_t> sweep_hits_;    // one sweep step's overlapping patches (#C + 1)
+  BlockVector<float> sweep_box_;        // the group boxes in sweep order (6 rows of #G + 1)
+  BlockVector<uint32_t> sweep_hits_;    // one sweep step's overlapping groups (#G + 1)
   int sweep_axis_ = -1;                 // the axis sweep_ is sorted on (-1: none yet)
   BlockVector<float> patch_tri_box_;
   BlockVector<PreparedTriangle> tri_prepared_;
