@@ -478,6 +478,7 @@ struct CreaseSweep {
     for (int k = 0; k < 3; ++k) lo[k] = kInfinity, hi[k] = -kInfinity;
 #if SPHERECHAIN_SKIN_SSE2
     alignas(16) float local[4 * 3 * kPatch];
+    constexpr uint32_t kAhead = 8;
     __m128 all_lo = _mm_set1_ps(kInfinity), all_hi = _mm_set1_ps(-kInfinity), nan = _mm_setzero_ps();
     __m128 group_lo = all_lo, group_hi = all_hi;
     for (uint32_t p = 0; p < C; ++p) {
@@ -485,6 +486,9 @@ struct CreaseSweep {
       const uint32_t nv = m.cl_vert_offsets_[p + 1] - m.cl_vert_offsets_[p];
       const uint8_t* corner = &m.cl_local_[3 * kPatch * size_t{p}];
       float* tb = &w.patch_tri_box_[6 * kPatch * size_t{p}];
+      if (p + kAhead < C)  // the positions are the caller's: fetched a few patches ahead (random reads)
+        for (uint32_t k = m.cl_vert_offsets_[p + kAhead]; k < m.cl_vert_offsets_[p + kAhead + 1]; ++k)
+          _mm_prefetch(base + stride * m.cl_vert_[k], _MM_HINT_T0);
       __m128 vl = _mm_set1_ps(kInfinity), vh = _mm_set1_ps(-kInfinity);
       for (uint32_t i = 0; i < nv; ++i) {
         const float* q = reinterpret_cast<const float*>(base + stride * vert[i]);
