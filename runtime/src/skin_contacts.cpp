@@ -12,14 +12,18 @@
 //     the mesh (sort and sweep; the order kept from the last frame and re-sorted by insertion), each with
 //     itself too, and per overlapping pair of groups their patch boxes 4 at a time; per overlapping pair of
 //     patches whose near block (from window masks when the two are fewer than 64 apart in Morton order,
-//     else from the lower one's sorted row of partners) is not all near: each side kept to its triangles that meet
-//     the other patch's box and have a partner not near in it, then each kept triangle's box against the
-//     other side's kept boxes (16 lanes at a time) with the near bits cleared, and the rest tested exactly
+//     else from the lower one's sorted row of partners) is not all near: each side kept to its triangles
+//     that meet the other patch's box and have a partner not near in it, then each kept triangle's box
+//     against the other side's kept boxes (16 lanes at a time) with the near bits cleared, and the rest tested exactly
 //     (TrianglesIntersect on prepared triangles). A job wider than the asset's crease also asks the graph
 //     (CreaseScratch::Near) about each intersecting pair the bits let through.
 // So every pair of triangles whose boxes overlap is either near by the bits (skipped: a fold, or
 // neighbours sharing a corner — the two-ring floor covers them) or tested: the same contacts as testing
 // every pair of triangles, each once.
+// The code is skin_contacts_sweep.inl, compiled twice below: CreaseSweep (baseline x86-64, or scalar) and,
+// on x86-64, CreaseSweepAvx512 (AVX-512 function target: the 16-lane box tests in one compare per bound).
+// RunCrease picks per job as the other kernels do (kernels::Best(), capped by SPHERECHAIN_ISA); the two give
+// the same contacts, depths and order (comparisons and min/max only; no FMA: -ffp-contract=off).
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -27,6 +31,7 @@
 #include <new>
 
 #include "alloc_guard.h"
+#include "internal.h"
 #include "spherechain/runtime/narrow_phase.h"
 
 #if defined(__GNUC__) && defined(__x86_64__)
@@ -153,663 +158,37 @@ void ContactDepthOf(const float* const a[3], const float* const b[3], ContactDep
 }
 
 struct CreaseSweep {
-  struct Counters {
-    uint32_t patch_pairs = 0, box_tests = 0, tests = 0, degenerate = 0, folds = 0, contacts = 0;
-  };
-
-  static uint32_t PatchCount(const NarrowPhaseModel& m) { return static_cast<uint32_t>(m.cl_tri_.size() / kPatch); }
-  static uint32_t GroupCount(const NarrowPhaseModel& m) { return (PatchCount(m) + kGroup - 1) / kGroup; }
-
-  static constexpr uint32_t kWindow = 64;  // pairs of patches fewer than this apart: in near_win_
-  /// The near block of patches a <= b (an index into near_rows_ / near_far_), kAllNear, or kFarPair when no
-  /// pair of the two is near. Pairs fewer than kWindow patches apart (the patches are in Morton order:
-  /// 87 % of the pairs a MakeHuman frame looks up) from a's two window masks; the others from a's sorted
-  /// row of partners further apart (near_out_: 12 a patch on average, the pairs of a patch it holds a near
-  /// pair with), both a few hundred KB for MakeHuman, where a hash table's random reads missed the caches.
-  static uint32_t NearBlock(const NarrowPhaseModel& m, uint32_t a, uint32_t b) {
-    const uint32_t d = b - a;
-    if (d < kWindow) {
-      const uint64_t bit = uint64_t{1} << d, blocks = m.near_win_[2 * size_t{a} + 1];
-      if (m.near_win_[2 * size_t{a}] & bit) return kAllNear;
-      if (!(blocks & bit)) return kFarPair;
-      return m.near_base_[a] + static_cast<uint32_t>(__builtin_popcountll(blocks & (bit - 1)));
-    }
-    const uint64_t key = uint64_t{b} << 32;
-    for (uint32_t k = m.near_out_offsets_[a], end = m.near_out_offsets_[a + 1]; k < end; ++k) {
-      const uint64_t entry = m.near_out_[k];
-      if (entry >= key) return entry >> 32 == b ? static_cast<uint32_t>(entry) : kFarPair;
-    }
-    return kFarPair;
-  }
-
-  /// Patches and near bits (file comment) from the bind pose `bind` (#V×3) and the model's graph.
-  static Status BuildPatches(NarrowPhaseModel& m, const float* bind) {
-    const CreaseGraph& g = m.crease_graph_;
-    const uint32_t T = static_cast<uint32_t>(m.tri_v_.size() / 3), N = g.node_count();
-    auto valid = [&](uint32_t t) {
-      const uint32_t* v = &m.tri_v_[3 * size_t{t}];
-      const uint32_t w0 = m.weld_[v[0]], w1 = m.weld_[v[1]], w2 = m.weld_[v[2]];
-      return w0 != w1 && w1 != w2 && w0 != w2;  // index-degenerate triangles are never tested
-    };
-    // Node → triangles (CSR) and each triangle's bind centroid.
-    std::vector<uint32_t> nt_off(size_t{N} + 1, 0), nt_tri, order;
-    std::vector<float> centroid(3 * size_t{T});
-    float lo[3] = {kInfinity, kInfinity, kInfinity}, hi[3] = {-kInfinity, -kInfinity, -kInfinity};
-    for (uint32_t t = 0; t < T; ++t) {
-      if (!valid(t)) continue;
-      order.push_back(t);
-      for (int k = 0; k < 3; ++k) {
-        const uint32_t v = m.tri_v_[3 * size_t{t} + k];
-        ++nt_off[g.node(v) + 1];
-        for (int a = 0; a < 3; ++a) centroid[3 * size_t{t} + a] += bind[3 * size_t{v} + a] / 3.0f;
-      }
-      for (int a = 0; a < 3; ++a)
-        lo[a] = std::min(lo[a], centroid[3 * size_t{t} + a]), hi[a] = std::max(hi[a], centroid[3 * size_t{t} + a]);
-    }
-    for (uint32_t n = 0; n < N; ++n) nt_off[n + 1] += nt_off[n];
-    nt_tri.resize(nt_off[N]);
-    {
-      std::vector<uint32_t> fill(nt_off.begin(), nt_off.end() - 1);
-      for (uint32_t t : order)
-        for (int k = 0; k < 3; ++k) nt_tri[fill[g.node(m.tri_v_[3 * size_t{t} + k])]++] = t;
-    }
-    // Seeds in Morton order of the centroids (ties by index: deterministic).
-    std::vector<uint64_t> seeds(order.size());
-    for (size_t i = 0; i < order.size(); ++i) {
-      uint32_t q[3];
-      for (int a = 0; a < 3; ++a) {
-        const float span = hi[a] - lo[a];
-        q[a] = span > 0.0f ? static_cast<uint32_t>(std::min(1023.0f, (centroid[3 * size_t{order[i]} + a] - lo[a]) / span * 1024.0f)) : 0;
-      }
-      seeds[i] = uint64_t{Morton(q[0], q[1], q[2])} << 32 | order[i];
-    }
-    std::sort(seeds.begin(), seeds.end());
-    // Grow each patch from its seed: the unassigned triangles sharing a corner with it, nearest the seed first.
-    std::vector<uint32_t> patch_of(T, kNone), seen(T, kNone), frontier;
-    m.cl_tri_.clear();
-    auto dist2 = [&](uint32_t a, uint32_t b) {
-      float d = 0;
-      for (int k = 0; k < 3; ++k) d += (centroid[3 * size_t{a} + k] - centroid[3 * size_t{b} + k]) * (centroid[3 * size_t{a} + k] - centroid[3 * size_t{b} + k]);
-      return d;
-    };
-    for (uint64_t key : seeds) {
-      const uint32_t seed = static_cast<uint32_t>(key);
-      if (patch_of[seed] != kNone) continue;
-      const uint32_t p = PatchCount(m);
-      m.cl_tri_.resize(m.cl_tri_.size() + kPatch, kNone);
-      frontier.assign(1, seed);
-      seen[seed] = p;
-      for (uint32_t n_in = 0; n_in < kPatch && !frontier.empty();) {
-        size_t best = 0;
-        for (size_t i = 1; i < frontier.size(); ++i)
-          if (dist2(frontier[i], seed) < dist2(frontier[best], seed) ||
-              (dist2(frontier[i], seed) == dist2(frontier[best], seed) && frontier[i] < frontier[best]))
-            best = i;
-        const uint32_t t = frontier[best];
-        frontier[best] = frontier.back();
-        frontier.pop_back();
-        patch_of[t] = p;
-        m.cl_tri_[kPatch * size_t{p} + n_in++] = t;
-        for (int k = 0; k < 3; ++k) {
-          const uint32_t n = g.node(m.tri_v_[3 * size_t{t} + k]);
-          for (uint32_t i = nt_off[n]; i < nt_off[n + 1]; ++i) {
-            const uint32_t u = nt_tri[i];
-            if (patch_of[u] == kNone && seen[u] != p) seen[u] = p, frontier.push_back(u);
-          }
-        }
-      }
-    }
-    const uint32_t C = PatchCount(m);
-    std::vector<uint8_t> slot_of(T, 0);
-    for (size_t k = 0; k < m.cl_tri_.size(); ++k)
-      if (m.cl_tri_[k] != kNone) slot_of[m.cl_tri_[k]] = static_cast<uint8_t>(k % kPatch);
-    // Each patch's distinct vertices, its triangles' corners among them, its triangle count (the slots are
-    // filled in order: padding last) and the mask of its slots in use.
-    m.cl_vert_offsets_.assign(1, 0);
-    m.cl_vert_.clear();
-    m.cl_local_.assign(3 * kPatch * size_t{C}, 0);
-    m.cl_count_.assign(C, 0);
-    m.cl_valid_.assign(C, 0);
-    std::vector<uint32_t> verts;
-    for (uint32_t p = 0; p < C; ++p) {
-      verts.clear();
-      uint32_t n = 0;
-      for (uint32_t i = 0; i < kPatch; ++i) {
-        const uint32_t t = m.cl_tri_[kPatch * size_t{p} + i];
-        if (t == kNone) break;
-        verts.insert(verts.end(), &m.tri_v_[3 * size_t{t}], &m.tri_v_[3 * size_t{t}] + 3);
-        ++n;
-      }
-      std::sort(verts.begin(), verts.end());
-      verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
-      for (uint32_t i = 0; i < n; ++i)
-        for (int k = 0; k < 3; ++k) {
-          const uint32_t v = m.tri_v_[3 * size_t{m.cl_tri_[kPatch * size_t{p} + i]} + k];
-          m.cl_local_[3 * kPatch * size_t{p} + 3 * i + k] =
-              static_cast<uint8_t>(std::lower_bound(verts.begin(), verts.end(), v) - verts.begin());
-        }
-      m.cl_count_[p] = static_cast<uint8_t>(n);
-      m.cl_valid_[p] = static_cast<uint16_t>((1u << n) - 1);
-      m.cl_vert_.insert(m.cl_vert_.end(), verts.begin(), verts.end());
-      m.cl_vert_offsets_.push_back(static_cast<uint32_t>(m.cl_vert_.size()));
-    }
-    // Near bits. A triangle's near nodes (CreaseScratch::Reach) are the union of its corners' (the bounded
-    // Dijkstra from three sources settles each node at its nearest corner; the ring is the corners' edge
-    // neighbours), so per patch p each distinct corner node is searched once, the triangles of patches
-    // q >= p at its near nodes gathered into 16-bit masks per q, and those masks OR-ed into the rows of
-    // p's triangles that have that corner.
-    CreaseScratch scratch;
-    if (Status s = scratch.Init(g); s != Status::kOk) return s;
-    // A node is a corner in two or three patches, and its search and the gathering of the triangles near it
-    // are most of Init's time: each node's result is kept from its first patch to its last (last_patch), then
-    // dropped, so every node is searched once and only a band of nodes (the patches are in Morton order) is
-    // held at a time. Same patches, same masks, same order as a search per patch: the same model.
-    std::vector<uint32_t> last_patch(N, 0);
-    for (uint32_t p = 0; p < C; ++p)
-      for (uint32_t k = m.cl_vert_offsets_[p]; k < m.cl_vert_offsets_[p + 1]; ++k) last_patch[g.node(m.cl_vert_[k])] = p;
-    // Kept per node: the patches q its near nodes' triangles lie in, each with the 16-bit mask of those
-    // triangles' slots (q << 16 | mask), in the order first met.
-    std::vector<std::vector<uint64_t>> kept_near(N);
-    std::vector<uint64_t> fresh;
-    std::vector<uint32_t> fresh_of(C, kNone);
-    std::vector<uint32_t> entry_of(C, kNone), touched;
-    std::vector<uint16_t> rows;
-    std::vector<uint64_t> node_entries;  // this corner node's patches q >= p: (entry << 16 | mask)
-    std::vector<uint64_t> corners;  // per patch: (node << 32 | vertex << 4 | slot) of each triangle's corners
-    std::vector<uint64_t> pairs;  // (p << 32 | q), p <= q, for every pair of patches with a near pair
-    std::vector<uint32_t> block;  // per pair in `pairs`: its rows' block in near_rows_, or kAllNear
-    m.near_rows_.clear();
-    m.near_far_.clear();
-    auto valid_mask = [&](uint32_t p) {
-      uint32_t mask = 0;
-      for (uint32_t i = 0; i < kPatch; ++i) mask |= uint32_t{m.cl_tri_[kPatch * size_t{p} + i] != kNone} << i;
-      return mask;
-    };
-    for (uint32_t p = 0; p < C; ++p) {
-      touched.clear();
-      rows.clear();
-      corners.clear();
-      for (uint32_t i = 0; i < kPatch; ++i) {
-        const uint32_t t = m.cl_tri_[kPatch * size_t{p} + i];
-        if (t == kNone) break;
-        for (int k = 0; k < 3; ++k) {
-          const uint32_t v = m.tri_v_[3 * size_t{t} + k];
-          corners.push_back(uint64_t{g.node(v)} << 32 | uint64_t{v} << 4 | i);
-        }
-      }
-      std::sort(corners.begin(), corners.end());
-      for (size_t b = 0; b < corners.size();) {
-        size_t e = b + 1;
-        while (e < corners.size() && corners[e] >> 32 == corners[b] >> 32) ++e;
-        const uint32_t v = static_cast<uint32_t>(corners[b]) >> 4, node = static_cast<uint32_t>(corners[b] >> 32);
-        std::vector<uint64_t>& kept = kept_near[node];
-        const std::vector<uint64_t>* near = &kept;
-        if (kept.empty()) {  // a node is near its own triangles: empty means not searched yet
-          const uint32_t source[3] = {v, v, v};
-          fresh.clear();
-          for (uint32_t n : scratch.Reach(g, source, g.crease()))
-            for (uint32_t k = nt_off[n]; k < nt_off[n + 1]; ++k) {
-              const uint32_t u = nt_tri[k], q = patch_of[u];
-              if (fresh_of[q] == kNone) fresh_of[q] = static_cast<uint32_t>(fresh.size()), fresh.push_back(uint64_t{q} << 16);
-              fresh[fresh_of[q]] |= uint64_t{1} << slot_of[u];
-            }
-          for (uint64_t f : fresh) fresh_of[f >> 16] = kNone;
-          near = &fresh;
-          if (last_patch[node] != p) kept = fresh;
-        }
-        node_entries.clear();
-        for (uint64_t f : *near) {
-          const uint32_t q = static_cast<uint32_t>(f >> 16);
-          if (q < p) continue;
-          if (entry_of[q] == kNone) {
-            entry_of[q] = static_cast<uint32_t>(touched.size());
-            touched.push_back(q);
-            rows.resize(rows.size() + kPatch, 0);
-          }
-          node_entries.push_back(uint64_t{entry_of[q]} << 16 | (f & 0xffffu));
-        }
-        for (size_t c = b; c < e; ++c) {
-          const uint32_t i = static_cast<uint32_t>(corners[c]) & 15u;
-          for (uint64_t en : node_entries) rows[kPatch * size_t(en >> 16) + i] |= static_cast<uint16_t>(en);
-        }
-        if (last_patch[node] == p) std::vector<uint64_t>().swap(kept);
-        b = e;
-      }
-      const uint32_t mask_p = valid_mask(p);
-      for (uint32_t q : touched) {
-        uint16_t* r = &rows[kPatch * size_t{entry_of[q]}];
-        const uint32_t mask_q = valid_mask(q);
-        bool all = true;
-        for (uint32_t i = 0; i < kPatch; ++i) {
-          r[i] |= static_cast<uint16_t>(~mask_q);  // padding slots: as if near (never tested)
-          if ((mask_p >> i & 1) && r[i] != 0xffffu) all = false;
-        }
-        uint32_t b = kAllNear;
-        if (!all) {
-          b = static_cast<uint32_t>(m.near_rows_.size() / kPatch);
-          m.near_rows_.insert(m.near_rows_.end(), r, r + kPatch);
-          // The rows (p's slots) with a partner not near, and the columns (q's) with one: the rest of
-          // either patch is never looked at for this pair. Of one patch, pairs j > i only.
-          uint32_t far_rows = 0, far_cols = 0;
-          for (uint32_t i = 0; i < kPatch; ++i) {
-            if (!(mask_p >> i & 1)) continue;
-            uint32_t free = ~uint32_t{r[i]} & 0xffffu;
-            if (q == p) free &= ~((2u << i) - 1);
-            if (free) far_rows |= 1u << i, far_cols |= free;
-          }
-          m.near_far_.push_back(far_rows | far_cols << 16);
-        }
-        pairs.push_back(uint64_t{p} << 32 | q), block.push_back(b);
-        entry_of[q] = kNone;
-      }
-    }
-    // The blocks renumbered in the order of their pairs (p, then q): a patch's blocks are consecutive from
-    // near_base_[p], those fewer than kWindow apart first, so NearBlock counts them in the window masks.
-    std::vector<uint32_t> by(pairs.size());
-    for (uint32_t i = 0; i < by.size(); ++i) by[i] = i;
-    std::sort(by.begin(), by.end(), [&](uint32_t i, uint32_t j) { return pairs[i] < pairs[j]; });
-    const std::vector<uint16_t> rows_built(m.near_rows_.begin(), m.near_rows_.end());
-    const std::vector<uint32_t> far_built(m.near_far_.begin(), m.near_far_.end());
-    m.near_rows_.clear();
-    m.near_far_.clear();
-    m.near_win_.assign(2 * size_t{C}, 0);
-    m.near_base_.assign(C, 0);
-    m.near_out_offsets_.assign(size_t{C} + 1, 0);
-    m.near_out_.clear();
-    uint32_t row = kNone;
-    for (uint32_t i : by) {
-      const uint32_t p = static_cast<uint32_t>(pairs[i] >> 32), q = static_cast<uint32_t>(pairs[i]);
-      if (p != row) row = p, m.near_base_[p] = static_cast<uint32_t>(m.near_far_.size());
-      m.near_out_offsets_[p + 1] += q - p >= kWindow;
-      uint32_t b = block[i];
-      if (b != kAllNear) {
-        const uint32_t renumbered = static_cast<uint32_t>(m.near_far_.size());
-        m.near_rows_.insert(m.near_rows_.end(), &rows_built[kPatch * size_t{b}], &rows_built[kPatch * size_t{b}] + kPatch);
-        m.near_far_.push_back(far_built[b]);
-        b = renumbered;
-      }
-      if (q - p < kWindow)
-        m.near_win_[2 * size_t{p} + (b == kAllNear ? 0 : 1)] |= uint64_t{1} << (q - p);
-      else
-        m.near_out_.push_back(uint64_t{q} << 32 | b);  // in pair order: each row sorted by q
-    }
-    for (uint32_t p = 0; p < C; ++p) m.near_out_offsets_[p + 1] += m.near_out_offsets_[p];
-    // Per pair of groups g <= h fewer than kGroupWindow apart, bit i + 4j set when the sweep skips patches
-    // 4g + i and 4h + j whole: all near, padding, or (g == h) i > j, each pair of one group once.
-    const uint32_t G = GroupCount(m);
-    m.group_near_.assign(kGroupWindow * size_t{G}, 0);
-    for (uint32_t g = 0; g < G; ++g)
-      for (uint32_t h = g; h < G && h - g < kGroupWindow; ++h) {
-        uint32_t skip = 0;
-        for (uint32_t j = 0; j < kGroup; ++j)
-          for (uint32_t i = 0; i < kGroup; ++i) {
-            const uint32_t a = kGroup * g + i, b = kGroup * h + j;
-            const bool whole = a >= C || b >= C || (g == h && i > j) || NearBlock(m, a, b) == kAllNear;
-            skip |= uint32_t{whole} << (i + kGroup * j);
-          }
-        m.group_near_[kGroupWindow * size_t{g} + (h - g)] = static_cast<uint16_t>(skip);
-      }
-    return Status::kOk;
-  }
-
-  static bool Prepared(const NarrowPhaseModel& m, NarrowPhaseWorkspace& w, const char* base, size_t stride,
-                       uint32_t t, Counters* c) {
-    uint32_t& state = w.tri_frame_[t];
-    if (state >> 1 != w.frame_) {
-      const uint32_t* v = &m.tri_v_[3 * size_t{t}];
-      const float* p[3];
-      for (int j = 0; j < 3; ++j) p[j] = reinterpret_cast<const float*>(base + stride * v[j]);
-      const bool ok = PrepareTriangle(p[0], p[1], p[2], &w.tri_prepared_[t]);
-      state = w.frame_ << 1 | (ok ? 0u : 1u);
-      c->degenerate += !ok;
-    }
-    return !(state & 1);
-  }
-
-  /// Pass 1 of a frame: each patch's distinct vertices read once (cl_vert_), its box (patch_box_: per group
-  /// of 4 patches 6 rows of 4) and its 16 triangle boxes (patch_tri_box_: 6 rows of 16, inverted padding)
-  /// from them (cl_local_), each group's box (group_box_: 6 rows of #G), and the box of them all (lo, hi).
-  /// False when a vertex is NaN or a box not finite (nothing reported).
-  static bool Boxes(const NarrowPhaseModel& m, NarrowPhaseWorkspace& w, const char* base, size_t stride, float lo[3],
-                    float hi[3]) {
-    const uint32_t C = PatchCount(m), G = GroupCount(m);
-    float* box = w.patch_box_.data();
-    float* group = w.group_box_.data();
-    for (int k = 0; k < 3; ++k) lo[k] = kInfinity, hi[k] = -kInfinity;
-#if SPHERECHAIN_SKIN_SSE2
-    alignas(16) float local[4 * 3 * kPatch];
-    constexpr uint32_t kAhead = 8;
-    __m128 all_lo = _mm_set1_ps(kInfinity), all_hi = _mm_set1_ps(-kInfinity), nan = _mm_setzero_ps();
-    __m128 group_lo = all_lo, group_hi = all_hi;
-    for (uint32_t p = 0; p < C; ++p) {
-      const uint32_t* vert = &m.cl_vert_[m.cl_vert_offsets_[p]];
-      const uint32_t nv = m.cl_vert_offsets_[p + 1] - m.cl_vert_offsets_[p];
-      const uint8_t* corner = &m.cl_local_[3 * kPatch * size_t{p}];
-      float* tb = &w.patch_tri_box_[6 * kPatch * size_t{p}];
-      if (p + kAhead < C)  // the positions are the caller's: fetched a few patches ahead (random reads)
-        for (uint32_t k = m.cl_vert_offsets_[p + kAhead]; k < m.cl_vert_offsets_[p + kAhead + 1]; ++k)
-          _mm_prefetch(base + stride * m.cl_vert_[k], _MM_HINT_T0);
-      __m128 vl = _mm_set1_ps(kInfinity), vh = _mm_set1_ps(-kInfinity);
-      for (uint32_t i = 0; i < nv; ++i) {
-        const float* q = reinterpret_cast<const float*>(base + stride * vert[i]);
-        // x, y, z, 0 without reading past the vertex (the positions are only 4-byte aligned)
-        const __m128 v = _mm_movelh_ps(_mm_unpacklo_ps(_mm_load_ss(q), _mm_load_ss(q + 1)), _mm_load_ss(q + 2));
-        _mm_store_ps(local + 4 * i, v);
-        vl = _mm_min_ps(vl, v), vh = _mm_max_ps(vh, v), nan = _mm_or_ps(nan, _mm_cmpunord_ps(v, v));
-      }
-      alignas(16) float tl[4], th[4];
-      _mm_store_ps(tl, vl), _mm_store_ps(th, vh);
-      float* pb = box + 6 * kGroup * size_t{p / kGroup} + p % kGroup;
-      for (int k = 0; k < 3; ++k) pb[kGroup * k] = tl[k], pb[kGroup * (3 + k)] = th[k];
-      group_lo = _mm_min_ps(group_lo, vl), group_hi = _mm_max_ps(group_hi, vh);
-      if (p % kGroup == kGroup - 1 || p + 1 == C) {
-        _mm_store_ps(tl, group_lo), _mm_store_ps(th, group_hi);
-        for (int k = 0; k < 3; ++k) group[k * size_t{G} + p / kGroup] = tl[k], group[(3 + k) * size_t{G} + p / kGroup] = th[k];
-        all_lo = _mm_min_ps(all_lo, group_lo), all_hi = _mm_max_ps(all_hi, group_hi);
-        group_lo = _mm_set1_ps(kInfinity), group_hi = _mm_set1_ps(-kInfinity);
-      }
-      // Four triangles at a time: each box from its corners, then transposed into the rows (padding slots
-      // have corners 0, 0, 0: a box, inverted below).
-      for (uint32_t t = 0; t < kPatch; t += 4) {
-        __m128 l[4], h[4];
-        for (uint32_t k = 0; k < 4; ++k) {
-          const uint8_t* c = corner + 3 * (t + k);
-          const __m128 a = _mm_load_ps(local + 4 * c[0]), b = _mm_load_ps(local + 4 * c[1]), d = _mm_load_ps(local + 4 * c[2]);
-          l[k] = _mm_min_ps(_mm_min_ps(a, b), d), h[k] = _mm_max_ps(_mm_max_ps(a, b), d);
-        }
-        _MM_TRANSPOSE4_PS(l[0], l[1], l[2], l[3]);
-        _MM_TRANSPOSE4_PS(h[0], h[1], h[2], h[3]);
-        for (int k = 0; k < 3; ++k) _mm_storeu_ps(tb + 16 * k + t, l[k]), _mm_storeu_ps(tb + 16 * (3 + k) + t, h[k]);
-      }
-      for (uint32_t t = m.cl_count_[p]; t < kPatch; ++t)
-        for (int k = 0; k < 3; ++k) tb[16 * k + t] = kInfinity, tb[16 * (3 + k) + t] = -kInfinity;
-    }
-    // A NaN anywhere (min/max would drop it), or an infinite coordinate (it reaches the box of them all).
-    alignas(16) float tl[4], th[4];
-    _mm_store_ps(tl, all_lo), _mm_store_ps(th, all_hi);
-    if (_mm_movemask_ps(nan)) return false;
-    for (int k = 0; k < 3; ++k) {
-      if (!std::isfinite(tl[k]) || !std::isfinite(th[k])) return false;
-      lo[k] = tl[k], hi[k] = th[k];
-    }
-#else
-    for (uint32_t p = 0; p < C; ++p) {
-      const uint32_t first = m.cl_vert_offsets_[p], nv = m.cl_vert_offsets_[p + 1] - first;
-      const uint8_t* corner = &m.cl_local_[3 * kPatch * size_t{p}];
-      const uint32_t n = m.cl_count_[p];
-      float* tb = &w.patch_tri_box_[6 * kPatch * size_t{p}];
-      float bl[3] = {kInfinity, kInfinity, kInfinity}, bh[3] = {-kInfinity, -kInfinity, -kInfinity};
-      bool nan = false;  // std::min/max would drop a NaN
-      for (uint32_t i = 0; i < nv; ++i) {
-        const float* q = reinterpret_cast<const float*>(base + stride * m.cl_vert_[first + i]);
-        for (int k = 0; k < 3; ++k) bl[k] = std::min(bl[k], q[k]), bh[k] = std::max(bh[k], q[k]), nan |= q[k] != q[k];
-      }
-      if (nan) return false;
-      float* pb = box + 6 * kGroup * size_t{p / kGroup} + p % kGroup;
-      float* gb = group + p / kGroup;
-      for (int k = 0; k < 3; ++k) {
-        if (!std::isfinite(bl[k]) || !std::isfinite(bh[k])) return false;
-        pb[kGroup * k] = bl[k], pb[kGroup * (3 + k)] = bh[k];
-        if (p % kGroup == 0) gb[k * size_t{G}] = kInfinity, gb[(3 + k) * size_t{G}] = -kInfinity;
-        gb[k * size_t{G}] = std::min(gb[k * size_t{G}], bl[k]), gb[(3 + k) * size_t{G}] = std::max(gb[(3 + k) * size_t{G}], bh[k]);
-        lo[k] = std::min(lo[k], bl[k]), hi[k] = std::max(hi[k], bh[k]);
-      }
-      for (uint32_t t = 0; t < kPatch; ++t) {
-        float l[3] = {kInfinity, kInfinity, kInfinity}, h[3] = {-kInfinity, -kInfinity, -kInfinity};
-        if (t < n)
-          for (int j = 0; j < 3; ++j) {
-            const float* q = reinterpret_cast<const float*>(base + stride * m.cl_vert_[first + corner[3 * t + j]]);
-            for (int k = 0; k < 3; ++k) l[k] = std::min(l[k], q[k]), h[k] = std::max(h[k], q[k]);
-          }
-        for (int k = 0; k < 3; ++k) tb[16 * k + t] = l[k], tb[16 * (3 + k) + t] = h[k];
-      }
-    }
-#endif
-    return true;
-  }
-
-  /// The sweep order (w.sweep_: group box minimum on `axis` << 32 | group, ascending). The previous frame's
-  /// order, re-keyed and insertion-sorted, when it was on the same axis (frames of one animation move little:
-  /// a few swaps); a full sort otherwise, or when the insertions pass a budget of 8 moves a group. Either way
-  /// the unique sorted order of the keys.
-  static void Order(const NarrowPhaseModel& m, NarrowPhaseWorkspace& w, int axis) {
-    const uint32_t C = GroupCount(m);
-    const float* row = w.group_box_.data() + axis * size_t{C};
-    uint64_t* s = w.sweep_.data();
-    if (axis == w.sweep_axis_) {
-      for (uint32_t i = 0; i < C; ++i) {
-        const uint32_t p = static_cast<uint32_t>(s[i]);
-        s[i] = uint64_t{OrderedBits(row[p])} << 32 | p;
-      }
-      size_t budget = 8 * size_t{C};
-      uint32_t i = 1;
-      for (; i < C; ++i) {
-        const uint64_t key = s[i];
-        uint32_t j = i;
-        for (; j > 0 && s[j - 1] > key && budget; --j, --budget) s[j] = s[j - 1];
-        s[j] = key;
-        if (!budget) break;
-      }
-      if (i >= C) return;
-    }
-    for (uint32_t p = 0; p < C; ++p) s[p] = uint64_t{OrderedBits(row[p])} << 32 | p;
-    std::sort(s, s + C);
-    w.sweep_axis_ = axis;
-  }
-
-  /// Patch pair (a <= b; `rows` their near bits, `far` the rows and columns with a partner not near):
-  /// every triangle pair not near whose boxes overlap, tested exactly. Each side is first kept to its
-  /// triangles that meet the other patch's box and have a partner not near there.
-  template <class OnContact>
-  static void Pair(const NarrowPhaseModel& m, NarrowPhaseWorkspace& w, const char* base, size_t stride, uint32_t a,
-                   uint32_t b, const uint16_t* rows, uint32_t far, float crease, Counters* c, OnContact& on_contact) {
-    ++c->patch_pairs;
-    const float* pa = w.patch_box_.data() + 6 * kGroup * size_t{a / kGroup} + a % kGroup;  // 6 rows of kGroup
-    const float* pb = w.patch_box_.data() + 6 * kGroup * size_t{b / kGroup} + b % kGroup;
-    const float alo[3] = {pa[0], pa[kGroup], pa[2 * kGroup]}, ahi[3] = {pa[3 * kGroup], pa[4 * kGroup], pa[5 * kGroup]};
-    const float blo[3] = {pb[0], pb[kGroup], pb[2 * kGroup]}, bhi[3] = {pb[3 * kGroup], pb[4 * kGroup], pb[5 * kGroup]};
-    const float* ba = &w.patch_tri_box_[6 * kPatch * size_t{a}];
-    const float* bb = &w.patch_tri_box_[6 * kPatch * size_t{b}];
-    uint32_t live = OverlapMask16(ba, blo, bhi) & far & 0xffffu;
-    if (!live) return;
-    const uint32_t cols = OverlapMask16(bb, alo, ahi) & far >> 16;
-    if (!cols) return;
-    const bool wider = crease > m.crease_graph_.crease();
-    for (; live; live &= live - 1) {
-      const uint32_t i = static_cast<uint32_t>(__builtin_ctz(live));
-      uint32_t want = cols & ~uint32_t{rows[i]};
-      if (a == b) want &= ~((2u << i) - 1);  // each pair of one patch once (j > i)
-      if (!want) continue;
-      const float lo[3] = {ba[i], ba[16 + i], ba[32 + i]}, hi[3] = {ba[48 + i], ba[64 + i], ba[80 + i]};
-      uint32_t overlap = OverlapMask16(bb, lo, hi) & want;
-      c->box_tests += kPatch;
-      if (!overlap) continue;
-      const uint32_t t = m.cl_tri_[kPatch * size_t{a} + i];
-      if (!Prepared(m, w, base, stride, t, c)) continue;  // t degenerate: in no contact
-      const uint32_t* tv = &m.tri_v_[3 * size_t{t}];
-      for (; overlap; overlap &= overlap - 1) {
-        const uint32_t u = m.cl_tri_[kPatch * size_t{b} + static_cast<uint32_t>(__builtin_ctz(overlap))];
-        if (!Prepared(m, w, base, stride, u, c)) continue;
-        ++c->tests;
-        if (!TrianglesIntersect(w.tri_prepared_[t], w.tri_prepared_[u])) continue;
-        if (wider && w.crease_scratch_.Near(m.crease_graph_, tv, &m.tri_v_[3 * size_t{u}], crease)) {
-          ++c->folds;
-          continue;
-        }
-        ++c->contacts;
-        on_contact(t, u);
-      }
-    }
-  }
-
-  /// One frame: patch boxes, the sweep, every pair. False (nothing reported) when a patch vertex is NaN/Inf.
-  template <class OnContact>
-  static bool Collide(const NarrowPhaseModel& m, NarrowPhaseWorkspace& w, const char* base, size_t stride,
-                      float crease, Counters* c, OnContact&& on_contact) {
-    const uint32_t C = GroupCount(m);
-    if (++w.frame_ >= 0x7fffffffu) {  // stamps wrap: forget them all
-      std::fill(w.tri_frame_.begin(), w.tri_frame_.end(), 0u);
-      w.frame_ = 1;
-    }
-    float lo[3], hi[3];
-    if (!Boxes(m, w, base, stride, lo, hi)) return false;
-    const float* box = w.group_box_.data();
-    const float* patch_box = w.patch_box_.data();
-    int axis = 0;
-    for (int k = 1; k < 3; ++k)
-      if (hi[k] - lo[k] > hi[axis] - lo[axis]) axis = k;
-    Order(m, w, axis);
-    // The group boxes in sweep order: the sweep's axis first, then the two others (a sentinel after the last).
-    const int rows_of[6] = {axis, 3 + axis, (axis + 1) % 3, 3 + (axis + 1) % 3, (axis + 2) % 3, 3 + (axis + 2) % 3};
-    float* sb = w.sweep_box_.data();
-    const size_t pitch = size_t{C} + 1;
-    for (uint32_t i = 0; i < C; ++i) {
-      const uint32_t p = static_cast<uint32_t>(w.sweep_[i]);
-      for (int r = 0; r < 6; ++r) sb[r * pitch + i] = box[rows_of[r] * size_t{C} + p];
-    }
-    static const uint16_t kFar[kPatch] = {};
-    // Groups g and h (g == h: each pair of its patches once, a patch with itself included): unless the
-    // model marks all their patch pairs to skip, their patches' boxes 4 at a time, then each overlapping
-    // pair of patches not skipped whole.
-    auto groups = [&](uint32_t g, uint32_t h) {
-      if (g > h) std::swap(g, h);
-      const uint32_t skip = h - g < kGroupWindow ? m.group_near_[kGroupWindow * size_t{g} + (h - g)] : 0u;
-      if (skip == 0xffffu) return;
-      const float* bg = patch_box + 6 * kGroup * size_t{g};
-      const float* bh = patch_box + 6 * kGroup * size_t{h};
-      uint32_t overlap = 0;
-      for (uint32_t j = 0; j < kGroup; ++j) {
-        const float lo[3] = {bh[j], bh[kGroup + j], bh[2 * kGroup + j]};
-        const float hi[3] = {bh[3 * kGroup + j], bh[4 * kGroup + j], bh[5 * kGroup + j]};
-        overlap |= OverlapMask4(bg, lo, hi) << (kGroup * j);
-      }
-      for (overlap &= ~skip; overlap; overlap &= overlap - 1) {
-        const uint32_t bit = static_cast<uint32_t>(__builtin_ctz(overlap));
-        const uint32_t a = kGroup * g + bit % kGroup, b = kGroup * h + bit / kGroup;
-        const uint32_t block = NearBlock(m, a, b);
-        if (block == kAllNear) continue;
-        if (block == kFarPair)
-          Pair(m, w, base, stride, a, b, kFar, m.cl_valid_[a] | m.cl_valid_[b] << 16, crease, c, on_contact);
-        else
-          Pair(m, w, base, stride, a, b, &m.near_rows_[kPatch * size_t{block}], m.near_far_[block], crease, c, on_contact);
-      }
-    };
-    for (uint32_t i = 0; i < C; ++i) {
-      const uint32_t p = static_cast<uint32_t>(w.sweep_[i]);
-      groups(p, p);
-      const float end = sb[pitch + i], l1 = sb[2 * pitch + i], h1 = sb[3 * pitch + i], l2 = sb[4 * pitch + i],
-                  h2 = sb[5 * pitch + i];
-      // The groups starting before p ends on the axis, then those overlapping it on the two others
-      // (branch-free: their sweep positions appended to hits_ as found).
-      uint32_t n = 0;
-      uint32_t* hits = w.sweep_hits_.data();
-      uint32_t j = i + 1;
-#if SPHERECHAIN_SKIN_SSE2
-      const __m128 vl1 = _mm_set1_ps(l1), vh1 = _mm_set1_ps(h1), vl2 = _mm_set1_ps(l2), vh2 = _mm_set1_ps(h2);
-      const __m128 vend = _mm_set1_ps(end);
-      for (; j + 4 <= C; j += 4) {
-        const __m128 start = _mm_loadu_ps(sb + j);
-        const __m128 mk = _mm_and_ps(_mm_and_ps(_mm_cmple_ps(_mm_loadu_ps(sb + 2 * pitch + j), vh1),
-                                                _mm_cmpge_ps(_mm_loadu_ps(sb + 3 * pitch + j), vl1)),
-                                     _mm_and_ps(_mm_cmple_ps(_mm_loadu_ps(sb + 4 * pitch + j), vh2),
-                                                _mm_cmpge_ps(_mm_loadu_ps(sb + 5 * pitch + j), vl2)));
-        const int in = _mm_movemask_ps(_mm_cmple_ps(start, vend));
-        for (uint32_t bits = static_cast<uint32_t>(_mm_movemask_ps(mk) & in); bits; bits &= bits - 1)
-          hits[n++] = j + static_cast<uint32_t>(__builtin_ctz(bits));
-        if (in != 0xf) break;  // sorted: the rest start after p ends
-      }
-      if (j + 4 > C)
-#endif
-        for (; j < C && sb[j] <= end; ++j) {
-          hits[n] = j;
-          n += (sb[2 * pitch + j] <= h1) & (sb[3 * pitch + j] >= l1) & (sb[4 * pitch + j] <= h2) & (sb[5 * pitch + j] >= l2);
-        }
-      for (uint32_t k = 0; k < n; ++k) groups(p, static_cast<uint32_t>(w.sweep_[hits[k]]));
-    }
-    return true;
-  }
-
-  /// Model part: the index buffer, the graph, the patches and the bind pose's own contacts.
-  static Status InitModel(NarrowPhaseModel& m, const AssetView& view) {
-    const schema::Asset& a = *view.asset;
-    const auto* bind = a.bind_positions();
-    if (!bind || !(a.crease() > 0.0f)) return Status::kOk;  // no crease rule: kCrease jobs refused
-    const auto* tris = a.triangles();
-    m.tri_v_.assign(tris->begin(), tris->end());
-    if (Status s = m.crease_graph_.Init(bind->data(), view.vertex_count, m.tri_v_.data(), view.triangle_count,
-                                        m.weld_.data(), a.crease());
-        s != Status::kOk)
-      return s;
-    if (Status s = BuildPatches(m, bind->data()); s != Status::kOk) return s;
-    NarrowPhaseWorkspace w;
-    if (Status s = InitWorkspace(w, m, nullptr); s != Status::kOk) return s;
-    Counters c;
-    Collide(m, w, reinterpret_cast<const char*>(bind->data()), 12, m.crease_graph_.crease(), &c,
-            [&](uint32_t t, uint32_t u) { m.bind_contacts_.push_back(uint64_t{std::min(t, u)} << 32 | std::max(t, u)); });
-    std::sort(m.bind_contacts_.begin(), m.bind_contacts_.end());
-    return Status::kOk;
-  }
-
-  static Status InitWorkspace(NarrowPhaseWorkspace& w, const NarrowPhaseModel& m, BlockArena* arena) {
-    if (!m.crease_graph_.initialized()) return Status::kOk;
-    const uint32_t C = GroupCount(m), T = static_cast<uint32_t>(m.tri_v_.size() / 3);
-    w.patch_box_.assign(6 * kGroup * size_t{C}, 0.0f);
-    for (size_t g = 0; g < C; ++g)  // inverted: the padding patches of the last group (never written)
-      for (uint32_t k = 0; k < 3 * kGroup; ++k) w.patch_box_[6 * kGroup * g + k] = kInfinity, w.patch_box_[6 * kGroup * g + 3 * kGroup + k] = -kInfinity;
-    w.group_box_.assign(6 * size_t{C}, 0.0f);
-    w.sweep_.assign(C, 0);
-    w.sweep_box_.assign(6 * (size_t{C} + 1), 0.0f);
-    w.sweep_hits_.assign(size_t{C} + 1, 0);
-    for (uint32_t p = 0; p < C; ++p) w.sweep_[p] = p;
-    w.sweep_axis_ = -1;
-    w.patch_tri_box_.assign(96 * size_t{PatchCount(m)}, 0.0f);
-    w.tri_prepared_.assign(T, PreparedTriangle{});
-    w.tri_frame_.assign(T, 0);
-    w.frame_ = 0;
-    return w.crease_scratch_.Init(m.crease_graph_, arena);
-  }
-
-  static Status Run(const NarrowPhaseJob& job) {
-    const NarrowPhaseModel& m = *job.model;
-    NarrowPhaseWorkspace& w = *job.workspace;
-    NarrowPhaseStats st;
-    *job.count = 0;
-    if (job.stats) *job.stats = st;
-    const float crease = job.crease > 0.0f ? job.crease : m.crease_graph_.crease();
-    w.crease_scratch_.Reset();
-    Counters c;
-    uint32_t written = 0;
-    const char* base = static_cast<const char*>(job.positions.data);
-    const size_t stride = job.positions.stride_bytes;
-    const bool finite = Collide(m, w, base, stride, crease,
-                                &c, [&](uint32_t t, uint32_t u) {
-                                  st.bind_contacts += m.IntersectsAtBind(t, u);
-                                  if (written >= job.capacity) return;
-                                  uint16_t sa = m.tri_sphere_[t], sb = m.tri_sphere_[u];
-                                  if (sa > sb || (sa == sb && t > u)) std::swap(sa, sb), std::swap(t, u);
-                                  if (job.depths) {
-                                    const float* pa[3];
-                                    const float* pb[3];
-                                    for (int j = 0; j < 3; ++j) {
-                                      pa[j] = reinterpret_cast<const float*>(base + stride * m.tri_v_[3 * size_t{t} + j]);
-                                      pb[j] = reinterpret_cast<const float*>(base + stride * m.tri_v_[3 * size_t{u} + j]);
-                                    }
-                                    ContactDepthOf(pa, pb, &job.depths[written]);
-                                  }
-                                  job.output[written++] = TriangleContact{t, u, sa, sb};
-                                });
-    if (!finite) return Status::kErrorNonFinitePositions;
-    st.candidate_pairs = c.patch_pairs;
-    st.box_tests = c.box_tests;
-    st.triangle_tests = c.tests;
-    st.degenerate_triangles = c.degenerate;
-    st.crease_folds = c.folds;
-    st.contacts = c.contacts;
-    *job.count = written;
-    if (job.stats) *job.stats = st;
-    return st.contacts > job.capacity ? Status::kOkTruncated : Status::kOk;
-  }
+#define SPHERECHAIN_SKIN_AVX512 0
+#include "skin_contacts_sweep.inl"
+#undef SPHERECHAIN_SKIN_AVX512
 };
+
+#if SPHERECHAIN_SKIN_SSE2
+// GCC 12's AVX-512 headers pass _mm512_undefined_ps() as the merge source of unmasked intrinsics, which
+// -Wuninitialized reports at every inlined use (GCC bug 105593; kernels.cpp does the same).
+#if !defined(__clang__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wuninitialized"
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
+#pragma GCC push_options
+#pragma GCC target("avx512f,avx512vl,avx512dq,avx512bw,popcnt")
+#ifdef __clang__
+#pragma clang attribute push(__attribute__((target("avx512f,avx512vl,avx512dq,avx512bw,popcnt"))), apply_to = function)
+#endif
+struct CreaseSweepAvx512 {
+#define SPHERECHAIN_SKIN_AVX512 1
+#include "skin_contacts_sweep.inl"
+#undef SPHERECHAIN_SKIN_AVX512
+};
+#ifdef __clang__
+#pragma clang attribute pop
+#endif
+#pragma GCC pop_options
+#if !defined(__clang__)
+#pragma GCC diagnostic pop
+#endif
+#endif
 
 bool NarrowPhaseModel::IntersectsAtBind(uint32_t t, uint32_t u) const {
   const uint64_t key = uint64_t{std::min(t, u)} << 32 | std::max(t, u);
@@ -820,6 +199,11 @@ Status InitCreaseModel(NarrowPhaseModel& m, const AssetView& view) { return Crea
 Status InitCreaseWorkspace(NarrowPhaseWorkspace& w, const NarrowPhaseModel& m, BlockArena* arena) {
   return CreaseSweep::InitWorkspace(w, m, arena);
 }
-Status RunCrease(const NarrowPhaseJob& job) { return CreaseSweep::Run(job); }
+Status RunCrease(const NarrowPhaseJob& job) {
+#if SPHERECHAIN_SKIN_SSE2
+  if (kernels::Best() == kernels::Isa::kAvx512) return CreaseSweepAvx512::Run(job);
+#endif
+  return CreaseSweep::Run(job);
+}
 
 }  // namespace spherechain::runtime

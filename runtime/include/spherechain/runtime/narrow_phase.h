@@ -196,6 +196,7 @@ class NarrowPhaseModel {
   friend struct NarrowPhaseJob;
   friend struct NarrowPhaseInternal;
   friend struct CreaseSweep;
+  friend struct CreaseSweepAvx512;
 
  private:
   uint64_t id_ = 0;
@@ -293,6 +294,7 @@ class NarrowPhaseWorkspace {
   friend struct NarrowPhaseJob;
   friend struct NarrowPhaseInternal;
   friend struct CreaseSweep;
+  friend struct CreaseSweepAvx512;
   friend class NarrowPhaseModel;
   friend class Workspace;
 
