@@ -164,17 +164,16 @@ struct CreaseSweep {
 };
 
 #if SPHERECHAIN_SKIN_SSE2
+#ifdef __clang__
+#pragma clang attribute push(__attribute__((target("avx512f,avx512vl,avx512dq,avx512bw,popcnt"))), apply_to = function)
+#else
 // GCC 12's AVX-512 headers pass _mm512_undefined_ps() as the merge source of unmasked intrinsics, which
 // -Wuninitialized reports at every inlined use (GCC bug 105593; kernels.cpp does the same).
-#if !defined(__clang__)
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wuninitialized"
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#endif
 #pragma GCC push_options
 #pragma GCC target("avx512f,avx512vl,avx512dq,avx512bw,popcnt")
-#ifdef __clang__
-#pragma clang attribute push(__attribute__((target("avx512f,avx512vl,avx512dq,avx512bw,popcnt"))), apply_to = function)
 #endif
 struct CreaseSweepAvx512 {
 #define SPHERECHAIN_SKIN_AVX512 1
@@ -183,9 +182,8 @@ struct CreaseSweepAvx512 {
 };
 #ifdef __clang__
 #pragma clang attribute pop
-#endif
+#else
 #pragma GCC pop_options
-#if !defined(__clang__)
 #pragma GCC diagnostic pop
 #endif
 #endif
