@@ -2,13 +2,11 @@
 # Prepares .carry/ (git-ignored) for the GPU machine, which has CMake, nvcc and a compiler but no
 # package registry: the FlatBuffers and doctest headers from this machine's Debian packages, doctest's
 # CMake package made relocatable, baked MakeHuman / CesiumMan / BCN_Epileptic assets with their recorded
-# frames (positions and joint matrices) plus MakeHuman's body mesh, for the CPU == GPU tests and the bench. Run it here, then on the GPU machine (device tool, carry
-# [".carry"]):
-#   FLATBUFFERS_INCLUDE_DIR=$PWD/.carry/include cmake --preset cuda -DSPHERECHAIN_BUILD_BENCH=ON \
-#     -Ddoctest_DIR=$PWD/.carry/lib/cmake/doctest -DSPHERECHAIN_SHARED_DATA_DIR=$PWD/.carry/data &&
-#   cmake --build build/cuda --target cuda_tests cuda_bench -j16 &&
-#   SPHERECHAIN_MH_ASSET=$PWD/.carry/mh.sphc build/cuda/tests/cuda_tests &&
-#   build/cuda/bench/cuda_bench .carry/mh.sphc .carry/data/makehuman/base.obj --max-instances 100000
+# frames (positions and joint matrices) plus MakeHuman's body mesh, for the CPU == GPU tests and the bench.
+# Run it here, then the whole check on the GPU machine in one command (device tool, carry [".carry"]):
+#   bash scripts/gpu-check.sh [--ncu]
+# which builds the `cuda` preset there, runs the CUDA suite on these assets and frames, ctest's guard, the
+# bench and compute-sanitizer, and packs the logs into $OUT (see its header).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cli=${SPHERECHAIN_CLI:-build/dev/cli/spherechain}
@@ -29,5 +27,5 @@ mkdir -p .carry/frames/mh .carry/frames/cesiumman .carry/frames/bcn
 "$cli" -q play .carry/mh.sphc --mesh $data/makehuman/base.obj --repeat 1 --dump-frames .carry/frames/mh >/dev/null
 "$cli" -q play .carry/cesiumman.sphc --mesh $data/gltf/CesiumMan.gltf --repeat 1 --dump-frames .carry/frames/cesiumman >/dev/null
 "$cli" -q play .carry/bcn.sphc --mesh $bcn --repeat 1 --dump-frames .carry/frames/bcn >/dev/null
-echo "then, on the GPU machine, add: SPHERECHAIN_GPU_FRAMES=\"\$PWD/.carry/mh.sphc=\$PWD/.carry/frames/mh;\$PWD/.carry/cesiumman.sphc=\$PWD/.carry/frames/cesiumman;\$PWD/.carry/bcn.sphc=\$PWD/.carry/frames/bcn\""
+echo "then, on the GPU machine: bash scripts/gpu-check.sh"
 du -sh .carry

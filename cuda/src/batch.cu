@@ -1,8 +1,11 @@
 // Batch: fused refit + detect kernels (one launch per frame) and their host-side setup.
 //
 // Kernel design (see Strategy in batch.h):
-//  - GroupKernel<kWarp=false>: a block per instance, a thread per sphere (kThreadPerSphere);
-//  - GroupKernel<kWarp=true>:  a warp per instance, 4 per block (kWarpPerInstance);
+//  - SphereKernel: a block per instance, a thread per sphere, or `split` threads per sphere when the
+//    batch has few instances (kThreadPerSphere); the pairs dealt out evenly (circular order);
+//  - GroupKernel:  a warp per instance, 4 per block (kWarpPerInstance);
+//  - BoxKernel: a block per instance, the CPU DetectJob's blocks of 8 spheres and their bounds, then the
+//    sphere tests of the block pairs kept (kBlockBoxes, the default);
 //  - ChainKernel: a block per (instance, chain), a thread per chain sphere (kBlockPerChain, M1).
 // Each refits the spheres it needs into shared memory (DevRefitSphere: runtime/formulas.h, the formulas
 // the CPU's scalar path and SIMD kernels compile), syncs, runs
@@ -59,6 +62,39 @@ __device__ __forceinline__ float4 DevRefitSphere(const DeviceAssetDesc& a, const
   return make_float4(out[0], out[1], out[2], out[3]);
 }
 
+/// JointRefitJob for one sphere `s` (runtime/src/kernels.cpp JointRefitScalar, the same roundings):
+/// M = ((w0·M_j0 + w1·M_j1) + w2·M_j2) + w3·M_j3 per element over influence 0 and then influences 1, 2, 3
+/// while their weight is not 0, then per row (ρ0·bx + ρ1·by) + (ρ2·bz + ρ3); radius = the bind radius.
+/// Returns (x, y, z, r).
+__device__ __forceinline__ float4 DevJointSphere(const DeviceAssetDesc& a, const float* matrices, uint32_t s) {
+  const uint4 off = __ldg(a.joint_offsets + s);
+  const float4 w = __ldg(a.joint_weights + s);
+  const float4 b = __ldg(a.bind + s);
+  float m[12];
+  const float* M = matrices + off.x;
+#pragma unroll
+  for (int e = 0; e < 12; ++e) m[e] = w.x * __ldg(M + e);
+  auto blend = [&](uint32_t offset, float weight) {
+    const float* N = matrices + offset;
+#pragma unroll
+    for (int e = 0; e < 12; ++e) m[e] = m[e] + weight * __ldg(N + e);
+  };
+  if (w.y != 0.0f) {
+    blend(off.y, w.y);
+    if (w.z != 0.0f) {
+      blend(off.z, w.z);
+      if (w.w != 0.0f) blend(off.w, w.w);
+    }
+  }
+  float c[3];
+#pragma unroll
+  for (int row = 0; row < 3; ++row) {
+    const float* p = m + 4 * row;
+    c[row] = (p[0] * b.x + p[1] * b.y) + (p[2] * b.z + p[3] * 1.0f);
+  }
+  return make_float4(c[0], c[1], c[2], b.w);
+}
+
 /// DetectJob's overlap test (formulas::OverlapLanes) on the radii grown by the margin m (one float add
 /// each, as DetectJob's gather does; with m == 0 that is r itself).
 __device__ __forceinline__ bool DevOverlap(const float4& A, const float4& B, float m) {
@@ -92,6 +128,8 @@ using detail::DeviceInstance;
 constexpr uint32_t kFlagFrameMode = 1u;     // RefitMode::kPivotFrame
 constexpr uint32_t kFlagWriteSpheres = 2u;  // FrameParams::write_spheres
 constexpr uint32_t kFlagM1 = 4u;            // DetectMethod::kM1
+constexpr uint32_t kFlagJoints = 8u;        // RefitSource::kJoints
+constexpr uint32_t kNoSphere = 0xFFFFu;     // DeviceAssetDesc::slot_spheres padding
 constexpr uint32_t kWarpsPerBlock = 4;      // kWarpPerInstance: instances per block
 constexpr size_t kSharedLimit = 48 * 1024;  // default dynamic shared memory per block
 
@@ -105,6 +143,8 @@ struct KernelParams {
   uint32_t capacity;
   uint32_t shared_spheres;  // spheres per group slice of shared memory
   uint32_t chains_per_instance;
+  uint32_t split;     // SphereKernel: threads per sphere (1 when there are many instances)
+  uint32_t max_blocks, max_block_pairs;  // BoxKernel: shared memory layout
   uint32_t flags;
   float margin;       // FrameParams::margin: >= 0 for every instance, < 0 each instance's asset's
   float fold_margin;  // FrameParams::fold_margin: >= 0 for every instance (each asset has one), < 0 the asset's
@@ -133,6 +173,13 @@ __device__ __forceinline__ uint32_t FoldRegion(const DeviceAssetDesc& A, float f
   return fold >= 0.0f ? __ldg(A.sphere_regions + a) : 0u;
 }
 
+// Sphere s of instance I refitted from the frame's source (FrameParams::source).
+__device__ __forceinline__ float4 RefitSphere(const KernelParams& p, const DeviceAssetDesc& A, const DeviceInstance& I,
+                                              uint32_t s) {
+  if (p.flags & kFlagJoints) return detail::DevJointSphere(A, I.joint_matrices, s);
+  return detail::DevRefitSphere(A, I.positions, I.stride_bytes, s, p.flags & kFlagFrameMode);
+}
+
 // Appends one pair: one atomicAdd per coalesced group of hitting threads. `grow`: see DevDepth (0 for
 // M1, the margin for M2).
 __device__ __forceinline__ void Emit(const KernelParams& p, uint32_t inst, uint32_t a, uint32_t b, const float4& A,
@@ -156,64 +203,205 @@ __device__ __forceinline__ void AddInstanceCount(const KernelParams& p, uint32_t
   if ((threadIdx.x & 31u) == 0 && hits) atomicAdd(p.counters + 2 + inst, hits);
 }
 
-template <bool kWarp, bool kShared>
+// kWarpPerInstance: a warp per instance, kWarpsPerBlock instances per block.
+template <bool kShared>
 __global__ void GroupKernel(KernelParams p) {
   extern __shared__ float4 smem[];
-  const uint32_t G = kWarp ? 32u : blockDim.x;
-  const uint32_t group = kWarp ? threadIdx.x / 32u : 0u;
-  const uint32_t lane = kWarp ? threadIdx.x % 32u : threadIdx.x;
-  const uint32_t inst = kWarp ? blockIdx.x * (blockDim.x / 32u) + group : blockIdx.x;
-  if (inst >= p.instance_count) return;  // whole warp (kWarp) or whole block
+  const uint32_t group = threadIdx.x / 32u, lane = threadIdx.x % 32u;
+  const uint32_t inst = blockIdx.x * (blockDim.x / 32u) + group;
+  if (inst >= p.instance_count) return;  // whole warp
   const DeviceInstance I = p.instances[inst];
   const DeviceAssetDesc& A = p.assets[I.asset];
   const uint32_t S = A.sphere_count;
-  const bool frame_mode = p.flags & kFlagFrameMode, write = p.flags & kFlagWriteSpheres, m1 = p.flags & kFlagM1;
+  const bool write = p.flags & kFlagWriteSpheres, m1 = p.flags & kFlagM1;
   const float m = InstanceMargin(p, A), grow = m1 ? 0.0f : m;  // depth rounding as DetectM1 / DetectM2
   const float fold = InstanceFoldMargin(p, A);
   float4* sph = kShared ? smem + size_t{group} * p.shared_spheres : p.spheres + I.sphere_offset;
 
-  for (uint32_t s = lane; s < S; s += G) {
-    const float4 v = detail::DevRefitSphere(A, I.positions, I.stride_bytes, s, frame_mode);
+  for (uint32_t s = lane; s < S; s += 32u) {
+    const float4 v = RefitSphere(p, A, I, s);
     sph[s] = v;
     if (kShared && write) p.spheres[I.sphere_offset + s] = v;
   }
-  if (kWarp) __syncwarp(); else __syncthreads();
+  __syncwarp();
 
   const uint32_t* mask = A.chain_mask;
   uint32_t hits = 0;
-  if (kWarp) {
-    // Sphere a broadcast to the warp; lanes take b = a + 1 + lane, a + 33 + lane, ...
-    for (uint32_t a = 0; a + 1 < S; ++a) {
-      const float4 SA = sph[a];
-      const uint32_t ma = __ldg(mask + a);
-      if (m1 && !ma) continue;  // uniform across the warp
-      const uint32_t ra = FoldRegion(A, fold, a);
-      for (uint32_t b = a + 1 + lane; b < S; b += 32u) {
-        const uint32_t common = ma & __ldg(mask + b);
-        if (m1 && !common) continue;
-        const float4 SB = sph[b];
-        if (detail::DevOverlap(SA, SB, PairMargin(A, m, fold, ra, b)) && !detail::DevIsExcluded(A, a, b)) {
-          ++hits;
-          Emit(p, inst, a, b, SA, SB, common, grow);
-        }
+  // Sphere a broadcast to the warp; lanes take b = a + 1 + lane, a + 33 + lane, ...
+  for (uint32_t a = 0; a + 1 < S; ++a) {
+    const float4 SA = sph[a];
+    const uint32_t ma = __ldg(mask + a);
+    if (m1 && !ma) continue;  // uniform across the warp
+    const uint32_t ra = FoldRegion(A, fold, a);
+    for (uint32_t b = a + 1 + lane; b < S; b += 32u) {
+      const uint32_t common = ma & __ldg(mask + b);
+      if (m1 && !common) continue;
+      const float4 SB = sph[b];
+      if (detail::DevOverlap(SA, SB, PairMargin(A, m, fold, ra, b)) && !detail::DevIsExcluded(A, a, b)) {
+        ++hits;
+        Emit(p, inst, a, b, SA, SB, common, grow);
       }
     }
-  } else {
-    // Thread per sphere: sphere a against every higher-index sphere (§6, M2 mapping).
-    for (uint32_t a = lane; a < S; a += G) {
-      const float4 SA = sph[a];
-      const uint32_t ma = __ldg(mask + a);
-      if (m1 && !ma) continue;
-      const uint32_t ra = FoldRegion(A, fold, a);
-      for (uint32_t b = a + 1; b < S; ++b) {
-        const uint32_t common = ma & __ldg(mask + b);
-        if (m1 && !common) continue;
-        const float4 SB = sph[b];
-        if (detail::DevOverlap(SA, SB, PairMargin(A, m, fold, ra, b)) && !detail::DevIsExcluded(A, a, b)) {
-          ++hits;
-          Emit(p, inst, a, b, SA, SB, common, grow);
-        }
+  }
+  AddInstanceCount(p, inst, hits);
+}
+
+// kThreadPerSphere: a block per instance. The block refits the spheres into shared memory, with each one's
+// chain mask and fold region beside it, then deals out the S(S−1)/2 pairs evenly: sphere a meets
+// b = a + k (mod S) for k = 1 .. ⌊(S−1)/2⌋, and also k = S/2 when S is even and a < S/2 — every unordered
+// pair once, every sphere ⌊S/2⌋ or ⌊(S−1)/2⌋ tests, so no thread waits on a longer row (a row per
+// sphere, b > a, gives sphere 0 S−1 tests and the last none). With `split` > 1 (few instances: more
+// threads per instance shorten the frame) the k range of each sphere is cut into `split` slices, one
+// per thread. Each pair is tested and reported in index order (lower index first), so the floats are
+// DetectJob's.
+// kMany (split == 1): blocks of at most 256 threads, registers capped so that SPHERECHAIN_CUDA_SPHERE_BLOCKS
+// such blocks fit an SM (6: 40 registers, 12 blocks of MakeHuman's 128 threads; a compile-time tuning
+// knob, measured in docs/performance.md); else blocks of up to 1024 threads.
+#ifndef SPHERECHAIN_CUDA_SPHERE_BLOCKS
+#define SPHERECHAIN_CUDA_SPHERE_BLOCKS 6
+#endif
+template <bool kShared, bool kMany>
+__global__ void __launch_bounds__(kMany ? 256 : 1024, kMany ? SPHERECHAIN_CUDA_SPHERE_BLOCKS : 1)
+    SphereKernel(KernelParams p) {
+  extern __shared__ float4 smem[];
+  const uint32_t inst = blockIdx.x;
+  if (inst >= p.instance_count) return;  // whole block
+  const DeviceInstance I = p.instances[inst];
+  const DeviceAssetDesc& A = p.assets[I.asset];
+  const uint32_t S = A.sphere_count, T = blockDim.x;
+  const bool write = p.flags & kFlagWriteSpheres, m1 = p.flags & kFlagM1;
+  const float m = InstanceMargin(p, A), grow = m1 ? 0.0f : m;  // depth rounding as DetectM1 / DetectM2
+  const float fold = InstanceFoldMargin(p, A);
+  float4* sph = kShared ? smem : p.spheres + I.sphere_offset;
+  uint2* meta = reinterpret_cast<uint2*>(smem + p.shared_spheres);  // kShared: (chain mask, fold region)
+
+  for (uint32_t s = threadIdx.x; s < S; s += T) {
+    const float4 v = RefitSphere(p, A, I, s);
+    sph[s] = v;
+    if (kShared) {
+      meta[s] = make_uint2(__ldg(A.chain_mask + s), FoldRegion(A, fold, s));
+      if (write) p.spheres[I.sphere_offset + s] = v;
+    }
+  }
+  __syncthreads();
+
+  auto meta_of = [&](uint32_t s) {
+    return kShared ? meta[s] : make_uint2(__ldg(A.chain_mask + s), FoldRegion(A, fold, s));
+  };
+  const uint32_t split = p.split, half = (S - 1) / 2, chunk = (S / 2 + split - 1) / split;
+  uint32_t hits = 0;
+  for (uint32_t w = threadIdx.x; w < S * split; w += T) {
+    const uint32_t a = w % S, part = w / S;
+    const uint32_t k_end = min(half + ((S % 2 == 0 && a < S / 2) ? 1u : 0u), (part + 1) * chunk);
+    uint32_t k = part * chunk + 1;
+    if (k > k_end) continue;
+    const float4 SA = sph[a];
+    const uint2 MA = meta_of(a);
+    uint32_t b = a + k;
+    if (b >= S) b -= S;
+    for (; k <= k_end; ++k, b = b + 1 == S ? 0 : b + 1) {
+      const uint2 MB = meta_of(b);
+      const uint32_t common = MA.x & MB.x;
+      if (m1 && !common) continue;
+      const float4 SB = sph[b];
+      const bool a_first = a < b;
+      const float4 P = a_first ? SA : SB;
+      const float4 Q = a_first ? SB : SA;
+      const uint32_t lo = a_first ? a : b, hi = a_first ? b : a;
+      const float mp = fold >= 0.0f && MA.y == MB.y ? fold : m;
+      if (detail::DevOverlap(P, Q, mp) && !detail::DevIsExcluded(A, lo, hi)) {
+        ++hits;
+        Emit(p, inst, lo, hi, P, Q, common, grow);
       }
+    }
+  }
+  AddInstanceCount(p, inst, hits);
+}
+
+// kBlockBoxes: a block per instance, DetectJob's broad phase (kernels.inl BlockBoxes / BlockRow).
+// Shared memory: the spheres by slot (8B float4; padding slots NaN), each slot's (chain mask, fold region),
+// the blocks' bounds (lo xyz + grown radius, hi xyz), the kept block pairs and their count.
+// 1. refit each slot's sphere; 2. per block the box of its centres and its largest radius grown by M,
+// the larger of the margin and the fold margin (NaN terms skipped); 3. per block pair with a lane of
+// the method, the gap test of BlockRow — per axis g = max(loJ − hiI, loI − hiJ, 0), kept when
+// g_x² + g_y² + g_z² < (R_I + R_J)², which never drops a pair the sphere test reports (the monotonic
+// rounding argument in kernels.inl) — kept pairs appended to shared memory; 4. the allowed lanes of the
+// kept pairs, 64 per pair dealt over the threads: the sphere test with the pair's own margin
+// (DetectJob's floats: the test and the depth are symmetric in the two spheres), reported (lower id,
+// higher id).
+// kMany: blocks of at most 256 threads under the register cap of SphereKernel's kMany; else up to 512.
+template <bool kMany>
+__global__ void __launch_bounds__(kMany ? 256 : 512, kMany ? SPHERECHAIN_CUDA_SPHERE_BLOCKS : 1) BoxKernel(KernelParams p) {
+  extern __shared__ float4 smem[];
+  const uint32_t inst = blockIdx.x;
+  if (inst >= p.instance_count) return;  // whole block
+  const DeviceInstance I = p.instances[inst];
+  const DeviceAssetDesc& A = p.assets[I.asset];
+  const uint32_t B = A.block_count, slots = 8 * B, T = blockDim.x;
+  const bool write = p.flags & kFlagWriteSpheres, m1 = p.flags & kFlagM1;
+  const float m = InstanceMargin(p, A), grow = m1 ? 0.0f : m;  // depth rounding as DetectM1 / DetectM2
+  const float fold = InstanceFoldMargin(p, A);
+  const float M = fold >= 0.0f ? fmaxf(m, fold) : m;
+  float4* sph = smem;                                                     // 8 · max_blocks
+  uint2* meta = reinterpret_cast<uint2*>(sph + 8 * p.max_blocks);         // 8 · max_blocks
+  float4* lo = reinterpret_cast<float4*>(meta + 8 * p.max_blocks);        // max_blocks: lo xyz, R
+  float4* hi = lo + p.max_blocks;                                         // max_blocks: hi xyz
+  uint4* kept = reinterpret_cast<uint4*>(hi + p.max_blocks);              // max_block_pairs
+  uint32_t* kept_count = reinterpret_cast<uint32_t*>(kept + p.max_block_pairs);
+
+  if (threadIdx.x == 0) *kept_count = 0;
+  for (uint32_t s = threadIdx.x; s < slots; s += T) {
+    const uint32_t id = A.slot_spheres[s];
+    if (id == kNoSphere) {
+      sph[s] = make_float4(__int_as_float(0x7fc00000), 0.0f, 0.0f, __int_as_float(0x7fc00000));
+      meta[s] = make_uint2(0u, 0u);
+      continue;
+    }
+    const float4 v = RefitSphere(p, A, I, id);
+    sph[s] = v;
+    meta[s] = make_uint2(__ldg(A.chain_mask + id), FoldRegion(A, fold, id));
+    if (write) p.spheres[I.sphere_offset + id] = v;
+  }
+  __syncthreads();
+
+  for (uint32_t b = threadIdx.x; b < B; b += T) {
+    float lx = INFINITY, ly = INFINITY, lz = INFINITY, hx = -INFINITY, hy = -INFINITY, hz = -INFINITY, R = 0.0f;
+    for (uint32_t l = 0; l < 8; ++l) {
+      const float4 v = sph[8 * b + l];
+      lx = fminf(lx, v.x), hx = fmaxf(hx, v.x), ly = fminf(ly, v.y), hy = fmaxf(hy, v.y);
+      lz = fminf(lz, v.z), hz = fmaxf(hz, v.z), R = fmaxf(R, fabsf(v.w + M));
+    }
+    lo[b] = make_float4(lx, ly, lz, R);
+    hi[b] = make_float4(hx, hy, hz, 0.0f);
+  }
+  __syncthreads();
+
+  const uint4* pairs = A.block_pairs[m1 ? 0 : 1];
+  for (uint32_t w = threadIdx.x, n = A.block_pair_count[m1 ? 0 : 1]; w < n; w += T) {
+    const uint4 e = __ldg(pairs + w);
+    const uint32_t bi = e.x & 0xFFFFu, bj = e.x >> 16;
+    const float4 li = lo[bi], hi_i = hi[bi], lj = lo[bj], hj = hi[bj];
+    const float gx = fmaxf(fmaxf(lj.x - hi_i.x, li.x - hj.x), 0.0f);
+    const float gy = fmaxf(fmaxf(lj.y - hi_i.y, li.y - hj.y), 0.0f);
+    const float gz = fmaxf(fmaxf(lj.z - hi_i.z, li.z - hj.z), 0.0f);
+    const float rr = li.w + lj.w;
+    if (gx * gx + gy * gy + gz * gz < rr * rr) kept[atomicAdd(kept_count, 1u)] = e;
+  }
+  __syncthreads();
+
+  uint32_t hits = 0;
+  for (uint32_t w = threadIdx.x, n = 64 * *kept_count; w < n; w += T) {
+    const uint4 e = kept[w >> 6];
+    const uint32_t lane = w & 63u;
+    if (!(((lane < 32 ? e.y : e.z) >> (lane & 31u)) & 1u)) continue;
+    const uint32_t ps = 8 * (e.x & 0xFFFFu) + (lane >> 3), qs = 8 * (e.x >> 16) + (lane & 7u);
+    const float4 P = sph[ps], Q = sph[qs];
+    const uint2 MP = meta[ps], MQ = meta[qs];
+    const float mp = fold >= 0.0f && MP.y == MQ.y ? fold : m;
+    if (detail::DevOverlap(P, Q, mp)) {
+      const uint32_t a = A.slot_spheres[ps], b = A.slot_spheres[qs];
+      ++hits;
+      Emit(p, inst, min(a, b), max(a, b), P, Q, MP.x & MQ.x, grow);
     }
   }
   AddInstanceCount(p, inst, hits);
@@ -228,7 +416,7 @@ __global__ void ChainKernel(KernelParams p) {
   const DeviceInstance I = p.instances[inst];
   const DeviceAssetDesc& A = p.assets[I.asset];
   if (chain >= A.chain_count && chain != 0) return;  // whole block
-  const bool frame_mode = p.flags & kFlagFrameMode, write = p.flags & kFlagWriteSpheres;
+  const bool write = p.flags & kFlagWriteSpheres;
   const float m = InstanceMargin(p, A), fold = InstanceFoldMargin(p, A);
   const uint32_t* mask = A.chain_mask;
   uint32_t off = 0, n = 0;
@@ -244,7 +432,7 @@ __global__ void ChainKernel(KernelParams p) {
   // output by its first chain's block; chain 0's block also refits the chainless spheres.
   for (uint32_t i = threadIdx.x; i < n; i += blockDim.x) {
     const uint32_t s = ids[i];
-    const float4 v = detail::DevRefitSphere(A, I.positions, I.stride_bytes, s, frame_mode);
+    const float4 v = RefitSphere(p, A, I, s);
     if (kShared) {
       smem[i] = v;
       if (write && uint32_t(__ffs(__ldg(mask + s)) - 1) == chain) global[s] = v;
@@ -254,7 +442,7 @@ __global__ void ChainKernel(KernelParams p) {
   }
   if (write && chain == 0)
     for (uint32_t s = threadIdx.x; s < A.sphere_count; s += blockDim.x)
-      if (!__ldg(mask + s)) global[s] = detail::DevRefitSphere(A, I.positions, I.stride_bytes, s, frame_mode);
+      if (!__ldg(mask + s)) global[s] = RefitSphere(p, A, I, s);
   __syncthreads();
 
   uint32_t hits = 0;
@@ -297,11 +485,16 @@ Batch& Batch::operator=(Batch&& o) noexcept {
     capacity_ = std::exchange(o.capacity_, 0);
     total_spheres_ = std::exchange(o.total_spheres_, 0);
     max_spheres_ = std::exchange(o.max_spheres_, 0);
+    max_blocks_ = std::exchange(o.max_blocks_, 0);
+    max_block_pairs_ = std::exchange(o.max_block_pairs_, 0);
     max_chains_ = std::exchange(o.max_chains_, 0);
     max_chain_length_ = std::exchange(o.max_chain_length_, 0);
     sm_count_ = std::exchange(o.sm_count_, 1);
     frame_position_bytes_ = std::exchange(o.frame_position_bytes_, 0);
+    frame_joint_bytes_ = std::exchange(o.frame_joint_bytes_, 0);
     every_asset_folds_ = std::exchange(o.every_asset_folds_, false);
+    all_positions_ = std::exchange(o.all_positions_, false);
+    all_joints_ = std::exchange(o.all_joints_, false);
     sphere_offsets_ = std::move(o.sphere_offsets_);
     table_ = std::exchange(o.table_, nullptr);
     asset_table_ = std::exchange(o.asset_table_, nullptr);
@@ -320,10 +513,10 @@ void Batch::Release() {
   FreeAll(ptrs, 4);
   host_assets_ = nullptr;
   asset_count_ = instance_count_ = capacity_ = total_spheres_ = 0;
-  max_spheres_ = max_chains_ = max_chain_length_ = 0;
+  max_spheres_ = max_chains_ = max_chain_length_ = max_blocks_ = max_block_pairs_ = 0;
   sm_count_ = 1;
-  frame_position_bytes_ = 0;
-  every_asset_folds_ = false;
+  frame_position_bytes_ = frame_joint_bytes_ = 0;
+  every_asset_folds_ = all_positions_ = all_joints_ = false;
   sphere_offsets_.clear();
   table_ = asset_table_ = instance_table_ = nullptr;
   pairs_ = nullptr;
@@ -337,11 +530,18 @@ Status CheckInstances(const DeviceAsset* const* assets, uint32_t asset_count, co
                       uint32_t instance_count) {
   for (uint32_t i = 0; i < instance_count; ++i) {
     const Instance& in = instances[i];
-    if (!in.positions) return Status::kErrorNullArgument;
+    if (!in.positions && !in.joint_matrices) return Status::kErrorNullArgument;
     if (in.asset >= asset_count) return Status::kErrorInvalidJob;
-    if (reinterpret_cast<uintptr_t>(in.positions) % alignof(float) != 0) return Status::kErrorAlignment;
-    if (in.stride_bytes < 3 * sizeof(float) || in.stride_bytes % sizeof(float) != 0) return Status::kErrorStride;
-    if (in.vertex_count != assets[in.asset]->vertex_count()) return Status::kErrorVertexCount;
+    if (in.positions) {
+      if (reinterpret_cast<uintptr_t>(in.positions) % alignof(float) != 0) return Status::kErrorAlignment;
+      if (in.stride_bytes < 3 * sizeof(float) || in.stride_bytes % sizeof(float) != 0) return Status::kErrorStride;
+      if (in.vertex_count != assets[in.asset]->vertex_count()) return Status::kErrorVertexCount;
+    }
+    if (in.joint_matrices) {
+      if (reinterpret_cast<uintptr_t>(in.joint_matrices) % alignof(float) != 0) return Status::kErrorAlignment;
+      if (assets[in.asset]->joint_count() == 0) return Status::kErrorMissingField;
+      if (in.joint_count != assets[in.asset]->joint_count()) return Status::kErrorJointCount;
+    }
   }
   return Status::kOk;
 }
@@ -357,8 +557,8 @@ Status Batch::Init(const DeviceAsset* const* assets, uint32_t asset_count, const
     if (!assets[k] || !assets[k]->valid()) return Status::kErrorInvalidJob;
   if (Status s = CheckInstances(assets, asset_count, instances, instance_count); s != Status::kOk) return s;
 
-  uint64_t total_spheres = 0, pairs_bound = 0, pos_bytes = 0;
-  uint32_t max_s = 0, max_c = 0, max_len = 0;
+  uint64_t total_spheres = 0, pairs_bound = 0;
+  uint32_t max_s = 0, max_c = 0, max_len = 0, max_blocks = 0, max_block_pairs = 0;
   try {
     sphere_offsets_.resize(instance_count);
   } catch (const std::bad_alloc&) {
@@ -369,10 +569,11 @@ Status Batch::Init(const DeviceAsset* const* assets, uint32_t asset_count, const
     sphere_offsets_[i] = static_cast<uint32_t>(total_spheres);
     total_spheres += d.sphere_count;
     pairs_bound += uint64_t{d.sphere_count} * (d.sphere_count - 1) / 2 - d.excluded_count;
-    pos_bytes += uint64_t{d.sphere_count} * 12 * 12;
     max_s = std::max(max_s, d.sphere_count);
     max_c = std::max(max_c, d.chain_count);
     max_len = std::max(max_len, d.max_chain_length);
+    max_blocks = std::max(max_blocks, d.block_count);
+    max_block_pairs = std::max({max_block_pairs, d.block_pair_count[0], d.block_pair_count[1]});
   }
   if (total_spheres > UINT32_MAX) {
     Release();
@@ -413,10 +614,11 @@ Status Batch::Init(const DeviceAsset* const* assets, uint32_t asset_count, const
   capacity_ = capacity;
   total_spheres_ = static_cast<uint32_t>(total_spheres);
   max_spheres_ = max_s;
+  max_blocks_ = max_blocks;
+  max_block_pairs_ = max_block_pairs;
   max_chains_ = max_c;
   max_chain_length_ = max_len;
   sm_count_ = static_cast<uint32_t>(sms);
-  frame_position_bytes_ = pos_bytes;
   every_asset_folds_ = true;
   for (uint32_t k = 0; k < asset_count; ++k) every_asset_folds_ = every_asset_folds_ && assets[k]->fold_margin() >= 0.0f;
   instance_count_ = instance_count;
@@ -425,11 +627,24 @@ Status Batch::Init(const DeviceAsset* const* assets, uint32_t asset_count, const
 }
 
 Status Batch::Upload(const Instance* instances, uint32_t instance_count) {
+  uint64_t pos_bytes = 0, joint_bytes = 0;
+  bool all_positions = true, all_joints = true;
+  for (uint32_t i = 0; i < instance_count; ++i) {
+    const Instance& in = instances[i];
+    all_positions = all_positions && in.positions;
+    all_joints = all_joints && in.joint_matrices;
+    if (in.positions) pos_bytes += uint64_t{host_assets_[in.asset]->sphere_count()} * 12 * 12;
+    if (in.joint_matrices) joint_bytes += uint64_t{in.joint_count} * 12 * sizeof(float);
+  }
+  frame_position_bytes_ = pos_bytes;
+  frame_joint_bytes_ = joint_bytes;
+  all_positions_ = all_positions;
+  all_joints_ = all_joints;
   try {
     std::vector<DeviceInstance> table(instance_count);
     for (uint32_t i = 0; i < instance_count; ++i)
-      table[i] = {static_cast<const char*>(instances[i].positions), instances[i].stride_bytes, instances[i].asset,
-                  sphere_offsets_[i], 0u};
+      table[i] = {static_cast<const char*>(instances[i].positions), instances[i].joint_matrices, instances[i].stride_bytes,
+                  instances[i].asset, sphere_offsets_[i], 0u};
     return detail::CudaStatus(
         cudaMemcpy(instance_table_, table.data(), sizeof(DeviceInstance) * instance_count, cudaMemcpyHostToDevice));
   } catch (const std::bad_alloc&) {
@@ -451,20 +666,25 @@ Status Batch::SetInstances(const Instance* instances, uint32_t instance_count) {
 
 Status Batch::Run(const FrameParams& params, cudaStream_t stream) const {
   if (!initialized()) return Status::kErrorInvalidJob;
-  if (params.mode != runtime::RefitMode::kPaper && params.mode != runtime::RefitMode::kPivotFrame)
+  const bool joints = params.source == runtime::RefitSource::kJoints;
+  if (!joints && params.source != runtime::RefitSource::kVertices) return Status::kErrorInvalidJob;
+  if (!joints && params.mode != runtime::RefitMode::kPaper && params.mode != runtime::RefitMode::kPivotFrame)
     return Status::kErrorInvalidJob;
   const bool m1 = params.method == runtime::DetectMethod::kM1;
   if (!m1 && params.method != runtime::DetectMethod::kM2) return Status::kErrorInvalidJob;
   if (!std::isfinite(params.margin) || !std::isfinite(params.fold_margin)) return Status::kErrorInvalidJob;  // as DetectJob::Check
   // A fold margin of the frame's own needs regions: every asset of the batch must have one (checked at Init).
   if (params.fold_margin >= 0.0f && !every_asset_folds_) return Status::kErrorInvalidJob;
+  if (!(joints ? all_joints_ : all_positions_)) return Status::kErrorNullArgument;  // the source's input, per instance
   Strategy strategy = params.strategy;
   const bool few = instance_count_ < 4 * sm_count_;
-  if (strategy == Strategy::kAuto)
-    strategy = few ? (m1 ? Strategy::kBlockPerChain : Strategy::kThreadPerSphere) : Strategy::kWarpPerInstance;
+  const size_t box_shm = (sizeof(float4) + sizeof(uint2)) * 8 * size_t{max_blocks_} + 2 * sizeof(float4) * max_blocks_ +
+                         sizeof(uint4) * max_block_pairs_ + sizeof(uint32_t);
+  if (strategy == Strategy::kAuto || (strategy == Strategy::kBlockBoxes && box_shm > kSharedLimit))
+    strategy = box_shm <= kSharedLimit ? Strategy::kBlockBoxes : Strategy::kThreadPerSphere;
   if (strategy == Strategy::kBlockPerChain && !m1) return Status::kErrorInvalidJob;
   if (strategy != Strategy::kThreadPerSphere && strategy != Strategy::kBlockPerChain &&
-      strategy != Strategy::kWarpPerInstance)
+      strategy != Strategy::kWarpPerInstance && strategy != Strategy::kBlockBoxes)
     return Status::kErrorInvalidJob;
 
   KernelParams p;
@@ -477,10 +697,13 @@ Status Batch::Run(const FrameParams& params, cudaStream_t stream) const {
   p.capacity = capacity_;
   p.shared_spheres = max_spheres_;
   p.chains_per_instance = std::max(max_chains_, 1u);
+  p.split = 1;
+  p.max_blocks = max_blocks_;
+  p.max_block_pairs = max_block_pairs_;
   p.margin = params.margin;
   p.fold_margin = params.fold_margin;
   p.flags = (params.mode == runtime::RefitMode::kPivotFrame ? kFlagFrameMode : 0u) |
-            (params.write_spheres ? kFlagWriteSpheres : 0u) | (m1 ? kFlagM1 : 0u);
+            (params.write_spheres ? kFlagWriteSpheres : 0u) | (m1 ? kFlagM1 : 0u) | (joints ? kFlagJoints : 0u);
 
   if (Status s = detail::CudaStatus(cudaMemsetAsync(counters_, 0, sizeof(uint32_t) * (2 + size_t{instance_count_}), stream));
       s != Status::kOk)
@@ -488,21 +711,37 @@ Status Batch::Run(const FrameParams& params, cudaStream_t stream) const {
 
   switch (strategy) {
     case Strategy::kThreadPerSphere: {
-      const uint32_t threads = std::clamp(RoundUp32(max_spheres_), 32u, 256u);
-      const size_t shm = sizeof(float4) * max_spheres_;
-      if (shm <= kSharedLimit)
-        GroupKernel<false, true><<<instance_count_, threads, shm, stream>>>(p);
+      // Few instances: up to 1024 threads per instance (split threads per sphere) to shorten the frame.
+      const uint32_t per_sphere = RoundUp32(max_spheres_);
+      p.split = few ? std::clamp(1024u / std::max(per_sphere, 1u), 1u, 8u) : 1u;
+      const uint32_t threads = std::clamp(per_sphere * p.split, 32u, p.split > 1 ? 1024u : 256u);
+      const size_t shm = (sizeof(float4) + sizeof(uint2)) * max_spheres_;
+      const bool many = p.split == 1;
+      if (shm <= kSharedLimit && many)
+        SphereKernel<true, true><<<instance_count_, threads, shm, stream>>>(p);
+      else if (shm <= kSharedLimit)
+        SphereKernel<true, false><<<instance_count_, threads, shm, stream>>>(p);
+      else if (many)
+        SphereKernel<false, true><<<instance_count_, threads, 0, stream>>>(p);
       else
-        GroupKernel<false, false><<<instance_count_, threads, 0, stream>>>(p);
+        SphereKernel<false, false><<<instance_count_, threads, 0, stream>>>(p);
+      break;
+    }
+    case Strategy::kBlockBoxes: {
+      const uint32_t threads = few ? 512u : std::clamp(RoundUp32(8 * max_blocks_), 32u, 256u);
+      if (few)
+        BoxKernel<false><<<instance_count_, threads, box_shm, stream>>>(p);
+      else
+        BoxKernel<true><<<instance_count_, threads, box_shm, stream>>>(p);
       break;
     }
     case Strategy::kWarpPerInstance: {
       const uint32_t blocks = (instance_count_ + kWarpsPerBlock - 1) / kWarpsPerBlock;
       const size_t shm = sizeof(float4) * max_spheres_ * kWarpsPerBlock;
       if (shm <= kSharedLimit)
-        GroupKernel<true, true><<<blocks, 32 * kWarpsPerBlock, shm, stream>>>(p);
+        GroupKernel<true><<<blocks, 32 * kWarpsPerBlock, shm, stream>>>(p);
       else
-        GroupKernel<true, false><<<blocks, 32 * kWarpsPerBlock, 0, stream>>>(p);
+        GroupKernel<false><<<blocks, 32 * kWarpsPerBlock, 0, stream>>>(p);
       break;
     }
     case Strategy::kBlockPerChain: {

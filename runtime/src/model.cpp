@@ -122,7 +122,7 @@ struct ModelSections {
     size = AlignUp(k.size);
     a = ModelArrays{bind[0], bind[1], bind[2], bind[3], pivot_vertices, local[0], local[1], local[2],
                     offset[0], offset[1], offset[2], radius_scale, chain_mask, chain_offsets, chain_spheres,
-                    excl_offsets, excl_neighbors, joints, weights, E, 0};
+                    excl_offsets, excl_neighbors, joints, weights, E, 0, nullptr, {nullptr, nullptr}, 0};
   }
 };
 
@@ -435,6 +435,9 @@ Status Model::Build(const AssetView& view, unsigned char* memory, size_t bytes, 
   key_slots_ = static_cast<uint32_t>(key_slots);
   order_ = order;
   for (int m = 0; m < 2; ++m) allowed_[m] = k.allowed[m], live_[m] = k.live[m], key_begin_[m] = k.key_begin[m];
+  a_.broad_order = order;
+  a_.broad_allowed[0] = k.allowed[0], a_.broad_allowed[1] = k.allowed[1];
+  a_.broad_blocks = B;
   joint_sphere_ = k.joint_sphere, joint_offsets_ = k.joint_offsets, joint_weights_ = k.joint_weights;
   joint_bind_ = k.joint_bind;
   std::copy(joint_group_end, joint_group_end + 4, joint_group_end_);

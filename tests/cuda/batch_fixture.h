@@ -38,6 +38,7 @@ struct AssetSet {
   runtime::Model model;   // the CPU model the device copy is uploaded from
   runtime::Workspace ws;  // a CPU character of it (the reference runs)
   sc::DeviceAsset device;
+  std::vector<std::vector<float>> joint_frames;  // recorded clips: per frame #J×12 (frame_NNNN.joints), or none
 };
 
 /// Loads `set->bytes` into the view, the CPU model and workspace, and the device copy (from the model).
@@ -48,6 +49,7 @@ inline void LoadBytes(AssetSet* s) {
   REQUIRE(s->device.Upload(s->model) == sc::Status::kOk);
   CHECK(s->device.contact_margin() == s->model.contact_margin());
   CHECK(s->device.fold_margin() == s->model.fold_margin());
+  CHECK(s->device.joint_count() == s->model.joint_count());
 }
 
 inline void LoadSet(AssetSet* s, AssetData d) {
@@ -64,8 +66,10 @@ inline void LoadFile(AssetSet* s, const std::string& path) {
 /// A "star" of tubes crossing near the origin (many crossing pairs), chains mixing tubes; its
 /// Asset.contact_margin is `contact_margin` (0: the field absent, as asset_builder.h writes it).
 /// With `fold_margin` >= 0 it also has Asset.fold_margin and Asset.sphere_regions: tube i is region i % 3.
+/// With `joints` > 0 it has joint weights (schema v3) over that many joints: sphere k follows 1 + k % 4
+/// influences (fewer when `joints` < 4), distinct joints, random weights descending and summing to 1.
 inline void MakeStar(AssetSet* s, uint32_t tubes, uint32_t rings, float contact_margin = 0.0f,
-                     float fold_margin = -1.0f) {
+                     float fold_margin = -1.0f, uint32_t joints = 0) {
   std::vector<Tube> ts;
   for (uint32_t i = 0; i < tubes; ++i) {
     Tube t;
@@ -94,6 +98,25 @@ inline void MakeStar(AssetSet* s, uint32_t tubes, uint32_t rings, float contact_
       for (uint32_t k = d.tube_first_sphere[t], e = t + 1 < tubes ? d.tube_first_sphere[t + 1] : S; k < e; ++k)
         d.sphere_regions[k] = static_cast<uint8_t>(t % 3);
   }
+  if (joints > 0) {
+    std::mt19937 rng(1234u + joints);
+    std::uniform_real_distribution<float> u(0.05f, 1.0f);
+    const uint32_t S = static_cast<uint32_t>(d.spheres.size());
+    d.joint_count = joints;
+    d.sphere_joints.assign(size_t{4} * S, 0);
+    d.sphere_joint_weights.assign(size_t{4} * S, 0.0f);
+    for (uint32_t k = 0; k < S; ++k) {
+      const uint32_t n = std::min(1 + k % 4, joints);
+      float w[4] = {};
+      float sum = 0.0f;
+      for (uint32_t i = 0; i < n; ++i) sum += w[i] = u(rng);
+      std::sort(w, w + n, std::greater<float>());
+      for (uint32_t i = 0; i < n; ++i) {  // n <= joints: distinct joints
+        d.sphere_joints[4 * k + i] = static_cast<uint16_t>((k + i) % joints);
+        d.sphere_joint_weights[4 * k + i] = w[i] / sum;
+      }
+    }
+  }
   s->bytes = Serialize(d);
   LoadBytes(s);
 }
@@ -105,8 +128,26 @@ struct DeviceInstances {
   std::vector<uint32_t> strides;
   void* buffer = nullptr;
   std::vector<size_t> offsets;
+  std::vector<std::vector<float>> joints;  // per instance #J×12 (RefitSource::kJoints input), or none
+  float* joint_buffer = nullptr;
   ~DeviceInstances() {
     if (buffer) (void)cudaFree(buffer);
+    if (joint_buffer) (void)cudaFree(joint_buffer);
+  }
+  // Copies `joints` (one #J×12 set per instance, #J of the instance's asset) to the device and points the
+  // table's joint_matrices / joint_count at them (allocated on the first call; later calls reuse it).
+  void UploadJoints() {
+    REQUIRE(joints.size() == table.size());
+    size_t total = 0;
+    for (const auto& j : joints) total += j.size();
+    if (!joint_buffer) CUDA_REQUIRE(cudaMalloc(reinterpret_cast<void**>(&joint_buffer), std::max<size_t>(total, 1) * 4));
+    size_t off = 0;
+    for (size_t i = 0; i < joints.size(); ++i) {
+      CUDA_REQUIRE(cudaMemcpy(joint_buffer + off, joints[i].data(), joints[i].size() * 4, cudaMemcpyHostToDevice));
+      table[i].joint_matrices = joint_buffer + off;
+      table[i].joint_count = static_cast<uint32_t>(joints[i].size() / 12);
+      off += joints[i].size();
+    }
   }
   void Build(const std::vector<AssetSet*>& assets, uint32_t n, uint32_t seed, bool rest = false) {
     std::mt19937 rng(seed);
@@ -150,11 +191,11 @@ inline float FrameFoldMargin(const AssetSet& a, const sc::FrameParams& fp) {
   return a.model.fold_margin() < 0.0f ? -1.0f : fp.fold_margin < 0.0f ? a.model.fold_margin() : fp.fold_margin;
 }
 
-/// Checks the GPU frame against the CPU runtime (DetectJob with fp.margin and fp.fold_margin) for every
-/// instance. Pairs must be the same set with the same chains mask and depth (1e-4 rel); a pair may differ
-/// only when it is borderline on the CPU spheres (|d² − (ra+rb+2m)²| ≤ 1e-5 (ra+rb+2m)², m the pair's
-/// margin: the instance's, or its fold margin for two spheres of one region).
-/// Spheres (when written) equal within 1e-5 relative.
+/// Checks the GPU frame against the CPU runtime (RefitJob, or JointRefitJob for fp.source == kJoints, then
+/// DetectJob with fp.margin and fp.fold_margin) for every instance, bit for bit: the spheres (when
+/// written) equal as floats, the pairs the same set with the same chains mask and the same depth. A pair
+/// that differs is reported as borderline when it is within rounding of the test on the CPU spheres
+/// (|d² − (ra+rb+2m)²| ≤ 1e-5 (ra+rb+2m)², m the pair's margin) — still a failure, but the message says so.
 inline void CompareWithCpu(const std::vector<AssetSet*>& assets, const DeviceInstances& inst, const sc::HostResults& gpu,
                            const sc::Batch& batch, const sc::FrameParams& fp) {
   std::vector<std::map<std::pair<int, int>, runtime::Collision>> by_inst(inst.host.size());
@@ -166,14 +207,18 @@ inline void CompareWithCpu(const std::vector<AssetSet*>& assets, const DeviceIns
   for (size_t i = 0; i < inst.host.size(); ++i) {
     AssetSet& a = *assets[inst.table[i].asset];
     const float m = FrameMargin(a, fp), fold = FrameFoldMargin(a, fp);
+    const bool from_joints = fp.source == runtime::RefitSource::kJoints;
+    REQUIRE((!from_joints || i < inst.joints.size()));
     const CpuFrame cpu = CpuReference(a.model, a.ws, a.view, inst.host[i].data(), 12, fp.mode, fp.method, fp.margin,
-                                      a.model.fold_margin() < 0.0f ? -1.0f : fp.fold_margin);
+                                      a.model.fold_margin() < 0.0f ? -1.0f : fp.fold_margin,
+                                      from_joints ? inst.joints[i].data() : nullptr);
+    REQUIRE(cpu.x.size() == a.view.sphere_count);
     cpu_total += cpu.pairs.size();
     if (fp.write_spheres) {
       const uint32_t off = batch.sphere_offset(static_cast<uint32_t>(i));
       for (uint32_t s = 0; s < a.view.sphere_count; ++s) {
         const float4 g = gpu.spheres[off + s];
-        const bool ok = NearRel(g.x, cpu.x[s]) && NearRel(g.y, cpu.y[s]) && NearRel(g.z, cpu.z[s]) && NearRel(g.w, cpu.r[s]);
+        const bool ok = g.x == cpu.x[s] && g.y == cpu.y[s] && g.z == cpu.z[s] && g.w == cpu.r[s];
         if (!ok) {
           FAIL_CHECK("instance " << i << " sphere " << s << ": gpu (" << g.x << ", " << g.y << ", " << g.z << ", " << g.w
                                  << ") cpu (" << cpu.x[s] << ", " << cpu.y[s] << ", " << cpu.z[s] << ", " << cpu.r[s] << ")");
@@ -198,7 +243,7 @@ inline void CompareWithCpu(const std::vector<AssetSet*>& assets, const DeviceIns
         continue;
       }
       CHECK(it->second.chains == c.chains);
-      CHECK(NearRel(it->second.depth, c.depth, 1e-4f));
+      CHECK(it->second.depth == c.depth);
     }
     for (const auto& [key, c] : by_inst[i])
       if (!cpu_set.count(key)) {
@@ -208,6 +253,7 @@ inline void CompareWithCpu(const std::vector<AssetSet*>& assets, const DeviceIns
   }
   CHECK(gpu.total == gpu.pairs.size());
   CHECK_FALSE(gpu.overflow);
+  CHECK_MESSAGE(borderline == 0, borderline << " pairs differ from the CPU's (within rounding of the test)");
   MESSAGE("compared " << inst.host.size() << " instances, " << cpu_total << " CPU pairs, " << borderline
                       << " borderline differences (margin " << fp.margin << ", fold margin " << fp.fold_margin << ")");
 }
@@ -223,7 +269,8 @@ inline float MeanBindRadius(const AssetSet& a) {
 inline std::vector<std::pair<runtime::DetectMethod, sc::Strategy>> MethodStrategies() {
   std::vector<std::pair<runtime::DetectMethod, sc::Strategy>> out;
   for (runtime::DetectMethod method : {runtime::DetectMethod::kM1, runtime::DetectMethod::kM2})
-    for (sc::Strategy strategy : {sc::Strategy::kThreadPerSphere, sc::Strategy::kBlockPerChain, sc::Strategy::kWarpPerInstance})
+    for (sc::Strategy strategy : {sc::Strategy::kThreadPerSphere, sc::Strategy::kBlockPerChain, sc::Strategy::kWarpPerInstance,
+                                  sc::Strategy::kBlockBoxes})
       if (strategy != sc::Strategy::kBlockPerChain || method == runtime::DetectMethod::kM1) out.push_back({method, strategy});
   return out;
 }
@@ -241,9 +288,10 @@ inline sc::HostResults RunCompared(const std::vector<AssetSet*>& assets, const D
   return res;
 }
 
-/// Recorded animation frames (`spherechain play ... --dump-frames DIR`: frame_NNNN.f32, #V×3 float32)
+/// Recorded animation frames (`spherechain play ... --dump-frames DIR`: frame_NNNN.f32, #V×3 float32, and
+/// for a rigged asset frame_NNNN.joints, #J×12 float32, loaded into set.joint_frames)
 /// named by SPHERECHAIN_GPU_FRAMES="a.sphc=framesdir;b.sphc=framesdir2" (scripts/gpu-carry.sh prepares
-/// the MakeHuman morph and the CesiumMan walk): calls `fn(set, frames)` per readable item, the asset
+/// the MakeHuman morph, the CesiumMan walk and the BCN_Epileptic clip): calls `fn(set, frames)` per readable item, the asset
 /// loaded and set.mesh.positions = frames[0]. Returns the number of items; 0 after a visible SKIPPED
 /// message when the variable is unset.
 inline size_t ForEachRecordedClip(const std::function<void(AssetSet&, const std::vector<std::vector<float>>&)>& fn) {
@@ -279,6 +327,19 @@ inline size_t ForEachRecordedClip(const std::function<void(AssetSet&, const std:
       frames.push_back(std::move(p));
     }
     set.mesh.positions = frames[0];
+    const uint32_t J = set.model.joint_count();
+    bool all_joints = J > 0;
+    for (const std::string& f : files)
+      all_joints = all_joints && std::filesystem::exists(std::filesystem::path(f).replace_extension(".joints"));
+    for (const std::string& f : files) {
+      if (!all_joints) break;
+      const std::string jf = std::filesystem::path(f).replace_extension(".joints").string();
+      std::ifstream in(jf, std::ios::binary);
+      std::vector<float> m(size_t{J} * 12);
+      in.read(reinterpret_cast<char*>(m.data()), std::streamsize(m.size() * sizeof(float)));
+      REQUIRE_MESSAGE(in.gcount() == std::streamsize(m.size() * sizeof(float)), jf << " is not #J×12 float32");
+      set.joint_frames.push_back(std::move(m));
+    }
     fn(set, frames);
     MESSAGE(asset_path << ": " << frames.size() << " recorded frames, CPU == GPU");
     ++clips;

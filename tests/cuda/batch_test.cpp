@@ -27,7 +27,7 @@ TEST_CASE("cuda: CPU == GPU on synthetic assets and randomised instances (all st
   for (RefitMode mode : {RefitMode::kPaper, RefitMode::kPivotFrame})
     for (DetectMethod method : {DetectMethod::kM1, DetectMethod::kM2})
       for (sc::Strategy strategy : {sc::Strategy::kAuto, sc::Strategy::kThreadPerSphere, sc::Strategy::kBlockPerChain,
-                                    sc::Strategy::kWarpPerInstance}) {
+                                    sc::Strategy::kWarpPerInstance, sc::Strategy::kBlockBoxes}) {
         CAPTURE(int(mode));
         CAPTURE(int(method));
         CAPTURE(int(strategy));
@@ -153,6 +153,8 @@ TEST_CASE("cuda: invalid instances give the documented status") {
         sc::Status::kErrorInvalidJob);
   CHECK(batch.Run({RefitMode::kPaper, static_cast<DetectMethod>(9), sc::Strategy::kAuto, false}, 0) ==
         sc::Status::kErrorInvalidJob);
+  CHECK(batch.Run({RefitMode::kPaper, DetectMethod::kM1, static_cast<sc::Strategy>(5), false}, 0) ==
+        sc::Status::kErrorInvalidJob);
   CHECK(std::string(sc::ToString(sc::Status::kErrorVertexCount)).find("kErrorVertexCount") == 0);
   CHECK(std::string(sc::ToString(sc::Status::kErrorCuda)).find("kErrorCuda") == 0);
 }
@@ -210,9 +212,9 @@ TEST_CASE("cuda: MakeHuman asset, CPU == GPU over randomised instances") {
 }
 
 // Recorded animation frames (`spherechain play ... --dump-frames DIR`), each frame one instance of one
-// batch: the MakeHuman morph and the CesiumMan walk, CPU == GPU (SPHERECHAIN_GPU_FRAMES, see
+// batch: the MakeHuman morph, the CesiumMan walk and the BCN_Epileptic clip, CPU == GPU (SPHERECHAIN_GPU_FRAMES, see
 // ForEachRecordedClip).
-TEST_CASE("cuda: recorded animation frames (MakeHuman morph, CesiumMan walk), CPU == GPU") {
+TEST_CASE("cuda: recorded animation frames (MakeHuman morph, CesiumMan walk, BCN_Epileptic clip), CPU == GPU") {
   if (!RequireDevice()) return;
   ForEachRecordedClip([](AssetSet& set, const std::vector<std::vector<float>>& frames) {
     DeviceInstances inst;

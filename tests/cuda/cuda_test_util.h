@@ -80,8 +80,40 @@ inline std::vector<float> RandomMotion(const std::vector<float>& rest, std::mt19
   return out;
 }
 
+/// \#J skinning matrices (3×4 row-major, JointRefitJob's layout): one random rigid motion of the whole
+/// body (uniform rotation, translation in [-t, t]^3) composed with a small random rotation per joint
+/// (each quaternion component perturbed by up to `wobble`) about the origin, so spheres of different
+/// joints move apart or into each other.
+inline std::vector<float> RandomJointMatrices(uint32_t joint_count, std::mt19937& rng, float t, float wobble) {
+  std::normal_distribution<float> n01(0.0f, 1.0f);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  auto rotation = [](float w, float x, float y, float z, float* R) {
+    const float l = std::sqrt(w * w + x * x + y * y + z * z);
+    w /= l, x /= l, y /= l, z /= l;
+    const float r[9] = {1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w),
+                        2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w),
+                        2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)};
+    std::copy(r, r + 9, R);
+  };
+  float G[9];
+  rotation(n01(rng), n01(rng), n01(rng), n01(rng), G);
+  const float tr[3] = {t * u(rng), t * u(rng), t * u(rng)};
+  std::vector<float> out(size_t{joint_count} * 12);
+  for (uint32_t j = 0; j < joint_count; ++j) {
+    float L[9];
+    rotation(1.0f, wobble * u(rng), wobble * u(rng), wobble * u(rng), L);
+    float* m = out.data() + size_t{j} * 12;
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) m[4 * r + c] = G[3 * r] * L[c] + G[3 * r + 1] * L[3 + c] + G[3 * r + 2] * L[6 + c];
+      m[4 * r + 3] = tr[r];
+    }
+  }
+  return out;
+}
+
 /// CPU reference for one instance: refit + detect with the runtime (all pairs, never truncated),
-/// detect with DetectJob::margin = `margin` (< 0: the asset's).
+/// detect with DetectJob::margin = `margin` (< 0: the asset's). With `joint_matrices` (\#J × 12 floats) the
+/// refit is JointRefitJob's from them instead of RefitJob's from `positions`.
 struct CpuFrame {
   std::vector<runtime::Collision> pairs;
   std::vector<float> x, y, z, r;
@@ -89,14 +121,19 @@ struct CpuFrame {
 
 inline CpuFrame CpuReference(const runtime::Model& model, runtime::Workspace& ws, const runtime::AssetView& view, const float* positions,
                              uint32_t stride_bytes, runtime::RefitMode mode, runtime::DetectMethod method,
-                             float margin = -1.0f, float fold_margin = -1.0f) {
+                             float margin = -1.0f, float fold_margin = -1.0f, const float* joint_matrices = nullptr) {
   CpuFrame f;
   runtime::RefitJob refit;
   refit.model = &model;
   refit.workspace = &ws;
   refit.mode = mode;
   refit.positions = {positions, view.vertex_count, stride_bytes};
-  if (refit.Run() != runtime::Status::kOk) return f;
+  runtime::JointRefitJob joint_refit;
+  joint_refit.model = &model;
+  joint_refit.workspace = &ws;
+  joint_refit.joint_matrices = joint_matrices;
+  joint_refit.joint_count = model.joint_count();
+  if ((joint_matrices ? joint_refit.Run() : refit.Run()) != runtime::Status::kOk) return f;
   const runtime::SphereArrays s = ws.spheres();
   f.x.assign(s.x, s.x + s.count);
   f.y.assign(s.y, s.y + s.count);

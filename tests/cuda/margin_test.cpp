@@ -217,7 +217,8 @@ TEST_CASE("cuda: FrameParams::margin NaN or infinite gives kErrorInvalidJob and 
   REQUIRE(before.total > 0);
   for (float bad : {std::nanf(""), std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity()})
     for (DetectMethod method : {DetectMethod::kM1, DetectMethod::kM2})
-      for (sc::Strategy strategy : {sc::Strategy::kAuto, sc::Strategy::kThreadPerSphere, sc::Strategy::kWarpPerInstance}) {
+      for (sc::Strategy strategy : {sc::Strategy::kAuto, sc::Strategy::kThreadPerSphere, sc::Strategy::kWarpPerInstance,
+                                    sc::Strategy::kBlockBoxes}) {
         CAPTURE(bad);
         sc::FrameParams b{RefitMode::kPivotFrame, method, strategy, false};
         b.margin = bad;

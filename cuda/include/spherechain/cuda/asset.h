@@ -26,11 +26,27 @@ struct DeviceAssetDesc {
   const uint16_t* excl_neighbors = nullptr;  ///< \#excluded: partners b > a, ascending per a
   const uint8_t* sphere_regions = nullptr;   ///< \#S: each sphere's region (Asset.sphere_regions), only when the
                                              ///< asset has a fold margin (fold_margin >= 0); else null
+  const uint4* joint_offsets = nullptr;      ///< \#S, only when the asset has joint weights (joint_count > 0):
+                                             ///< per influence k the offset [floats] of its skinning matrix,
+                                             ///< joint × 12 (Asset.sphere_joints; unused influences 0)
+  const float4* joint_weights = nullptr;     ///< \#S, with joint_offsets: the influences' weights, descending
+                                             ///< (Asset.sphere_joint_weights); the first 0 after influence 0
+                                             ///< ends the blend (as JointRefitJob)
+  const uint16_t* slot_spheres = nullptr;    ///< 8B: DetectJob's broad-phase layout, the sphere in each slot
+                                             ///< (ModelArrays::broad_order; padding 0xFFFF)
+  const uint4* block_pairs[2] = {};          ///< [M1, M2] block_pair_count[m]: the block pairs (I <= J) with a
+                                             ///< lane the method tests, (I | J << 16, lanes low 32 bits, lanes
+                                             ///< high 32 bits, 0) (ModelArrays::broad_allowed)
   uint32_t sphere_count = 0;                 ///< \#S (1..65535)
   uint32_t vertex_count = 0;                 ///< \#V the positions must have
   uint32_t chain_count = 0;                  ///< \#C (0..32)
   uint32_t max_chain_length = 0;             ///< longest chain (spheres)
   uint32_t excluded_count = 0;               ///< \#excluded (len(Asset.excluded_pairs))
+  uint32_t block_count = 0;                  ///< B (ModelArrays::broad_blocks)
+  uint32_t block_pair_count[2] = {};         ///< [M1, M2] entries of block_pairs
+  uint32_t joint_count = 0;                  ///< \#J skinning matrices an instance's joint refit reads
+                                             ///< (Asset.joint_count, runtime::Model::joint_count()); 0: the
+                                             ///< asset holds no joint weights (no RefitSource::kJoints)
   float contact_margin = 0.0f;               ///< the asset's contact margin [Units: source units]
                                              ///< (Asset.contact_margin, schema v2; 0 for v1 assets), as
                                              ///< runtime::Model::contact_margin(): the margin
@@ -57,7 +73,9 @@ class DeviceAsset {
 
   /// Copies `model`'s refit/detect arrays (ModelArrays: pivot vertices, pivot-frame coordinates, radius
   /// scales, bind spheres, chains, excluded pairs; with a fold margin also the spheres' regions,
-  /// Model::fold_region) to the current device (one cudaMalloc, one synchronous cudaMemcpy) and keeps the
+  /// Model::fold_region; with joint weights (schema v3 rigged bakes) the spheres' joints and weights for
+  /// the joint refit; the broad phase's blocks of 8 spheres and the block pairs each method tests) to
+  /// the current device (one cudaMalloc, one synchronous cudaMemcpy) and keeps the
   /// asset's contact margin (Model::contact_margin()) and fold margin (Model::fold_margin()). Neither the
   /// model nor the asset bytes are needed afterwards.
   /// Returns kOk; kErrorNullArgument (model not initialised); kErrorOutOfMemory (host/device allocation);
@@ -75,6 +93,7 @@ class DeviceAsset {
   uint32_t sphere_count() const { return desc_.sphere_count; }  ///< \#S
   uint32_t vertex_count() const { return desc_.vertex_count; }  ///< \#V
   uint32_t chain_count() const { return desc_.chain_count; }    ///< \#C
+  uint32_t joint_count() const { return desc_.joint_count; }    ///< \#J (0: no joint refit)
   /// The asset's contact margin (DeviceAssetDesc::contact_margin) [Units: source units]; 0 when empty.
   float contact_margin() const { return desc_.contact_margin; }
   /// The asset's fold margin (DeviceAssetDesc::fold_margin) [Units: source units]; < 0: none (also when empty).

@@ -6,6 +6,7 @@
 
 #include "spherechain/cuda/asset.h"
 #include "spherechain/cuda/status.h"
+#include "spherechain/runtime/batch.h"
 #include "spherechain/runtime/detect.h"
 #include "spherechain/runtime/refit.h"
 
@@ -15,8 +16,8 @@ namespace spherechain::cuda {
 /// All strategies report the same pair set for a given DetectMethod and margin (the CPU DetectJob's
 /// set with the same DetectJob::margin).
 enum class Strategy : uint8_t {
-  /// kBlockPerChain for M1 when there are few instances (< 4 per SM), else kWarpPerInstance.
-  /// M2: kThreadPerSphere for few instances, else kWarpPerInstance.
+  /// kBlockBoxes (the fastest at every batch size measured on an H200 with MakeHuman:
+  /// docs/performance.md, "GPU").
   kAuto = 0,
   /// A block per instance, a thread per sphere: thread a refits sphere a into shared memory, then
   /// tests it against every higher-index sphere b > a (M1: only b sharing a chain with a). The paper's
@@ -30,20 +31,38 @@ enum class Strategy : uint8_t {
   /// Batched: a warp per instance, 4 instances per 128-thread block; lanes refit spheres, then for
   /// each sphere a the lanes test b > a in parallel. Fills the GPU with many small characters.
   kWarpPerInstance = 3,
+  /// A block per instance with the CPU DetectJob's broad phase: the block refits the spheres into shared
+  /// memory in the model's blocks of 8 (grouped by body region, kd-split at bind pose), bounds each block
+  /// (box of centres, largest radius grown by the margin), keeps the block pairs whose gap is below the
+  /// radii (DetectJob's conservative test: it never drops a pair the sphere test reports), and tests only
+  /// their allowed lanes (not excluded; M1: sharing a chain) — far fewer sphere tests than all S(S−1)/2.
+  /// Few instances: up to 512 threads per instance. Needs the blocks in 48 KiB of shared memory (else
+  /// kThreadPerSphere runs instead).
+  kBlockBoxes = 4,
 };
 
 /// One character instance of a batch (host struct, copied to the device by Batch::Init /
-/// SetInstances).
+/// SetInstances). It carries the input of either refit source (FrameParams::source), or both.
 struct Instance {
   /// DEVICE pointer to the deformed positions, vertex i = 3 floats (x, y, z) at
   /// `(const char*)positions + i * stride_bytes` — runtime::PositionsView on the device. Same space
-  /// and units as the asset's bind pose (or a rigid motion of it). [Limit: 4-byte aligned, non-null]
-  /// Read by every Batch::Run; must stay valid (and be written by the caller's skinning before Run
-  /// on the same stream, or synchronised) for as long as the batch runs.
+  /// and units as the asset's bind pose (or a rigid motion of it). [Limit: 4-byte aligned; may be null
+  /// when `joint_matrices` is set, and then Run with RefitSource::kVertices gives kErrorNullArgument]
+  /// Read by every Batch::Run from vertices; must stay valid (and be written by the caller's skinning
+  /// before Run on the same stream, or synchronised) for as long as the batch runs.
   const void* positions = nullptr;
-  uint32_t vertex_count = 0;   ///< \#V [Limit: == the asset's vertex_count, else kErrorVertexCount]
-  uint32_t stride_bytes = 12;  ///< [Limit: >= 12, multiple of 4, else kErrorStride]
+  uint32_t vertex_count = 0;   ///< \#V [Limit: == the asset's vertex_count when `positions` is set, else
+                               ///< kErrorVertexCount]
+  uint32_t stride_bytes = 12;  ///< [Limit: >= 12, multiple of 4 when `positions` is set, else kErrorStride]
   uint32_t asset = 0;          ///< slot in the `assets` array passed to Batch::Init [Limit: < asset_count]
+  /// [opt] DEVICE pointer to \#J skinning matrices, 12 floats each, packed: the layout JointRefitJob reads
+  /// (runtime::kJointMatrixFloats, 3×4 row-major; runtime::JointMatrixFromColumnMajor converts glTF's),
+  /// in the skin's joint order. Read by every Batch::Run from joints, with the same lifetime rules as
+  /// `positions`. [Limit: 4-byte aligned (kErrorAlignment); the asset must hold joint weights
+  /// (DeviceAsset::joint_count() > 0, else kErrorMissingField)]
+  const float* joint_matrices = nullptr;
+  uint32_t joint_count = 0;    ///< \#J [Limit: == DeviceAsset::joint_count() when `joint_matrices` is set,
+                               ///< else kErrorJointCount]
 };
 
 /// One colliding pair of one instance: runtime::Collision (same fields, same values as the CPU
@@ -76,6 +95,13 @@ struct FrameParams {
   /// then every asset of the batch must have one (else kErrorInvalidJob, as DetectJob); NaN or ±inf:
   /// kErrorInvalidJob. [Limit: finite]
   float fold_margin = -1.0f;
+  /// What the spheres are refitted from, as runtime::BatchJob::source: kVertices — each instance's
+  /// `positions` (RefitJob with `mode`, paper §5.1); kJoints — each instance's `joint_matrices`
+  /// (JointRefitJob: every centre skinned like a vertex by the sphere's four joint weights, radius = bind
+  /// radius; `mode` is not read). Both give the CPU job's spheres bit for bit. Unlike JointRefitJob, which
+  /// refuses non-finite matrices (kErrorNonFiniteJoints) before writing, a batch does not scan the
+  /// matrices: a NaN or infinite one gives non-finite spheres, which never overlap.
+  runtime::RefitSource source = runtime::RefitSource::kVertices;
 };
 
 /// Host copy of one frame's results (Batch::Download). Allocates; for tests and tools, not the
@@ -117,9 +143,10 @@ class Batch {
   /// @param capacity        BatchCollision records in pairs(); 0 = Σ over instances of the exact
   ///                        non-excluded pair count of its asset (never truncates, M1 or M2; clamped
   ///                        to 2^31). Memory: 16 B per record.
-  /// Returns kOk; kErrorNullArgument; kErrorInvalidJob (asset slot out of range, asset not uploaded,
-  /// counts out of limits); kErrorAlignment / kErrorStride / kErrorVertexCount (the first bad
-  /// instance; the batch is left empty); kErrorOutOfMemory; kErrorCuda.
+  /// Returns kOk; kErrorNullArgument (also an instance with neither positions nor joint matrices);
+  /// kErrorInvalidJob (asset slot out of range, asset not uploaded, counts out of limits);
+  /// kErrorAlignment / kErrorStride / kErrorVertexCount / kErrorMissingField / kErrorJointCount (the
+  /// first bad instance, see Instance; the batch is left empty); kErrorOutOfMemory; kErrorCuda.
   /// Cost: O(\#assets + N) host work, allocations, synchronous copies.
   Status Init(const DeviceAsset* const* assets, uint32_t asset_count, const Instance* instances,
               uint32_t instance_count, uint32_t capacity = 0);
@@ -138,13 +165,15 @@ class Batch {
   /// rounded as DetectJob's for the method (M1: rA + rB − ‖·‖; M2 with m ≠ 0: ((rA + m) + (rB + m) − ‖·‖)
   /// − 2m). Asynchronous, no allocation, no synchronisation: capturable (cudaStreamBeginCapture …
   /// EndCapture).
-  /// Returns kOk (enqueued; read the overflow flag for truncation); kErrorInvalidJob (not initialised,
-  /// unknown mode/method/strategy, kBlockPerChain with M2, margin or fold_margin NaN or infinite,
+  /// Returns kOk (enqueued; read the overflow flag for truncation); kErrorNullArgument (the source's
+  /// input missing on some instance: positions for kVertices, joint_matrices for kJoints; nothing
+  /// enqueued); kErrorInvalidJob (not initialised, unknown source/mode/method/strategy, kBlockPerChain with M2, margin or fold_margin NaN or infinite,
   /// fold_margin >= 0 with an asset of the batch that has no fold margin; nothing enqueued,
   /// outputs untouched); kErrorCuda (launch failed: LastCudaError()). Non-finite positions give
   /// non-finite spheres, which never overlap.
-  /// Cost: one kernel; per sphere 12 vertex reads (144 B) + ~120 flops; per tested pair 12 flops (the
-  /// CPU's 11, whose radii are grown beforehand, plus the column sphere's margin add).
+  /// Cost: one kernel; per sphere 12 vertex reads (144 B) + ~120 flops from vertices, or 1–4 matrix
+  /// reads (48 B each, shared by the spheres of a joint) + ≤ 100 flops from joints; per tested pair 12
+  /// flops (the CPU's 11, whose radii are grown beforehand, plus the column sphere's margin add).
   Status Run(const FrameParams& params, cudaStream_t stream) const;
 
   /// Copies the last frame's outputs to `out` after synchronising `stream` (allocates host vectors).
@@ -169,6 +198,9 @@ class Batch {
   /// Bytes of positions a frame reads (12 vertices × 12 B per sphere, Σ over instances): the
   /// "useful" traffic for bandwidth figures (the hardware moves whole 32 B sectors).
   uint64_t frame_position_bytes() const { return frame_position_bytes_; }
+  /// Bytes of joint matrices a frame from joints reads at most (\#J × 48 B, Σ over instances that have
+  /// them).
+  uint64_t frame_joint_bytes() const { return frame_joint_bytes_; }
 
  private:
   Status Upload(const Instance* instances, uint32_t instance_count);
@@ -177,8 +209,10 @@ class Batch {
   uint32_t asset_count_ = 0;
   uint32_t instance_count_ = 0, capacity_ = 0, total_spheres_ = 0;
   uint32_t max_spheres_ = 0, max_chains_ = 0, max_chain_length_ = 0, sm_count_ = 1;
-  uint64_t frame_position_bytes_ = 0;
-  bool every_asset_folds_ = false;  // every asset of Init has a fold margin (FrameParams::fold_margin >= 0 allowed)
+  uint32_t max_blocks_ = 0, max_block_pairs_ = 0;  // over the batch's assets (kBlockBoxes' shared memory)
+  uint64_t frame_position_bytes_ = 0, frame_joint_bytes_ = 0;
+  bool every_asset_folds_ = false;
+  bool all_positions_ = false, all_joints_ = false;  // every instance has positions / joint matrices  // every asset of Init has a fold margin (FrameParams::fold_margin >= 0 allowed)
   std::vector<uint32_t> sphere_offsets_;
   void* table_ = nullptr;          // device: DeviceAssetDesc[asset_count] + internal instance table
   void* asset_table_ = nullptr;    // into table_

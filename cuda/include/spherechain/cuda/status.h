@@ -25,6 +25,9 @@ enum class [[nodiscard]] Status : uint32_t {
   kErrorVertexCount = 0x8000'0004u,   ///< Instance::vertex_count != the asset's fingerprint.vertex_count.
   kErrorStride = 0x8000'0005u,        ///< Instance::stride_bytes < 12 or not a multiple of 4.
   kErrorOutOfMemory = 0x8000'0006u,   ///< Host or device allocation failed (setup calls only).
+  kErrorJointCount = 0x8000'0008u,    ///< Instance::joint_count != the asset's Asset.joint_count.
+  kErrorMissingField = 0x8000'0201u,  ///< Instance::joint_matrices set on an asset without joint weights
+                                      ///< (baked from a mesh without a skin, or schema v1/v2: re-bake).
 
   kErrorCuda = 0x8000'0301u,      ///< A CUDA runtime call failed; LastCudaError() / LastCudaErrorString()
                                   ///< give the cudaError_t of this thread's last failure.

@@ -60,6 +60,13 @@ struct ModelArrays {
   const float* sphere_joint_weights;  ///< \#S×4 or null: Asset.sphere_joint_weights
   uint32_t excluded_count;        ///< \#excluded
   uint32_t max_chain_length;      ///< longest chain [spheres]
+  /// DetectJob's broad-phase layout: B blocks of 8 slots (spheres grouped by body region, each group
+  /// split at bind pose by a kd split, padded with the id \#S).
+  const uint32_t* broad_order;        ///< 8B: the sphere id in each slot (padding: \#S)
+  const uint64_t* broad_allowed[2];   ///< [M1, M2] B×B, row I, column J >= I: bit 8·row + l set ⇔ the
+                                      ///< spheres in slots 8I + row and 8J + l are a pair the method tests
+                                      ///< (two spheres, not excluded; M1: sharing a chain)
+  uint32_t broad_blocks;              ///< B
 };
 
 /// Which triangles stand behind a sphere in a NarrowPhaseModel.
