@@ -288,14 +288,22 @@ Result<std::vector<FittedSphere>> FitCover(const Mesh& mesh, const Segmentation&
   vopt.max_voxels = 16'000'000;
   auto vox = VoxelizeInterior(mesh.positions, mesh.indices, vopt, ctx);
   if (!vox.ok()) return MakeError(Error::Code::kFit, "fit cover: " + vox.error().message);
-  if (!layout.paper && params.cover_max_voxels > 0 && vox->inside.size() > size_t(params.cover_max_voxels)) {
-    // A creature lies along its longest extent, the voxels' scale: a bulky one (a quadruped's trunk and
-    // head) has more interior at 1/200 of its length than the budget: coarser voxels, by the cube root of
-    // the excess (2 % more, to land under it). The paper's standing bodies keep 1/200 of their height.
-    const double grow = 1.02 * std::cbrt(double(vox->inside.size()) / double(params.cover_max_voxels));
+  // A creature lies along its longest extent, the voxels' scale: a bulky one (a quadruped's trunk and head)
+  // has more interior at 1/200 of its length than the budget: coarser voxels, by the cube root of the excess
+  // (2 % more, to land under it). The paper's bipeds are measured by their height, so a standing one has far
+  // fewer (MakeHuman 95,000); their budget is FitParams::kBipedVoxelFactor times the creatures', which no standing body
+  // reaches, so it only stops a body lying down (whose "height" is its thickness) from a fit of millions of
+  // voxels.
+  const size_t budget = params.cover_max_voxels == 0 ? 0
+                        : layout.paper               ? size_t(params.cover_max_voxels) * FitParams::kBipedVoxelFactor
+                                                     : size_t(params.cover_max_voxels);
+  if (ctx) ctx->Debug("fit cover: " + std::to_string(vox->inside.size()) + " interior voxels");
+  if (budget > 0 && vox->inside.size() > budget) {
+    const double grow = 1.02 * std::cbrt(double(vox->inside.size()) / double(budget));
     if (ctx)
-      ctx->Info("fit cover: " + std::to_string(vox->inside.size()) + " interior voxels, over cover_max_voxels " +
-                std::to_string(params.cover_max_voxels) + ": voxels " + std::to_string(grow) + " times larger");
+      ctx->Info("fit cover: " + std::to_string(vox->inside.size()) + " interior voxels, over the budget " +
+                std::to_string(budget) + " (cover_max_voxels" + (layout.paper ? " × " + std::to_string(FitParams::kBipedVoxelFactor) : "") +
+                "): voxels " + std::to_string(grow) + " times larger");
     vopt.voxel_rel = float(params.cover_voxel_rel * grow);
     Context::Timer t(ctx, "fit.cover.voxelize_coarser");  // its own name: the report keys timings by name
     vox = VoxelizeInterior(mesh.positions, mesh.indices, vopt, nullptr);

@@ -15,6 +15,7 @@
 
 #include <unistd.h>
 
+#include "spherechain/baker/fit.h"
 #include "spherechain/baker/segment.h"
 #include "spherechain/import/import.h"
 
@@ -316,4 +317,43 @@ TEST_CASE("Fuzz findings: assimp in its child process gives the same mesh, skin 
     }
   }
   CHECK(compared >= 20);
+}
+
+TEST_CASE("Fuzz findings: a body lying down is fitted within the bipeds' voxel budget, not on millions of voxels") {
+  // fuzz_import_assimp: a 228-triangle ASCII STL, segmented as a T-pose biped whose trunk lies horizontal. A
+  // biped's voxels scale with its height, which for this body is its thickness: at the default 1/200 it has
+  // 3.1 million interior voxels (MakeHuman 95,000) and its fit took 6 minutes. Bipeds now get a budget too,
+  // FitParams::kBipedVoxelFactor × cover_max_voxels; here scaled down (voxels 1/20 of the height, a budget of
+  // 4 × 500) so that the test is quick: about 3,000 voxels at that size, voxelised coarser under 2,000.
+  const fs::path repro = fs::path(SPHERECHAIN_SOURCE_DIR) / "fuzz/corpus/import_assimp/slow_fit_lying_body.stl";
+  std::ifstream in(repro, std::ios::binary);
+  const std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  REQUIRE(bytes.size() > 1);
+  Dir d;
+  auto mesh = ImportMesh(d.Write("lying.stl", bytes.substr(1)));  // the first byte picks the fuzzer's format
+  REQUIRE(mesh.ok());
+  auto seg = spherechain::baker::Segment(mesh.value(), spherechain::baker::SegmentMethod::kAuto);
+  REQUIRE(seg.ok());
+  REQUIRE(seg->layout.paper);  // segmented as a biped: the layout the budget used to skip
+  spherechain::baker::FitParams p;
+  p.cover_voxel_rel = 0.05;
+  p.cover_max_voxels = 500;
+  p.max_spheres = 32;
+  std::vector<std::string> lines;
+  spherechain::import::Context ctx;
+  ctx.sink = [&](spherechain::import::Context::Level, const std::string& m) { lines.push_back(m); };
+  auto fit = spherechain::baker::FitSpheres(mesh.value(), seg.value(), p, &ctx);
+  REQUIRE(fit.ok());
+  CHECK_FALSE(fit->spheres.empty());
+  const uint32_t budget = uint32_t(p.cover_max_voxels) * spherechain::baker::FitParams::kBipedVoxelFactor;
+  bool over = false;
+  long fitted_voxels = -1;
+  for (const std::string& m : lines) {
+    CAPTURE(m);
+    over = over || m.find("over the budget " + std::to_string(budget) + " (cover_max_voxels × ") != std::string::npos;
+    if (const size_t at = m.find(" candidates over "); at != std::string::npos) fitted_voxels = std::stol(m.substr(at + 17));
+  }
+  CHECK(over);  // voxelised again, coarser
+  CHECK(fitted_voxels > 0);
+  CHECK(fitted_voxels <= long(budget));
 }

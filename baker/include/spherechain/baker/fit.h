@@ -27,10 +27,13 @@ struct FitParams {
   /// Budget of interior voxels for a creature (a segmentation whose RegionLayout is not the paper's): one
   /// with more at cover_voxel_rel (bulky along its longest extent, the voxels' scale: the Wuson, 267,000)
   /// is voxelised again with voxels larger by the cube root of the excess (× 1.02), so its fit costs what
-  /// a human's does (MakeHuman 95,000 … mrfixit 132,000 interior voxels; the paper's standing bodies are
-  /// never capped). 0: no budget. [Limit: >= 0] JSON "cover_max_voxels" (in the configuration hash only
-  /// when not the default)
+  /// a human's does (MakeHuman 95,000 … mrfixit 132,000 interior voxels). The paper's bipeds, whose voxels
+  /// scale with their height, get kBipedVoxelFactor times this budget: no standing body comes near it, a
+  /// body lying down (its "height" its thickness: millions of voxels) does. 0: no budget for either.
+  /// [Limit: >= 0] JSON "cover_max_voxels" (in the configuration hash only when not the default)
   int cover_max_voxels = 140'000;
+  /// The paper's bipeds' voxel budget, in multiples of cover_max_voxels (see there).
+  static constexpr int kBipedVoxelFactor = 4;
   double min_radius_rel = 0.003;      ///< smallest sphere radius / body height (fingers, toes: none)
   double min_gain = 0.0002;           ///< stop when the best sphere adds less than this (weighted share
                                       ///< of the body's volume, see region_balance) [Limit: 0..1]
