@@ -46,6 +46,15 @@ struct Dir {
 
 std::string Nested(size_t depth) { return std::string(depth, '[') + std::string(depth, ']'); }
 
+/// A file of the assimp fuzzer's corpus (fuzz/corpus/import_assimp/NAME) as the file it stands for: its first
+/// byte, which picks the fuzzer's format, dropped.
+std::string AssimpCorpusFile(const std::string& name) {
+  std::ifstream in(fs::path(SPHERECHAIN_SOURCE_DIR) / "fuzz/corpus/import_assimp" / name, std::ios::binary);
+  const std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  REQUIRE_MESSAGE(bytes.size() > 1, name);
+  return bytes.substr(1);
+}
+
 /// A glTF of one triangle (positions in data.bin beside it: 3 × float3, then 3 uint32 indices), with `extra`
 /// spliced into the root object (accessor / bufferView overrides go in by replacing the defaults below).
 struct Gltf {
@@ -228,15 +237,12 @@ TEST_CASE("Fuzz findings: a region map's deep entry is named briefly (kConfig), 
 
 TEST_CASE("Fuzz findings: a PLY on which assimp never returns is stopped in its child process (kFormat)") {
   // fuzz_import_assimp: an ASCII PLY header followed by binary FBX bytes; assimp's PLY reader ran for minutes.
-  const fs::path repro = fs::path(SPHERECHAIN_SOURCE_DIR) / "fuzz/corpus/import_assimp/timeout_assimp_ply_loop.ply";
-  std::ifstream in(repro, std::ios::binary);
-  const std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-  REQUIRE(bytes.size() > 1);
+  const std::string file = AssimpCorpusFile("timeout_assimp_ply_loop.ply");
   Dir d;
   ImportOptions o;
   o.assimp_seconds = 2.0;
   const auto t0 = std::chrono::steady_clock::now();
-  auto r = ImportMesh(d.Write("loop.ply", bytes.substr(1)), o);  // the first byte picks the fuzzer's format
+  auto r = ImportMesh(d.Write("loop.ply", file), o);
   const double took = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   REQUIRE_FALSE(r.ok());
   CHECK(r.error().code == Error::Code::kFormat);
@@ -247,12 +253,9 @@ TEST_CASE("Fuzz findings: a PLY on which assimp never returns is stopped in its 
 TEST_CASE("Fuzz findings: a PLY on which assimp's reader crashes is a kFormat error naming the signal") {
   // fuzz_import_assimp: a 134-byte ASCII PLY with a mangled property line; assimp's PLY reader dereferences
   // null (SIGSEGV inside libassimp). In its child process the crash ends the child only.
-  const fs::path repro = fs::path(SPHERECHAIN_SOURCE_DIR) / "fuzz/corpus/import_assimp/crash_assimp_ply_segv.ply";
-  std::ifstream in(repro, std::ios::binary);
-  const std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-  REQUIRE(bytes.size() > 1);
+  const std::string file = AssimpCorpusFile("crash_assimp_ply_segv.ply");
   Dir d;
-  auto r = ImportMesh(d.Write("crash.ply", bytes.substr(1)));  // the first byte picks the fuzzer's format
+  auto r = ImportMesh(d.Write("crash.ply", file));
   REQUIRE_FALSE(r.ok());
   CHECK(r.error().code == Error::Code::kFormat);
   CAPTURE(r.error().message);
@@ -325,12 +328,9 @@ TEST_CASE("Fuzz findings: a body lying down is fitted within the bipeds' voxel b
   // 3.1 million interior voxels (MakeHuman 95,000) and its fit took 6 minutes. Bipeds now get a budget too,
   // FitParams::kBipedVoxelFactor × cover_max_voxels; here scaled down (voxels 1/20 of the height, a budget of
   // 4 × 500) so that the test is quick: about 3,000 voxels at that size, voxelised coarser under 2,000.
-  const fs::path repro = fs::path(SPHERECHAIN_SOURCE_DIR) / "fuzz/corpus/import_assimp/slow_fit_lying_body.stl";
-  std::ifstream in(repro, std::ios::binary);
-  const std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-  REQUIRE(bytes.size() > 1);
+  const std::string file = AssimpCorpusFile("slow_fit_lying_body.stl");
   Dir d;
-  auto mesh = ImportMesh(d.Write("lying.stl", bytes.substr(1)));  // the first byte picks the fuzzer's format
+  auto mesh = ImportMesh(d.Write("lying.stl", file));
   REQUIRE(mesh.ok());
   auto seg = spherechain::baker::Segment(mesh.value(), spherechain::baker::SegmentMethod::kAuto);
   REQUIRE(seg.ok());
