@@ -89,7 +89,7 @@ sb::Segmentation StandInSegmentation(const sb::Mesh& m, const std::string& weigh
   std::vector<uint8_t> vr(m.vertex_count(), static_cast<uint8_t>(sb::Region::kTorso));
   for (const auto& [bone, list] : j["weights"].items()) {
     const bool left = bone.size() > 2 && bone.substr(bone.size() - 2) == ".L";
-    auto starts = [&](const char* p) { return bone.rfind(p, 0) == 0; };
+    auto starts = [&b = bone](const char* p) { return b.rfind(p, 0) == 0; };  // clang < 16: no capture of a binding
     uint8_t r = static_cast<uint8_t>(sb::Region::kTorso);
     if (starts("upperarm") || starts("lowerarm") || starts("wrist") || starts("finger") || starts("metacarpal"))
       r = static_cast<uint8_t>(left ? sb::Region::kLeftArm : sb::Region::kRightArm);
