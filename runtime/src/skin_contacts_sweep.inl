@@ -318,18 +318,23 @@
     return Status::kOk;
   }
 
-  static bool Prepared(const NarrowPhaseModel& m, NarrowPhaseWorkspace& w, const char* base, size_t stride,
-                       uint32_t t, Counters* c) {
-    uint32_t& state = w.tri_frame_[t];
-    if (state >> 1 != w.frame_) {
+  /// Triangle t prepared for exact tests this frame (PrepareTriangle): its slot in the frame's pool of
+  /// prepared triangles (tri_prepared_, filled in the order the tests meet them: the used part small and
+  /// hot), or kNone when it is degenerate (in no contact).
+  static uint32_t Prepared(const NarrowPhaseModel& m, NarrowPhaseWorkspace& w, const char* base, size_t stride,
+                           uint32_t t, Counters* c) {
+    uint64_t& state = w.tri_frame_[t];
+    if (state >> 32 != w.frame_) {
       const uint32_t* v = &m.tri_v_[3 * size_t{t}];
       const float* p[3];
       for (int j = 0; j < 3; ++j) p[j] = reinterpret_cast<const float*>(base + stride * v[j]);
-      const bool ok = PrepareTriangle(p[0], p[1], p[2], &w.tri_prepared_[t]);
-      state = w.frame_ << 1 | (ok ? 0u : 1u);
+      const uint32_t slot = w.prepared_used_;
+      const bool ok = PrepareTriangle(p[0], p[1], p[2], &w.tri_prepared_[slot]);
+      w.prepared_used_ += ok;
+      state = uint64_t{w.frame_} << 32 | (ok ? slot : kNone);
       c->degenerate += !ok;
     }
-    return !(state & 1);
+    return static_cast<uint32_t>(state);
   }
 
   /// Pass 1 of a frame: each patch's distinct vertices read once (cl_vert_), its box (patch_box_: per group
@@ -491,13 +496,15 @@
       c->box_tests += kPatch;
       if (!overlap) continue;
       const uint32_t t = m.cl_tri_[kPatch * size_t{a} + i];
-      if (!Prepared(m, w, base, stride, t, c)) continue;  // t degenerate: in no contact
+      const uint32_t ts = Prepared(m, w, base, stride, t, c);
+      if (ts == kNone) continue;  // t degenerate: in no contact
       const uint32_t* tv = &m.tri_v_[3 * size_t{t}];
       for (; overlap; overlap &= overlap - 1) {
         const uint32_t u = m.cl_tri_[kPatch * size_t{b} + static_cast<uint32_t>(__builtin_ctz(overlap))];
-        if (!Prepared(m, w, base, stride, u, c)) continue;
+        const uint32_t us = Prepared(m, w, base, stride, u, c);
+        if (us == kNone) continue;
         ++c->tests;
-        if (!TrianglesIntersect(w.tri_prepared_[t], w.tri_prepared_[u])) continue;
+        if (!TrianglesIntersect(w.tri_prepared_[ts], w.tri_prepared_[us])) continue;
         if (wider && w.crease_scratch_.Near(m.crease_graph_, tv, &m.tri_v_[3 * size_t{u}], crease)) {
           ++c->folds;
           continue;
@@ -514,9 +521,10 @@
                       float crease, Counters* c, OnContact&& on_contact) {
     const uint32_t C = GroupCount(m);
     if (++w.frame_ >= 0x7fffffffu) {  // stamps wrap: forget them all
-      std::fill(w.tri_frame_.begin(), w.tri_frame_.end(), 0u);
+      std::fill(w.tri_frame_.begin(), w.tri_frame_.end(), uint64_t{0});
       w.frame_ = 1;
     }
+    w.prepared_used_ = 0;
     float lo[3], hi[3];
     if (!Boxes(m, w, base, stride, lo, hi)) return false;
     const float* box = w.group_box_.data();

@@ -345,7 +345,7 @@ class NarrowPhaseWorkspace {
   // consecutive patches, #G = ⌈#C/4⌉, 6 rows of 4: min x, y, z, max x, y, z; inverted padding), each
   // group's box (6 rows of #G), the sweep order of the groups (kept from frame to frame: re-sorted by
   // insertion), each patch's triangle boxes (96 floats: 6 rows of 16, inverted padding; all computed each
-  // frame), prepared triangles (tri_frame_: frame << 1 | degenerate, when prepared this frame), the rule's
+  // frame), prepared triangles (a pool filled in the order the tests meet them; tri_frame_ stamps each triangle with its frame and slot), the rule's
   // scratch (a job wider than the asset's crease).
   BlockVector<float> patch_box_, group_box_;
   BlockVector<uint64_t> sweep_;
@@ -353,9 +353,9 @@ class NarrowPhaseWorkspace {
   BlockVector<uint32_t> sweep_hits_;    // one sweep step's overlapping groups (#G + 1)
   int sweep_axis_ = -1;                 // the axis sweep_ is sorted on (-1: none yet)
   BlockVector<float> patch_tri_box_;
-  BlockVector<PreparedTriangle> tri_prepared_;
-  BlockVector<uint32_t> tri_frame_;
-  uint32_t frame_ = 0;
+  BlockVector<PreparedTriangle> tri_prepared_;  // this frame's prepared triangles, in the order met (#T)
+  BlockVector<uint64_t> tri_frame_;             // per triangle: frame << 32 | its slot there (~0u: degenerate)
+  uint32_t frame_ = 0, prepared_used_ = 0;
   CreaseScratch crease_scratch_;
 };
 
