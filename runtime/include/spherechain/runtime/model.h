@@ -136,7 +136,7 @@ class Model {
   /// Not thread-safe on one object (nothing may use the model meanwhile).
   Status Init(const AssetView& view);
   /// The same with `options`: with options.narrow_phase also the narrow phase (narrow_phase()), built on
-  /// the heap and moved into the model's one block (6.1 MB more for MakeHuman with the crease rule). Also
+  /// the heap and moved into the model's one block (4.9 MB more for MakeHuman with the crease rule). Also
   /// returns what NarrowPhaseModel::Init returns (kErrorMissingField, kErrorInvalidJob for unknown
   /// regions); the model is empty after a failure.
   Status Init(const AssetView& view, const ModelOptions& options);

@@ -140,7 +140,7 @@ class NarrowPhaseModel {
   /// (sphere, region vertex) + ~20 B per sphere; kReach also 2 B per (triangle, sphere it stands behind).
   /// An asset with the crease rule adds the rule's patches and near bits: one bounded Dijkstra per welded
   /// node (~0.26 s for MakeHuman's 26,756 triangles, RelWithDebInfo, one core) and their memory
-  /// (crease_patch_bytes(): 2.90 MB in 1,722 patches for MakeHuman).
+  /// (crease_patch_bytes(): 1.54 MB in 1,722 patches for MakeHuman).
   /// Not thread-safe on one object (nothing may use the model meanwhile).
   Status Init(const AssetView& view, NarrowPhaseRegions regions = NarrowPhaseRegions::kSurrounding);
   /// kReach when built from reach regions, else kSurrounding.
@@ -270,7 +270,7 @@ class NarrowPhaseModel {
 /// runtime::Workspace's: ~110 B per region triangle (a prepared triangle 64 B, a box 32 B, indices) +
 /// ~90 B per sphere + ~150 B per triangle and 17 B per vertex of the largest region (≈ 2.9 MB for
 /// MakeHuman's 26,756 triangles by that count); with the crease rule also ~100 B per triangle and ~45 B
-/// per welded vertex (7.5 MB in all for MakeHuman). Move-only; moving leaves the source uninitialised.
+/// per welded vertex (7.6 MB in all for MakeHuman). Move-only; moving leaves the source uninitialised.
 /// Thread safety: one job at a time per workspace; different workspaces are independent, also when they
 /// share a model.
 class NarrowPhaseWorkspace {
@@ -345,8 +345,8 @@ class NarrowPhaseWorkspace {
   // consecutive patches, #G = ⌈#C/4⌉, 6 rows of 4: min x, y, z, max x, y, z; inverted padding), each
   // group's box (6 rows of #G), the sweep order of the groups (kept from frame to frame: re-sorted by
   // insertion), each patch's triangle boxes (96 floats: 6 rows of 16, inverted padding; all computed each
-  // frame), prepared triangles (a pool filled in the order the tests meet them; tri_frame_ stamps each triangle with its frame and slot), the rule's
-  // scratch (a job wider than the asset's crease).
+  // frame), prepared triangles (a pool filled in the order the tests meet them; tri_frame_ stamps each
+  // triangle with its frame and slot), the rule's scratch (a job wider than the asset's crease).
   BlockVector<float> patch_box_, group_box_;
   BlockVector<uint64_t> sweep_;
   BlockVector<float> sweep_box_;        // the group boxes in sweep order (6 rows of #G + 1)
@@ -354,7 +354,7 @@ class NarrowPhaseWorkspace {
   int sweep_axis_ = -1;                 // the axis sweep_ is sorted on (-1: none yet)
   BlockVector<float> patch_tri_box_;
   BlockVector<PreparedTriangle> tri_prepared_;  // this frame's prepared triangles, in the order met (#T)
-  BlockVector<uint64_t> tri_frame_;             // per triangle: frame << 32 | its slot there (~0u: degenerate)
+  BlockVector<uint64_t> tri_frame_;             // per triangle: frame << 32 | its slot (low half ~0u: degenerate)
   uint32_t frame_ = 0, prepared_used_ = 0;
   CreaseScratch crease_scratch_;
 };
