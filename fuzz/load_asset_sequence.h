@@ -48,10 +48,11 @@ inline constexpr uint32_t kHarnessTestBudget = 100000;
 /// Init alone, 5 s in the fuzz build.
 inline constexpr uint32_t kHarnessJunkBindContacts = 16384;
 
-/// The narrow phase of `view` held by a Model, run on `positions` (\#V×3, packed) under every Exclusions
-/// the model supports (kCrease first; after a job past kHarnessTestBudget exact tests, the others are
-/// left out on those positions), each output checked. nullptr when everything behaved as documented. `*crease_ran`
-/// (opt) is set when a kCrease job ran to completion.
+/// The narrow phase of `view` held by a Model, run on `positions` (\#V×3, packed) and at the bind pose
+/// under every Exclusions the model supports, each output checked: kCrease first, and after a job past
+/// kHarnessTestBudget exact tests no other on those positions; past kHarnessJunkBindContacts, nothing at
+/// the bind pose and no second build in caller memory. nullptr when everything behaved as documented.
+/// `*crease_ran` (opt) is set when a kCrease job ran to completion.
 inline const char* RunNarrowPhaseSequence(const runtime::AssetView& view, const std::vector<float>* positions_or_null,
                                           bool* crease_ran = nullptr) {
   using namespace spherechain::runtime;
