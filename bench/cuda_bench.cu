@@ -2,10 +2,11 @@
 // by side with the CPU runtime in the same run.
 //
 //   cuda_bench [ASSET.sphc [BASE.obj]] [--max-instances N] [--sizes N,N,...] [--source vertices|joints|both]
-//              [--frames DIR] [--synthetic]
+//              [--frames DIR] [--synthetic] [--strategies auto,sphere,chain,warp,boxes] [--no-cpu]
 //     defaults: /tmp/mh.sphc and ${SPHERECHAIN_SHARED_DATA_DIR}/makehuman/base.obj (MakeHuman); when
 //     either is missing (or --synthetic) a synthetic ~80-sphere, 6-chain tube character is used and
-//     the header says so.
+//     the header says so. --strategies: the rows to run (default all five); --no-cpu: no CPU columns
+//     (a quicker run, e.g. to compare builds of the kernels on the same machine).
 //
 // Instances: the bind pose, each with its own rotation about the vertical axis, translation and
 // per-vertex noise (generated on the device, one packed xyz buffer per instance, so N instances read
@@ -32,6 +33,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -70,6 +72,9 @@ __device__ float Unit(uint32_t h) { return float(h >> 8) * (1.0f / 16777216.0f) 
 // Instance i's #J matrices (3×4 row-major) at out + i · J · 12: [R_y(angle_i) | t_i + noise_j], the angle
 // and translation of PerturbKernel's instance i.
 // With `clip` (F frames of #J×12): [R_y | t] composed with frame i mod F's matrices.
+// The launch floor: a kernel that does nothing, one block of one thread.
+__global__ void EmptyKernel() {}
+
 __global__ void JointsKernel(const float* clip, uint32_t F, float* out, uint32_t J, uint32_t N, float extent, float noise) {
   const uint64_t idx = uint64_t{blockIdx.x} * blockDim.x + threadIdx.x;
   if (idx >= uint64_t{J} * N) return;
@@ -135,7 +140,10 @@ int main(int argc, char** argv) {
   uint32_t max_instances = 100000;
   std::vector<uint32_t> sizes = {1, 100, 1000, 10000, 100000};
   std::string source_arg = "both", frames_dir;
-  bool synthetic = false;
+  bool synthetic = false, cpu = true;
+  const char* strategy_names[] = {"auto", "thread/sphere", "block/chain", "warp/instance", "block/boxes"};
+  const char* strategy_args[] = {"auto", "sphere", "chain", "warp", "boxes"};
+  bool run_strategy[5] = {true, true, true, true, true};
   int positional = 0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -143,6 +151,11 @@ int main(int argc, char** argv) {
     else if (a == "--synthetic") synthetic = true;
     else if (a == "--source" && i + 1 < argc) source_arg = argv[++i];
     else if (a == "--frames" && i + 1 < argc) frames_dir = argv[++i];
+    else if (a == "--no-cpu") cpu = false;
+    else if (a == "--strategies" && i + 1 < argc) {
+      const std::string list = "," + std::string(argv[++i]) + ",";
+      for (int k = 0; k < 5; ++k) run_strategy[k] = list.find("," + std::string(strategy_args[k]) + ",") != std::string::npos;
+    }
     else if (a == "--sizes" && i + 1 < argc) {
       sizes.clear();
       for (std::string list = argv[++i]; !list.empty();) {
@@ -255,10 +268,35 @@ int main(int argc, char** argv) {
   const uint32_t hw_threads = std::max(1u, std::thread::hardware_concurrency());
   ThreadParallelFor pool{hw_threads};
   std::printf("CPU: %u hardware threads\n", hw_threads);
+  {  // The launch floor: a graph of one empty kernel, timed as the rows' latency and µs/frame are.
+    cudaGraph_t graph;
+    cudaGraphExec_t exec;
+    CK(cudaStreamBeginCapture(stream, cudaStreamCaptureModeGlobal));
+    EmptyKernel<<<1, 1, 0, stream>>>();
+    CK(cudaStreamEndCapture(stream, &graph));
+    CK(cudaGraphInstantiate(&exec, graph, 0));
+    std::vector<double> lat;
+    for (int r = 0; r < 51; ++r) {
+      const double t0 = NowUs();
+      CK(cudaGraphLaunch(exec, stream));
+      CK(cudaStreamSynchronize(stream));
+      lat.push_back(NowUs() - t0);
+    }
+    std::nth_element(lat.begin(), lat.begin() + 25, lat.end());
+    const int reps = 20000;
+    CK(cudaEventRecord(e0, stream));
+    for (int r = 0; r < reps; ++r) CK(cudaGraphLaunch(exec, stream));
+    CK(cudaEventRecord(e1, stream));
+    CK(cudaEventSynchronize(e1));
+    float ms = 0;
+    CK(cudaEventElapsedTime(&ms, e0, e1));
+    std::printf("launch floor (a graph of one empty kernel): %.2f us a replay, latency %.2f us\n", 1e3 * ms / reps, lat[25]);
+    CK(cudaGraphExecDestroy(exec));
+    CK(cudaGraphDestroy(graph));
+  }
   std::printf("\n%-6s %8s %-4s %-16s %12s %12s %14s %9s %7s %14s %8s %14s %9s %10s\n", "source", "N", "meth", "strategy", "GPU us/frame",
               "GPU latency", "chars/s", "GB/s", "%peak", "CPU us/frame", "speedup", "CPUxT us/frm", "vs CPUxT",
               "pairs/inst");
-  const char* strategy_names[] = {"auto", "thread/sphere", "block/chain", "warp/instance", "block/boxes"};
   const uint32_t J = model.joint_count();
   std::vector<runtime::RefitSource> sources;
   if (source_arg != "joints") sources.push_back(runtime::RefitSource::kVertices);
@@ -306,7 +344,7 @@ int main(int argc, char** argv) {
     for (runtime::DetectMethod method : {runtime::DetectMethod::kM1, runtime::DetectMethod::kM2}) {
       std::vector<runtime::Collision> out(runtime::DetectBound(view, method));
       double best = 1e30;
-      for (int rep = 0; rep < 3; ++rep) {
+      for (int rep = 0; rep < (cpu ? 3 : 0); ++rep) {
         const double t0 = NowUs();
         for (uint32_t i = 0; i < cpu_n; ++i) {
           runtime::RefitJob refit;
@@ -330,13 +368,13 @@ int main(int argc, char** argv) {
         }
         best = std::min(best, (NowUs() - t0) / cpu_n);
       }
-      const double cpu_frame = best * N;
+      const double cpu_frame = cpu ? best * N : NAN;
       // All cores: one BatchJob over mt_n characters, each with its own workspace and output.
-      std::vector<runtime::Workspace> mt_ws(mt_n);
+      std::vector<runtime::Workspace> mt_ws(cpu ? mt_n : 0);
       std::vector<runtime::CharacterFrame> frames(mt_n);
       std::vector<runtime::Collision> mt_out(size_t{mt_n} * out.size());
       std::vector<uint32_t> mt_count(mt_n);
-      for (uint32_t i = 0; i < mt_n; ++i) {
+      for (uint32_t i = 0; i < mt_ws.size(); ++i) {
         if (mt_ws[i].Init(model) != runtime::Status::kOk) return 1;
         frames[i].workspace = &mt_ws[i];
         if (from_joints)
@@ -358,16 +396,16 @@ int main(int argc, char** argv) {
       bj.parallel_for = {&ThreadParallelFor::Run, &pool};
       bj.parallel_grain = 16;
       double mt_best = 1e30;
-      for (int rep = 0; rep < 3; ++rep) {
+      for (int rep = 0; rep < (cpu ? 3 : 0); ++rep) {
         const double t0 = NowUs();
         if (runtime::Failed(bj.Run())) return 1;
         mt_best = std::min(mt_best, NowUs() - t0);
       }
-      const double mt_frame = mt_best * N / mt_n;
+      const double mt_frame = cpu ? mt_best * N / mt_n : NAN;
       const bool m1 = method == runtime::DetectMethod::kM1;
       for (sc::Strategy strategy : {sc::Strategy::kAuto, sc::Strategy::kThreadPerSphere, sc::Strategy::kBlockPerChain,
                                     sc::Strategy::kWarpPerInstance, sc::Strategy::kBlockBoxes}) {
-        if (!m1 && strategy == sc::Strategy::kBlockPerChain) continue;
+        if ((!m1 && strategy == sc::Strategy::kBlockPerChain) || !run_strategy[static_cast<int>(strategy)]) continue;
         sc::FrameParams fp{runtime::RefitMode::kPivotFrame, method, strategy, false};
         fp.source = source;
         if (batch.Run(fp, stream) != sc::Status::kOk) return 1;  // warm-up

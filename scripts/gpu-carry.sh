@@ -5,10 +5,17 @@
 # frames (positions and joint matrices) plus MakeHuman's body mesh, for the CPU == GPU tests and the bench.
 # Run it here, then the whole check on the GPU machine in one command (device tool, carry [".carry"]):
 #   bash scripts/gpu-check.sh [--ncu]
+# `scripts/gpu-carry.sh --base REV` also carries cuda/ as it is at git revision REV (.carry/base/cuda), which
+# gpu-check.sh then builds beside the working tree's and benches in the same run (a before/after on one GPU).
 # which builds the `cuda` preset there, runs the CUDA suite on these assets and frames, ctest's guard, the
 # bench and compute-sanitizer, and packs the logs into $OUT (see its header).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+base_rev=
+if [ "${1:-}" = "--base" ]; then
+  base_rev=${2:?usage: gpu-carry.sh [--base REV]}
+  git rev-parse --verify -q "$base_rev^{commit}" >/dev/null || { echo "gpu-carry.sh: no such revision: $base_rev" >&2; exit 1; }
+fi
 cli=${SPHERECHAIN_CLI:-build/dev/cli/spherechain}
 [ -x "$cli" ] || { echo "build the CLI first (bash scripts/test.sh, or set SPHERECHAIN_CLI)" >&2; exit 1; }
 rm -rf .carry && mkdir -p .carry/include .carry/lib/cmake .carry/data/makehuman .carry/data/gltf
@@ -27,5 +34,10 @@ mkdir -p .carry/frames/mh .carry/frames/cesiumman .carry/frames/bcn
 "$cli" -q play .carry/mh.sphc --mesh $data/makehuman/base.obj --repeat 1 --dump-frames .carry/frames/mh >/dev/null
 "$cli" -q play .carry/cesiumman.sphc --mesh $data/gltf/CesiumMan.gltf --repeat 1 --dump-frames .carry/frames/cesiumman >/dev/null
 "$cli" -q play .carry/bcn.sphc --mesh $bcn --repeat 1 --dump-frames .carry/frames/bcn >/dev/null
+if [ -n "$base_rev" ]; then
+  mkdir -p .carry/base
+  git archive "$base_rev" cuda | tar -x -C .carry/base
+  git rev-parse --short "$base_rev" >.carry/base/REVISION
+fi
 echo "then, on the GPU machine: bash scripts/gpu-check.sh"
 du -sh .carry

@@ -16,6 +16,7 @@
 // (cooperative_groups::coalesced_threads), counting per instance. When the spheres do not fit in
 // 48 KiB of shared memory the kernels keep them in the batch's global sphere buffer instead.
 #include <cooperative_groups.h>
+#include <cuda/atomic>
 
 #include <algorithm>
 #include <cmath>
@@ -33,33 +34,45 @@ namespace spherechain::cuda::detail {
 // spheres and pairs are the CPU's bit for bit. Only the device memory access is written here.
 using Ops = runtime::formulas::ScalarOps;
 
-/// RefitJob for one sphere `s`: 12 vertex reads (strided, read-only path), the four pivot centroids
-/// (formulas::TriangleCentroid3), then formulas::RefitLanes (kPivotFrame with its kPaper fallback, or
-/// kPaper). Returns (x, y, z, r).
-__device__ __forceinline__ float4 DevRefitSphere(const DeviceAssetDesc& a, const char* base, uint32_t stride,
-                                                 uint32_t s, bool frame_mode) {
-  float px[4], py[4], pz[4];
-  const uint32_t* idx = a.pivot_vertices + size_t{12} * s;
-#pragma unroll
-  for (int k = 0; k < 4; ++k) {
-    float v[3][3];
-#pragma unroll
-    for (int t = 0; t < 3; ++t) {
-      const float* q = reinterpret_cast<const float*>(base + size_t{__ldg(idx + 3 * k + t)} * stride);
-      v[t][0] = __ldg(q);
-      v[t][1] = __ldg(q + 1);
-      v[t][2] = __ldg(q + 2);
-    }
-    float c[3];
-    runtime::formulas::TriangleCentroid3(v[0], v[1], v[2], c);
-    px[k] = c[0], py[k] = c[1], pz[k] = c[2];
-  }
+/// formulas::RefitLanes of sphere `s` from its four pivot triangles' centroids (px, py, pz)[k]
+/// (formulas::TriangleCentroid3): kPivotFrame with its kPaper fallback, or kPaper. Returns (x, y, z, r).
+__device__ __forceinline__ float4 DevRefitFromCentroids(const DeviceAssetDesc& a, uint32_t s, const float* px,
+                                                        const float* py, const float* pz, bool frame_mode) {
   const float4 local = __ldg(a.frame_local + s);  // (local_center, radius_scale)
   const float4 off = __ldg(a.frame_offset + s);   // (centroid_offset, 0)
   float out[4];
   runtime::formulas::RefitLanes<Ops>(px, py, pz, local.x, local.y, local.z, off.x, off.y, off.z, local.w, frame_mode,
                                      out);
   return make_float4(out[0], out[1], out[2], out[3]);
+}
+
+/// DevRefitFromCentroids from the 12 pivot vertices: `vertex(k, c)` is coordinate c of triangle k / 3's
+/// corner k % 3. Returns (x, y, z, r).
+template <typename VertexFn>
+__device__ __forceinline__ float4 DevRefitFromPivots(const DeviceAssetDesc& a, uint32_t s, VertexFn vertex, bool frame_mode) {
+  float px[4], py[4], pz[4];
+#pragma unroll
+  for (int k = 0; k < 4; ++k) {
+    float v[3][3], c[3];
+#pragma unroll
+    for (int t = 0; t < 3; ++t)
+#pragma unroll
+      for (int d = 0; d < 3; ++d) v[t][d] = vertex(3 * k + t, d);
+    runtime::formulas::TriangleCentroid3(v[0], v[1], v[2], c);
+    px[k] = c[0], py[k] = c[1], pz[k] = c[2];
+  }
+  return DevRefitFromCentroids(a, s, px, py, pz, frame_mode);
+}
+
+/// RefitJob for one sphere `s`: 12 vertex reads (strided, read-only path), then DevRefitFromPivots.
+/// Returns (x, y, z, r).
+__device__ __forceinline__ float4 DevRefitSphere(const DeviceAssetDesc& a, const char* base, uint32_t stride,
+                                                 uint32_t s, bool frame_mode) {
+  const uint32_t* idx = a.pivot_vertices + size_t{12} * s;
+  return DevRefitFromPivots(
+      a, s,
+      [&](int k, int c) { return __ldg(reinterpret_cast<const float*>(base + size_t{__ldg(idx + k)} * stride) + c); },
+      frame_mode);
 }
 
 /// JointRefitJob for one sphere `s` (runtime/src/kernels.cpp JointRefitScalar, the same roundings):
@@ -129,6 +142,7 @@ constexpr uint32_t kFlagFrameMode = 1u;     // RefitMode::kPivotFrame
 constexpr uint32_t kFlagWriteSpheres = 2u;  // FrameParams::write_spheres
 constexpr uint32_t kFlagM1 = 4u;            // DetectMethod::kM1
 constexpr uint32_t kFlagJoints = 8u;        // RefitSource::kJoints
+constexpr uint32_t kFlagPublish = 16u;      // counters kept in the work set, published by the frame's last block
 constexpr uint32_t kNoSphere = 0xFFFFu;     // DeviceAssetDesc::slot_spheres padding
 constexpr uint32_t kWarpsPerBlock = 4;      // kWarpPerInstance: instances per block
 constexpr size_t kSharedLimit = 48 * 1024;  // default dynamic shared memory per block
@@ -137,13 +151,16 @@ struct KernelParams {
   const DeviceAssetDesc* assets;
   const DeviceInstance* instances;
   BatchCollision* pairs;
-  uint32_t* counters;  // [0] total, [1] overflow, [2 + i] per instance
+  uint32_t* counters;  // [0] total, [1] overflow, [2 + i] per instance: the set the blocks add to
+  uint32_t* published; // kFlagPublish: Batch::counters(), written by the frame's last block (FinishBlock)
+  uint32_t* ticket;    // kFlagPublish: blocks finished so far (0 between frames)
   float4* spheres;     // Σ#S: output, and the sphere store when not in shared memory
   uint32_t instance_count;
   uint32_t capacity;
   uint32_t shared_spheres;  // spheres per group slice of shared memory
   uint32_t chains_per_instance;
   uint32_t split;     // SphereKernel: threads per sphere (1 when there are many instances)
+  uint32_t blocks_per_instance;  // BoxKernel: blocks sharing an instance's block pairs (1 when there are many)
   uint32_t max_blocks, max_block_pairs;  // BoxKernel: shared memory layout
   uint32_t flags;
   float margin;       // FrameParams::margin: >= 0 for every instance, < 0 each instance's asset's
@@ -193,8 +210,32 @@ __device__ __forceinline__ void Emit(const KernelParams& p, uint32_t inst, uint3
   if (slot < p.capacity) {
     reinterpret_cast<uint4*>(p.pairs)[slot] = make_uint4(inst, a | (b << 16), __float_as_uint(depth), chains);
   } else {
-    p.counters[1] = 1u;
+    atomicExch(p.counters + 1, 1u);
+    __threadfence();  // rare; seen by the frame's last block (FinishBlock) before it publishes
   }
+}
+
+// End of a block of SphereKernel / BoxKernel under kFlagPublish (few instances: Run enqueues no memset;
+// every thread must call; `block_hits` a shared word zeroed before the kernel's first __syncthreads):
+// the block adds its hits to instance `inst`'s counter of the work set p.counters (zero when a frame
+// starts), then takes a ticket (an acquire-release atomic: it releases this block's counter updates, which
+// the barrier ordered before it, and acquires every earlier block's). The block that takes the last ticket
+// moves the work set into Batch::counters() and zeroes it and the ticket for the next frame.
+__device__ __forceinline__ void FinishBlock(const KernelParams& p, uint32_t inst, uint32_t hits, uint32_t* block_hits) {
+  __shared__ uint32_t last;
+  hits = __reduce_add_sync(0xffffffffu, hits);
+  if ((threadIdx.x & 31u) == 0 && hits) atomicAdd(block_hits, hits);
+  __syncthreads();
+  if (threadIdx.x == 0) {
+    if (*block_hits) atomicAdd(p.counters + 2 + inst, *block_hits);
+    // release: this block's counter updates; acquire: every earlier block's
+    last = ::cuda::atomic_ref<uint32_t, ::cuda::thread_scope_device>(*p.ticket).fetch_add(1u, ::cuda::memory_order_acq_rel) ==
+           gridDim.x - 1;
+  }
+  __syncthreads();
+  if (!last) return;
+  for (uint32_t i = threadIdx.x; i < 2 + p.instance_count; i += blockDim.x) p.published[i] = atomicExch(p.counters + i, 0u);
+  if (threadIdx.x == 0) *p.ticket = 0u;
 }
 
 // Adds each warp's hit count to instance `inst`'s counter (every lane of the warp must call).
@@ -260,6 +301,12 @@ __global__ void GroupKernel(KernelParams p) {
 #ifndef SPHERECHAIN_CUDA_SPHERE_BLOCKS
 #define SPHERECHAIN_CUDA_SPHERE_BLOCKS 6
 #endif
+// kBlockBoxes from vertices, many instances: its own register cap, SPHERECHAIN_CUDA_VERTEX_BLOCKS blocks of
+// 256 threads an SM (a compile-time tuning knob; 3, 4, 5 and 6 measured in docs/performance.md: 6, the
+// joint refit's 40 registers, is the fastest at 100,000 characters, 5 by 1 % at 10,000).
+#ifndef SPHERECHAIN_CUDA_VERTEX_BLOCKS
+#define SPHERECHAIN_CUDA_VERTEX_BLOCKS 6
+#endif
 template <bool kShared, bool kMany>
 __global__ void __launch_bounds__(kMany ? 256 : 1024, kMany ? SPHERECHAIN_CUDA_SPHERE_BLOCKS : 1)
     SphereKernel(KernelParams p) {
@@ -274,6 +321,8 @@ __global__ void __launch_bounds__(kMany ? 256 : 1024, kMany ? SPHERECHAIN_CUDA_S
   const float fold = InstanceFoldMargin(p, A);
   float4* sph = kShared ? smem : p.spheres + I.sphere_offset;
   uint2* meta = reinterpret_cast<uint2*>(smem + p.shared_spheres);  // kShared: (chain mask, fold region)
+  __shared__ uint32_t block_hits;
+  if (threadIdx.x == 0) block_hits = 0;
 
   for (uint32_t s = threadIdx.x; s < S; s += T) {
     const float4 v = RefitSphere(p, A, I, s);
@@ -315,41 +364,64 @@ __global__ void __launch_bounds__(kMany ? 256 : 1024, kMany ? SPHERECHAIN_CUDA_S
       }
     }
   }
-  AddInstanceCount(p, inst, hits);
+  if (p.flags & kFlagPublish)
+    FinishBlock(p, inst, hits, &block_hits);
+  else
+    AddInstanceCount(p, inst, hits);
 }
 
-// kBlockBoxes: a block per instance, DetectJob's broad phase (kernels.inl BlockBoxes / BlockRow).
-// Shared memory: the spheres by slot (8B float4; padding slots NaN), each slot's (chain mask, fold region),
-// the blocks' bounds (lo xyz + grown radius, hi xyz), the kept block pairs and their count.
-// 1. refit each slot's sphere; 2. per block the box of its centres and its largest radius grown by M,
-// the larger of the margin and the fold margin (NaN terms skipped); 3. per block pair with a lane of
-// the method, the gap test of BlockRow — per axis g = max(loJ − hiI, loI − hiJ, 0), kept when
-// g_x² + g_y² + g_z² < (R_I + R_J)², which never drops a pair the sphere test reports (the monotonic
-// rounding argument in kernels.inl) — kept pairs appended to shared memory; 4. the allowed lanes of the
-// kept pairs, 64 per pair dealt over the threads: the sphere test with the pair's own margin
-// (DetectJob's floats: the test and the depth are symmetric in the two spheres), reported (lower id,
-// higher id).
+// kBlockBoxes' shared memory, byte offsets (host and device compute it alike): the spheres by slot
+// (float4; padding slots NaN), each slot's (chain mask, fold region), the blocks' bounds (lo xyz + grown
+// radius, hi xyz), the kept block pairs, and two words (kept count, block hits).
+struct BoxLayout {
+  uint32_t meta, lo, hi, kept, words, bytes;
+};
+__host__ __device__ inline BoxLayout MakeBoxLayout(uint32_t max_blocks, uint32_t max_block_pairs) {
+  BoxLayout L{};
+  uint32_t o = 16u * 8u * max_blocks;
+  L.meta = o, o += 8u * 8u * max_blocks;
+  L.lo = o, o += 16u * max_blocks;
+  L.hi = o, o += 16u * max_blocks;
+  L.kept = o, o += 16u * max_block_pairs;
+  L.words = o, o += 16u;
+  L.bytes = o;
+  return L;
+}
+
+// kBlockBoxes: `blocks_per_instance` blocks per instance (1 with many instances), DetectJob's broad phase
+// (kernels.inl BlockBoxes / BlockRow).
+// 1. refit each slot's sphere (every block of the instance refits them all); 2. per block the box of its centres and its largest radius grown by M, the larger of the
+// margin and the fold margin (NaN terms skipped); 3. per block pair with a lane of the method (this
+// block's share: every blocks_per_instance-th), the gap test of BlockRow — per axis
+// g = max(loJ − hiI, loI − hiJ, 0), kept when g_x² + g_y² + g_z² < (R_I + R_J)², which never drops a pair
+// the sphere test reports (the monotonic rounding argument in kernels.inl) — kept pairs appended to
+// shared memory; 4. the allowed lanes of the kept pairs, 64 per pair dealt over the threads: the sphere test with the pair's own margin (DetectJob's floats: the test and the depth are symmetric in the two
+// spheres), reported (lower id, higher id).
 // kMany: blocks of at most 256 threads under the register cap of SphereKernel's kMany; else up to 512.
-template <bool kMany>
-__global__ void __launch_bounds__(kMany ? 256 : 512, kMany ? SPHERECHAIN_CUDA_SPHERE_BLOCKS : 1) BoxKernel(KernelParams p) {
+template <bool kMany, bool kJoints>
+__global__ void __launch_bounds__(kMany ? 256 : 512,
+                                  kMany ? (kJoints ? SPHERECHAIN_CUDA_SPHERE_BLOCKS : SPHERECHAIN_CUDA_VERTEX_BLOCKS) : 1)
+    BoxKernel(KernelParams p) {
   extern __shared__ float4 smem[];
-  const uint32_t inst = blockIdx.x;
-  if (inst >= p.instance_count) return;  // whole block
+  const uint32_t G = p.blocks_per_instance, inst = blockIdx.x / G, part = blockIdx.x % G;
+  if (inst >= p.instance_count) return;  // whole block (never: the grid is N·G blocks)
   const DeviceInstance I = p.instances[inst];
   const DeviceAssetDesc& A = p.assets[I.asset];
   const uint32_t B = A.block_count, slots = 8 * B, T = blockDim.x;
-  const bool write = p.flags & kFlagWriteSpheres, m1 = p.flags & kFlagM1;
+  const bool write = (p.flags & kFlagWriteSpheres) && part == 0, m1 = p.flags & kFlagM1;
   const float m = InstanceMargin(p, A), grow = m1 ? 0.0f : m;  // depth rounding as DetectM1 / DetectM2
   const float fold = InstanceFoldMargin(p, A);
   const float M = fold >= 0.0f ? fmaxf(m, fold) : m;
-  float4* sph = smem;                                                     // 8 · max_blocks
-  uint2* meta = reinterpret_cast<uint2*>(sph + 8 * p.max_blocks);         // 8 · max_blocks
-  float4* lo = reinterpret_cast<float4*>(meta + 8 * p.max_blocks);        // max_blocks: lo xyz, R
-  float4* hi = lo + p.max_blocks;                                         // max_blocks: hi xyz
-  uint4* kept = reinterpret_cast<uint4*>(hi + p.max_blocks);              // max_block_pairs
-  uint32_t* kept_count = reinterpret_cast<uint32_t*>(kept + p.max_block_pairs);
+  const BoxLayout L = MakeBoxLayout(p.max_blocks, p.max_block_pairs);
+  char* const base = reinterpret_cast<char*>(smem);
+  float4* sph = smem;                                          // 8 · max_blocks
+  uint2* meta = reinterpret_cast<uint2*>(base + L.meta);       // 8 · max_blocks
+  float4* lo = reinterpret_cast<float4*>(base + L.lo);         // max_blocks: lo xyz, R
+  float4* hi = reinterpret_cast<float4*>(base + L.hi);         // max_blocks: hi xyz
+  uint4* kept = reinterpret_cast<uint4*>(base + L.kept);       // max_block_pairs
+  uint32_t* words = reinterpret_cast<uint32_t*>(base + L.words);  // [0] kept count, [1] block hits
+  if (threadIdx.x == 0) words[0] = words[1] = 0;
 
-  if (threadIdx.x == 0) *kept_count = 0;
   for (uint32_t s = threadIdx.x; s < slots; s += T) {
     const uint32_t id = A.slot_spheres[s];
     if (id == kNoSphere) {
@@ -357,7 +429,8 @@ __global__ void __launch_bounds__(kMany ? 256 : 512, kMany ? SPHERECHAIN_CUDA_SP
       meta[s] = make_uint2(0u, 0u);
       continue;
     }
-    const float4 v = RefitSphere(p, A, I, id);
+    const float4 v = kJoints ? detail::DevJointSphere(A, I.joint_matrices, id)
+                             : detail::DevRefitSphere(A, I.positions, I.stride_bytes, id, p.flags & kFlagFrameMode);
     sph[s] = v;
     meta[s] = make_uint2(__ldg(A.chain_mask + id), FoldRegion(A, fold, id));
     if (write) p.spheres[I.sphere_offset + id] = v;
@@ -377,7 +450,7 @@ __global__ void __launch_bounds__(kMany ? 256 : 512, kMany ? SPHERECHAIN_CUDA_SP
   __syncthreads();
 
   const uint4* pairs = A.block_pairs[m1 ? 0 : 1];
-  for (uint32_t w = threadIdx.x, n = A.block_pair_count[m1 ? 0 : 1]; w < n; w += T) {
+  for (uint32_t w = threadIdx.x * G + part, n = A.block_pair_count[m1 ? 0 : 1]; w < n; w += T * G) {
     const uint4 e = __ldg(pairs + w);
     const uint32_t bi = e.x & 0xFFFFu, bj = e.x >> 16;
     const float4 li = lo[bi], hi_i = hi[bi], lj = lo[bj], hj = hi[bj];
@@ -385,12 +458,12 @@ __global__ void __launch_bounds__(kMany ? 256 : 512, kMany ? SPHERECHAIN_CUDA_SP
     const float gy = fmaxf(fmaxf(lj.y - hi_i.y, li.y - hj.y), 0.0f);
     const float gz = fmaxf(fmaxf(lj.z - hi_i.z, li.z - hj.z), 0.0f);
     const float rr = li.w + lj.w;
-    if (gx * gx + gy * gy + gz * gz < rr * rr) kept[atomicAdd(kept_count, 1u)] = e;
+    if (gx * gx + gy * gy + gz * gz < rr * rr) kept[atomicAdd(words, 1u)] = e;
   }
   __syncthreads();
 
   uint32_t hits = 0;
-  for (uint32_t w = threadIdx.x, n = 64 * *kept_count; w < n; w += T) {
+  for (uint32_t w = threadIdx.x, n = 64 * words[0]; w < n; w += T) {
     const uint4 e = kept[w >> 6];
     const uint32_t lane = w & 63u;
     if (!(((lane < 32 ? e.y : e.z) >> (lane & 31u)) & 1u)) continue;
@@ -404,7 +477,10 @@ __global__ void __launch_bounds__(kMany ? 256 : 512, kMany ? SPHERECHAIN_CUDA_SP
       Emit(p, inst, min(a, b), max(a, b), P, Q, MP.x & MQ.x, grow);
     }
   }
-  AddInstanceCount(p, inst, hits);
+  if (p.flags & kFlagPublish)
+    FinishBlock(p, inst, hits, words + 1);
+  else
+    AddInstanceCount(p, inst, hits);
 }
 
 // M1, a block per (instance, chain), a thread per chain sphere (§6, M1 mapping).
@@ -466,6 +542,11 @@ __global__ void ChainKernel(KernelParams p) {
 }
 
 uint32_t RoundUp32(uint32_t v) { return (v + 31u) & ~31u; }
+
+// The counters' device block: Batch::counters() [2 + N], the work set of kFlagPublish frames [2 + N] (zero
+// between frames), the ticket.
+size_t CounterBytes(uint32_t instance_count) { return sizeof(uint32_t) * (2 * (2 + size_t{instance_count}) + 1); }
+
 
 void FreeAll(void** ptrs, size_t n) {
   for (size_t i = 0; i < n; ++i)
@@ -593,7 +674,7 @@ Status Batch::Init(const DeviceAsset* const* assets, uint32_t asset_count, const
   Status st = detail::CudaStatus(cudaMalloc(&table_, table_bytes));
   if (st == Status::kOk) st = detail::CudaStatus(cudaMalloc(reinterpret_cast<void**>(&pairs_), sizeof(BatchCollision) * capacity));
   if (st == Status::kOk)
-    st = detail::CudaStatus(cudaMalloc(reinterpret_cast<void**>(&counters_), sizeof(uint32_t) * (2 + size_t{instance_count})));
+    st = detail::CudaStatus(cudaMalloc(reinterpret_cast<void**>(&counters_), CounterBytes(instance_count)));
   if (st == Status::kOk) st = detail::CudaStatus(cudaMalloc(reinterpret_cast<void**>(&spheres_), sizeof(float4) * total_spheres));
   if (st != Status::kOk) return Release(), st;
   asset_table_ = table_;
@@ -606,7 +687,7 @@ Status Batch::Init(const DeviceAsset* const* assets, uint32_t asset_count, const
   } catch (const std::bad_alloc&) {
     st = Status::kErrorOutOfMemory;
   }
-  if (st == Status::kOk) st = detail::CudaStatus(cudaMemset(counters_, 0, sizeof(uint32_t) * (2 + size_t{instance_count})));
+  if (st == Status::kOk) st = detail::CudaStatus(cudaMemset(counters_, 0, CounterBytes(instance_count)));
   if (st != Status::kOk) return Release(), st;
 
   host_assets_ = assets;
@@ -678,36 +759,43 @@ Status Batch::Run(const FrameParams& params, cudaStream_t stream) const {
   if (!(joints ? all_joints_ : all_positions_)) return Status::kErrorNullArgument;  // the source's input, per instance
   Strategy strategy = params.strategy;
   const bool few = instance_count_ < 4 * sm_count_;
-  const size_t box_shm = (sizeof(float4) + sizeof(uint2)) * 8 * size_t{max_blocks_} + 2 * sizeof(float4) * max_blocks_ +
-                         sizeof(uint4) * max_block_pairs_ + sizeof(uint32_t);
+  const uint32_t box_threads = few ? 512u : std::clamp(RoundUp32(8 * max_blocks_), 32u, 256u);
+  const size_t box_shm = MakeBoxLayout(max_blocks_, max_block_pairs_).bytes;
   if (strategy == Strategy::kAuto || (strategy == Strategy::kBlockBoxes && box_shm > kSharedLimit))
     strategy = box_shm <= kSharedLimit ? Strategy::kBlockBoxes : Strategy::kThreadPerSphere;
   if (strategy == Strategy::kBlockPerChain && !m1) return Status::kErrorInvalidJob;
   if (strategy != Strategy::kThreadPerSphere && strategy != Strategy::kBlockPerChain &&
       strategy != Strategy::kWarpPerInstance && strategy != Strategy::kBlockBoxes)
     return Status::kErrorInvalidJob;
+  // Few instances, a block (or a few) per instance: the kernel's last block publishes the counters, so the
+  // frame is one launch without a memset (FinishBlock).
+  const bool publish = few && (strategy == Strategy::kBlockBoxes || strategy == Strategy::kThreadPerSphere);
 
   KernelParams p;
   p.assets = static_cast<const DeviceAssetDesc*>(asset_table_);
   p.instances = static_cast<const DeviceInstance*>(instance_table_);
   p.pairs = pairs_;
-  p.counters = counters_;
+  p.counters = publish ? counters_ + 2 + instance_count_ : counters_;
+  p.published = counters_;
+  p.ticket = counters_ + 2 * (2 + size_t{instance_count_});
   p.spheres = spheres_;
   p.instance_count = instance_count_;
   p.capacity = capacity_;
   p.shared_spheres = max_spheres_;
   p.chains_per_instance = std::max(max_chains_, 1u);
   p.split = 1;
+  p.blocks_per_instance = 1;
   p.max_blocks = max_blocks_;
   p.max_block_pairs = max_block_pairs_;
   p.margin = params.margin;
   p.fold_margin = params.fold_margin;
   p.flags = (params.mode == runtime::RefitMode::kPivotFrame ? kFlagFrameMode : 0u) |
-            (params.write_spheres ? kFlagWriteSpheres : 0u) | (m1 ? kFlagM1 : 0u) | (joints ? kFlagJoints : 0u);
+            (params.write_spheres ? kFlagWriteSpheres : 0u) | (m1 ? kFlagM1 : 0u) | (joints ? kFlagJoints : 0u) | (publish ? kFlagPublish : 0u);
 
-  if (Status s = detail::CudaStatus(cudaMemsetAsync(counters_, 0, sizeof(uint32_t) * (2 + size_t{instance_count_}), stream));
-      s != Status::kOk)
-    return s;
+  if (!publish)
+    if (Status s = detail::CudaStatus(cudaMemsetAsync(counters_, 0, sizeof(uint32_t) * (2 + size_t{instance_count_}), stream));
+        s != Status::kOk)
+      return s;
 
   switch (strategy) {
     case Strategy::kThreadPerSphere: {
@@ -728,11 +816,18 @@ Status Batch::Run(const FrameParams& params, cudaStream_t stream) const {
       break;
     }
     case Strategy::kBlockBoxes: {
-      const uint32_t threads = few ? 512u : std::clamp(RoundUp32(8 * max_blocks_), 32u, 256u);
-      if (few)
-        BoxKernel<false><<<instance_count_, threads, box_shm, stream>>>(p);
+      // Few instances: up to 8 blocks share an instance's block pairs (each refits all its spheres), so
+      // a frame of one character takes a shorter path through the block-pair and sphere tests.
+      p.blocks_per_instance = few ? std::clamp(sm_count_ / instance_count_, 1u, 8u) : 1u;
+      const uint32_t blocks = instance_count_ * p.blocks_per_instance;
+      if (few && joints)
+        BoxKernel<false, true><<<blocks, box_threads, box_shm, stream>>>(p);
+      else if (few)
+        BoxKernel<false, false><<<blocks, box_threads, box_shm, stream>>>(p);
+      else if (joints)
+        BoxKernel<true, true><<<blocks, box_threads, box_shm, stream>>>(p);
       else
-        BoxKernel<true><<<instance_count_, threads, box_shm, stream>>>(p);
+        BoxKernel<true, false><<<blocks, box_threads, box_shm, stream>>>(p);
       break;
     }
     case Strategy::kWarpPerInstance: {

@@ -232,3 +232,38 @@ TEST_CASE("cuda: recorded animation frames (MakeHuman morph, CesiumMan walk, BCN
       }
   });
 }
+
+// A crowd of the recorded frames over the many-instance threshold (4 instances an SM: one block an instance,
+// the register-capped kernels; below it a batch runs the few-instance kernels, several blocks an
+// instance, which the other cases cover), from vertices and from the skinning matrices: every strategy
+// and method, CPU == GPU.
+TEST_CASE("cuda: a crowd of recorded frames over the many-instance threshold, both refit sources, CPU == GPU") {
+  if (!RequireDevice()) return;
+  int dev_id = 0, sms = 0;
+  CUDA_REQUIRE(cudaGetDevice(&dev_id));
+  CUDA_REQUIRE(cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, dev_id));
+  const uint32_t n = 4u * static_cast<uint32_t>(sms) + 1u;
+  ForEachRecordedClip([&](AssetSet& set, const std::vector<std::vector<float>>& frames) {
+    std::vector<std::vector<float>> crowd(n);
+    for (uint32_t i = 0; i < n; ++i) crowd[i] = frames[i % frames.size()];
+    DeviceInstances inst;
+    BuildFrameInstances(set, crowd, &inst);
+    if (!set.joint_frames.empty()) {
+      for (uint32_t i = 0; i < n; ++i) inst.joints.push_back(set.joint_frames[i % set.joint_frames.size()]);
+      inst.UploadJoints();
+    }
+    const sc::DeviceAsset* dev[] = {&set.device};
+    sc::Batch batch;
+    REQUIRE(batch.Init(dev, 1, inst.table.data(), n) == sc::Status::kOk);
+    for (const auto& [method, strategy] : MethodStrategies()) {
+      CAPTURE(int(method));
+      CAPTURE(int(strategy));
+      const sc::HostResults res = RunCompared({&set}, inst, batch, sc::FrameParams{RefitMode::kPivotFrame, method, strategy, true});
+      CHECK(res.total > 0);  // the recorded clips collide somewhere: the crowd tests real pairs
+      if (set.joint_frames.empty()) continue;
+      sc::FrameParams fp{RefitMode::kPivotFrame, method, strategy, true};
+      fp.source = RefitSource::kJoints;
+      (void)RunCompared({&set}, inst, batch, fp);
+    }
+  });
+}

@@ -36,7 +36,8 @@ enum class Strategy : uint8_t {
   /// (box of centres, largest radius grown by the margin), keeps the block pairs whose gap is below the
   /// radii (DetectJob's conservative test: it never drops a pair the sphere test reports), and tests only
   /// their allowed lanes (not excluded; M1: sharing a chain) — far fewer sphere tests than all S(S−1)/2.
-  /// Few instances: up to 512 threads per instance. Needs the blocks in 48 KiB of shared memory (else
+  /// Few instances (fewer than 4 an SM): blocks of 512 threads, up to 8 per instance (each refits all its
+  /// spheres and tests a share of its block pairs). Needs the blocks in 48 KiB of shared memory (else
   /// kThreadPerSphere runs instead).
   kBlockBoxes = 4,
 };
@@ -117,8 +118,10 @@ struct HostResults {
 
 /// A set of character instances refitted and tested together, with its device outputs.
 /// Setup (Init / SetInstances / Release) allocates and synchronises; Run() does neither: it enqueues
-/// one cudaMemsetAsync and one kernel on the caller's stream, so a frame can be captured into a CUDA
-/// graph and replayed (the positions are re-read at every replay).
+/// one kernel on the caller's stream — preceded by a cudaMemsetAsync of the counters, except with few
+/// instances (fewer than 4 an SM) under kBlockBoxes or kThreadPerSphere, where the frame's last block
+/// publishes the counters itself — so a frame can be captured into a CUDA graph and replayed (the
+/// positions are re-read at every replay).
 /// Outputs (device memory owned by the batch; transient: overwritten by the next Run, valid once the
 /// stream reaches the end of that Run's work):
 ///  - pairs(): BatchCollision[capacity], compacted with atomics, order unspecified (sort to compare);
@@ -156,7 +159,7 @@ class Batch {
   /// graph capture. Graphs captured before remain valid (the table lives at the same address).
   Status SetInstances(const Instance* instances, uint32_t instance_count);
 
-  /// Enqueues one frame on `stream` (0 = legacy default stream): zero the counters, then refit every
+  /// Enqueues one frame on `stream` (0 = legacy default stream): count from zero, refit every
   /// instance's spheres from its positions and report overlapping non-excluded pairs. Overlap, as
   /// the CPU DetectJob (same float operations, so the same pair set): ‖cB − cA‖² < ((rB + m) + (rA + m))²,
   /// m the instance's margin (FrameParams::margin, or its asset's when < 0) — for two spheres of one region of
