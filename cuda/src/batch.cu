@@ -4,8 +4,8 @@
 //  - SphereKernel: a block per instance, a thread per sphere, or `split` threads per sphere when the
 //    batch has few instances (kThreadPerSphere); the pairs dealt out evenly (circular order);
 //  - GroupKernel:  a warp per instance, 4 per block (kWarpPerInstance);
-//  - BoxKernel: a block per instance, the CPU DetectJob's blocks of 8 spheres and their bounds, then the
-//    sphere tests of the block pairs kept (kBlockBoxes, the default);
+//  - BoxKernel: a block per instance (up to 8 with few instances), the CPU DetectJob's blocks of 8 spheres
+//    and their bounds, then the sphere tests of the block pairs kept (kBlockBoxes, the default);
 //  - ChainKernel: a block per (instance, chain), a thread per chain sphere (kBlockPerChain, M1).
 // Each refits the spheres it needs into shared memory (DevRefitSphere: runtime/formulas.h, the formulas
 // the CPU's scalar path and SIMD kernels compile), syncs, runs
@@ -14,7 +14,9 @@
 // two spheres of one region when the asset has one (PairMargin) — and appends hits (with the
 // spheres' own depth) to one device array with warp-aggregated atomicAdd
 // (cooperative_groups::coalesced_threads), counting per instance. When the spheres do not fit in
-// 48 KiB of shared memory the kernels keep them in the batch's global sphere buffer instead.
+// 48 KiB of shared memory the kernels keep them in the batch's global sphere buffer instead. With few
+// instances, SphereKernel and BoxKernel count into a work set that the frame's last block publishes
+// (FinishBlock), so the frame is one launch; otherwise Run clears the counters with a memset first.
 #include <cooperative_groups.h>
 #include <cuda/atomic>
 
@@ -390,14 +392,16 @@ __host__ __device__ inline BoxLayout MakeBoxLayout(uint32_t max_blocks, uint32_t
 
 // kBlockBoxes: `blocks_per_instance` blocks per instance (1 with many instances), DetectJob's broad phase
 // (kernels.inl BlockBoxes / BlockRow).
-// 1. refit each slot's sphere (every block of the instance refits them all); 2. per block the box of its centres and its largest radius grown by M, the larger of the
-// margin and the fold margin (NaN terms skipped); 3. per block pair with a lane of the method (this
-// block's share: every blocks_per_instance-th), the gap test of BlockRow — per axis
-// g = max(loJ − hiI, loI − hiJ, 0), kept when g_x² + g_y² + g_z² < (R_I + R_J)², which never drops a pair
-// the sphere test reports (the monotonic rounding argument in kernels.inl) — kept pairs appended to
-// shared memory; 4. the allowed lanes of the kept pairs, 64 per pair dealt over the threads: the sphere test with the pair's own margin (DetectJob's floats: the test and the depth are symmetric in the two
-// spheres), reported (lower id, higher id).
-// kMany: blocks of at most 256 threads under the register cap of SphereKernel's kMany; else up to 512.
+// 1. refit each slot's sphere (every block of the instance refits them all); 2. per block the box of its
+// centres and its largest radius grown by M, the larger of the margin and the fold margin (NaN terms
+// skipped); 3. per block pair with a lane of the method (this block's share: every
+// blocks_per_instance-th), the gap test of BlockRow — per axis g = max(loJ − hiI, loI − hiJ, 0), kept when
+// g_x² + g_y² + g_z² < (R_I + R_J)², which never drops a pair the sphere test reports (the monotonic
+// rounding argument in kernels.inl) — kept pairs appended to shared memory; 4. the allowed lanes of the
+// kept pairs, 64 per pair dealt over the threads: the sphere test with the pair's own margin (DetectJob's
+// floats: the test and the depth are symmetric in the two spheres), reported (lower id, higher id).
+// kMany: blocks of at most 256 threads under a register cap (SPHERECHAIN_CUDA_SPHERE_BLOCKS from joints,
+// SPHERECHAIN_CUDA_VERTEX_BLOCKS from vertices); else up to 512.
 template <bool kMany, bool kJoints>
 __global__ void __launch_bounds__(kMany ? 256 : 512,
                                   kMany ? (kJoints ? SPHERECHAIN_CUDA_SPHERE_BLOCKS : SPHERECHAIN_CUDA_VERTEX_BLOCKS) : 1)
@@ -546,7 +550,6 @@ uint32_t RoundUp32(uint32_t v) { return (v + 31u) & ~31u; }
 // The counters' device block: Batch::counters() [2 + N], the work set of kFlagPublish frames [2 + N] (zero
 // between frames), the ticket.
 size_t CounterBytes(uint32_t instance_count) { return sizeof(uint32_t) * (2 * (2 + size_t{instance_count}) + 1); }
-
 
 void FreeAll(void** ptrs, size_t n) {
   for (size_t i = 0; i < n; ++i)
@@ -790,7 +793,8 @@ Status Batch::Run(const FrameParams& params, cudaStream_t stream) const {
   p.margin = params.margin;
   p.fold_margin = params.fold_margin;
   p.flags = (params.mode == runtime::RefitMode::kPivotFrame ? kFlagFrameMode : 0u) |
-            (params.write_spheres ? kFlagWriteSpheres : 0u) | (m1 ? kFlagM1 : 0u) | (joints ? kFlagJoints : 0u) | (publish ? kFlagPublish : 0u);
+            (params.write_spheres ? kFlagWriteSpheres : 0u) | (m1 ? kFlagM1 : 0u) | (joints ? kFlagJoints : 0u) |
+            (publish ? kFlagPublish : 0u);
 
   if (!publish)
     if (Status s = detail::CudaStatus(cudaMemsetAsync(counters_, 0, sizeof(uint32_t) * (2 + size_t{instance_count_}), stream));
