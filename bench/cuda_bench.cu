@@ -72,8 +72,42 @@ __device__ float Unit(uint32_t h) { return float(h >> 8) * (1.0f / 16777216.0f) 
 // Instance i's #J matrices (3×4 row-major) at out + i · J · 12: [R_y(angle_i) | t_i + noise_j], the angle
 // and translation of PerturbKernel's instance i.
 // With `clip` (F frames of #J×12): [R_y | t] composed with frame i mod F's matrices.
+double NowUs() {
+  return std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
 // The launch floor: a kernel that does nothing, one block of one thread.
 __global__ void EmptyKernel() {}
+
+// A graph's timing: the median latency of 51 single frames (launch to the end of the stream's
+// synchronisation, wall clock) and the mean of back-to-back replays over ~0.2 s timed with events.
+struct GraphTiming {
+  double latency_us, replay_us;
+};
+GraphTiming TimeGraph(cudaGraphExec_t exec, cudaStream_t stream, cudaEvent_t e0, cudaEvent_t e1) {
+  std::vector<double> lat;
+  for (int r = 0; r < 51; ++r) {
+    const double t0 = NowUs();
+    CK(cudaGraphLaunch(exec, stream));
+    CK(cudaStreamSynchronize(stream));
+    lat.push_back(NowUs() - t0);
+  }
+  std::nth_element(lat.begin(), lat.begin() + 25, lat.end());
+  float probe_ms = 0;
+  CK(cudaEventRecord(e0, stream));
+  CK(cudaGraphLaunch(exec, stream));
+  CK(cudaEventRecord(e1, stream));
+  CK(cudaEventSynchronize(e1));
+  CK(cudaEventElapsedTime(&probe_ms, e0, e1));
+  const int reps = std::clamp(static_cast<int>(200.0 / std::max(probe_ms, 1e-3f)), 10, 20000);
+  CK(cudaEventRecord(e0, stream));
+  for (int r = 0; r < reps; ++r) CK(cudaGraphLaunch(exec, stream));
+  CK(cudaEventRecord(e1, stream));
+  CK(cudaEventSynchronize(e1));
+  float ms = 0;
+  CK(cudaEventElapsedTime(&ms, e0, e1));
+  return {lat[25], 1e3 * ms / reps};
+}
 
 __global__ void JointsKernel(const float* clip, uint32_t F, float* out, uint32_t J, uint32_t N, float extent, float noise) {
   const uint64_t idx = uint64_t{blockIdx.x} * blockDim.x + threadIdx.x;
@@ -128,10 +162,6 @@ struct ThreadParallelFor {
     for (auto& th : pool) th.join();
   }
 };
-
-double NowUs() {
-  return std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
 
 }  // namespace
 
@@ -275,22 +305,8 @@ int main(int argc, char** argv) {
     EmptyKernel<<<1, 1, 0, stream>>>();
     CK(cudaStreamEndCapture(stream, &graph));
     CK(cudaGraphInstantiate(&exec, graph, 0));
-    std::vector<double> lat;
-    for (int r = 0; r < 51; ++r) {
-      const double t0 = NowUs();
-      CK(cudaGraphLaunch(exec, stream));
-      CK(cudaStreamSynchronize(stream));
-      lat.push_back(NowUs() - t0);
-    }
-    std::nth_element(lat.begin(), lat.begin() + 25, lat.end());
-    const int reps = 20000;
-    CK(cudaEventRecord(e0, stream));
-    for (int r = 0; r < reps; ++r) CK(cudaGraphLaunch(exec, stream));
-    CK(cudaEventRecord(e1, stream));
-    CK(cudaEventSynchronize(e1));
-    float ms = 0;
-    CK(cudaEventElapsedTime(&ms, e0, e1));
-    std::printf("launch floor (a graph of one empty kernel): %.2f us a replay, latency %.2f us\n", 1e3 * ms / reps, lat[25]);
+    const GraphTiming t = TimeGraph(exec, stream, e0, e1);
+    std::printf("launch floor (a graph of one empty kernel): %.2f us a replay, latency %.2f us\n", t.replay_us, t.latency_us);
     CK(cudaGraphExecDestroy(exec));
     CK(cudaGraphDestroy(graph));
   }
@@ -417,35 +433,13 @@ int main(int argc, char** argv) {
         CK(cudaStreamEndCapture(stream, &graph));
         if (st != sc::Status::kOk) return 1;
         CK(cudaGraphInstantiate(&exec, graph, 0));
-        // Latency: one frame, launch to completion, median of 51.
-        std::vector<double> lat;
-        for (int r = 0; r < 51; ++r) {
-          const double t0 = NowUs();
-          CK(cudaGraphLaunch(exec, stream));
-          CK(cudaStreamSynchronize(stream));
-          lat.push_back(NowUs() - t0);
-        }
-        std::nth_element(lat.begin(), lat.begin() + 25, lat.end());
-        // Throughput: back-to-back replays for ~0.2 s.
-        float probe_ms = 0;
-        CK(cudaEventRecord(e0, stream));
-        CK(cudaGraphLaunch(exec, stream));
-        CK(cudaEventRecord(e1, stream));
-        CK(cudaEventSynchronize(e1));
-        CK(cudaEventElapsedTime(&probe_ms, e0, e1));
-        const int reps = std::clamp(static_cast<int>(200.0 / std::max(probe_ms, 1e-3f)), 10, 20000);
-        CK(cudaEventRecord(e0, stream));
-        for (int r = 0; r < reps; ++r) CK(cudaGraphLaunch(exec, stream));
-        CK(cudaEventRecord(e1, stream));
-        CK(cudaEventSynchronize(e1));
-        float ms = 0;
-        CK(cudaEventElapsedTime(&ms, e0, e1));
-        const double us = 1e3 * ms / reps;
+        const GraphTiming t = TimeGraph(exec, stream, e0, e1);
+        const double us = t.replay_us;
         sc::HostResults res;
         const sc::Status ds = batch.Download(stream, &res);
         const double gbs = (from_joints ? batch.frame_joint_bytes() : batch.frame_position_bytes()) / (us * 1e-6) / 1e9;
         std::printf("%-6s %8u %-4s %-16s %12.2f %12.2f %14.3g %9.1f %6.1f%% %13.1f%s %8.1fx %13.1f%s %8.1fx %10.2f%s\n",
-                    from_joints ? "joints" : "verts", N, m1 ? "M1" : "M2", strategy_names[static_cast<int>(strategy)], us, lat[25], N / (us * 1e-6), gbs,
+                    from_joints ? "joints" : "verts", N, m1 ? "M1" : "M2", strategy_names[static_cast<int>(strategy)], us, t.latency_us, N / (us * 1e-6), gbs,
                     100.0 * gbs / peak_gbs, cpu_frame, cpu_n < N ? "*" : " ", cpu_frame / us, mt_frame, mt_n < N ? "*" : " ",
                     mt_frame / us, double(res.total) / N,
                     ds == sc::Status::kOkTruncated ? " (overflow)" : "");
