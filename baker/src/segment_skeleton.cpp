@@ -180,11 +180,19 @@ Result<Segmentation> SegmentBySkeleton(const Mesh& mesh, const SkeletonOptions& 
   }
   if (total - sub[top] >= min_share) {
     Limb limb;  // the tree above the trunk (a skeleton rooted at its head, say)
-    limb.root = size_t(skin.nodes[top].parent);
     limb.share = (total - sub[top]) / total;
     for (size_t n = 0; n < nn; ++n)
       if (!in_top[n]) limb.bones.push_back(n);
-    limbs.push_back(std::move(limb));
+    // Its first bone: top's parent; when top is a root, the skin is a forest (a skin whose joints leave
+    // out a bone between two of them, say) and the branch is the other trees: the root moving the most.
+    if (skin.nodes[top].parent >= 0) {
+      limb.root = size_t(skin.nodes[top].parent);
+    } else {
+      limb.root = SIZE_MAX;
+      for (size_t n : limb.bones)
+        if (skin.nodes[n].parent < 0 && (limb.root == SIZE_MAX || sub[n] > sub[limb.root])) limb.root = n;
+    }
+    if (limb.root != SIZE_MAX) limbs.push_back(std::move(limb));
   }
   if (limbs.size() + 1 > size_t(kMaxRegions))
     return NoLimbs(std::to_string(limbs.size()) + " branches off the trunk, more than the " +

@@ -141,6 +141,50 @@ TEST_CASE("segment (skeleton): bad input — no recognisable limbs, no skin, a s
   }
 }
 
+// A skin whose bones are two trees (found by fuzz_import_gltf: a glTF whose skin lists the mesh's own root
+// node among its joints and leaves out the bone tree's root). The trunk's top bone is then a root and the
+// weight outside its tree is a forest branch; its first bone used to be "top's parent" (none: an index past
+// the bone list).
+TEST_CASE("segment (skeleton): a skin of two bone trees — the other tree is a limb, or the error says why") {
+  sc::Mesh mesh = Import(Creature());
+  sc::Skin& skin = *mesh.skin;
+  auto node_of = [&](const std::string& name) {
+    for (size_t n = 0; n < skin.nodes.size(); ++n)
+      if (skin.nodes[n].name == name) return int32_t(n);
+    FAIL("no bone " << name);
+    return int32_t(-1);
+  };
+  REQUIRE(skin.nodes[size_t(node_of("Spine"))].parent == -1);  // the trunk's top is the tree's root
+  // A second root bone, "Extra", after the others (parents first still holds).
+  sc::Node extra;
+  extra.name = "Extra";
+  skin.nodes.push_back(extra);
+  const int32_t extra_node = int32_t(skin.nodes.size() - 1);
+  SUBCASE("the tail's weight on the other tree: that tree is a limb with the tail's triangles") {
+    for (sc::SkinJoint& j : skin.joints)
+      if (j.node == node_of("Tail01") || j.node == node_of("Tail02")) j.node = extra_node;
+    auto seg = sc::SegmentBySkeleton(mesh);
+    REQUIRE_MESSAGE(seg.ok(), (seg.ok() ? "" : seg.error().message));
+    const sc::RegionLayout& L = seg->layout;
+    REQUIRE(L.count() == 6);
+    int extra_region = -1;
+    for (int r = 0; r < L.count(); ++r)
+      if (L.regions[size_t(r)].bone == "Extra") extra_region = r;
+    REQUIRE(extra_region >= 0);
+    CHECK(Count(seg.value(), extra_region) == 104);  // the tail's triangles
+    CHECK(L.IsTrunk(sc::Region(L.count() - 1)));
+    CHECK(Count(seg.value(), L.count() - 1) == 856);
+  }
+  SUBCASE("the trunk's weight on the other tree (the fuzzer's input): refused, saying why") {
+    for (sc::SkinJoint& j : skin.joints)
+      if (j.node == node_of("Spine") || j.node == node_of("Pelvis") || j.node == node_of("Chest")) j.node = extra_node;
+    auto seg = sc::SegmentBySkeleton(mesh);
+    REQUIRE_FALSE(seg.ok());
+    CHECK(seg.error().code == sc::Error::Code::kSegmentation);
+    CHECK(seg.error().message.find("no recognisable limbs") != std::string::npos);
+  }
+}
+
 TEST_CASE("segment: a region map naming its regions — a creature's layout, and an unknown name refused") {
   const sc::Mesh mesh = Import(Creature());
   auto truth = sc::SegmentBySkeleton(mesh);
