@@ -5,10 +5,10 @@
 # frames (positions and joint matrices) plus MakeHuman's body mesh, for the CPU == GPU tests and the bench.
 # Run it here, then the whole check on the GPU machine in one command (device tool, carry [".carry"]):
 #   bash scripts/gpu-check.sh [--ncu]
+# which builds the `cuda` preset there, runs the CUDA suite on these assets and frames, the bench,
+# compute-sanitizer and ctest's guard, and writes its logs into $OUT (see its header).
 # `scripts/gpu-carry.sh --base REV` also carries cuda/ as it is at git revision REV (.carry/base/cuda), which
 # gpu-check.sh then builds beside the working tree's and benches in the same run (a before/after on one GPU).
-# which builds the `cuda` preset there, runs the CUDA suite on these assets and frames, ctest's guard, the
-# bench and compute-sanitizer, and packs the logs into $OUT (see its header).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 base_rev=
