@@ -185,6 +185,7 @@ Result<Segmentation> SegmentBySkeleton(const Mesh& mesh, const SkeletonOptions& 
       if (!in_top[n]) limb.bones.push_back(n);
     // Its first bone: top's parent; when top is a root, the skin is a forest (a skin whose joints leave
     // out a bone between two of them, say) and the branch is the other trees: the root moving the most.
+    // (There is one: the weight outside top's tree lies on a tree of its own.)
     if (skin.nodes[top].parent >= 0) {
       limb.root = size_t(skin.nodes[top].parent);
     } else {
@@ -192,7 +193,7 @@ Result<Segmentation> SegmentBySkeleton(const Mesh& mesh, const SkeletonOptions& 
       for (size_t n : limb.bones)
         if (skin.nodes[n].parent < 0 && (limb.root == SIZE_MAX || sub[n] > sub[limb.root])) limb.root = n;
     }
-    if (limb.root != SIZE_MAX) limbs.push_back(std::move(limb));
+    limbs.push_back(std::move(limb));
   }
   if (limbs.size() + 1 > size_t(kMaxRegions))
     return NoLimbs(std::to_string(limbs.size()) + " branches off the trunk, more than the " +
