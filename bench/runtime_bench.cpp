@@ -684,13 +684,46 @@ bool SkinContacts(const Workload& w, const sc::AssetView& view, int runs) {
       found[f].emplace_back(std::min(out[i].triangle_a, out[i].triangle_b), std::max(out[i].triangle_a, out[i].triangle_b));
     std::sort(found[f].begin(), found[f].end());
   }
+  // The same job given each frame's joint matrices (an asset baked with skin weights, frames with .joints):
+  // the joint-matrix cull. Its contacts are checked against the job's; timed in the same passes.
+  const bool cull = np.has_joint_cull() && w.joints.size() == F;
+  std::vector<double> cull_us(F, 1e300);
+  std::vector<sc::NarrowPhaseStats> cull_stats(F);
+  bool ok = true;
+  sc::NarrowPhaseJob cull_job = job;
+  std::vector<sc::TriangleContact> cull_out(out.size());
+  uint32_t cull_count = 0;
+  sc::NarrowPhaseStats cull_st;
+  cull_job.output = cull_out.data(), cull_job.count = &cull_count, cull_job.stats = &cull_st;
+  cull_job.joint_count = np.joint_count();
+  for (size_t f = 0; cull && f < F; ++f) {
+    cull_job.positions = {w.frames[f].data(), w.vertex_count, 12};
+    cull_job.joint_matrices = w.joints[f].data();
+    if (sc::Status s = cull_job.Run(); s != sc::Status::kOk) {
+      std::fprintf(stderr, "skin contacts with joint matrices, frame %zu: %s\n", f, sc::ToString(s));
+      return false;
+    }
+    cull_stats[f] = cull_st;
+    std::vector<TrianglePair> pairs;
+    for (uint32_t i = 0; i < cull_count; ++i)
+      pairs.emplace_back(std::min(cull_out[i].triangle_a, cull_out[i].triangle_b), std::max(cull_out[i].triangle_a, cull_out[i].triangle_b));
+    std::sort(pairs.begin(), pairs.end());
+    if (pairs != found[f]) {
+      std::fprintf(stderr, "MISMATCH skin contacts with joint matrices, frame %zu: %zu, without %zu\n", f, pairs.size(), found[f].size());
+      ok = false;
+    }
+  }
   for (int k = 0; k < runs; ++k)
     for (size_t f = 0; f < F; ++f) {
       job.positions = {w.frames[f].data(), w.vertex_count, 12};
       us[f] = std::min(us[f], Micros([&] { (void)job.Run(); }));
+      if (cull) {
+        cull_job.positions = job.positions;
+        cull_job.joint_matrices = w.joints[f].data();
+        cull_us[f] = std::min(cull_us[f], Micros([&] { (void)cull_job.Run(); }));
+      }
       if (k < 2) peer_us[f] = std::min(peer_us[f], Micros([&] { sweep_all(w.frames[f].data(), &peer[f]); }));
     }
-  bool ok = true;
 #if SPHERECHAIN_BENCH_EMBREE
   EmbreePeer embree;
   std::vector<double> embree_us(F, 1e300), embree_build_us(F, 1e300);
@@ -732,6 +765,20 @@ bool SkinContacts(const Workload& w, const sc::AssetView& view, int runs) {
   std::printf("%-30s %12.0f %12.1f %12.0f\n", "triangle box tests", box_tests.median, box_tests.mean, box_tests.max);
   std::printf("%-30s %12.0f %12.1f %12.0f\n", "exact triangle tests", tests.median, tests.mean, tests.max);
   std::printf("%-30s %12.0f %12.1f %12.0f\n", "contacts", hits.median, hits.mean, hits.max);
+  if (cull) {
+    const Summary ctime = Summarize(cull_us);
+    const Summary culled = Summarize(Column(cull_stats, &sc::NarrowPhaseStats::joint_culled));
+    const Summary cbox = Summarize(Column(cull_stats, &sc::NarrowPhaseStats::box_tests));
+    std::printf("%-30s %12.1f %12.1f %12.1f  (frame %zu)\n", "with joint matrices: us", ctime.median, ctime.mean,
+                ctime.max, ctime.argmax);
+    std::printf("%-30s %12.0f %12.1f %12.0f\n", "  patch pairs culled", culled.median, culled.mean, culled.max);
+    std::printf("%-30s %12.0f %12.1f %12.0f\n", "  triangle box tests", cbox.median, cbox.mean, cbox.max);
+    std::printf("ratio job / job with joint matrices: %.2fx (medians), %.2fx (maxima); contacts equal: %s\n",
+                time.median / ctime.median, time.max / ctime.max, ok ? "yes" : "NO");
+  } else {
+    std::printf("with joint matrices: not run (%s)\n",
+                np.has_joint_cull() ? "the frames have no .joints" : "the asset has no skin weights: bake --skin-weights");
+  }
   std::printf("%-30s %12.1f %12.1f %12.1f  (best of %d)\n", "peer: whole-mesh sweep us", ptime.median, ptime.mean,
               ptime.max, std::min(runs, 2));
   std::printf("ratio whole-mesh sweep / job: %.1fx (medians), %.1fx (maxima); contacts equal on every frame: %s\n",

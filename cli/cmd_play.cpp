@@ -151,6 +151,8 @@ nlohmann::json PlayJson(const PlayArgs& a, const runtime::AssetView& view, const
     if (opts.narrow_phase)
       o["narrow_phase"] = {{"contacts", r.narrow.contacts},
                            {"candidate_pairs", r.narrow.candidate_pairs},
+                           {"box_tests", r.narrow.box_tests},
+                           {"joint_culled", r.narrow.joint_culled},
                            {"triangle_tests", r.narrow.triangle_tests},
                            {"degenerate_triangles", r.narrow.degenerate_triangles},
                            {"us", r.narrow_us},

@@ -133,6 +133,18 @@ inline const char* RunNarrowPhaseSequence(const runtime::AssetView& view, const 
       }
       if (ex == Exclusions::kCrease && at_bind && stats.contacts != np.bind_contact_count())
         return "NarrowPhaseJob kCrease at bind pose: not the bind contacts Init found";
+      if (ex == Exclusions::kCrease && at_bind && np.has_joint_cull()) {
+        // The bind pose is the skin under identity matrices: the joint-matrix cull may skip pairs, never a contact.
+        std::vector<float> identity(size_t{np.joint_count()} * kJointMatrixFloats, 0.0f);
+        for (uint32_t j = 0; j < np.joint_count(); ++j)
+          for (int k = 0; k < 3; ++k) identity[size_t{j} * kJointMatrixFloats + 5 * k] = 1.0f;
+        job.joint_matrices = identity.data();
+        job.joint_count = np.joint_count();
+        NarrowPhaseStats culled;
+        job.stats = &culled;
+        if (Failed(job.Run())) return "NarrowPhaseJob kCrease with joint matrices failed on valid arguments";
+        if (culled.contacts != stats.contacts) return "NarrowPhaseJob kCrease: the joint-matrix cull lost a bind contact";
+      }
       if (ex == Exclusions::kCrease && crease_ran) *crease_ran = true;
     }
   }

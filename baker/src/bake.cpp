@@ -67,7 +67,8 @@ Result<BakeConfig> ParseBakeConfig(const std::string& text, const std::string& w
                                               "min_radius_rel", "min_gain", "region_balance", "refine_sweeps", "dilation_rel",
                                               "skin_spheres", "skin_tolerance_rel", "skin_min_vertices", "medial_min_rel",
                                               "contact_margin_rel", "near_rel", "vertices", "regions", "pivot_poses",
-                                              "pivot_pose_angle", "reach_rel", "fold_margin_rel", "crease_rel"};
+                                              "pivot_pose_angle", "reach_rel", "fold_margin_rel", "crease_rel",
+                                              "skin_weights"};
   for (auto it = j.begin(); it != j.end(); ++it)
     if (!known.count(it.key())) return MakeError(Error::Code::kConfig, where + ": unknown key '" + it.key() + "'");
 
@@ -102,6 +103,10 @@ Result<BakeConfig> ParseBakeConfig(const std::string& text, const std::string& w
     if (v == "joined") c.import.vertices = VertexContract::kJoined;
     else if (v == "source") c.import.vertices = VertexContract::kSource;
     else return MakeError(Error::Code::kConfig, where + ": 'vertices' must be \"joined\" or \"source\"");
+  }
+  if (j.contains("skin_weights")) {
+    if (!j["skin_weights"].is_boolean()) return MakeError(Error::Code::kConfig, where + ": 'skin_weights' must be true or false");
+    c.skin_weights = j["skin_weights"];
   }
   if (j.contains("compare_segmentations")) {
     if (!j["compare_segmentations"].is_boolean())
@@ -191,6 +196,7 @@ Status ApplyBakeOptions(const BakeOptions& o, BakeConfig* config) {
                                                " must be > 0 (source units), or 0 for the default");
   if (o.disk_step > 0.0) config->fit.disk_step = o.disk_step;
   config->force = o.force;
+  if (o.skin_weights) config->skin_weights = true;
   if (o.segmentation == "auto") config->segmentation = SegmentMethod::kAuto;
   else if (o.segmentation == "rig") config->segmentation = SegmentMethod::kRig;
   else if (o.segmentation == "geometry") config->segmentation = SegmentMethod::kGeometry;
@@ -235,6 +241,7 @@ std::string CanonicalConfig(const BakeConfig& c, const RegionLayout* layout) {
   j["reach_rel"] = c.reach_rel;
   if (c.fold_margin_rel) j["fold_margin_rel"] = *c.fold_margin_rel;  // added later: written only when set
   j["crease_rel"] = c.crease_rel;
+  if (c.skin_weights) j["skin_weights"] = true;  // added later: written only when on
   // Added after assets were cached on the hash: written only when on (the default is off).
   if (c.pivot_poses) j["pivot_poses"] = c.pivot_poses, j["pivot_pose_angle"] = c.pivot_pose_angle;
   j["rays"] = c.fit.rays;
@@ -589,6 +596,7 @@ Result<BakeResult> Bake(const std::string& input_path, const BakeConfig& config,
     in.fold_margin = FoldMarginRel(config, r.segmentation.layout) * r.fit.body_height;
     in.bind_positions = &mesh.positions;
     in.crease = config.crease_rel * r.fit.body_height;
+    in.skin_weights = config.skin_weights;
     if (r.coverage) in.coverage = &*r.coverage;
     in.coverage_voxel_rel = r.coverage_options.voxel_rel;
     in.forced_findings = &r.plausibility;

@@ -1,6 +1,7 @@
 #include "spherechain/baker/write.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <numeric>
@@ -37,6 +38,41 @@ fb::UpAxis ToUpAxis(UpAxis a) {
     case UpAxis::kY: break;
   }
   return fb::UpAxis::Y;
+}
+
+// Asset.skin_counts / skin_joints / skin_weights from the imported rows (weights summing to 1): the
+// influences above 0 (at most 255 a vertex, the largest kept), each weight × 255 rounded down and the
+// remainder of 255 handed out by largest fractions, so every weight stays within 1/255 of its value and
+// a vertex's sum to 255. Joints < 65,536 (CentreSkinWeights refuses more).
+void SkinRows(const Skin& skin, std::vector<uint8_t>* counts, std::vector<uint16_t>* joints,
+              std::vector<uint8_t>* weights) {
+  const size_t V = skin.weight_offsets.size() - 1;
+  counts->assign(V, 0);
+  std::vector<std::pair<float, uint32_t>> row;
+  std::vector<uint32_t> q;
+  for (size_t v = 0; v < V; ++v) {
+    row.clear();
+    for (uint32_t e = skin.weight_offsets[v]; e < skin.weight_offsets[v + 1]; ++e)
+      if (skin.weights[e] > 0.0f) row.emplace_back(skin.weights[e], skin.weight_joints[e]);
+    std::sort(row.begin(), row.end(), [](const auto& x, const auto& y) { return x.first > y.first; });
+    if (row.size() > 255) row.resize(255);
+    double sum = 0.0;
+    for (const auto& r : row) sum += r.first;
+    if (row.empty() || !(sum > 0.0)) continue;
+    q.assign(row.size(), 0);
+    std::vector<std::pair<double, size_t>> frac;
+    uint32_t given = 0;
+    for (size_t k = 0; k < row.size(); ++k) {
+      const double x = row[k].first / sum * 255.0;
+      q[k] = uint32_t(std::floor(x));
+      given += q[k];
+      frac.emplace_back(x - q[k], k);
+    }
+    std::stable_sort(frac.begin(), frac.end(), [](const auto& x, const auto& y) { return x.first > y.first; });
+    for (size_t k = 0; given < 255 && k < frac.size(); ++k, ++given) ++q[frac[k].second];
+    (*counts)[v] = uint8_t(row.size());
+    for (size_t k = 0; k < row.size(); ++k) joints->push_back(uint16_t(row[k].second)), weights->push_back(uint8_t(q[k]));
+  }
 }
 
 }  // namespace
@@ -144,6 +180,20 @@ std::vector<uint8_t> BuildAsset(const AssetInputs& in) {
 
   flatbuffers::Offset<flatbuffers::Vector<float>> bind_v;
   if (in.bind_positions && in.crease > 0.0) bind_v = b.CreateVector(*in.bind_positions);
+  // The skin weights per vertex (schema v4, with the crease rule and the joint refit's weights): every
+  // influence above 0, its weight rounded to 1/255 so that a vertex's sum to 255 (largest remainders).
+  flatbuffers::Offset<flatbuffers::Vector<uint8_t>> skin_counts_v, skin_weights_v;
+  flatbuffers::Offset<flatbuffers::Vector<uint16_t>> skin_joints_v;
+  const bool skin_rows = in.skin_weights && in.bind_positions && in.crease > 0.0 && in.centre_weights && mesh.skin &&
+                         mesh.skin->weight_offsets.size() == mesh.positions.size() / 3 + 1;
+  if (skin_rows) {
+    std::vector<uint8_t> counts, weights;
+    std::vector<uint16_t> joints;
+    SkinRows(*mesh.skin, &counts, &joints, &weights);
+    skin_counts_v = b.CreateVector(counts);
+    skin_joints_v = b.CreateVector(joints);
+    skin_weights_v = b.CreateVector(weights);
+  }
 
   fb::AssetBuilder ab(b);
   ab.add_schema_version(layout.IsPaperFive() ? spherechain::runtime::kPaperSchemaVersion : spherechain::runtime::kSchemaVersion);
@@ -151,6 +201,7 @@ std::vector<uint8_t> BuildAsset(const AssetInputs& in) {
   ab.add_contact_margin(float(in.contact_margin));
   if (in.fold_margin >= 0.0) ab.add_fold_margin(float(in.fold_margin));
   if (in.bind_positions && in.crease > 0.0) ab.add_bind_positions(bind_v), ab.add_crease(float(in.crease));
+  if (skin_rows) ab.add_skin_counts(skin_counts_v), ab.add_skin_joints(skin_joints_v), ab.add_skin_weights(skin_weights_v);
   ab.add_fit_method(fit_method);
   if (in.coverage) ab.add_coverage(coverage);
   if (in.centre_weights) {

@@ -58,6 +58,7 @@ import::Status Context::Init() {
   so.narrow = playback::SessionNarrow::kEvery;
   so.crease = false;
   so.reach_model = true;
+  so.joint_matrices = true;  // the skin contacts' narrow phase culls with them (an asset with skin weights)
   so.contact_capacity = 1u << 20;
   if (auto s = session.Init(view, mesh, so); !s.ok()) return Fail(s.error().code, "'" + a.asset_name + "': " + s.error().message);
   contacts.resize(so.contact_capacity);

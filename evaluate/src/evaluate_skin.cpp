@@ -34,6 +34,8 @@ import::Status MeasureSkinContacts(Context& c, const playback::SessionFrame& fr,
   job.capacity = static_cast<uint32_t>(c.contacts.size());
   job.count = &n;
   job.stats = &row->skin_stats;
+  if (narrow.has_joint_cull() && fr.joint_matrices.size() == size_t{narrow.joint_count()} * runtime::kJointMatrixFloats)
+    job.joint_matrices = fr.joint_matrices.data(), job.joint_count = narrow.joint_count();
   const auto t0 = std::chrono::steady_clock::now();
   const runtime::Status ks = job.Run();
   row->skin_us = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count();

@@ -131,7 +131,10 @@ Status Session::Step(const Animation& animation, uint32_t f) {
   if (auto s = animation.Frame(*mesh_, f, &scratch_, &positions_, &label); !s.ok()) return s;
   // The frame's joint matrices, in the runtime's layout: for the joint refit and for a consumer that asked.
   const bool joints = options_.spheres && options_.refit == PlayRefit::kJoints;
-  const bool give = options_.joint_matrices && view_.asset->sphere_joints() &&
+  // The narrow phase's joint-matrix cull (an asset baked with skin weights) takes them too.
+  const bool cull = options_.narrow == SessionNarrow::kEvery && exclusions_ == runtime::Exclusions::kCrease &&
+                    model_.narrow_phase() && model_.narrow_phase()->has_joint_cull();
+  const bool give = (options_.joint_matrices || cull) && view_.asset->sphere_joints() &&
                     view_.asset->joint_count() == scratch_.matrices.size();
   if (joints || give) JointMatrices(scratch_, &joint_matrices_);
   return Run(positions_.data(), joints || give ? joint_matrices_.data() : nullptr, f, std::move(label));
@@ -162,7 +165,7 @@ Status Session::Run(const float* positions, const float* joint_matrices, uint32_
     if (auto s = Refit(positions, joint_matrices); !s.ok()) return s;
     if (auto s = Detect(); !s.ok()) return s;
   }
-  if (options_.narrow != SessionNarrow::kNone) return Narrow(positions);
+  if (options_.narrow != SessionNarrow::kNone) return Narrow(positions, joint_matrices);
   return Ok{};
 }
 
@@ -234,7 +237,7 @@ Status Session::Detect() {
   return Ok{};
 }
 
-Status Session::Narrow(const float* positions) {
+Status Session::Narrow(const float* positions, const float* joint_matrices) {
   uint32_t count = 0;
   runtime::NarrowPhaseJob job;
   job.model = model_.narrow_phase();
@@ -259,6 +262,10 @@ Status Session::Narrow(const float* positions) {
     // joint, and the exact narrow phase behind them cannot cry wolf.
     if (model_.fold_margin() >= 0.0f) broad.fold_margin = broad.margin;
     job.sphere_pairs = out_behind_.data();
+  } else if (crease && joint_matrices && job.model->has_joint_cull()) {
+    // The frame was skinned by these matrices (Animation::Frame: linear blend of the mesh's own weights).
+    job.joint_matrices = joint_matrices;
+    job.joint_count = job.model->joint_count();
   }
   auto run = [&] {
     if (behind) {

@@ -168,6 +168,7 @@ def bake(
     rig: _Path | None = None,
     disk_step: float | None = None,
     force: bool = False,
+    skin_weights: bool = False,
 ) -> Asset:
     """Bakes a character file (what `spherechain bake` writes, byte for byte)."""
 

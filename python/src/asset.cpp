@@ -94,7 +94,7 @@ PyAsset Load(const py::object& source) {
 // ---- bake -----------------------------------------------------------------------------------------
 PyAsset Bake(const py::object& path, const py::object& config, std::optional<std::string> regions,
              std::optional<std::string> segmentation, const py::object& region_map, std::optional<std::string> vertices,
-             const py::object& rig, std::optional<double> disk_step, bool force) {
+             const py::object& rig, std::optional<double> disk_step, bool force, bool skin_weights) {
   PyObject* error_class = Exceptions().bake_error;
   auto fail = [&](const import::Error& e) {
     ThrowOffline(error_class, e, std::string(import::ToString(e.code)) + ": " + e.message);
@@ -118,6 +118,7 @@ PyAsset Bake(const py::object& path, const py::object& config, std::optional<std
   if (!rig.is_none()) options.rig = PathString(rig);
   options.disk_step = disk_step.value_or(0.0);
   options.force = force;
+  options.skin_weights = skin_weights;
   if (auto s = baker::ApplyBakeOptions(options, &bake_config); !s.ok()) fail(s.error());
 
   LogLines log;
@@ -342,7 +343,8 @@ the bytes are not a loadable asset; FileNotFoundError / OSError when the file ca
 
   m.def("bake", &Bake, py::arg("path"), py::arg("config") = py::none(), py::kw_only(), py::arg("regions") = py::none(),
         py::arg("segmentation") = py::none(), py::arg("region_map") = py::none(), py::arg("vertices") = py::none(),
-        py::arg("rig") = py::none(), py::arg("disk_step") = py::none(), py::arg("force") = false, R"doc(
+        py::arg("rig") = py::none(), py::arg("disk_step") = py::none(), py::arg("force") = false,
+        py::arg("skin_weights") = false, R"doc(
 Bakes a character file into an Asset: what `spherechain bake PATH -o OUT.sphc` writes, byte for byte, for
 the same input, configuration and options (the same library calls). Releases the GIL; the libraries' log
 lines go to the logging module's "spherechain" logger.
@@ -353,7 +355,8 @@ config: None (defaults), a dict of configuration keys (as a `--config` JSON file
 regions: "extended" or "paper" (`--regions`); segmentation: "auto", "rig", "geometry", "skeleton", "map";
 region_map: path of a JSON region map; vertices: "joined" or "source" (assimp formats); rig: a MakeHuman
 .mhskel; disk_step: the torso disk step in source units (> 0); force: write the asset although a
-plausibility check fails (`--force`). Each one given overrides the configuration's key.
+plausibility check fails (`--force`); skin_weights: also write the skin weights per vertex for the narrow
+phase's joint-matrix cull (`--skin-weights`). Each one given overrides the configuration's key.
 Raises BakeError (.code, .message; str() is what the CLI prints after "error: ").
 )doc");
 

@@ -43,6 +43,17 @@ def test_bake_options_give_the_cli_bytes(tmp_path):
     assert paper.to_bytes() == (tmp_path / "paper.sphc").read_bytes()
 
 
+def test_skin_weights_option_gives_the_cli_bytes(baked, tmp_path):
+    # --skin-weights, the keyword and the configuration key write the same bytes; the asset grows by the rows.
+    work, asset = baked
+    (tmp_path / "fast.json").write_text(json.dumps(FAST))
+    cli("bake", CREATURE, "-o", tmp_path / "skin.sphc", "--config", tmp_path / "fast.json", "--skin-weights")
+    by_keyword = spherechain.bake(CREATURE, FAST, skin_weights=True)
+    by_key = spherechain.bake(CREATURE, dict(FAST, skin_weights=True))
+    assert by_keyword.to_bytes() == (tmp_path / "skin.sphc").read_bytes() == by_key.to_bytes()
+    assert len(by_keyword.to_bytes()) > len(asset.to_bytes())
+
+
 def test_info_is_inspect_json(baked):
     work, asset = baked
     inspected = json.loads(cli("inspect", work / "cli.sphc", "--json").stdout)

@@ -181,6 +181,27 @@ Status Semantics(const Asset& a, AssetView* view) {
     }
   }
 
+  // The skin weights per vertex (optional, schema v4, with the crease rule): #V counts, their joints and
+  // weights; a vertex's rounded weights sum to 255 within its count (each is within 1/2 of weight × 255).
+  const auto* kc = a.skin_counts();
+  const auto* kj = a.skin_joints();
+  const auto* kw = a.skin_weights();
+  if (bool(kc) != bool(kj) || bool(kc) != bool(kw)) return Status::kErrorMissingField;
+  if (kc) {
+    if (kc->size() != V || !(a.crease() > 0.0f)) return Status::kErrorCountMismatch;
+    size_t n = 0;
+    for (uint8_t c : *kc) n += c;
+    if (kj->size() != n || kw->size() != n) return Status::kErrorCountMismatch;
+    for (uint16_t j : *kj)
+      if (j >= a.joint_count()) return Status::kErrorIndexOutOfRange;
+    size_t e = 0;
+    for (uint8_t c : *kc) {
+      int sum = 0;
+      for (uint32_t k = 0; k < c; ++k) sum += kw->Get(e++);
+      if (c && std::abs(sum - 255) * 2 > int{c}) return Status::kErrorSkinWeights;
+    }
+  }
+
   // Regions (optional, schema v4): what region values mean; the trunk last.
   if (const auto* regions = a.regions()) {
     const uint32_t R = regions->size();

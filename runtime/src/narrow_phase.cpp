@@ -624,6 +624,8 @@ void NarrowPhaseModel::ForEachArray(F&& f) {
   f(cl_tri_), f(cl_vert_offsets_), f(cl_vert_), f(near_far_), f(near_rows_);
   f(near_win_), f(near_base_), f(near_out_offsets_), f(near_out_), f(group_near_);
   f(cl_valid_), f(cl_local_), f(cl_count_);
+  f(cull_pairs_), f(cl_ref_), f(cl_cull_offsets_), f(cl_cull_pair_), f(near_cross_);
+  f(cull_anchor_), f(cl_slack_), f(cl_cull_w_), f(cl_cull_reach_), f(near_gap_), f(near_cross_reach_);
   f(behind_offsets_), f(behind_), f(weld_), f(tri_sphere_);
   f(region_offsets_), f(region_tri_), f(region_v_), f(region_w_), f(vert_offsets_), f(vert_ids_), f(region_local_);
   f(excl_offsets_), f(excl_partners_), f(pool_offsets_), f(chunk_offsets_);
@@ -784,6 +786,7 @@ void NarrowPhaseWorkspace::ForEachArray(F&& f) {
     for (int k = 0; k < 3; ++k) f(l->lo[k]), f(l->hi[k]);
   }
   f(patch_box_), f(group_box_), f(sweep_), f(sweep_box_), f(sweep_hits_), f(patch_tri_box_), f(tri_prepared_), f(tri_frame_);
+  f(cull_t_), f(cull_f_), f(cull_smin_), f(cull_e_), f(patch_tri_frame_);
   crease_scratch_.ForEachArray(f);
 }
 
@@ -872,6 +875,12 @@ Status NarrowPhaseJob::Check() const {
     if (!model->has_crease()) return Status::kErrorMissingField;
     if (sphere_pairs || !std::isfinite(crease) || crease < 0.0f || (crease > 0.0f && crease < model->crease()))
       return Status::kErrorInvalidJob;
+  }
+  if (joint_matrices) {
+    if (exclusions != Exclusions::kCrease) return Status::kErrorInvalidJob;
+    if (!model->has_joint_cull()) return Status::kErrorMissingField;
+    if (joint_count != model->joint_count()) return Status::kErrorJointCount;
+    if (reinterpret_cast<uintptr_t>(joint_matrices) % 4 != 0) return Status::kErrorAlignment;
   }
   if (reinterpret_cast<uintptr_t>(positions.data) % 4 != 0) return Status::kErrorAlignment;
   if (positions.stride_bytes < 12 || positions.stride_bytes % 4 != 0) return Status::kErrorStride;

@@ -25,6 +25,7 @@
 // RunCrease picks per job as the other kernels do (kernels::Best(), capped by SPHERECHAIN_ISA); the two give
 // the same contacts, depths and order (comparisons and min/max only; no FMA: -ffp-contract=off).
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -121,6 +122,7 @@ uint32_t Morton(uint32_t x, uint32_t y, uint32_t z) {
   };
   return spread(x) | spread(y) << 1 | spread(z) << 2;
 }
+
 }  // namespace
 
 void ContactDepthOf(const float* const a[3], const float* const b[3], ContactDepth* out) {

@@ -21,6 +21,7 @@
 #include "spherechain/import/file_io.h"
 #include "spherechain/playback/morph.h"
 #include "spherechain/runtime/narrow_phase.h"
+#include "spherechain/runtime/refit.h"
 #include "spherechain/runtime/triangle_intersect.h"
 #include "test_data.h"
 
@@ -285,26 +286,85 @@ PairSet CreaseContacts(Baked* b, const std::vector<float>& pos, runtime::NarrowP
 
 }  // namespace
 
+namespace {
+// One crease job on `pos`, with the frame's skinning matrices (column-major, SkinningScratch::matrices)
+// or without (null): its records and depths, in order.
+struct CullRun {
+  std::vector<runtime::TriangleContact> contacts;
+  std::vector<runtime::ContactDepth> depths;
+  runtime::NarrowPhaseStats stats;
+};
+CullRun CreaseRun(Baked* b, const std::vector<float>& pos, const std::vector<playback::Matrix4>* matrices) {
+  CullRun r;
+  r.contacts.resize(1u << 18), r.depths.resize(r.contacts.size());
+  std::vector<float> joints;
+  uint32_t n = 0;
+  runtime::NarrowPhaseJob job;
+  job.model = &b->narrow;
+  job.workspace = &b->narrow_ws;
+  job.exclusions = runtime::Exclusions::kCrease;
+  job.positions = {pos.data(), b->view.vertex_count, 12};
+  job.output = r.contacts.data();
+  job.depths = r.depths.data();
+  job.capacity = static_cast<uint32_t>(r.contacts.size());
+  job.count = &n;
+  job.stats = &r.stats;
+  if (matrices) {
+    joints.resize(matrices->size() * runtime::kJointMatrixFloats);
+    for (size_t j = 0; j < matrices->size(); ++j)
+      runtime::JointMatrixFromColumnMajor((*matrices)[j].data(), &joints[j * runtime::kJointMatrixFloats]);
+    job.joint_matrices = joints.data();
+    job.joint_count = static_cast<uint32_t>(matrices->size());
+  }
+  REQUIRE(job.Run() == runtime::Status::kOk);
+  r.contacts.resize(n), r.depths.resize(n);
+  return r;
+}
+
+// The joint-matrix cull changes nothing the job reports: the same records, depths and order, frame for frame.
+void CheckJointCull(Baked* b, const std::vector<float>& pos, const playback::SkinningScratch& scratch,
+                    uint64_t* culled, uint64_t* contacts) {
+  const CullRun plain = CreaseRun(b, pos, nullptr);
+  const CullRun cull = CreaseRun(b, pos, &scratch.matrices);
+  REQUIRE(cull.contacts.size() == plain.contacts.size());
+  CHECK(std::memcmp(cull.contacts.data(), plain.contacts.data(), plain.contacts.size() * sizeof(runtime::TriangleContact)) == 0);
+  CHECK(std::memcmp(cull.depths.data(), plain.depths.data(), plain.depths.size() * sizeof(runtime::ContactDepth)) == 0);
+  CHECK(cull.stats.contacts == plain.stats.contacts);
+  CHECK(cull.stats.bind_contacts == plain.stats.bind_contacts);
+  CHECK(cull.stats.candidate_pairs == plain.stats.candidate_pairs);  // culled pairs are still counted
+  CHECK(plain.stats.joint_culled == 0);
+  CHECK(cull.stats.box_tests <= plain.stats.box_tests);
+  *culled += cull.stats.joint_culled;
+  *contacts += cull.contacts.size();
+}
+}  // namespace
+
 TEST_CASE("heavy: the crease rule on real frames: CesiumMan walk and BCN_Epileptic clip equal the skin's truth") {
   // Every self-contact the skin makes, whichever spheres own it: the crease job equals the definition computed
   // apart (at the asset's crease and at twice it), and it finds contacts the exclusion-based job cannot (pairs
-  // of one sphere or of an excluded pair) — the walking arm on the flank.
+  // of one sphere or of an excluded pair) — the walking arm on the flank. Baked with the skin weights: the
+  // job given the frame's joint matrices reports the same, in the same order (the joint-matrix cull).
   test::SomeInputs inputs;
+  baker::BakeConfig config;
+  config.skin_weights = true;
   for (const std::string& path :
        {test::SharedData("gltf/CesiumMan.gltf"), test::AssimpModel("X/BCN_Epileptic.X")}) {
     if (!inputs.Found(path)) continue;
     CAPTURE(path);
     Baked b;
-    BakeAndLoad(path, &b);
+    BakeAndLoad(path, &b, config);
     REQUIRE(b.narrow.has_crease());
+    REQUIRE(b.narrow.has_joint_cull());
     CHECK(b.narrow.crease() == doctest::Approx(0.03 * b.bake.fit.body_height).epsilon(1e-5));
     const baker::Clip& clip = b.bake.mesh.clips.front();
     std::vector<float> pos(b.bake.mesh.positions.size());
     playback::SkinningScratch scratch;
     size_t total = 0, hidden = 0;
+    uint64_t culled = 0, cull_contacts = 0;
     for (uint32_t f = 0; f < 40; f += 8) {
       CAPTURE(f);
       REQUIRE(playback::SkinClip(b.bake.mesh, clip, clip.duration_s * float(f) / 40.0f, &scratch, pos.data(), pos.size()).ok());
+      CheckJointCull(&b, pos, scratch, &culled, &cull_contacts);
       for (float scale : {1.0f, 2.0f}) {
         const float crease = scale * b.narrow.crease();
         runtime::NarrowPhaseStats st;
@@ -319,8 +379,11 @@ TEST_CASE("heavy: the crease rule on real frames: CesiumMan walk and BCN_Epilept
         }
       }
     }
-    MESSAGE(path << ": " << total << " skin contacts over 5 frames, " << hidden << " of them in one sphere or an excluded pair");
+    MESSAGE(path << ": " << total << " skin contacts over 5 frames, " << hidden << " of them in one sphere or an excluded pair; "
+                 << culled << " pairs of patches culled by the joint matrices");
     CHECK(total > 0);
+    CHECK(cull_contacts == total);
+    CHECK(culled > 0);
     CHECK(hidden > 0);  // what the exclusion-based definition hid
   }
 }
@@ -428,6 +491,109 @@ TEST_CASE("the crease rule: the synthetic creature's crossing fore legs are cont
   if (old_view.vertex_count == b.view.vertex_count) CHECK(job.Run() == runtime::Status::kErrorMissingField);
   job.exclusions = runtime::Exclusions::kAsset;
   if (old_view.vertex_count == b.view.vertex_count) CHECK(runtime::Succeeded(job.Run()));
+}
+
+TEST_CASE("heavy: the joint-matrix cull on real frames: the MakeHuman morph unchanged") {
+  // Baked with the skin weights, the narrow phase given the frame's skinning matrices skips neighbouring
+  // patches that moved nearly rigidly; the contacts, depths and their order stay those of the job without
+  // matrices on every frame, and the cull does skip most of those pairs (CesiumMan and BCN_Epileptic: with
+  // the crease rule's test on their clips).
+  baker::BakeConfig config;
+  config.skin_weights = true;
+  test::SomeInputs inputs;
+  const std::string mh = test::SharedData("makehuman/base.obj");
+  const std::string poses_dir = test::SourceFile("data/poses/makehuman");
+  if (inputs.Found(mh) && inputs.Found(poses_dir)) {
+    Baked b;
+    BakeAndLoad(mh, &b, config);
+    REQUIRE(b.narrow.has_joint_cull());
+    CHECK(b.narrow.joint_count() == b.bake.mesh.skin->joints.size());
+    auto poses = playback::LoadPoseFolder(poses_dir, *b.bake.mesh.skin);
+    REQUIRE(poses.ok());
+    std::vector<float> pos(b.bake.mesh.positions.size());
+    playback::SkinningScratch scratch;
+    uint64_t culled = 0, contacts = 0, pairs = 0;
+    for (uint32_t f = 0; f < 40; f += 2) {
+      CAPTURE(f);
+      REQUIRE(playback::SkinMorphFrame(b.bake.mesh, poses.value(), f, 40, &scratch, pos.data(), pos.size()).ok());
+      CheckJointCull(&b, pos, scratch, &culled, &contacts);
+      runtime::NarrowPhaseStats st;
+      CreaseContacts(&b, pos, &st);
+      pairs += st.candidate_pairs;
+    }
+    MESSAGE("MakeHuman morph, 20 frames: " << contacts << " contacts; " << culled << " of " << pairs
+                                           << " pairs of patches culled by the joint matrices");
+    CHECK(contacts > 0);
+    CHECK(culled * 2 > pairs);  // 2,487 of 3,393 a frame measured
+  }
+}
+
+TEST_CASE("the joint-matrix cull: the creature's crossing legs unchanged; bad matrices and assets without weights refused") {
+  const std::string creature = test::SourceFile("tests/data/creature/creature.gltf");
+  baker::BakeConfig config;
+  config.skin_weights = true;
+  Baked b, plain;
+  BakeAndLoad(creature, &b, config);
+  BakeAndLoad(creature, &plain);
+  REQUIRE(b.narrow.has_joint_cull());
+  CHECK_FALSE(plain.narrow.has_joint_cull());
+  CHECK(plain.narrow.joint_count() == 0);
+  // The skin rows: one count per vertex, weights summing to 255 a vertex.
+  const schema::Asset& a = *b.view.asset;
+  REQUIRE(a.skin_counts());
+  CHECK(a.skin_counts()->size() == b.view.vertex_count);
+  CHECK_FALSE(plain.view.asset->skin_counts());
+  size_t e = 0;
+  for (uint8_t c : *a.skin_counts()) {
+    int sum = 0;
+    for (uint32_t k = 0; k < c; ++k) sum += a.skin_weights()->Get(e++);
+    CHECK((c == 0 || sum == 255));
+  }
+  CHECK(b.bake.asset.size() > plain.bake.asset.size() + 3 * e);
+  const baker::Clip* cross = nullptr;
+  for (const baker::Clip& c : b.bake.mesh.clips)
+    if (c.name == "cross") cross = &c;
+  REQUIRE(cross);
+  std::vector<float> pos(b.bake.mesh.positions.size());
+  playback::SkinningScratch scratch;
+  uint64_t culled = 0, contacts = 0;
+  for (float t : {0.0f, 0.25f, 0.5f, 0.75f}) {
+    REQUIRE(playback::SkinClip(b.bake.mesh, *cross, t * cross->duration_s, &scratch, pos.data(), pos.size()).ok());
+    CheckJointCull(&b, pos, scratch, &culled, &contacts);
+  }
+  CHECK(contacts > 0);
+  // Bad jobs.
+  std::vector<float> joints(scratch.matrices.size() * runtime::kJointMatrixFloats);
+  for (size_t j = 0; j < scratch.matrices.size(); ++j)
+    runtime::JointMatrixFromColumnMajor(scratch.matrices[j].data(), &joints[j * runtime::kJointMatrixFloats]);
+  std::vector<runtime::TriangleContact> out(1024);
+  uint32_t n = 0;
+  runtime::NarrowPhaseJob job;
+  job.model = &b.narrow;
+  job.workspace = &b.narrow_ws;
+  job.exclusions = runtime::Exclusions::kCrease;
+  job.positions = {pos.data(), b.view.vertex_count, 12};
+  job.output = out.data();
+  job.capacity = 1024;
+  job.count = &n;
+  job.joint_matrices = joints.data();
+  job.joint_count = b.narrow.joint_count();
+  CHECK(job.Run() == runtime::Status::kOk);
+  job.joint_count = b.narrow.joint_count() + 1;
+  CHECK(job.Run() == runtime::Status::kErrorJointCount);
+  job.joint_count = b.narrow.joint_count();
+  job.exclusions = runtime::Exclusions::kAsset;
+  CHECK(job.Run() == runtime::Status::kErrorInvalidJob);
+  job.exclusions = runtime::Exclusions::kCrease;
+  job.joint_matrices = reinterpret_cast<const float*>(reinterpret_cast<const char*>(joints.data()) + 1);
+  CHECK(job.Run() == runtime::Status::kErrorAlignment);
+  job.joint_matrices = joints.data();
+  joints[5] = std::numeric_limits<float>::quiet_NaN();
+  n = 77;
+  CHECK(job.Run() == runtime::Status::kErrorNonFiniteJoints);
+  CHECK(n == 0);
+  job.model = &plain.narrow, job.workspace = &plain.narrow_ws;
+  CHECK(job.Run() == runtime::Status::kErrorMissingField);
 }
 
 namespace {

@@ -122,6 +122,9 @@ struct AssetData {
   std::vector<uint32_t> reach_offsets, reach_triangles;  // [opt] Asset.reach_*: each empty = field absent
   std::vector<float> bind_positions;  // [opt] Asset.bind_positions (#V×3): empty = field absent
   float crease = -1.0f;               ///< Asset.crease; -1 (the schema default) = not written
+  std::vector<uint8_t> skin_counts;   // [opt] Asset.skin_counts (#V): empty = field absent
+  std::vector<uint16_t> skin_joints;  // [opt] Asset.skin_joints: empty = field absent
+  std::vector<uint8_t> skin_weights;  // [opt] Asset.skin_weights: empty = field absent
   /// [opt] Asset.regions (schema v4): names and kinds (true: Trunk); empty = field absent.
   std::vector<std::pair<std::string, bool>> regions;
 };
@@ -258,6 +261,11 @@ inline AlignedBytes Serialize(const AssetData& d) {
   if (!d.reach_triangles.empty()) rt = b.CreateVector(d.reach_triangles);
   flatbuffers::Offset<flatbuffers::Vector<float>> bind;
   if (!d.bind_positions.empty()) bind = b.CreateVector(d.bind_positions);
+  flatbuffers::Offset<flatbuffers::Vector<uint8_t>> kc, kw;
+  flatbuffers::Offset<flatbuffers::Vector<uint16_t>> kj;
+  if (!d.skin_counts.empty()) kc = b.CreateVector(d.skin_counts);
+  if (!d.skin_joints.empty()) kj = b.CreateVector(d.skin_joints);
+  if (!d.skin_weights.empty()) kw = b.CreateVector(d.skin_weights);
   flatbuffers::Offset<flatbuffers::Vector<flatbuffers::Offset<schema::RegionInfo>>> regions;
   if (!d.regions.empty()) {
     std::vector<flatbuffers::Offset<schema::RegionInfo>> list;
@@ -286,6 +294,9 @@ inline AlignedBytes Serialize(const AssetData& d) {
   if (!d.weld_ids.empty()) ab.add_weld_ids(weld);
   if (!d.bind_positions.empty()) ab.add_bind_positions(bind);
   if (!(d.crease == -1.0f)) ab.add_crease(d.crease);
+  if (!d.skin_counts.empty()) ab.add_skin_counts(kc);
+  if (!d.skin_joints.empty()) ab.add_skin_joints(kj);
+  if (!d.skin_weights.empty()) ab.add_skin_weights(kw);
   if (d.contact_margin != 0.0f) ab.add_contact_margin(d.contact_margin);
   if (!(d.fold_margin == -1.0f)) ab.add_fold_margin(d.fold_margin);  // NaN written too (loader tests)
   if (d.joint_count != 0) ab.add_joint_count(d.joint_count);

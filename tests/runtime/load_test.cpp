@@ -163,6 +163,31 @@ TEST_CASE("LoadAsset: semantic errors each give their status") {
   expect([&](test::AssetData& d) { with_joints(d); d.sphere_joints.resize(d.sphere_joints.size() - 4); },
          Status::kErrorCountMismatch);
   expect([&](test::AssetData& d) { with_joints(d); d.sphere_joint_weights.clear(); }, Status::kErrorMissingField);
+  // Skin weights per vertex (schema v4, with the crease rule): one count a vertex, as many joints and weights as
+  // they add up to, joints < joint_count, each vertex's rounded weights summing to 255 within half its count.
+  auto with_skin = [&](test::AssetData& d) {
+    with_joints(d);
+    d.bind_positions = mesh.positions;
+    d.crease = 0.5f;
+    for (uint32_t v = 0; v < d.vertex_count; ++v) {
+      d.skin_counts.push_back(2);
+      d.skin_joints.insert(d.skin_joints.end(), {uint16_t(v % 3), uint16_t((v + 1) % 3)});
+      d.skin_weights.insert(d.skin_weights.end(), {200, 55});
+    }
+  };
+  {
+    test::AssetData d = base;
+    with_skin(d);
+    CHECK(Load(d, &view) == Status::kOk);
+    d.skin_weights[1] = 56;  // 256 for two influences: within one of 255
+    CHECK(Load(d, &view) == Status::kOk);
+  }
+  expect([&](test::AssetData& d) { with_skin(d); d.skin_weights[1] = 57; }, Status::kErrorSkinWeights);
+  expect([&](test::AssetData& d) { with_skin(d); d.skin_joints[3] = 3; }, Status::kErrorIndexOutOfRange);
+  expect([&](test::AssetData& d) { with_skin(d); d.skin_counts[0] = 3; }, Status::kErrorCountMismatch);
+  expect([&](test::AssetData& d) { with_skin(d); d.skin_counts.pop_back(); }, Status::kErrorCountMismatch);
+  expect([&](test::AssetData& d) { with_skin(d); d.skin_weights.clear(); }, Status::kErrorMissingField);
+  expect([&](test::AssetData& d) { with_skin(d); d.crease = -1.0f, d.bind_positions.clear(); }, Status::kErrorCountMismatch);
   {
     test::AssetData d = base;
     with_joints(d);

@@ -68,6 +68,11 @@ struct BakeConfig {
   /// positions (Asset.bind_positions) so the runtime applies it with no geodesics per frame.
   /// [Limit: (0, 0.5]; config key "crease_rel"]
   double crease_rel = 0.03;
+  /// Write the skin weights per vertex (Asset.skin_counts / skin_joints / skin_weights: 3 bytes an
+  /// influence, +134 KB for MakeHuman's 40,156) beside the crease rule, for the narrow phase's joint-matrix
+  /// cull (runtime NarrowPhaseJob::joint_matrices). A rigged mesh only (none: nothing written).
+  /// [config key "skin_weights"; CLI bake --skin-weights] Default off.
+  bool skin_weights = false;
   /// Exclusions (cover fit): pairs whose spheres come within (near_rel + 2·contact_margin_rel) × body
   /// height of each other at bind pose are adjacent (chains.h BindExcludedPairs) — so nothing the
   /// margin reaches at bind pose is ever reported.
@@ -110,6 +115,7 @@ struct BakeOptions {
   std::string rig;           ///< [opt] MakeHuman .mhskel path (config "rig")
   double disk_step = 0.0;    ///< [opt] torso disk step δ [Units: source] [Limit: 0 (unset) or > 0, finite]
   bool force = false;        ///< write the asset although a plausibility check fails (BakeConfig::force)
+  bool skin_weights = false;  ///< [opt] true: BakeConfig::skin_weights on (false leaves it as configured)
 };
 
 /// Applies `options` over `*config` (the configuration file's, or the defaults). Errors: kConfig, naming the

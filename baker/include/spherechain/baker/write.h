@@ -39,6 +39,7 @@ struct AssetInputs {
   double fold_margin = -1.0;                        ///< Asset.fold_margin [Units: source]; < 0: left out
   const std::vector<float>* bind_positions = nullptr;  ///< Asset.bind_positions (\#V×3); null: left out
   double crease = -1.0;                             ///< Asset.crease [Units: source]; <= 0: left out
+  bool skin_weights = false;  ///< Asset.skin_* from mesh->skin (with the crease and centre_weights only)
   const CoverageStats* coverage = nullptr;          ///< [opt] Asset.coverage
   float coverage_voxel_rel = 0.0f;                  ///< the voxel edge it was measured with / height
   /// [opt] Asset.forced_findings: plausibility checks the bake failed and was forced past (bake --force).

@@ -179,7 +179,7 @@ class Session {
  private:
   Status Refit(const float* positions, const float* joint_matrices);
   Status Detect();
-  Status Narrow(const float* positions);
+  Status Narrow(const float* positions, const float* joint_matrices);
   Status RuntimeFailure(const char* job, runtime::Status s);
 
   SessionOptions options_;

@@ -88,7 +88,11 @@ struct AssetView {
 ///     kErrorMissingField), and the optional v3 joint weights:
 ///     sphere_joints and sphere_joint_weights both present or both absent, 4·\#S each
 ///     (kErrorCountMismatch), joint indices < joint_count (kErrorIndexOutOfRange), weights finite,
-///     >= 0 and summing to 1 ± 1e-3 per sphere (kErrorSkinWeights); the optional v4 regions: 2 to
+///     >= 0 and summing to 1 ± 1e-3 per sphere (kErrorSkinWeights); the optional v4 skin weights
+///     per vertex: skin_counts, skin_joints and skin_weights all present or all absent
+///     (kErrorMissingField), \#V counts and as many joints and weights as they add up to, only with the
+///     crease rule (kErrorCountMismatch), joints < joint_count (kErrorIndexOutOfRange), each vertex's
+///     rounded weights summing to 255 within half its count (kErrorSkinWeights); the optional v4 regions: 2 to
 ///     kMaxRegions, exactly one Trunk and it the last, every sphere_regions / triangle_regions value below
 ///     their count (kErrorRegions).
 /// Returns kOk with `*out` filled.

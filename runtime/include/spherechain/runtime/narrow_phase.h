@@ -107,6 +107,8 @@ struct NarrowPhaseStats {
                                       ///< skipped by their near bits before any box test, and not counted)
   uint32_t bind_contacts = 0;         ///< kCrease: contacts whose triangles intersect at bind pose too (modelling
                                       ///< artefacts; reported, NarrowPhaseModel::IntersectsAtBind names them)
+  uint32_t joint_culled = 0;          ///< kCrease with joint matrices: pairs of patches with a near block
+                                      ///< dismissed by the joint-matrix bound (counted in candidate_pairs)
 };
 
 struct NarrowPhaseJob;
@@ -140,7 +142,9 @@ class NarrowPhaseModel {
   /// (sphere, region vertex) + ~20 B per sphere; kReach also 2 B per (triangle, sphere it stands behind).
   /// An asset with the crease rule adds the rule's patches and near bits: one bounded Dijkstra per welded
   /// node (~0.26 s for MakeHuman's 26,756 triangles, RelWithDebInfo, one core) and their memory
-  /// (crease_patch_bytes(): 1.54 MB in 1,722 patches for MakeHuman).
+  /// (crease_patch_bytes(): 1.54 MB in 1,722 patches for MakeHuman). With the skin weights per vertex
+  /// (Asset.skin_*) also the joint-matrix cull's data (NarrowPhaseJob::joint_matrices): per patch its
+  /// joints, per block of near rows a gap from 16×16 bind boxes (~20 ms more for MakeHuman).
   /// Not thread-safe on one object (nothing may use the model meanwhile).
   Status Init(const AssetView& view, NarrowPhaseRegions regions = NarrowPhaseRegions::kSurrounding);
   /// kReach when built from reach regions, else kSurrounding.
@@ -183,6 +187,11 @@ class NarrowPhaseModel {
            8 * (near_out_.size() + near_win_.size()) +
            2 * (near_rows_.size() + cl_valid_.size() + group_near_.size()) + cl_local_.size() + cl_count_.size();
   }
+  /// True when the asset carries the skin weights per vertex (Asset.skin_counts, schema v4) beside the
+  /// crease rule: a kCrease job may pass joint matrices (NarrowPhaseJob::joint_matrices).
+  bool has_joint_cull() const { return cull_joint_count_ != 0; }
+  /// \#J the joint matrices must have (Asset.joint_count), 0 without the joint-matrix cull.
+  uint32_t joint_count() const { return cull_joint_count_; }
   /// How many such pairs the bind pose has (computed by Init with the crease rule).
   uint32_t bind_contact_count() const { return static_cast<uint32_t>(bind_contacts_.size()); }
   /// Bytes of the model's arrays in their block (the whole block when the model owns it).
@@ -237,6 +246,18 @@ class NarrowPhaseModel {
   BlockVector<uint64_t> near_win_, near_out_;
   BlockVector<uint16_t> near_rows_, cl_valid_, group_near_;
   BlockVector<uint8_t> cl_local_, cl_count_;
+  // The joint-matrix cull (skin_contacts.cpp; Asset.skin_*, empty without). Per patch its reference joint
+  // r (the most weight over its vertices; kNone when a vertex has no influence: never culled), its slack
+  // (1 − the least weight of r on its vertices, rounded up), and per other joint j of its vertices an entry
+  // (CSR cl_cull_offsets_ #C+1): the joint pair (j, r) (an index into cull_pairs_: j << 16 | r, each with
+  // an anchor point, cull_anchor_ #K×3, the mean bind centre of the patches using it), j's largest
+  // weight there (rounded up) and the reach: distance from the anchor to the patch's bind centre + its
+  // bind radius. Per block of near rows: a lower bound on the bind distance of its pairs not near
+  // (near_gap_), and when the two patches' references differ the pair (r_q, r_p) with its reach for q
+  // (near_cross_, near_cross_reach_; kNone: same reference).
+  uint32_t cull_joint_count_ = 0;
+  BlockVector<uint32_t> cull_pairs_, cl_ref_, cl_cull_offsets_, cl_cull_pair_, near_cross_;
+  BlockVector<float> cull_anchor_, cl_slack_, cl_cull_w_, cl_cull_reach_, near_gap_, near_cross_reach_;
   bool reach_ = false;  // regions from Asset.reach_*: overlapping, owners from the surrounding regions
   uint32_t sphere_count_ = 0, vertex_count_ = 0, triangle_count_ = 0;
   BlockVector<uint32_t> behind_offsets_;  // reach_ only: CSR #T+1, the spheres each triangle stands behind
@@ -355,6 +376,13 @@ class NarrowPhaseWorkspace {
   BlockVector<float> patch_tri_box_;
   BlockVector<PreparedTriangle> tri_prepared_;  // this frame's prepared triangles, in the order met (#T)
   BlockVector<uint64_t> tri_frame_;             // per triangle: frame << 32 | its slot (low half ~0u: degenerate)
+  // The joint-matrix cull's frame: per joint pair t = |(M_j − M_r)(anchor, 1)| and f = |A_j − A_r|_F
+  // (cull_t_, cull_f_), per joint a lower bound on its linear part's least singular value (cull_smin_),
+  // per patch its bound E on how far its vertices stray from its reference joint's rigid motion
+  // (cull_e_), and per patch the frame its triangle boxes were built in (patch_tri_frame_: with the cull
+  // they are built when a pair first needs them).
+  BlockVector<float> cull_t_, cull_f_, cull_smin_, cull_e_;
+  BlockVector<uint32_t> patch_tri_frame_;
   uint32_t frame_ = 0, prepared_used_ = 0;
   CreaseScratch crease_scratch_;
 };
@@ -397,6 +425,22 @@ struct NarrowPhaseJob {
   /// [opt] kCrease only (ignored otherwise): caller buffer of `capacity` records; depths[i] is output[i]'s
   /// penetration (ContactDepth). Null: not computed (~15 ns a contact saved).
   ContactDepth* depths = nullptr;
+  /// [opt] kCrease only: the joint matrices that skinned `positions` (\#J × kJointMatrixFloats floats,
+  /// JointRefitJob's layout: 3×4 row-major M_j = current transform · inverse bind, [Units: model]),
+  /// for the joint-matrix cull: pairs of patches holding near pairs (neighbours on the skin) are
+  /// dismissed without their triangles when the skin between them moved nearly rigidly, and only the
+  /// patches a remaining pair needs get triangle boxes. The same contacts, depths and order as without.
+  /// Bound (linear blend skinning; Asset.skin_* rows): a vertex v' = Σ w_j M_j v lies within
+  /// E = min((1 − min w_r)·max_j e_j, Σ_j max w_j·e_j) of M_r v, r the patch's reference joint and
+  /// e_j ≥ |(M_j − M_r)(v, 1)| over the patch's bind sphere; two patches with the same reference are
+  /// skipped when σ_min(A_r)·gap > E_p + E_q + margin, gap a lower bound on the bind distance of their pairs
+  /// not near (the least distance of their bind boxes, at Init), margin 1e-4 × the frame's largest coordinate; different
+  /// references add |(M_rq − M_rp) x| over q's bind sphere. [Precondition: `positions` are the asset's
+  /// bind positions skinned by linear blend with these matrices and the asset's skin weights (within float
+  /// rounding), as `play`, `evaluate` and an engine's CPU skinning give; other deformations (dual-quaternion
+  /// skinning, blend shapes, cloth) must not pass matrices: contacts could be missed.] Null: no cull.
+  const float* joint_matrices = nullptr;
+  uint32_t joint_count = 0;               ///< \#J with joint_matrices [Limit: == NarrowPhaseModel::joint_count()]
   uint32_t* count = nullptr;              ///< out: records written (== min(stats.contacts, capacity))
   NarrowPhaseStats* stats = nullptr;      ///< [opt] out: counters
 
@@ -405,11 +449,15 @@ struct NarrowPhaseJob {
   /// kErrorNullArgument (model, workspace, count or positions.data null; output null with capacity > 0;
   /// sphere_pairs null with sphere_pair_count > 0), kErrorInvalidJob (model or workspace not
   /// initialised, unknown exclusions; kCrease with sphere_pairs or a crease below the asset's or not
-  /// finite), kErrorMissingField (kCrease on an asset without the crease rule), kErrorWorkspaceModel (the workspace was made for another model), kErrorAlignment (positions not 4-byte aligned), kErrorStride, kErrorVertexCount,
+  /// finite; joint_matrices with exclusions other than kCrease), kErrorMissingField (kCrease on an asset
+  /// without the crease rule; joint_matrices on an asset without skin weights per vertex: re-bake),
+  /// kErrorJointCount (joint_count != NarrowPhaseModel::joint_count()), kErrorAlignment (joint_matrices
+  /// not 4-byte aligned), kErrorWorkspaceModel (the workspace was made for another model), kErrorAlignment (positions not 4-byte aligned), kErrorStride, kErrorVertexCount,
   /// kErrorIndexOutOfRange (a sphere_pairs record with a >= b or b >= \#S), else kOk.
   Status Check() const;
   /// Returns Check()'s error (outputs untouched); kErrorNonFinitePositions when a vertex of a
-  /// surrounding region is NaN/Inf (count 0, stats zero); kOk; or kOkTruncated when more contacts than
+  /// surrounding region is NaN/Inf (count 0, stats zero); kErrorNonFiniteJoints when a joint matrix holds
+  /// a NaN or Inf (count 0, stats zero); kOk; or kOkTruncated when more contacts than
   /// `capacity` exist: output holds the first `capacity` in the documented order, *count == capacity,
   /// stats complete.
   Status Run() const;

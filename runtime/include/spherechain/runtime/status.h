@@ -67,7 +67,8 @@ enum class [[nodiscard]] Status : uint32_t {
                                          ///< ascending by (a, b).
   kErrorContactMargin = 0x8000'020Du,    ///< Asset.contact_margin < 0 (schema v2).
   kErrorSkinWeights = 0x8000'020Eu,      ///< A sphere's joint weight is negative or not finite, or its four
-                                         ///< weights do not sum to 1 ± 1e-3 (schema v3).
+                                         ///< weights do not sum to 1 ± 1e-3 (schema v3), or a
+                                         ///< vertex's rounded skin_weights do not sum to 255 (v4).
   kErrorRegions = 0x8000'020Fu,          ///< Asset.regions (schema v4) malformed: fewer than 2 or more than
                                          ///< kMaxRegions regions, a Trunk that is not exactly the last one,
                                          ///< or a sphere_regions / triangle_regions value past it.

@@ -770,7 +770,10 @@ struct Asset FLATBUFFERS_FINAL_CLASS : private flatbuffers::Table {
     VT_REACH_TRIANGLES = 80,
     VT_FOLD_MARGIN = 82,
     VT_BIND_POSITIONS = 84,
-    VT_CREASE = 86
+    VT_CREASE = 86,
+    VT_SKIN_COUNTS = 88,
+    VT_SKIN_JOINTS = 90,
+    VT_SKIN_WEIGHTS = 92
   };
   uint32_t schema_version() const {
     return GetField<uint32_t>(VT_SCHEMA_VERSION, 0);
@@ -906,6 +909,15 @@ struct Asset FLATBUFFERS_FINAL_CLASS : private flatbuffers::Table {
   float crease() const {
     return GetField<float>(VT_CREASE, -1.0f);
   }
+  const flatbuffers::Vector<uint8_t> *skin_counts() const {
+    return GetPointer<const flatbuffers::Vector<uint8_t> *>(VT_SKIN_COUNTS);
+  }
+  const flatbuffers::Vector<uint16_t> *skin_joints() const {
+    return GetPointer<const flatbuffers::Vector<uint16_t> *>(VT_SKIN_JOINTS);
+  }
+  const flatbuffers::Vector<uint8_t> *skin_weights() const {
+    return GetPointer<const flatbuffers::Vector<uint8_t> *>(VT_SKIN_WEIGHTS);
+  }
   bool Verify(flatbuffers::Verifier &verifier) const {
     return VerifyTableStart(verifier) &&
            VerifyField<uint32_t>(verifier, VT_SCHEMA_VERSION, 4) &&
@@ -986,6 +998,12 @@ struct Asset FLATBUFFERS_FINAL_CLASS : private flatbuffers::Table {
            VerifyOffset(verifier, VT_BIND_POSITIONS) &&
            verifier.VerifyVector(bind_positions()) &&
            VerifyField<float>(verifier, VT_CREASE, 4) &&
+           VerifyOffset(verifier, VT_SKIN_COUNTS) &&
+           verifier.VerifyVector(skin_counts()) &&
+           VerifyOffset(verifier, VT_SKIN_JOINTS) &&
+           verifier.VerifyVector(skin_joints()) &&
+           VerifyOffset(verifier, VT_SKIN_WEIGHTS) &&
+           verifier.VerifyVector(skin_weights()) &&
            verifier.EndTable();
   }
 };
@@ -1120,6 +1138,15 @@ struct AssetBuilder {
   void add_crease(float crease) {
     fbb_.AddElement<float>(Asset::VT_CREASE, crease, -1.0f);
   }
+  void add_skin_counts(flatbuffers::Offset<flatbuffers::Vector<uint8_t>> skin_counts) {
+    fbb_.AddOffset(Asset::VT_SKIN_COUNTS, skin_counts);
+  }
+  void add_skin_joints(flatbuffers::Offset<flatbuffers::Vector<uint16_t>> skin_joints) {
+    fbb_.AddOffset(Asset::VT_SKIN_JOINTS, skin_joints);
+  }
+  void add_skin_weights(flatbuffers::Offset<flatbuffers::Vector<uint8_t>> skin_weights) {
+    fbb_.AddOffset(Asset::VT_SKIN_WEIGHTS, skin_weights);
+  }
   explicit AssetBuilder(flatbuffers::FlatBufferBuilder &_fbb)
         : fbb_(_fbb) {
     start_ = fbb_.StartTable();
@@ -1174,8 +1201,14 @@ inline flatbuffers::Offset<Asset> CreateAsset(
     flatbuffers::Offset<flatbuffers::Vector<uint32_t>> reach_triangles = 0,
     float fold_margin = -1.0f,
     flatbuffers::Offset<flatbuffers::Vector<float>> bind_positions = 0,
-    float crease = -1.0f) {
+    float crease = -1.0f,
+    flatbuffers::Offset<flatbuffers::Vector<uint8_t>> skin_counts = 0,
+    flatbuffers::Offset<flatbuffers::Vector<uint16_t>> skin_joints = 0,
+    flatbuffers::Offset<flatbuffers::Vector<uint8_t>> skin_weights = 0) {
   AssetBuilder builder_(_fbb);
+  builder_.add_skin_weights(skin_weights);
+  builder_.add_skin_joints(skin_joints);
+  builder_.add_skin_counts(skin_counts);
   builder_.add_crease(crease);
   builder_.add_bind_positions(bind_positions);
   builder_.add_fold_margin(fold_margin);
@@ -1264,7 +1297,10 @@ inline flatbuffers::Offset<Asset> CreateAssetDirect(
     const std::vector<uint32_t> *reach_triangles = nullptr,
     float fold_margin = -1.0f,
     const std::vector<float> *bind_positions = nullptr,
-    float crease = -1.0f) {
+    float crease = -1.0f,
+    const std::vector<uint8_t> *skin_counts = nullptr,
+    const std::vector<uint16_t> *skin_joints = nullptr,
+    const std::vector<uint8_t> *skin_weights = nullptr) {
   auto generator__ = generator ? _fbb.CreateString(generator) : 0;
   auto parts__ = parts ? _fbb.CreateVector<flatbuffers::Offset<spherechain::schema::MeshPart>>(*parts) : 0;
   auto units__ = units ? _fbb.CreateString(units) : 0;
@@ -1293,6 +1329,9 @@ inline flatbuffers::Offset<Asset> CreateAssetDirect(
   auto reach_offsets__ = reach_offsets ? _fbb.CreateVector<uint32_t>(*reach_offsets) : 0;
   auto reach_triangles__ = reach_triangles ? _fbb.CreateVector<uint32_t>(*reach_triangles) : 0;
   auto bind_positions__ = bind_positions ? _fbb.CreateVector<float>(*bind_positions) : 0;
+  auto skin_counts__ = skin_counts ? _fbb.CreateVector<uint8_t>(*skin_counts) : 0;
+  auto skin_joints__ = skin_joints ? _fbb.CreateVector<uint16_t>(*skin_joints) : 0;
+  auto skin_weights__ = skin_weights ? _fbb.CreateVector<uint8_t>(*skin_weights) : 0;
   return spherechain::schema::CreateAsset(
       _fbb,
       schema_version,
@@ -1336,7 +1375,10 @@ inline flatbuffers::Offset<Asset> CreateAssetDirect(
       reach_triangles__,
       fold_margin,
       bind_positions__,
-      crease);
+      crease,
+      skin_counts__,
+      skin_joints__,
+      skin_weights__);
 }
 
 /// One region of a body (Asset.regions, schema v4).
