@@ -144,6 +144,7 @@ class Workspace:
         pairs: _Records | None = None,
         regions: Literal["surrounding", "reach"] = "surrounding",
         crease: float | None = None,
+        matrices: _Float32Array | None = None,
     ) -> _Records:
         """Exact triangle contacts: a new CONTACT_DTYPE array."""
     def reset(self) -> None:

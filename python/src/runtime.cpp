@@ -336,7 +336,7 @@ PyObject* Detect(PyWorkspace& self, PyObject* method, PyObject* margin, PyObject
 }
 
 py::object NarrowPhase(PyWorkspace& self, py::handle positions, const py::object& exclusions, const py::object& pairs,
-                       const std::string& regions, const py::object& crease) {
+                       const std::string& regions, const py::object& crease, const py::object& matrices) {
   Exclusive exclusive(self);
   int kind = 0;
   if (regions == "reach") kind = 1;
@@ -352,6 +352,16 @@ py::object NarrowPhase(PyWorkspace& self, py::handle positions, const py::object
   if (!exclusion.empty() && exclusion != "crease" && exclusion != "asset" && exclusion != "none")
     ThrowValue("exclusions: expected \"crease\", \"asset\", \"none\" or None, got \"" + exclusion + "\"");
   if (!crease.is_none()) job.crease = static_cast<float>(crease.cast<double>());
+  if (!matrices.is_none()) {  // the joint-matrix cull: refit_joints()'s layout
+    PyObject* object = matrices.ptr();
+    auto* a = reinterpret_cast<PyArrayObject*>(object);
+    if (!PyArray_Check(object) || PyArray_TYPE(a) != NPY_FLOAT32 || !PyArray_ISNOTSWAPPED(a) || PyArray_NDIM(a) != 3 ||
+        PyArray_DIM(a, 1) != 3 || PyArray_DIM(a, 2) != 4 || !PyArray_IS_C_CONTIGUOUS(a))
+      ThrowValue("matrices: expected a C-contiguous numpy.ndarray of float32, shape (#J, 3, 4) (refit_joints()'s); got " +
+                 DescribeArray(object));
+    job.joint_matrices = static_cast<const float*>(PyArray_DATA(a));
+    job.joint_count = PyArray_DIM(a, 0) > npy_intp(std::numeric_limits<uint32_t>::max()) ? 0 : uint32_t(PyArray_DIM(a, 0));
+  }
 
   runtime::NarrowPhaseStats stats;
   uint32_t count = 0;
@@ -591,7 +601,8 @@ Workspace per thread. Every call releases the GIL while the runtime runs.
 )doc");
   workspace
       .def("narrow_phase", &NarrowPhase, py::arg("positions"), py::arg("exclusions") = py::none(),
-           py::arg("pairs") = py::none(), py::arg("regions") = "surrounding", py::arg("crease") = py::none(), R"doc(
+           py::arg("pairs") = py::none(), py::arg("regions") = "surrounding", py::arg("crease") = py::none(),
+           py::arg("matrices") = py::none(), R"doc(
 The exact triangle self-contacts of the deformed mesh (runtime NarrowPhaseJob).
 
 positions: as refit() (float32 (#V, 3), strided rows).
@@ -601,11 +612,15 @@ exclusions: "crease" (the skin's own definition: every intersecting pair not nea
 pairs: None (search every pair: the exact answer) or PAIR_DTYPE records from detect() to search behind.
 regions: "surrounding" or "reach" (the triangles behind a sphere; "reach" finds more behind `pairs`).
 crease: the fold distance [source units] of a "crease" search; None: the asset's.
+matrices: None, or the skinning matrices that deformed `positions` (as refit_joints() takes them) for a
+    "crease" search on an asset baked with skin_weights=True: neighbouring skin that moved nearly rigidly is
+    skipped, the same contacts found. The positions must be that linear blend skinning of the bind pose.
 Returns a new numpy.ndarray of dtype CONTACT_DTYPE: triangle_a, triangle_b (uint32, source triangle indices),
 sphere_a, sphere_b (uint16 owners, 0xFFFF for an unassigned triangle), depth (float32, source units) and
 direction (3 float32, unit) of the separating-axis push — NaN unless exclusions is "crease".
 Raises ValueError, StatusError (kErrorVertexCount, kErrorNonFinitePositions: a vertex of a surrounding region
-is NaN or inf; kErrorMissingField: "crease" on an asset without the rule; kErrorInvalidJob).
+is NaN or inf; kErrorMissingField: "crease" on an asset without the rule, or matrices on one without skin
+weights; kErrorJointCount; kErrorNonFiniteJoints; kErrorInvalidJob: matrices with another exclusions).
 Cost: the runtime's narrow phase (docs/performance.md); the first call builds the narrow phase's model and
 scratch, and each call allocates the returned array.
 )doc")

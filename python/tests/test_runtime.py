@@ -90,6 +90,26 @@ def test_narrow_phase_equals_play(creature):
     assert len(reach) >= len(behind)
 
 
+def test_narrow_phase_with_joint_matrices(creature):
+    # Baked with the skin weights: the recorded frames' matrices skip neighbouring skin that moved rigidly,
+    # and the contacts (records, depths, order) are those without them. Without the weights: refused.
+    from conftest import FAST, CREATURE
+    weighted = spherechain.Model(spherechain.bake(CREATURE, dict(FAST, skin_weights=True))).workspace()
+    found = 0
+    for f, (positions, matrices) in enumerate(zip(creature.positions, creature.joints)):
+        plain = weighted.narrow_phase(positions)
+        culled = weighted.narrow_phase(positions, matrices=matrices)
+        assert plain.tobytes() == culled.tobytes(), f"frame {f}"
+        found += len(culled)
+    assert found > 0, "the clip makes contacts"
+    ws = spherechain.Model(creature.asset).workspace()
+    with pytest.raises(spherechain.StatusError) as e:
+        ws.narrow_phase(creature.positions[0], matrices=creature.joints[0])
+    assert e.value.status == "kErrorMissingField"
+    with pytest.raises(ValueError):
+        weighted.narrow_phase(creature.positions[0], matrices=creature.joints[0][:, :2])
+
+
 def test_strided_positions_are_read_in_place(creature):
     """An interleaved vertex buffer (8 floats a vertex, x y z at floats 2..4) gives the contiguous answer."""
     model = spherechain.Model(creature.asset)

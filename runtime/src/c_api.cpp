@@ -333,6 +333,8 @@ SC_API sc_status sc_narrow_phase(const sc_model* model, sc_workspace* workspace,
   job.crease = o.crease;
   job.sphere_pairs = reinterpret_cast<const rt::Collision*>(o.sphere_pairs);
   job.sphere_pair_count = o.sphere_pairs ? o.sphere_pair_count : 0;
+  job.joint_matrices = o.joint_matrices;
+  job.joint_count = o.joint_matrices ? o.joint_count : 0;
   job.output = reinterpret_cast<rt::TriangleContact*>(contacts);
   job.capacity = capacity;
   job.depths =

@@ -93,7 +93,7 @@ int main(int argc, char** argv) {
   sc_pair* pairs = NULL;
   static sc_contact contacts[MAX_CONTACTS];
   static sc_contact_depth depths[MAX_CONTACTS];
-  sc_narrow_phase_options skin = {SC_EXCLUSIONS_CREASE, 0.0f, NULL, 0}; /* the skin's own contacts */
+  sc_narrow_phase_options skin = {SC_EXCLUSIONS_CREASE, 0.0f, NULL, 0, NULL, 0}; /* the skin's own contacts */
   int rc = 1;
 
   if (argc != 2) {

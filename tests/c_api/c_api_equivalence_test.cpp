@@ -107,7 +107,7 @@ struct Both {
 
   // sc_narrow_phase == NarrowPhaseJob (contacts and depths), full buffer; returns the count.
   uint32_t CheckNarrow(const std::vector<float>& positions, Exclusions exclusions, sc_exclusions c_exclusions,
-                       const std::vector<Collision>* pairs, bool with_depths) {
+                       const std::vector<Collision>* pairs, bool with_depths, const std::vector<float>* joints = nullptr) {
     const uint32_t capacity = 1u << 16;
     std::vector<TriangleContact> cpp(capacity);
     std::vector<ContactDepth> cpp_depths(capacity);
@@ -125,9 +125,11 @@ struct Both {
     job.depths = with_depths ? cpp_depths.data() : nullptr;
     job.capacity = capacity;
     job.count = &n_cpp;
+    if (joints) job.joint_matrices = joints->data(), job.joint_count = static_cast<uint32_t>(joints->size() / kJointMatrixFloats);
     REQUIRE(job.Run() == Status::kOk);
     sc_narrow_phase_options options{};
     options.exclusions = c_exclusions;
+    if (joints) options.joint_matrices = joints->data(), options.joint_count = job.joint_count;
     options.sphere_pairs = pairs ? reinterpret_cast<const sc_pair*>(pairs->data()) : nullptr;
     options.sphere_pair_count = pairs ? static_cast<uint32_t>(pairs->size()) : 0;
     REQUIRE(sc_narrow_phase(c_model, c_ws, positions.data(), view.vertex_count, 12, &options, c.data(),
@@ -239,6 +241,27 @@ TEST_CASE(
     }
     const std::vector<Collision> m2 = b.CheckDetect(DetectMethod::kM2, -1.0f);
     const uint32_t crease = b.CheckNarrow(*frame, Exclusions::kCrease, SC_EXCLUSIONS_CREASE, nullptr, true);
+    if (frame == &bind_copy) {  // the bind pose is the skin under identity matrices: the joint-matrix cull
+      REQUIRE(b.narrow.has_joint_cull());
+      std::vector<float> identity(size_t{b.narrow.joint_count()} * kJointMatrixFloats, 0.0f);
+      for (size_t j = 0; j < b.narrow.joint_count(); ++j)
+        for (int k = 0; k < 3; ++k) identity[j * kJointMatrixFloats + 5 * k] = 1.0f;
+      CHECK(b.CheckNarrow(*frame, Exclusions::kCrease, SC_EXCLUSIONS_CREASE, nullptr, true, &identity) == crease);
+      sc_narrow_phase_options options{};
+      options.exclusions = SC_EXCLUSIONS_CREASE;
+      options.joint_matrices = identity.data();
+      options.joint_count = b.narrow.joint_count() + 1;
+      uint32_t n = 0;
+      CHECK(sc_narrow_phase(b.c_model, b.c_ws, frame->data(), b.view.vertex_count, 12, &options, nullptr, nullptr, 0,
+                            &n) == SC_ERROR_JOINT_COUNT);
+      options.joint_count = b.narrow.joint_count();
+      identity[3] = NAN;
+      CHECK(sc_narrow_phase(b.c_model, b.c_ws, frame->data(), b.view.vertex_count, 12, &options, nullptr, nullptr, 0,
+                            &n) == SC_ERROR_NON_FINITE_JOINTS);
+      options.exclusions = SC_EXCLUSIONS_ASSET;
+      CHECK(sc_narrow_phase(b.c_model, b.c_ws, frame->data(), b.view.vertex_count, 12, &options, nullptr, nullptr, 0,
+                            &n) == SC_ERROR_INVALID_JOB);
+    }
     b.CheckNarrow(*frame, Exclusions::kAsset, SC_EXCLUSIONS_ASSET, nullptr, false);
     b.CheckNarrow(*frame, Exclusions::kAsset, SC_EXCLUSIONS_ASSET, &m2, false);
     b.CheckNarrow(*frame, Exclusions::kNone, SC_EXCLUSIONS_NONE, &m2, false);

@@ -587,10 +587,28 @@ static void TestReal(const char* path) {
   /* Narrow phase, the skin's definition (crease rule) with depths: contacts on the deformed frame. The count
    * query (capacity 0) gives the size; a second call fills it. */
   {
-    sc_narrow_phase_options crease = {SC_EXCLUSIONS_CREASE, 0.0f, NULL, 0};
+    sc_narrow_phase_options crease = {SC_EXCLUSIONS_CREASE, 0.0f, NULL, 0, NULL, 0};
     uint32_t n_crease = 0, n_bind_crease = 0, n_wide = 0, n_asset = 0, n_restricted = 0, n_default = 0;
     CHECK_STATUS(sc_narrow_phase(model, ws, bind, vertex_count, 12, &crease, NULL, NULL, 0, &n_bind_crease),
                  n_bind_crease ? SC_OK_TRUNCATED : SC_OK);
+    if (info.joint_count > 0) {
+      /* The joint-matrix cull: the bind pose is the skin under identity matrices, the same count. An asset
+       * baked without the skin weights refuses the matrices. */
+      float* identity = (float*)calloc(12 * (size_t)info.joint_count, sizeof(float));
+      uint32_t n_cull = 0, jj;
+      sc_status cull;
+      for (jj = 0; jj < info.joint_count; ++jj) identity[12 * jj] = identity[12 * jj + 5] = identity[12 * jj + 10] = 1.0f;
+      crease.joint_matrices = identity;
+      crease.joint_count = info.joint_count;
+      cull = sc_narrow_phase(model, ws, bind, vertex_count, 12, &crease, NULL, NULL, 0, &n_cull);
+      CHECK(cull == SC_ERROR_MISSING_FIELD || ((cull == SC_OK || cull == SC_OK_TRUNCATED) && n_cull == n_bind_crease));
+      crease.joint_count = info.joint_count + 1;
+      if (cull != SC_ERROR_MISSING_FIELD)
+        CHECK_STATUS(sc_narrow_phase(model, ws, bind, vertex_count, 12, &crease, NULL, NULL, 0, &n_cull), SC_ERROR_JOINT_COUNT);
+      crease.joint_matrices = NULL;
+      crease.joint_count = 0;
+      free(identity);
+    }
     CHECK_STATUS(sc_narrow_phase(model, ws, deformed, vertex_count, 12, &crease, NULL, NULL, 0, &n_crease),
                  SC_OK_TRUNCATED);
     CHECK(n_crease > n_bind_crease);

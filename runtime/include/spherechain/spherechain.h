@@ -336,6 +336,14 @@ typedef struct sc_narrow_phase_options {
   /// Only a, b are read [Limit: a < b < \#S].
   const sc_pair* sphere_pairs;
   uint32_t sphere_pair_count;  ///< records in sphere_pairs
+  /// [opt] #SC_EXCLUSIONS_CREASE only: the skinning matrices that deformed `positions` (joint_count × 12
+  /// floats, sc_refit_joints()'s layout), for the joint-matrix cull: neighbouring skin that moved nearly
+  /// rigidly is skipped, the same contacts found (runtime NarrowPhaseJob::joint_matrices, which states the
+  /// bound). Needs an asset baked with the skin weights (`bake --skin-weights`; else
+  /// #SC_ERROR_MISSING_FIELD). [Precondition: the positions are the asset's bind pose skinned by linear blend
+  /// with these matrices and the asset's weights; another deformation could lose contacts.] NULL: none.
+  const float* joint_matrices;
+  uint32_t joint_count;  ///< matrices in joint_matrices [Limit: == the asset's \#J]
 } sc_narrow_phase_options;
 
 /// One contact: two intersecting triangles of the deformed mesh. 12 bytes, the runtime's TriangleContact.
@@ -377,8 +385,10 @@ typedef struct sc_contact_depth {
 ///         positions or count null; contacts null with capacity > 0; sphere_pairs null with a count > 0);
 ///         #SC_ERROR_WORKSPACE_MODEL; #SC_ERROR_INVALID_JOB (model created without #SC_MODEL_NARROW_PHASE,
 ///         unknown exclusions, #SC_EXCLUSIONS_CREASE with sphere_pairs or with a crease below the asset's
-///         or not finite); #SC_ERROR_MISSING_FIELD (#SC_EXCLUSIONS_CREASE on an asset without the crease
-///         rule); #SC_ERROR_ALIGNMENT; #SC_ERROR_STRIDE; #SC_ERROR_VERTEX_COUNT; #SC_ERROR_INDEX_OUT_OF_RANGE
+///         or not finite; joint_matrices with other exclusions); #SC_ERROR_MISSING_FIELD
+///         (#SC_EXCLUSIONS_CREASE on an asset without the crease rule; joint_matrices on one without skin
+///         weights); #SC_ERROR_JOINT_COUNT; #SC_ERROR_NON_FINITE_JOINTS (a matrix holds a NaN or an infinity);
+///         #SC_ERROR_ALIGNMENT; #SC_ERROR_STRIDE; #SC_ERROR_VERTEX_COUNT; #SC_ERROR_INDEX_OUT_OF_RANGE
 ///         (a sphere pair with a >= b or b >= \#S); #SC_ERROR_NON_FINITE_POSITIONS (a tested vertex is NaN or
 ///         infinite). Nothing written to contacts / depths on failure.
 /// Cost: O(\#V) region boxes, then only the triangles near other regions (box culls, sort and sweep);
