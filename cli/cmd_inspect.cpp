@@ -61,6 +61,13 @@ int RunInspect(const InspectArgs& args) {
               j["joint_refit"]["available"].get<bool>()
                   ? ("yes, " + std::to_string(j["joint_refit"]["joints"].get<unsigned>()) + " joints").c_str()
                   : "no (schema v1/v2 or a mesh without a skin: vertex refit only)");
+  if (!j["skin_contacts"]["crease"].is_null())
+    std::printf("skin contacts: the crease rule, crease %.4g (source units); skin weights for the joint-matrix cull: %s\n",
+                j["skin_contacts"]["crease"].get<double>(),
+                j["skin_contacts"]["skin_weights"].get<bool>() ? "yes" : "no (bake --skin-weights)");
+  else
+    std::printf("skin contacts: no crease rule (baked before it): the narrow phase's exclusion-based definition only; "
+                "re-bake for the skin's own\n");
   std::printf("fit: %s, contact margin %.4g (source units)", j["fit"].get<std::string>().c_str(),
               j["contact_margin"].get<double>());
   if (!j["fold_margin"].is_null())

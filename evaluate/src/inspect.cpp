@@ -63,6 +63,10 @@ nlohmann::json DescribeAsset(const runtime::AssetView& v) {
   j["excluded_pairs"] = a.excluded_pairs() ? a.excluded_pairs()->size() : 0;
   // Schema v3: the refit from joint matrices (0 joints: not available — older schema or no skin).
   j["joint_refit"] = {{"available", a.sphere_joints() != nullptr}, {"joints", a.sphere_joints() ? a.joint_count() : 0}};
+  // Schema v4: the skin's own contact definition (the crease rule) and the skin weights for its joint-matrix
+  // cull; an asset without them runs the narrow phase's exclusion-based definition only.
+  j["skin_contacts"] = {{"crease", a.crease() > 0.0f ? nlohmann::json(a.crease()) : nlohmann::json(nullptr)},
+                        {"skin_weights", a.skin_counts() != nullptr}};
   j["unassigned_triangles"] = v.triangle_count - (a.surrounding_triangles() ? a.surrounding_triangles()->size() : 0);
   // Reach regions (absent before them): how many spheres a triangle stands behind, on average.
   j["reach_spheres_per_triangle"] =

@@ -52,6 +52,11 @@ def test_skin_weights_option_gives_the_cli_bytes(baked, tmp_path):
     by_key = spherechain.bake(CREATURE, dict(FAST, skin_weights=True))
     assert by_keyword.to_bytes() == (tmp_path / "skin.sphc").read_bytes() == by_key.to_bytes()
     assert len(by_keyword.to_bytes()) > len(asset.to_bytes())
+    # inspect says which asset carries them, and that both carry the crease rule; a golden v4 asset neither.
+    assert by_keyword.info()["skin_contacts"]["skin_weights"] and not asset.info()["skin_contacts"]["skin_weights"]
+    assert asset.info()["skin_contacts"]["crease"] > 0
+    old = json.loads(cli("inspect", SOURCE_DIR / "tests" / "data" / "golden" / "v4" / "creature.sphc", "--json").stdout)
+    assert old["skin_contacts"] == {"crease": None, "skin_weights": False}
 
 
 def test_info_is_inspect_json(baked):
