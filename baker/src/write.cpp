@@ -41,26 +41,27 @@ fb::UpAxis ToUpAxis(UpAxis a) {
 }
 
 // Asset.skin_counts / skin_joints / skin_weights from the imported rows (weights summing to 1): the
-// influences above 0 (at most 255 a vertex, the largest kept), each weight × 255 rounded down and the
-// remainder of 255 handed out by largest fractions, so every weight stays within 1/255 of its value and
-// a vertex's sum to 255. Joints < 65,536 (CentreSkinWeights refuses more).
+// influences above 0, each weight × 255 rounded down and the remainder of 255 handed out by largest
+// fractions, so every weight stays within 1/255 of its value and a vertex's sum to 255. A vertex with more
+// than 255 influences (or none) gets count 0: its patch is never culled (dropping influences would make the
+// runtime's bound wrong). Joints < 65,536 (CentreSkinWeights refuses more).
 void SkinRows(const Skin& skin, std::vector<uint8_t>* counts, std::vector<uint16_t>* joints,
               std::vector<uint8_t>* weights) {
   const size_t V = skin.weight_offsets.size() - 1;
   counts->assign(V, 0);
   std::vector<std::pair<float, uint32_t>> row;
   std::vector<uint32_t> q;
+  std::vector<std::pair<double, size_t>> frac;
   for (size_t v = 0; v < V; ++v) {
     row.clear();
     for (uint32_t e = skin.weight_offsets[v]; e < skin.weight_offsets[v + 1]; ++e)
       if (skin.weights[e] > 0.0f) row.emplace_back(skin.weights[e], skin.weight_joints[e]);
     std::sort(row.begin(), row.end(), [](const auto& x, const auto& y) { return x.first > y.first; });
-    if (row.size() > 255) row.resize(255);
     double sum = 0.0;
     for (const auto& r : row) sum += r.first;
-    if (row.empty() || !(sum > 0.0)) continue;
+    if (row.empty() || row.size() > 255 || !(sum > 0.0)) continue;
     q.assign(row.size(), 0);
-    std::vector<std::pair<double, size_t>> frac;
+    frac.clear();
     uint32_t given = 0;
     for (size_t k = 0; k < row.size(); ++k) {
       const double x = row[k].first / sum * 255.0;
