@@ -40,7 +40,10 @@
 // Surface_mesh of the asset's triangles over welded vertices, first N frames (--cgal-frames, default
 // 10; 0 = off), 1 run each. CGAL reports every self-intersection; its pairs are split into what our
 // contact definition leaves out (degenerate faces, same region, excluded sphere pairs, no region) and
-// the rest, which is compared with our contacts (printed, never fails the run). --per-frame: one line
+// the rest, which is compared with our contacts (printed, never fails the run). The same CGAL pairs under
+// the skin's definition (no welded corner in common, not near by the crease rule) must equal the
+// skin-contact job's contacts on those frames (a mismatch fails the run); the ratio CGAL / that job is
+// printed without and with the joint matrices. --per-frame: one line
 // per frame (time, breakdown, counters). "behind M2's pairs": per frame RefitJob + DetectJob M2, then
 // NarrowPhaseJob restricted to those pairs on the surrounding regions' and on the reach regions' model
 // (NarrowPhaseRegions), timed, with the share of the frame's contacts each finds (a contact the unrestricted
@@ -54,6 +57,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <memory>
 #include <numeric>
 #include <string>
 #include <thread>
@@ -597,8 +601,16 @@ struct EmbreePeer {
 // sweep of all triangle boxes on the longest axis, pairs sharing a welded corner skipped, TrianglesIntersect
 // on prepared triangles, then the rule asked of the graph (CreaseScratch::Near, bounded Dijkstra) for each
 // intersecting pair. Its contacts must equal the job's on every frame.
-bool SkinContacts(const Workload& w, const sc::AssetView& view, int runs) {
-  sc::NarrowPhaseModel np;
+// What SkinContacts leaves for the CGAL section: its model (the crease rule's graph) and, per frame, the job's
+// contacts (sorted) and fastest times, without and with the joint matrices (empty when not run).
+struct SkinFrames {
+  std::unique_ptr<sc::NarrowPhaseModel> model = std::make_unique<sc::NarrowPhaseModel>();
+  std::vector<std::vector<TrianglePair>> contacts;
+  std::vector<double> us, cull_us;
+};
+
+bool SkinContacts(const Workload& w, const sc::AssetView& view, int runs, SkinFrames* result) {
+  sc::NarrowPhaseModel& np = *result->model;
   sc::NarrowPhaseWorkspace np_ws;
   const double init_ms = Micros([&] { (void)np.Init(view); }) / 1000.0;
   if (!np.has_crease() || np_ws.Init(np) != sc::Status::kOk) {
@@ -792,6 +804,9 @@ bool SkinContacts(const Workload& w, const sc::AssetView& view, int runs) {
 #else
   std::printf("Embree peer: not built (libembree-dev not found at configure time)\n");
 #endif
+  result->contacts = std::move(found);
+  result->us = std::move(us);
+  if (cull) result->cull_us = std::move(cull_us);
   return ok;
 }
 
@@ -1016,7 +1031,8 @@ bool NarrowPhase(const Workload& w, const sc::AssetView& view, int runs, int cga
   std::printf("replica (bench-side sweep over all triangle boxes): tested pairs and contacts %s on every frame\n",
               ok ? "equal" : "DIFFER (see stderr)");
   for (float scale : margin_scales) ok = BehindTheProxy(w, view, runs, contacts, scale) && ok;
-  ok = SkinContacts(w, view, runs) && ok;
+  SkinFrames skin;
+  ok = SkinContacts(w, view, runs, &skin) && ok;
 
 #if SPHERECHAIN_BENCH_CGAL
   const size_t G = std::min(F, size_t(std::max(0, cgal_frames)));
@@ -1039,9 +1055,29 @@ bool NarrowPhase(const Workload& w, const sc::AssetView& view, int runs, int cga
   std::printf("%5s %9s %9s %8s %9s %11s | CGAL pairs: %6s %9s %8s %8s %7s %6s  %s\n", "frame", "sc us", "CGAL ms",
               "CGAL/sc", "contacts", "CGAL pairs", "degen.", "no region", "1 region", "excluded", "welded", "ours",
               "ours = contacts");
-  std::vector<double> cgal_ms, sc_us;
+  std::vector<double> cgal_ms, sc_us, skin_us, skin_cull_us;
   std::vector<std::pair<CgalMesh::Face_index, CgalMesh::Face_index>> pairs;
-  size_t agree = 0;
+  size_t agree = 0, skin_agree = 0;
+  // The skin's definition from CGAL's pairs: two faces with no welded corner in common (degenerate ones
+  // reported as (f, f) left out) that the crease rule does not call near.
+  const sc::NarrowPhaseModel& skin_np = *skin.model;
+  const bool skin_run = skin_np.has_crease() && skin.contacts.size() == F;
+  sc::CreaseScratch skin_scratch;
+  if (skin_run) (void)skin_scratch.Init(skin_np.crease_graph());
+  auto skin_pairs = [&]() {
+    std::vector<TrianglePair> out;
+    skin_scratch.Reset();
+    for (const auto& [f, g] : pairs) {
+      if (f == g) continue;
+      const uint32_t s = peer.face_source[f.idx()], t = peer.face_source[g.idx()];
+      if (m.Adjacent(s, t)) continue;
+      if (skin_scratch.Near(skin_np.crease_graph(), m.triangles + 3 * size_t{s}, m.triangles + 3 * size_t{t}, skin_np.crease()))
+        continue;
+      out.emplace_back(std::min(s, t), std::max(s, t));
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+  };
   for (size_t f = 0; f < G; ++f) {
     peer.SetFrame(w.frames[f].data());
     pairs.clear();
@@ -1057,6 +1093,11 @@ bool NarrowPhase(const Workload& w, const sc::AssetView& view, int runs, int cga
     agree += same;
     cgal_ms.push_back(t_us / 1000.0);
     sc_us.push_back(us[f]);
+    if (skin_run) {
+      skin_agree += skin_pairs() == skin.contacts[f];
+      skin_us.push_back(skin.us[f]);
+      if (!skin.cull_us.empty()) skin_cull_us.push_back(skin.cull_us[f]);
+    }
     std::printf("%5zu %9.1f %9.1f %7.0fx %9zu %11zu | %18zu %9zu %8zu %8zu %7zu %6zu  %s\n", f, us[f], t_us / 1000.0,
                 t_us / us[f], contacts[f].size(), c.all, c.degenerate, c.unassigned, c.same_region, c.excluded,
                 c.weld_adjacent, c.ours.size(), same ? "yes" : "NO");
@@ -1075,6 +1116,25 @@ bool NarrowPhase(const Workload& w, const sc::AssetView& view, int runs, int cga
   if (agree != cgal_ms.size())
     std::fprintf(stderr, "note: on %zu frame(s) CGAL's pairs under our contact definition differ from the narrow "
                          "phase's contacts (rows marked NO)\n", cgal_ms.size() - agree);
+  if (skin_run && !cgal_ms.empty()) {
+    const Summary sk = Summarize(skin_us);
+    std::printf("skin contacts (Exclusions::kCrease) on the same frames: median %.1f us, max %.1f us; ratio CGAL / "
+                "job: %.0fx (medians), %.0fx (maxima)",
+                sk.median, sk.max, 1000.0 * cg.median / sk.median, 1000.0 * cg.max / sk.max);
+    if (!skin_cull_us.empty()) {
+      const Summary kc = Summarize(skin_cull_us);
+      std::printf("; with joint matrices %.1f / %.1f us, %.0fx / %.0fx", kc.median, kc.max,
+                  1000.0 * cg.median / kc.median, 1000.0 * cg.max / kc.max);
+    }
+    std::printf("\nCGAL's pairs under the skin's definition (no welded corner in common, not near by the crease "
+                "rule): equal to the job's contacts on %zu of %zu frames\n",
+                skin_agree, cgal_ms.size());
+    if (skin_agree != cgal_ms.size()) {
+      std::fprintf(stderr, "MISMATCH: on %zu frame(s) CGAL's pairs under the skin's definition differ from the "
+                           "skin-contact job's\n", cgal_ms.size() - skin_agree);
+      ok = false;
+    }
+  }
 #else
   (void)cgal_frames;
   std::printf("CGAL self_intersections: not built (libcgal-dev not found at configure time)\n");
