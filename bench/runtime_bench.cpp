@@ -44,7 +44,7 @@
 // the skin's definition (no welded corner in common, not near by the crease rule) must equal the
 // skin-contact job's contacts on those frames (a mismatch fails the run); the ratio CGAL / that job is
 // printed without and with the joint matrices. --per-frame: one line
-// per frame (time, breakdown, counters). "behind M2's pairs": per frame RefitJob + DetectJob M2, then
+// per frame (time, breakdown, counters), for the narrow phase and for the skin contacts. "behind M2's pairs": per frame RefitJob + DetectJob M2, then
 // NarrowPhaseJob restricted to those pairs on the surrounding regions' and on the reach regions' model
 // (NarrowPhaseRegions), timed, with the share of the frame's contacts each finds (a contact the unrestricted
 // job did not report fails the run).
@@ -609,7 +609,7 @@ struct SkinFrames {
   std::vector<double> us, cull_us;
 };
 
-bool SkinContacts(const Workload& w, const sc::AssetView& view, int runs, SkinFrames* result) {
+bool SkinContacts(const Workload& w, const sc::AssetView& view, int runs, bool per_frame, SkinFrames* result) {
   sc::NarrowPhaseModel& np = *result->model;
   sc::NarrowPhaseWorkspace np_ws;
   const double init_ms = Micros([&] { (void)np.Init(view); }) / 1000.0;
@@ -804,6 +804,14 @@ bool SkinContacts(const Workload& w, const sc::AssetView& view, int runs, SkinFr
 #else
   std::printf("Embree peer: not built (libembree-dev not found at configure time)\n");
 #endif
+  if (per_frame) {
+    std::printf("%5s %9s %9s %10s %11s %11s %7s %8s\n", "frame", "us", "cull us", "patch pairs", "box tests",
+                "cull boxes", "exact", "contacts");
+    for (size_t f = 0; f < F; ++f)
+      std::printf("%5zu %9.1f %9.1f %10u %11u %11u %7u %8u\n", f, us[f], cull ? cull_us[f] : 0.0,
+                  stats[f].candidate_pairs, stats[f].box_tests, cull ? cull_stats[f].box_tests : 0u,
+                  stats[f].triangle_tests, stats[f].contacts);
+  }
   result->contacts = std::move(found);
   result->us = std::move(us);
   if (cull) result->cull_us = std::move(cull_us);
@@ -1032,7 +1040,7 @@ bool NarrowPhase(const Workload& w, const sc::AssetView& view, int runs, int cga
               ok ? "equal" : "DIFFER (see stderr)");
   for (float scale : margin_scales) ok = BehindTheProxy(w, view, runs, contacts, scale) && ok;
   SkinFrames skin;
-  ok = SkinContacts(w, view, runs, &skin) && ok;
+  ok = SkinContacts(w, view, runs, per_frame, &skin) && ok;
 
 #if SPHERECHAIN_BENCH_CGAL
   const size_t G = std::min(F, size_t(std::max(0, cgal_frames)));
