@@ -43,11 +43,11 @@
 // the rest, which is compared with our contacts (printed, never fails the run). The same CGAL pairs under
 // the skin's definition (no welded corner in common, not near by the crease rule) must equal the
 // skin-contact job's contacts on those frames (a mismatch fails the run); the ratio CGAL / that job is
-// printed without and with the joint matrices. --per-frame: one line
-// per frame (time, breakdown, counters), for the narrow phase and for the skin contacts. "behind M2's pairs": per frame RefitJob + DetectJob M2, then
-// NarrowPhaseJob restricted to those pairs on the surrounding regions' and on the reach regions' model
-// (NarrowPhaseRegions), timed, with the share of the frame's contacts each finds (a contact the unrestricted
-// job did not report fails the run).
+// printed without and with the joint matrices. --per-frame: one line per frame (time, breakdown,
+// counters), for the narrow phase and for the skin contacts. "behind M2's pairs": per frame RefitJob +
+// DetectJob M2, then NarrowPhaseJob restricted to those pairs on the surrounding regions' and on the
+// reach regions' model (NarrowPhaseRegions), timed, with the share of the frame's contacts each finds
+// (a contact the unrestricted job did not report fails the run).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
