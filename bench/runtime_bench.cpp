@@ -807,10 +807,15 @@ bool SkinContacts(const Workload& w, const sc::AssetView& view, int runs, bool p
   if (per_frame) {
     std::printf("%5s %9s %9s %10s %11s %11s %7s %8s\n", "frame", "us", "cull us", "patch pairs", "box tests",
                 "cull boxes", "exact", "contacts");
-    for (size_t f = 0; f < F; ++f)
-      std::printf("%5zu %9.1f %9.1f %10u %11u %11u %7u %8u\n", f, us[f], cull ? cull_us[f] : 0.0,
-                  stats[f].candidate_pairs, stats[f].box_tests, cull ? cull_stats[f].box_tests : 0u,
-                  stats[f].triangle_tests, stats[f].contacts);
+    for (size_t f = 0; f < F; ++f) {  // "-" in the cull columns when the cull did not run (reason above)
+      char cull_time[16] = "-", cull_boxes[16] = "-";
+      if (cull) {
+        std::snprintf(cull_time, sizeof cull_time, "%.1f", cull_us[f]);
+        std::snprintf(cull_boxes, sizeof cull_boxes, "%u", cull_stats[f].box_tests);
+      }
+      std::printf("%5zu %9.1f %9s %10u %11u %11s %7u %8u\n", f, us[f], cull_time, stats[f].candidate_pairs,
+                  stats[f].box_tests, cull_boxes, stats[f].triangle_tests, stats[f].contacts);
+    }
   }
   result->contacts = std::move(found);
   result->us = std::move(us);
