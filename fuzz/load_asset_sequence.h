@@ -106,6 +106,7 @@ inline const char* RunNarrowPhaseSequence(const runtime::AssetView& view, const 
       const Status s = job.Run();
       if (s == Status::kErrorNonFinitePositions) {
         if (n != 0) return "NarrowPhaseJob: non-finite positions with contacts written";
+        if (at_bind) return "NarrowPhaseJob: kErrorNonFinitePositions on the bind pose (finite: the crease graph checked it)";
         continue;
       }
       if (Failed(s)) return "NarrowPhaseJob failed on valid arguments";

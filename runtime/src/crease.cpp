@@ -144,9 +144,13 @@ void CreaseScratch::Search(const CreaseGraph& g, const uint32_t t[3], float crea
     const size_t ring_nodes = touched_.size();
     if (!Buckets(g, crease)) {
       // The bucket queue's entries ran out (a mesh with many edges far shorter than its crease): the same
-      // search again on a binary heap, whose entries never run out.
-      for (size_t i = 0; i < touched_.size(); ++i)
-        if (dist_[touched_[i]] > 0.0f) dist_[touched_[i]] = kInf;
+      // search again on a binary heap, whose entries never run out. Every node but the sources is forgotten,
+      // including those reached at distance 0 (edges of length 0 between nodes not welded): kept at 0 they
+      // would never be expanded again, and those past the ring would stay at 0 for later searches.
+      for (size_t i = 0; i < touched_.size(); ++i) {
+        const uint32_t n = touched_[i];
+        if (n != src[0] && n != src[1] && n != src[2]) dist_[n] = kInf;
+      }
       touched_.resize(ring_nodes);
       heap_.clear();
       for (uint32_t s : src) heap_.push_back(Key(0.0f, s));
@@ -200,7 +204,10 @@ bool CreaseScratch::Buckets(const CreaseGraph& g, float crease) {
       if (d > dist_[n]) continue;  // stale
       const bool room = Relax(g, n, d, crease, [&](float nd, uint32_t m) {
         if (used == capacity) return false;
-        const uint32_t to = std::max(b, std::min(kBuckets - 1, static_cast<uint32_t>(nd / width)));
+        // The last bucket when nd / width is not below it, or is NaN or infinite (a crease so small that
+        // its bucket width rounds to 0): converting those to an integer is undefined.
+        const float at = nd / width;
+        const uint32_t to = std::max(b, at < static_cast<float>(kBuckets - 1) ? static_cast<uint32_t>(at) : kBuckets - 1);
         entries_[used] = Key(nd, m), next_[used] = head_[to], head_[to] = used++;
         return true;
       });

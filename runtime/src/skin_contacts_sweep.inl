@@ -362,11 +362,19 @@
         unskinned |= counts->Get(v) == 0;
         for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], double{bind[3 * size_t{v} + k]}), hi[k] = std::max(hi[k], double{bind[3 * size_t{v} + k]});
         for (uint32_t e = first[v]; e < first[v + 1]; ++e) {
-          const uint32_t j = joints->Get(e), q = weights->Get(e);
+          const uint32_t j = joints->Get(e);
+          // A joint listed twice in one row (an asset the baker did not write) weighs the sum of its entries,
+          // as in linear blend skinning, and each entry adds its own unit of rounding: counted at its first.
+          bool listed = false;
+          for (uint32_t d = first[v]; d < e && !listed; ++d) listed = joints->Get(d) == j;
+          if (listed) continue;
+          uint32_t q = 0, entries = 0;
+          for (uint32_t d = e; d < first[v + 1]; ++d)
+            if (joints->Get(d) == j) q += weights->Get(d), ++entries;
           size_t f = 0;
           while (f < influence.size() && influence[f][0] != j) ++f;
           if (f == influence.size()) influence.push_back({j, 0, 0});
-          influence[f][1] += q, influence[f][2] = std::max(influence[f][2], q);
+          influence[f][1] += q, influence[f][2] = std::max(influence[f][2], q + entries - 1);
         }
       }
       double* c = &centre[3 * size_t{p}];
@@ -384,14 +392,15 @@
           if (influence[f][1] > influence[best][1] || (influence[f][1] == influence[best][1] && influence[f][0] < influence[best][0]))
             best = f;
         ref[p] = influence[best][0];
-        // The reference joint's least weight on the patch (0 where a vertex lacks it), rounded down.
+        // The reference joint's least weight on the patch (0 where a vertex lacks it), rounded down (a
+        // joint listed k times: the sum of its entries less k − 1 units, the formula below taking one more).
         uint32_t least = 255;
         for (uint32_t i = m.cl_vert_offsets_[p]; i < m.cl_vert_offsets_[p + 1]; ++i) {
           const uint32_t v = m.cl_vert_[i];
-          uint32_t q = 0;
+          uint32_t q = 0, entries = 0;
           for (uint32_t e = first[v]; e < first[v + 1]; ++e)
-            if (joints->Get(e) == ref[p]) q = weights->Get(e);
-          least = std::min(least, q);
+            if (joints->Get(e) == ref[p]) q += weights->Get(e), ++entries;
+          least = std::min(least, entries == 0 ? 0u : q + 1 > entries ? q + 1 - entries : 0u);
         }
         slack[p] = static_cast<float>(std::min(1.0, 1.0 - (least > 0 ? least - 1 : 0) / 255.0 + 1e-6));
         for (const auto& f : influence) {
@@ -765,6 +774,7 @@
       w.frame_ = 1;
     }
     w.prepared_used_ = 0;
+    if (C == 0) return true;  // no patch (every triangle degenerate by weld ids): no vertex to read, no contact
     float lo[3], hi[3];
     const bool lazy = joints != nullptr;
     if (!Boxes(m, w, base, stride, lo, hi, !lazy)) return false;

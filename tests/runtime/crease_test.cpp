@@ -99,6 +99,19 @@ st::Mesh TubeMesh(uint32_t rings, uint32_t sides, float spacing, float radius) {
   return mesh;
 }
 
+// TubeMesh with rings `first`, first + 1 and first + 2 at one place (the rings after them moved back by two
+// spacings): edges of length 0 between distinct nodes (coincident vertices not welded, as a hand-made asset
+// may have), two of them in a row from every vertex of those rings.
+st::Mesh CoincidentRings(uint32_t rings, uint32_t sides, float spacing, float radius, uint32_t first) {
+  st::Mesh mesh = TubeMesh(rings, sides, spacing, radius);
+  const std::vector<float> straight = mesh.positions;
+  for (uint32_t i = first + 1; i < rings; ++i)  // ring i where ring max(first, i − 2) was, exactly
+    for (uint32_t k = 0; k < sides; ++k)
+      for (int c = 0; c < 3; ++c)
+        mesh.positions[3 * (size_t{i} * sides + k) + c] = straight[3 * (size_t{std::max(first, i - 2)} * sides + k) + c];
+  return mesh;
+}
+
 }  // namespace
 
 TEST_CASE("crease rule: the bucketed search equals a textbook Dijkstra on every vertex") {
@@ -112,5 +125,19 @@ TEST_CASE("crease rule: the bucketed search equals a textbook Dijkstra on every 
   }
   SUBCASE("the binary heap the search falls back to when the bucket queue's entries run out") {
     CheckEveryVertex(TubeMesh(24, 12, 0.6f, 1.0f), 3.0f, 8);  // 8 entries: every search with more than a few nodes falls back
+  }
+  SUBCASE("edges of length 0 (coincident vertices not welded), on the buckets and on the heap") {
+    // The fallback must forget the nodes the buckets reached at distance 0 beyond the source's ring, or the
+    // heap never expands them (0 is not below 0) and later searches find them still at 0.
+    const st::Mesh mesh = CoincidentRings(24, 12, 0.6f, 1.0f, 10);
+    CheckEveryVertex(mesh, 3.0f);
+    CheckEveryVertex(mesh, 3.0f, 8);
+  }
+  SUBCASE("a crease so small that a bucket's width rounds to 0") {
+    // 1e-44 / 256 is 0 in float: every distance's bucket index is 0 / 0 or d / 0; the search must still
+    // settle the nodes at distance 0 (and nothing else) without converting a NaN or an infinity to an integer.
+    const st::Mesh mesh = CoincidentRings(24, 12, 0.6f, 1.0f, 10);
+    CheckEveryVertex(mesh, 1e-44f);
+    CheckEveryVertex(mesh, 1e-44f, 8);
   }
 }

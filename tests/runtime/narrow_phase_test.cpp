@@ -510,6 +510,123 @@ TEST_CASE("narrow phase, crease rule: a bent tube's fold is not a contact, its e
   CHECK(found.size() == contacts.size());
 }
 
+TEST_CASE("narrow phase, crease rule: a mesh whose every triangle is degenerate by weld ids has no contact") {
+  // Each ring's vertices welded into one: every triangle has two corners of one ring, so none is a triangle of
+  // the welded surface and no patch holds any. The job reports nothing, with kOk, on every ISA (the SIMD
+  // pass once took the empty box of no patches for a non-finite position).
+  st::Mesh mesh;
+  st::Tube tube;
+  st::AssetData d = CreaseTube(&mesh, &tube);
+  for (uint32_t v = 0; v < d.vertex_count; ++v) d.weld_ids[v] = v - v % tube.sides;
+  Loaded l = Load(d);
+  Narrow ctx;
+  REQUIRE(ctx.Init(l.view) == rt::Status::kOk);
+  REQUIRE(ctx.model.has_crease());
+  for (const std::vector<float>& pos : {mesh.positions, Fold(mesh, tube, 15, 178.0f)}) {
+    std::vector<rt::TriangleContact> out(16);
+    uint32_t n = 77;
+    rt::NarrowPhaseJob job;
+    job.model = &ctx.model;
+    job.workspace = &ctx.ws;
+    job.exclusions = rt::Exclusions::kCrease;
+    job.positions = {pos.data(), static_cast<uint32_t>(pos.size() / 3), 12};
+    job.output = out.data();
+    job.capacity = static_cast<uint32_t>(out.size());
+    job.count = &n;
+    CHECK(job.Run() == rt::Status::kOk);
+    CHECK(n == 0);
+  }
+}
+
+TEST_CASE("narrow phase, crease rule: the joint-matrix cull counts a joint listed twice in a row at its whole weight") {
+  // The bent tube skinned to two joints: joint 0 fixed, joint 1 turning about the z axis through ring 15, the
+  // weight of joint 1 rising from 0 at ring 12 to 1 at ring 18; the frame is the linear blend of those
+  // (rounded) weights. Asset `merged` lists each joint once per vertex; asset `split` lists each weight as two
+  // entries of the same joint (the same sums). The cull must take a split joint at its whole weight: on every
+  // frame `split` reports what the job without matrices reports, and culls no more pairs than `merged` (a
+  // joint's largest entry alone, half its weight, would under-bound how far the skin strays and cull more).
+  st::Mesh mesh;
+  st::Tube tube;
+  st::AssetData base = CreaseTube(&mesh, &tube);
+  base.joint_count = 2;
+  for (size_t i = 0; i < base.spheres.size(); ++i) {
+    base.sphere_joints.insert(base.sphere_joints.end(), {uint16_t(i < 15 ? 0 : 1), 0, 0, 0});
+    base.sphere_joint_weights.insert(base.sphere_joint_weights.end(), {1.0f, 0.0f, 0.0f, 0.0f});
+  }
+  std::vector<uint32_t> q1(base.vertex_count);  // joint 1's weight × 255 per vertex
+  for (uint32_t v = 0; v < base.vertex_count; ++v) {
+    const float ring = static_cast<float>(v / tube.sides);
+    q1[v] = static_cast<uint32_t>(std::lround(255.0f * std::clamp((ring - 12.0f) / 6.0f, 0.0f, 1.0f)));
+  }
+  st::AssetData merged = base, split = base;
+  for (uint32_t v = 0; v < base.vertex_count; ++v) {
+    const uint32_t q[2] = {255 - q1[v], q1[v]};
+    uint8_t count_m = 0, count_s = 0;
+    for (uint16_t j = 0; j < 2; ++j) {
+      if (q[j] == 0) continue;
+      merged.skin_joints.push_back(j), merged.skin_weights.push_back(static_cast<uint8_t>(q[j])), ++count_m;
+      const uint32_t half = q[j] / 2;
+      for (uint32_t part : {half, q[j] - half})
+        if (part) split.skin_joints.push_back(j), split.skin_weights.push_back(static_cast<uint8_t>(part)), ++count_s;
+    }
+    merged.skin_counts.push_back(count_m), split.skin_counts.push_back(count_s);
+  }
+  Loaded lm = Load(merged), ls = Load(split);
+  Narrow cm, cs;
+  REQUIRE(cm.Init(lm.view) == rt::Status::kOk);
+  REQUIRE(cs.Init(ls.view) == rt::Status::kOk);
+  REQUIRE(cm.model.has_joint_cull());
+  REQUIRE(cs.model.has_joint_cull());
+  const float px = tube.origin[0] + tube.spacing * 15.0f;
+  uint64_t culled_merged = 0, culled_split = 0, contacts = 0;
+  for (float degrees : {30.0f, 60.0f, 90.0f, 120.0f, 150.0f, 170.0f, 178.0f}) {
+    CAPTURE(degrees);
+    const float a = degrees * 3.14159265f / 180.0f, c = std::cos(a), s = std::sin(a);
+    // Row-major 3×4: joint 0 the identity, joint 1 the turn about (px, 0, z).
+    const std::vector<float> matrices = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0,
+                                         c, -s, 0, px - c * px, s, c, 0, -s * px, 0, 0, 1, 0};
+    std::vector<float> pos(mesh.positions.size());
+    for (uint32_t v = 0; v < base.vertex_count; ++v) {
+      const float* x = &mesh.positions[3 * size_t{v}];
+      const float w1 = static_cast<float>(q1[v]) / 255.0f, w0 = 1.0f - w1;
+      for (int r = 0; r < 3; ++r) {
+        const float* m1 = &matrices[12 + 4 * r];
+        pos[3 * size_t{v} + r] = w0 * x[r] + w1 * (m1[0] * x[0] + m1[1] * x[1] + m1[2] * x[2] + m1[3]);
+      }
+    }
+    auto run = [&](Narrow* ctx, bool with_matrices) {
+      Run r;
+      r.contacts.resize(1u << 16);
+      uint32_t n = 0;
+      rt::NarrowPhaseJob job;
+      job.model = &ctx->model;
+      job.workspace = &ctx->ws;
+      job.exclusions = rt::Exclusions::kCrease;
+      job.positions = {pos.data(), static_cast<uint32_t>(pos.size() / 3), 12};
+      job.output = r.contacts.data();
+      job.capacity = static_cast<uint32_t>(r.contacts.size());
+      job.count = &n;
+      job.stats = &r.stats;
+      if (with_matrices) job.joint_matrices = matrices.data(), job.joint_count = 2;
+      r.status = job.Run();
+      r.contacts.resize(n);
+      return r;
+    };
+    const Run plain = run(&cs, false), with_split = run(&cs, true), with_merged = run(&cm, true);
+    REQUIRE(plain.status == rt::Status::kOk);
+    REQUIRE(with_split.status == rt::Status::kOk);
+    REQUIRE(with_merged.status == rt::Status::kOk);
+    CHECK(AsSet(with_split.contacts) == AsSet(plain.contacts));
+    CHECK(AsSet(with_merged.contacts) == AsSet(plain.contacts));
+    CHECK(with_split.stats.joint_culled <= with_merged.stats.joint_culled);
+    culled_merged += with_merged.stats.joint_culled, culled_split += with_split.stats.joint_culled;
+    contacts += plain.contacts.size();
+  }
+  CHECK(contacts > 0);       // the hairpins meet
+  CHECK(culled_split > 0);   // and the cull still works on the split rows
+  MESSAGE("pairs culled: " << culled_merged << " merged, " << culled_split << " split; " << contacts << " contacts");
+}
+
 TEST_CASE("narrow phase, crease rule: two tubes joined by a long bridge are far along the skin, however near in space") {
   // Tubes A and B side by side along x (radius 1, axes 2.2 apart: 0.2 apart at bind), joined at their far ends
   // by a ribbon that runs 12 units out and back, so along the surface they are ~24 apart — far beyond the
