@@ -487,6 +487,9 @@
     for (size_t b = 0; b < B; ++b)
       if (cross[b] != kNone) m.near_cross_reach_[b] = reach(cross[b], cross_patch[b]);
     m.cull_joint_count_ = a.joint_count();
+    float extent = 0.0f;
+    for (size_t i = 0; i < size_t{3} * V; ++i) extent = std::max(extent, std::fabs(bind[i]));
+    m.cull_bind_extent_ = extent;
   }
 
   /// Triangle t prepared for exact tests this frame (PrepareTriangle): its slot in the frame's pool of
@@ -628,8 +631,9 @@
 
   /// The joint-matrix cull's frame (narrow_phase.h NarrowPhaseJob::joint_matrices): per joint pair of the
   /// model t and f, per joint the least singular value's lower bound (Gershgorin on AᵀA), per patch E.
-  /// In double; each bound rounded up (t, f, E) or down (σ) into its float.
-  static void JointFrame(const NarrowPhaseModel& m, NarrowPhaseWorkspace& w, const float* M) {
+  /// In double; each bound rounded up (t, f, E) or down (σ) into its float. Returns the matrices' largest
+  /// |translation component| (a scale of the rounding margin).
+  static float JointFrame(const NarrowPhaseModel& m, NarrowPhaseWorkspace& w, const float* M) {
     const uint32_t K = static_cast<uint32_t>(m.cull_pairs_.size());
     for (uint32_t k = 0; k < K; ++k) {
       const float* mj = M + kJointMatrixFloats * (m.cull_pairs_[k] >> 16);
@@ -647,8 +651,10 @@
       w.cull_t_[k] = static_cast<float>(std::sqrt(t2) * (1.0 + 1e-6));
       w.cull_f_[k] = static_cast<float>(std::sqrt(f2) * (1.0 + 1e-6));
     }
+    float moved = 0.0f;
     for (uint32_t j = 0; j < m.cull_joint_count_; ++j) {
       const float* a = M + kJointMatrixFloats * j;
+      moved = std::max({moved, std::fabs(a[3]), std::fabs(a[7]), std::fabs(a[11])});
       double g[3][3];
       for (int i = 0; i < 3; ++i)
         for (int k = 0; k < 3; ++k) g[i][k] = double{a[i]} * a[k] + double{a[4 + i]} * a[4 + k] + double{a[8 + i]} * a[8 + k];
@@ -670,6 +676,7 @@
       }
       w.cull_e_[p] = static_cast<float>(std::min(double{m.cl_slack_[p]} * most, sum) * (1.0 + 1e-6));
     }
+    return moved;
   }
 
   /// True when the joint-matrix bound proves that no pair not near of patches a <= b (near block `block`)
@@ -779,8 +786,8 @@
     const bool lazy = joints != nullptr;
     if (!Boxes(m, w, base, stride, lo, hi, !lazy)) return false;
     float margin = 0.0f;
-    if (lazy) {
-      JointFrame(m, w, joints);
+    if (lazy) {  // float skinning's rounding grows with every term it adds: frame, bind pose and translations
+      margin = std::max(JointFrame(m, w, joints), m.cull_bind_extent_);
       for (int k = 0; k < 3; ++k) margin = std::max(margin, std::max(std::fabs(lo[k]), std::fabs(hi[k])));
       margin *= 1e-4f;
     }

@@ -256,6 +256,7 @@ class NarrowPhaseModel {
   // (near_gap_), and when the two patches' references differ the pair (r_q, r_p) with its reach for q
   // (near_cross_, near_cross_reach_; kNone: same reference).
   uint32_t cull_joint_count_ = 0;
+  float cull_bind_extent_ = 0.0f;  // the bind pose's largest |coordinate|: a scale of the cull's rounding margin
   BlockVector<uint32_t> cull_pairs_, cl_ref_, cl_cull_offsets_, cl_cull_pair_, near_cross_;
   BlockVector<float> cull_anchor_, cl_slack_, cl_cull_w_, cl_cull_reach_, near_gap_, near_cross_reach_;
   bool reach_ = false;  // regions from Asset.reach_*: overlapping, owners from the surrounding regions
@@ -434,7 +435,8 @@ struct NarrowPhaseJob {
   /// E = min((1 − min w_r)·max_j e_j, Σ_j max w_j·e_j) of M_r v, r the patch's reference joint and
   /// e_j ≥ |(M_j − M_r)(v, 1)| over the patch's bind sphere; two patches with the same reference are
   /// skipped when σ_min(A_r)·gap > E_p + E_q + margin, gap a lower bound on the bind distance of their pairs
-  /// not near (the least distance of their bind boxes, at Init), margin 1e-4 × the frame's largest coordinate; different
+  /// not near (the least distance of their bind boxes, at Init), margin 1e-4 × the largest |coordinate| of
+  /// the frame, of the bind pose and of the matrices' translations (float skinning's rounding); different
   /// references add |(M_rq − M_rp) x| over q's bind sphere. [Precondition: `positions` are the asset's
   /// bind positions skinned by linear blend with these matrices and the asset's skin weights (within float
   /// rounding), as `play`, `evaluate` and an engine's CPU skinning give; other deformations (dual-quaternion
