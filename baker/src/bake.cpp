@@ -1,10 +1,12 @@
 #include "spherechain/baker/bake.h"
 #include "spherechain/baker/training_poses.h"
+#include "spherechain/runtime/asset.h"
 #include "spherechain/runtime/crease.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -601,6 +603,13 @@ Result<BakeResult> Bake(const std::string& input_path, const BakeConfig& config,
     in.coverage_voxel_rel = r.coverage_options.voxel_rel;
     in.forced_findings = &r.plausibility;
     r.asset = BuildAsset(in);
+    // What the runtime refuses is never handed on (a writer bug would reach every game that loads it).
+    std::vector<uint64_t> aligned((r.asset.size() + 7) / 8);
+    std::memcpy(aligned.data(), r.asset.data(), r.asset.size());
+    runtime::AssetView view;
+    if (const runtime::Status s = runtime::LoadAsset(aligned.data(), r.asset.size(), &view); s != runtime::Status::kOk)
+      return MakeError(Error::Code::kInternal, std::string("the baked asset does not load in the runtime (a baker bug): ") +
+                                                   runtime::ToString(s));
   }
   return r;
 }

@@ -36,10 +36,12 @@ nlohmann::json DescribeAsset(const runtime::AssetView& v) {
   // The paper's five regions, or (schema v4) the creature's that Asset.regions names.
   const uint32_t R = runtime::RegionCount(v);
   std::vector<size_t> tris(R, 0), sph(R, 0);
-  for (uint8_t r : *a.triangle_regions())
-    if (r < R) ++tris[r];
-  for (uint8_t r : *a.sphere_regions())
-    if (r < R) ++sph[r];
+  if (const auto* tr = a.triangle_regions())  // optional in the schema: counted when present
+    for (uint8_t r : *tr)
+      if (r < R) ++tris[r];
+  if (const auto* sr = a.sphere_regions())
+    for (uint8_t r : *sr)
+      if (r < R) ++sph[r];
   for (uint32_t k = 0; k < R; ++k) {
     nlohmann::json& e = j["regions"][runtime::RegionName(v, k)];
     e = {{"triangles", tris[k]}, {"spheres", sph[k]}};

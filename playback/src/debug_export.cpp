@@ -23,6 +23,11 @@ namespace spherechain::playback {
 
 namespace {
 
+// Element i's region in an optional Asset.sphere_regions / triangle_regions (LoadAsset: #S / #T entries when
+// present); past every region (drawn grey, as the trunk) when the asset has none.
+uint32_t RegionAt(const flatbuffers::Vector<uint8_t>* regions, uint32_t i) { return regions ? regions->Get(i) : 0xffu; }
+
+
 Eigen::Vector3f UpOf(UpAxis a) {
   return a == UpAxis::kZ ? Eigen::Vector3f::UnitZ() : a == UpAxis::kX ? Eigen::Vector3f::UnitX() : Eigen::Vector3f::UnitY();
 }
@@ -42,8 +47,9 @@ Frame CharacterFrame(const Mesh& mesh, const runtime::AssetView& a) {
   for (uint32_t s = 0; s < a.sphere_count; ++s) {
     const auto& c = spheres->Get(s)->center();
     const Eigen::Vector3f p(c.x(), c.y(), c.z());
-    if (regions->Get(s) == 0 || regions->Get(s) == 2) { l += p; ++nl; }
-    if (regions->Get(s) == 1 || regions->Get(s) == 3) { r += p; ++nr; }
+    const uint32_t region = RegionAt(regions, s);
+    if (region == 0 || region == 2) { l += p; ++nl; }
+    if (region == 1 || region == 3) { r += p; ++nr; }
   }
   Eigen::Vector3f left = (nl && nr) ? Eigen::Vector3f(l / float(nl) - r / float(nr)) : Eigen::Vector3f::UnitX();
   if (a.asset->regions() && !a.asset->biped()) {
@@ -53,14 +59,14 @@ Frame CharacterFrame(const Mesh& mesh, const runtime::AssetView& a) {
     Eigen::Vector3f mean = Eigen::Vector3f::Zero();
     int n = 0;
     for (uint32_t s = 0; s < a.sphere_count; ++s)
-      if (regions->Get(s) == trunk) {
+      if (RegionAt(regions, s) == trunk) {
         const auto& c = spheres->Get(s)->center();
         mean += Eigen::Vector3f(c.x(), c.y(), c.z());
         ++n;
       }
     Eigen::Matrix3f cov = Eigen::Matrix3f::Zero();
     for (uint32_t s = 0; s < a.sphere_count && n > 0; ++s)
-      if (regions->Get(s) == trunk) {
+      if (RegionAt(regions, s) == trunk) {
         const auto& c = spheres->Get(s)->center();
         const Eigen::Vector3f d = Eigen::Vector3f(c.x(), c.y(), c.z()) - mean / float(n);
         cov += d * d.transpose();
@@ -135,7 +141,7 @@ Status ExportDebugGltf(const Mesh& mesh, const runtime::AssetView& a, const std:
   // Vertex colours: a vertex takes the region of the last triangle that uses it (seams show as-is).
   std::vector<float> colors(size_t(mesh.vertex_count()) * 3, 0.5f);
   for (uint32_t t = 0; t < mesh.triangle_count(); ++t) {
-    const auto c = RegionColor(a, tri_regions->Get(t));
+    const auto c = RegionColor(a, RegionAt(tri_regions, t));
     for (int k = 0; k < 3; ++k)
       for (int j = 0; j < 3; ++j) colors[3 * mesh.indices[3 * t + k] + j] = c[j];
   }
@@ -158,7 +164,7 @@ Status ExportDebugGltf(const Mesh& mesh, const runtime::AssetView& a, const std:
   const auto* spheres = a.asset->spheres();
   for (uint32_t s = 0; s < a.sphere_count; ++s) {
     const auto* S = spheres->Get(s);
-    const auto c = RegionColor(a, a.asset->sphere_regions()->Get(s));
+    const auto c = RegionColor(a, RegionAt(a.asset->sphere_regions(), s));
     const uint32_t base = uint32_t(sp_pos.size() / 3);
     for (size_t k = 0; k < unit.size(); k += 3) {
       sp_pos.insert(sp_pos.end(), {S->center().x() + S->radius() * unit[k], S->center().y() + S->radius() * unit[k + 1],
@@ -376,12 +382,12 @@ std::string RenderDebugSvg(const Mesh& mesh, const runtime::AssetView& a, int wi
   const auto* sphere_regions = a.asset->sphere_regions();
   Picture pic;
   pic.positions = mesh.positions.data();
-  pic.tri_left = [&](uint32_t t) { return RegionColor(a, tri_regions->Get(t)); };
+  pic.tri_left = [&](uint32_t t) { return RegionColor(a, RegionAt(tri_regions, t)); };
   pic.tri_right = [](uint32_t) { return std::array<float, 3>{0.85f, 0.85f, 0.85f}; };
   for (uint32_t s = 0; s < a.sphere_count; ++s) {
     const auto* S = spheres->Get(s);
     pic.spheres.push_back({{S->center().x(), S->center().y(), S->center().z()}, S->radius(),
-                           RegionColor(a, sphere_regions->Get(s)), 0.45f});
+                           RegionColor(a, RegionAt(sphere_regions, s)), 0.45f});
   }
   pic.caption = RegionLegend(a) + " — " + std::to_string(a.sphere_count) + " spheres";
   return RenderSvg(mesh, a, pic, width_px);

@@ -162,6 +162,8 @@ Status Semantics(const Asset& a, AssetView* view) {
   for (uint32_t v : *piv_v)
     if (v >= V) return Status::kErrorIndexOutOfRange;
 
+  // Joints are indexed by uint16 (sphere_joints, skin_joints): at most 65,536 of them.
+  if (a.joint_count() > kMaxJoints) return Status::kErrorIndexOutOfRange;
   // Joint weights (optional, schema v3): four influences per sphere.
   const auto* sj = a.sphere_joints();
   const auto* sw = a.sphere_joint_weights();
@@ -175,6 +177,9 @@ Status Semantics(const Asset& a, AssetView* view) {
       for (uint32_t k = 0; k < 4; ++k) {
         const float w = sw->Get(4 * i + k);
         if (!std::isfinite(w) || w < 0.0f) return Status::kErrorSkinWeights;
+        // The refit blends a sphere's influences up to its first 0 (the schema lists them by descending
+        // weight): a weight after a 0 would be dropped.
+        if (k > 0 && w > 0.0f && sw->Get(4 * i + k - 1) == 0.0f) return Status::kErrorSkinWeights;
         sum += w;
       }
       if (!(std::fabs(sum - 1.0f) <= 1e-3f)) return Status::kErrorSkinWeights;
@@ -214,6 +219,13 @@ Status Semantics(const Asset& a, AssetView* view) {
     if (const auto* tr = a.triangle_regions())
       for (uint8_t r : *tr)
         if (r >= R) return Status::kErrorRegions;
+  } else {  // the paper's five regions (RegionCount)
+    if (const auto* sr = a.sphere_regions())
+      for (uint8_t r : *sr)
+        if (r >= 5) return Status::kErrorRegions;
+    if (const auto* tr = a.triangle_regions())
+      for (uint8_t r : *tr)
+        if (r >= 5) return Status::kErrorRegions;
   }
 
   view->asset = &a;

@@ -14,7 +14,22 @@ struct BatchTaskData {
 
 // One character, serial: the same jobs a caller would run for it alone.
 void RunCharacter(const BatchJob& job, CharacterFrame& ch) {
-  Status s;
+  DetectJob detect;
+  detect.model = job.model;
+  detect.workspace = ch.workspace;
+  detect.method = job.method;
+  detect.output = ch.output;
+  detect.capacity = ch.capacity;
+  detect.count = ch.count;
+  detect.stats = ch.stats;
+  detect.margin = job.margin;
+  detect.fold_margin = job.fold_margin;
+  // The detect arguments first: a character that cannot be detected keeps its workspace's spheres untouched.
+  Status s = detect.Check();
+  if (s != Status::kOk) {
+    ch.status = s;
+    return;
+  }
   if (job.source == RefitSource::kVertices) {
     RefitJob refit;
     refit.positions = ch.positions;
@@ -30,19 +45,7 @@ void RunCharacter(const BatchJob& job, CharacterFrame& ch) {
     refit.joint_count = job.joint_count;
     s = refit.Run();
   }
-  if (s == Status::kOk) {
-    DetectJob detect;
-    detect.model = job.model;
-    detect.workspace = ch.workspace;
-    detect.method = job.method;
-    detect.output = ch.output;
-    detect.capacity = ch.capacity;
-    detect.count = ch.count;
-    detect.stats = ch.stats;
-    detect.margin = job.margin;
-    detect.fold_margin = job.fold_margin;
-    s = detect.Run();
-  }
+  if (s == Status::kOk) s = detect.Run();
   ch.status = s;
 }
 
@@ -74,7 +77,9 @@ Status BatchJob::Run() const {
   if (Status s = Check(); s != Status::kOk) return s;
   if (parallel_for.run) {
     BatchTaskData data{this};
-    parallel_for.run(parallel_for.user, (character_count + parallel_grain - 1) / parallel_grain, &BatchTask, &data);
+    // In 64 bits: a grain near 2^32 ("one task") must not wrap the count to 0 tasks.
+    const uint64_t tasks = (uint64_t{character_count} + parallel_grain - 1) / parallel_grain;
+    parallel_for.run(parallel_for.user, static_cast<uint32_t>(tasks), &BatchTask, &data);
   } else {
     for (uint32_t i = 0; i < character_count; ++i) RunCharacter(*this, characters[i]);
   }

@@ -49,7 +49,9 @@ Status RefitJob::Run() const {
   const uint32_t S = model->sphere_count();
   if (parallel_for.run) {
     RefitTaskData data{this};
-    parallel_for.run(parallel_for.user, (S + parallel_grain - 1) / parallel_grain, &RefitTask, &data);
+    // In 64 bits: a grain near 2^32 ("one task") must not wrap the count to 0 tasks.
+    const uint64_t tasks = (uint64_t{S} + parallel_grain - 1) / parallel_grain;
+    parallel_for.run(parallel_for.user, static_cast<uint32_t>(tasks), &RefitTask, &data);
   } else {
     Model::Internal::Refit(*this, 0, S);
   }

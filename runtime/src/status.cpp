@@ -32,7 +32,7 @@ const char* ToString(Status s) {
     case Status::kErrorChainOrder: return "kErrorChainOrder: chain spheres not strictly ascending";
     case Status::kErrorContactMargin: return "kErrorContactMargin: Asset.contact_margin is negative";
     case Status::kErrorSkinWeights:
-      return "kErrorSkinWeights: a sphere's joint weights are negative, not finite or do not sum to 1, or a vertex's skin weights do not sum to 1";
+      return "kErrorSkinWeights: a sphere's joint weights are negative, not finite, nonzero after a zero or do not sum to 1, or a vertex's skin weights do not sum to 1";
     case Status::kErrorRegions:
       return "kErrorRegions: Asset.regions malformed (count, one trunk last, or a region value past them)";
     case Status::kErrorJointCount:

@@ -160,6 +160,28 @@ TEST_CASE("LoadAsset: semantic errors each give their status") {
     d.sphere_joint_weights[5] = -0.25f;
   }, Status::kErrorSkinWeights);
   expect([&](test::AssetData& d) { with_joints(d); d.sphere_joint_weights[9] = 0.2f; }, Status::kErrorSkinWeights);
+  // A weight after a 0: the refit's blend ends at the first 0, so (0.5, 0, 0.5, 0) would follow half a joint
+  // and (0, 1, 0, 0) none. Out of order without a 0 between is blended whole: accepted.
+  expect([&](test::AssetData& d) {
+    with_joints(d);
+    d.sphere_joint_weights[4] = 0.5f, d.sphere_joint_weights[5] = 0.0f, d.sphere_joint_weights[6] = 0.5f;
+  }, Status::kErrorSkinWeights);
+  expect([&](test::AssetData& d) { with_joints(d); d.sphere_joint_weights[4] = 0.0f, d.sphere_joint_weights[5] = 1.0f; },
+         Status::kErrorSkinWeights);
+  {
+    test::AssetData d = base;
+    with_joints(d);
+    std::swap(d.sphere_joint_weights[4], d.sphere_joint_weights[5]);  // (0.25, 0.75, 0, 0)
+    CHECK(Load(d, &view) == Status::kOk);
+  }
+  // Joint indices are uint16: a joint_count past 65,536 would only ask for memory and time.
+  expect([&](test::AssetData& d) { with_joints(d); d.joint_count = kMaxJoints + 1; }, Status::kErrorIndexOutOfRange);
+  {
+    test::AssetData d = base;
+    with_joints(d);
+    d.joint_count = kMaxJoints;
+    CHECK(Load(d, &view) == Status::kOk);
+  }
   expect([&](test::AssetData& d) { with_joints(d); d.sphere_joints.resize(d.sphere_joints.size() - 4); },
          Status::kErrorCountMismatch);
   expect([&](test::AssetData& d) { with_joints(d); d.sphere_joint_weights.clear(); }, Status::kErrorMissingField);
@@ -275,7 +297,15 @@ TEST_CASE("LoadAsset: semantic errors each give their status") {
     CHECK(RegionCount(view) == 5);
     CHECK(std::string(RegionName(view, 4)) == "torso");
     CHECK(IsTrunkRegion(view, 4));
+    d.sphere_regions.assign(d.spheres.size(), 4);
+    d.triangle_regions.assign(d.triangle_spheres.size(), 4);
+    CHECK(Load(d, &view) == Status::kOk);
   }
+  // Without the regions table a value is one of the paper's five (a C caller indexes a table of RegionCount).
+  expect([&](test::AssetData& d) { d.sphere_regions.assign(d.spheres.size(), 4); d.sphere_regions[1] = 5; },
+         Status::kErrorRegions);
+  expect([&](test::AssetData& d) { d.triangle_regions.assign(d.triangle_spheres.size(), 0); d.triangle_regions[0] = 200; },
+         Status::kErrorRegions);
   expect([&](test::AssetData& d) { creature(d); d.sphere_regions[1] = 3; }, Status::kErrorRegions);
   expect([&](test::AssetData& d) { creature(d); d.triangle_regions[0] = 7; }, Status::kErrorRegions);
   expect([&](test::AssetData& d) { creature(d); d.regions[2].second = false; }, Status::kErrorRegions);  // no trunk

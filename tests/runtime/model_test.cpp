@@ -264,7 +264,7 @@ TEST_CASE("BatchJob equals each character's own refit + detect, serial and on tw
   for (uint32_t i = 0; i < N; ++i) poses.push_back(Pose(asset.mesh, 100 + i)), joints.push_back(Joints(200 + i));
   for (RefitSource source : {RefitSource::kVertices, RefitSource::kJoints})
     for (DetectMethod method : {DetectMethod::kM1, DetectMethod::kM2})
-      for (int hook = 0; hook < 2; ++hook) {
+      for (int hook = 0; hook < 3; ++hook) {  // serial; two threads; two threads, one task (the largest grain)
         CAPTURE(static_cast<int>(source));
         CAPTURE(static_cast<int>(method));
         CAPTURE(hook);
@@ -290,7 +290,7 @@ TEST_CASE("BatchJob equals each character's own refit + detect, serial and on tw
         batch.source = source;
         batch.joint_count = 3;
         batch.method = method;
-        batch.parallel_grain = 2;
+        batch.parallel_grain = hook == 2 ? 0xffffffffu : 2;  // 0xffffffff: the task count once wrapped to 0
         if (hook) batch.parallel_for.run = &TwoThreads;
         REQUIRE(batch.Run() == Status::kOk);
         for (uint32_t i = 0; i < N; ++i) {
@@ -373,4 +373,13 @@ TEST_CASE("BatchJob: bad batch arguments write nothing; a bad character gets its
   batch.character_count = 1;
   CHECK(batch.Run() == Status::kOkTruncated);
   CHECK(n_good == 1);
+  // Its own detect arguments bad (a null count): status set, and its workspace's spheres not refit either.
+  Workspace fresh;
+  REQUIRE(fresh.Init(model) == Status::kOk);
+  const std::vector<float> fresh_before = SphereBits(fresh);
+  frames[1].workspace = &fresh;
+  frames[1].count = nullptr;
+  CHECK(batch.Run() == Status::kErrorNullArgument);
+  CHECK(frames[1].status == Status::kErrorNullArgument);
+  CHECK(SphereBits(fresh) == fresh_before);
 }

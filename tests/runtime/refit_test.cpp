@@ -206,18 +206,22 @@ TEST_CASE("RefitJob through a parallel_for hook equals the serial run") {
   REQUIRE(fx.Refit(pos, RefitMode::kPivotFrame) == Status::kOk);
   const std::vector<float> serial(fx.ctx.ws.spheres().z, fx.ctx.ws.spheres().z + fx.ctx.model.sphere_count());
   (void)fx.ctx.ws.ResetToBindPose(fx.ctx.model);
-  RefitJob job;
-  job.model = &fx.ctx.model;
-  job.workspace = &fx.ctx.ws;
-  job.positions = {pos.data(), fx.mesh.vertex_count(), 12};
-  job.parallel_grain = 3;
-  int calls = 0;
-  job.parallel_for.user = &calls;
-  job.parallel_for.run = [](void* user, uint32_t count, ParallelFor::Task task, void* data) {
-    ++*static_cast<int*>(user);
-    for (uint32_t i = count; i-- > 0;) task(data, i, i + 1);  // reverse order, one index per task
-  };
-  REQUIRE(job.Run() == Status::kOk);
-  CHECK(calls == 1);
-  for (uint32_t i = 0; i < fx.ctx.model.sphere_count(); ++i) CHECK(fx.ctx.ws.spheres().z[i] == serial[i]);
+  for (uint32_t grain : {3u, 0xffffffffu}) {  // 0xffffffff: one task (its count once wrapped to 0 in 32 bits)
+    CAPTURE(grain);
+    (void)fx.ctx.ws.ResetToBindPose(fx.ctx.model);
+    RefitJob job;
+    job.model = &fx.ctx.model;
+    job.workspace = &fx.ctx.ws;
+    job.positions = {pos.data(), fx.mesh.vertex_count(), 12};
+    job.parallel_grain = grain;
+    int calls = 0;
+    job.parallel_for.user = &calls;
+    job.parallel_for.run = [](void* user, uint32_t count, ParallelFor::Task task, void* data) {
+      ++*static_cast<int*>(user);
+      for (uint32_t i = count; i-- > 0;) task(data, i, i + 1);  // reverse order, one index per task
+    };
+    REQUIRE(job.Run() == Status::kOk);
+    CHECK(calls == 1);
+    for (uint32_t i = 0; i < fx.ctx.model.sphere_count(); ++i) CHECK(fx.ctx.ws.spheres().z[i] == serial[i]);
+  }
 }

@@ -91,8 +91,9 @@ typedef uint32_t sc_status;
 #define SC_ERROR_TOO_MANY_SPHERES ((sc_status)0x80000203u) ///< More than 65,535 spheres.
 #define SC_ERROR_TOO_MANY_CHAINS ((sc_status)0x80000204u)  ///< More than 32 chains, or too many pairs in them.
 #define SC_ERROR_COUNT_MISMATCH ((sc_status)0x80000205u)   ///< An asset array's length disagrees with \#S, \#T or \#V.
-#define SC_ERROR_INDEX_OUT_OF_RANGE ((sc_status)0x80000206u)  ///< A sphere, triangle or vertex index out of range
-                                                              ///< (in the asset, or a sphere argument >= \#S).
+#define SC_ERROR_INDEX_OUT_OF_RANGE ((sc_status)0x80000206u)  ///< A sphere, triangle, vertex or joint index out of
+                                                              ///< range, or more than 65,536 joints (in the asset),
+                                                              ///< or a sphere argument >= \#S.
 #define SC_ERROR_OFFSETS ((sc_status)0x80000207u)          ///< Region offsets malformed in the asset.
 #define SC_ERROR_NON_FINITE ((sc_status)0x80000208u)       ///< A NaN or infinite float in the asset.
 #define SC_ERROR_RADIUS ((sc_status)0x80000209u)           ///< A sphere radius <= 0 in the asset.
@@ -100,8 +101,8 @@ typedef uint32_t sc_status;
 #define SC_ERROR_CHAIN_ORDER ((sc_status)0x8000020Bu)      ///< A chain's spheres not strictly ascending.
 #define SC_ERROR_EXCLUDED_PAIRS ((sc_status)0x8000020Cu)   ///< Excluded pairs not a < b or not strictly ascending.
 #define SC_ERROR_CONTACT_MARGIN ((sc_status)0x8000020Du)   ///< The asset's contact margin is negative.
-#define SC_ERROR_SKIN_WEIGHTS ((sc_status)0x8000020Eu)     ///< A sphere's joint weights negative, not finite or
-                                                           ///< not summing to 1.
+#define SC_ERROR_SKIN_WEIGHTS ((sc_status)0x8000020Eu)     ///< A sphere's joint weights negative, not finite,
+                                                           ///< one after a 0, or not summing to 1.
 #define SC_ERROR_REGIONS ((sc_status)0x8000020Fu)          ///< The asset's regions malformed.
 
 /// Static, NUL-terminated English text of `status`, starting with its constant's name (e.g.

@@ -22,6 +22,8 @@ inline constexpr uint32_t kSchemaVersion = 4;
 inline constexpr uint32_t kPaperSchemaVersion = 3;
 /// Most regions an asset may name (Asset.regions; region values are bytes).
 inline constexpr uint32_t kMaxRegions = 32;
+/// Most joints an asset may name (Asset.joint_count): joint indices are uint16.
+inline constexpr uint32_t kMaxJoints = 65536;
 /// The oldest schema version this SDK still reads: v1 and v2 assets load, with what later versions
 /// added absent (v1: contact margin 0 — their spheres were tested unmargined —, fit "paper", no
 /// coverage; v1 and v2: no joint weights, so JointRefitJob answers kErrorMissingField — re-bake).
@@ -85,16 +87,16 @@ struct AssetView {
 ///     kErrorNonFinite; >= 0 without sphere_regions: kErrorMissingField), the optional crease rule
 ///     (bind_positions: 3·\#V finite floats, else kErrorCountMismatch / kErrorNonFinite; crease NaN or inf:
 ///     kErrorNonFinite; crease == 0, or > 0 without bind_positions, triangles and weld_ids:
-///     kErrorMissingField), and the optional v3 joint weights:
-///     sphere_joints and sphere_joint_weights both present or both absent, 4·\#S each
+///     kErrorMissingField), joint_count <= kMaxJoints (kErrorIndexOutOfRange), and the optional v3 joint
+///     weights: sphere_joints and sphere_joint_weights both present or both absent, 4·\#S each
 ///     (kErrorCountMismatch), joint indices < joint_count (kErrorIndexOutOfRange), weights finite,
-///     >= 0 and summing to 1 ± 1e-3 per sphere (kErrorSkinWeights); the optional v4 skin weights
+///     >= 0, none after a 0 (the refit's blend ends at the first 0) and summing to 1 ± 1e-3 per sphere (kErrorSkinWeights); the optional v4 skin weights
 ///     per vertex: skin_counts, skin_joints and skin_weights all present or all absent
 ///     (kErrorMissingField), \#V counts and as many joints and weights as they add up to, only with the
 ///     crease rule (kErrorCountMismatch), joints < joint_count (kErrorIndexOutOfRange), each vertex's
 ///     rounded weights summing to 255 within half its count (kErrorSkinWeights); the optional v4 regions: 2 to
 ///     kMaxRegions, exactly one Trunk and it the last, every sphere_regions / triangle_regions value below
-///     their count (kErrorRegions).
+///     their count, or below 5 (the paper's regions) without Asset.regions (kErrorRegions).
 /// Returns kOk with `*out` filled.
 /// Cost: O(size) reads, no allocation, no exceptions; thread-safe (pure function of its inputs).
 /// Untrusted input: every truncated prefix and bit flip returns an error, never crashes (tested).

@@ -21,15 +21,15 @@ enum class [[nodiscard]] Status : uint32_t {
   kErrorNullArgument = 0x8000'0001u,  ///< A required pointer was null (or size 0 with a non-null ask).
   kErrorAlignment = 0x8000'0002u,     ///< Asset bytes not 8-byte aligned, or positions not 4-byte aligned.
   kErrorInvalidJob = 0x8000'0003u,    ///< Job fields inconsistent (unknown mode/method, model or
-                                      ///< workspace not initialised, parallel_for hook half set).
+                                      ///< workspace not initialised, parallel_grain 0).
   kErrorVertexCount = 0x8000'0004u,   ///< PositionsView::count != asset fingerprint.vertex_count.
   kErrorStride = 0x8000'0005u,        ///< PositionsView::stride_bytes < 12 or not a multiple of 4.
   kErrorOutOfMemory = 0x8000'0006u,   ///< Model / Workspace / NarrowPhaseModel / NarrowPhaseWorkspace::Init could not allocate.
   kErrorNonFinitePositions = 0x8000'0007u,  ///< A deformed vertex position is NaN or infinite
                                             ///< (NarrowPhaseJob checks the positions it reads).
   kErrorJointCount = 0x8000'0008u,    ///< JointRefitJob::joint_count != the asset's Asset.joint_count.
-  kErrorNonFiniteJoints = 0x8000'0009u,  ///< A joint matrix that some sphere follows holds a NaN or
-                                         ///< an infinity (JointRefitJob checks them before writing).
+  kErrorNonFiniteJoints = 0x8000'0009u,  ///< A joint matrix holds a NaN or an infinity (JointRefitJob
+                                         ///< checks all \#J before writing, those no sphere follows too).
   kErrorWorkspaceModel = 0x8000'000Au,   ///< The Workspace was made for another Model (Workspace::Init
                                          ///< records Model::id(); NarrowPhaseWorkspace likewise
                                          ///< NarrowPhaseModel::id()): the job wrote nothing.
@@ -53,8 +53,9 @@ enum class [[nodiscard]] Status : uint32_t {
   kErrorTooManyChains = 0x8000'0204u,    ///< \#chains > kMaxChains (chain bitmask is 32 bits), or the chains'
                                          ///< candidate pairs Σ|ζ|(|ζ|−1)/2 > kMaxChainPairs.
   kErrorCountMismatch = 0x8000'0205u,    ///< An array's length disagrees with \#S, \#T or 4·\#S / 12·\#S.
-  kErrorIndexOutOfRange = 0x8000'0206u,  ///< A sphere index >= \#S, triangle index >= \#T or vertex
-                                         ///< index >= \#V.
+  kErrorIndexOutOfRange = 0x8000'0206u,  ///< A sphere index >= \#S, triangle index >= \#T, vertex
+                                         ///< index >= \#V or joint index >= joint_count, or joint_count >
+                                         ///< kMaxJoints.
   kErrorOffsets = 0x8000'0207u,          ///< surrounding_offsets (or reach_offsets) not starting at 0,
                                          ///< not monotone, or not ending at len(surrounding_triangles)
                                          ///< (reach_triangles); a sphere's reach triangles not ascending.
@@ -67,11 +68,12 @@ enum class [[nodiscard]] Status : uint32_t {
                                          ///< ascending by (a, b).
   kErrorContactMargin = 0x8000'020Du,    ///< Asset.contact_margin < 0 (schema v2).
   kErrorSkinWeights = 0x8000'020Eu,      ///< A sphere's joint weight is negative or not finite, or its four
-                                         ///< weights do not sum to 1 ± 1e-3 (schema v3), or a
+                                         ///< weights have one after a 0 or do not sum to 1 ± 1e-3 (schema v3), or a
                                          ///< vertex's rounded skin_weights do not sum to 255 (v4).
   kErrorRegions = 0x8000'020Fu,          ///< Asset.regions (schema v4) malformed: fewer than 2 or more than
                                          ///< kMaxRegions regions, a Trunk that is not exactly the last one,
-                                         ///< or a sphere_regions / triangle_regions value past it.
+                                         ///< or a sphere_regions / triangle_regions value past them
+                                         ///< (past the paper's five without Asset.regions).
 };
 
 /// True for kOk and every success-with-detail (kOkTruncated). Cost: one compare.
