@@ -80,8 +80,10 @@ Status Semantics(const Asset& a, AssetView* view) {
   if (!Finite(a.fold_margin())) return Status::kErrorNonFinite;
   if (a.fold_margin() >= 0.0f && !a.sphere_regions()) return Status::kErrorMissingField;
 
-  // Chains: present, sorted, unique, in range, and with a bounded number of candidate pairs (the M1
-  // workspace and DetectBound grow with Σ|ζ|(|ζ|−1)/2: a small hostile asset must not ask for gigabytes).
+  // Chains: present, sorted, unique, in range, and with a bounded number of candidate pairs (M1's
+  // workspace and DetectBound grow with Σ|ζ|(|ζ|−1)/2, so its chains alone cannot ask for gigabytes; M2's
+  // grow with the pairs not excluded, up to #S²/2: a 7 MB asset of kMaxSpheres spheres and no exclusions
+  // asks M2 for about 17 GB of keys (model.h: O(#S²)); not bounded here).
   uint64_t chain_pairs = 0;
   for (const schema::Chain* c : *chains) {
     const auto* list = c->spheres();
