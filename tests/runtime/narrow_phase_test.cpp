@@ -102,6 +102,31 @@ Run RunJob(Narrow* ctx, const std::vector<float>& pos, rt::Exclusions ex, uint32
   return r;
 }
 
+// The crease rule's job (kCrease) on `pos`, with the joint-matrix cull when `matrices` (#J × 12) is given and
+// the depths when `depths` is: its status, stats and contacts (depths resized alike).
+Run RunCrease(Narrow* ctx, const std::vector<float>& pos, const std::vector<float>* matrices = nullptr,
+              std::vector<rt::ContactDepth>* depths = nullptr, uint32_t capacity = 1u << 16) {
+  Run r;
+  r.contacts.resize(capacity);
+  if (depths) depths->assign(capacity, rt::ContactDepth{});
+  uint32_t n = 77;
+  rt::NarrowPhaseJob job;
+  job.model = &ctx->model;
+  job.workspace = &ctx->ws;
+  job.exclusions = rt::Exclusions::kCrease;
+  job.positions = {pos.data(), static_cast<uint32_t>(pos.size() / 3), 12};
+  job.output = r.contacts.data();
+  job.capacity = capacity;
+  job.depths = depths ? depths->data() : nullptr;
+  job.count = &n;
+  job.stats = &r.stats;
+  if (matrices) job.joint_matrices = matrices->data(), job.joint_count = static_cast<uint32_t>(matrices->size() / 12);
+  r.status = job.Run();
+  r.contacts.resize(n);
+  if (depths) depths->resize(n);
+  return r;
+}
+
 std::set<Contact> AsSet(const std::vector<rt::TriangleContact>& v) {
   std::set<Contact> s;
   for (const auto& c : v) s.insert({c.sphere_a, c.sphere_b, c.triangle_a, c.triangle_b});
@@ -444,23 +469,9 @@ TEST_CASE("narrow phase, crease rule: a bent tube's fold is not a contact, its e
   CHECK(ctx.model.bind_contact_count() == 0);
   CHECK(ctx.model.crease_graph().components() == 1);
   auto crease_run = [&](const std::vector<float>& pos, std::vector<rt::ContactDepth>* depths = nullptr) {
-    std::vector<rt::TriangleContact> out(1u << 16);
-    if (depths) depths->assign(out.size(), rt::ContactDepth{});
-    uint32_t n = 0;
-    rt::NarrowPhaseStats stats;
-    rt::NarrowPhaseJob job;
-    job.model = &ctx.model;
-    job.workspace = &ctx.ws;
-    job.exclusions = rt::Exclusions::kCrease;
-    job.positions = {pos.data(), static_cast<uint32_t>(pos.size() / 3), 12};
-    job.output = out.data();
-    job.capacity = static_cast<uint32_t>(out.size());
-    job.depths = depths ? depths->data() : nullptr;
-    job.count = &n;
-    job.stats = &stats;
-    REQUIRE(job.Run() == rt::Status::kOk);
-    out.resize(n);
-    return std::make_pair(out, stats);
+    Run r = RunCrease(&ctx, pos, nullptr, depths);
+    REQUIRE(r.status == rt::Status::kOk);
+    return std::make_pair(r.contacts, r.stats);
   };
   // Straight: nothing.
   CHECK(crease_run(mesh.positions).first.empty());
@@ -523,18 +534,9 @@ TEST_CASE("narrow phase, crease rule: a mesh whose every triangle is degenerate 
   REQUIRE(ctx.Init(l.view) == rt::Status::kOk);
   REQUIRE(ctx.model.has_crease());
   for (const std::vector<float>& pos : {mesh.positions, Fold(mesh, tube, 15, 178.0f)}) {
-    std::vector<rt::TriangleContact> out(16);
-    uint32_t n = 77;
-    rt::NarrowPhaseJob job;
-    job.model = &ctx.model;
-    job.workspace = &ctx.ws;
-    job.exclusions = rt::Exclusions::kCrease;
-    job.positions = {pos.data(), static_cast<uint32_t>(pos.size() / 3), 12};
-    job.output = out.data();
-    job.capacity = static_cast<uint32_t>(out.size());
-    job.count = &n;
-    CHECK(job.Run() == rt::Status::kOk);
-    CHECK(n == 0);
+    const Run r = RunCrease(&ctx, pos, nullptr, nullptr, 16);
+    CHECK(r.status == rt::Status::kOk);
+    CHECK(r.contacts.empty());
   }
 }
 
@@ -594,25 +596,8 @@ TEST_CASE("narrow phase, crease rule: the joint-matrix cull counts a joint liste
         pos[3 * size_t{v} + r] = w0 * x[r] + w1 * (m1[0] * x[0] + m1[1] * x[1] + m1[2] * x[2] + m1[3]);
       }
     }
-    auto run = [&](Narrow* ctx, bool with_matrices) {
-      Run r;
-      r.contacts.resize(1u << 16);
-      uint32_t n = 0;
-      rt::NarrowPhaseJob job;
-      job.model = &ctx->model;
-      job.workspace = &ctx->ws;
-      job.exclusions = rt::Exclusions::kCrease;
-      job.positions = {pos.data(), static_cast<uint32_t>(pos.size() / 3), 12};
-      job.output = r.contacts.data();
-      job.capacity = static_cast<uint32_t>(r.contacts.size());
-      job.count = &n;
-      job.stats = &r.stats;
-      if (with_matrices) job.joint_matrices = matrices.data(), job.joint_count = 2;
-      r.status = job.Run();
-      r.contacts.resize(n);
-      return r;
-    };
-    const Run plain = run(&cs, false), with_split = run(&cs, true), with_merged = run(&cm, true);
+    const Run plain = RunCrease(&cs, pos), with_split = RunCrease(&cs, pos, &matrices),
+              with_merged = RunCrease(&cm, pos, &matrices);
     REQUIRE(plain.status == rt::Status::kOk);
     REQUIRE(with_split.status == rt::Status::kOk);
     REQUIRE(with_merged.status == rt::Status::kOk);
