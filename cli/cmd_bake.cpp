@@ -98,6 +98,14 @@ int RunBake(const BakeArgs& a) {
         return UsageError("bake: --report, --ray-csv, --png and --depfile name one file: with --out-dir, bake each "
                           "input on its own with -o to get them");
 
+  // An output that would overwrite an input or another output: refused before anything is read.
+  const std::string no_input;
+  if (!batch)
+    if (int clash = OutputsClash({{"-o", &a.output}, {"--report", &a.report}, {"--ray-csv", &a.ray_csv},
+                                  {"--png", &a.png}, {"--depfile", &a.depfile}},
+                                 {{"the input", a.inputs.empty() ? &no_input : &a.inputs.front()}, {"--config", &a.config},
+                                  {"--region-map", &a.options.region_map}}))
+      return clash;
   import::Context ctx = MakeLoggingContext();  // records the files read, the configuration's too (--depfile)
   baker::BakeConfig config;
   if (!a.config.empty()) {
@@ -118,6 +126,11 @@ int RunBake(const BakeArgs& a) {
   auto result = baker::Bake(a.inputs.front(), config, &ctx);
   if (!result.ok()) return Fail(result.error());
   const baker::BakeResult& r = result.value();
+  // Every file the bake read (glTF buffers, a rig, its weights...), now that they are known.
+  if (int clash = OutputsClash({{"-o", &a.output}, {"--report", &a.report}, {"--ray-csv", &a.ray_csv}, {"--png", &a.png},
+                                {"--depfile", &a.depfile}},
+                               {}, ctx.files_read))
+    return clash;
   std::string depfile;  // made before anything is written: a path it cannot name fails the bake
   if (!a.depfile.empty()) {
     auto d = import::MakeDepfile(a.output, ctx.files_read);

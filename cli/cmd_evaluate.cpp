@@ -30,6 +30,9 @@ struct EvaluateArgs {
 };
 
 int RunEvaluate(const EvaluateArgs& a) {
+  if (int clash = OutputsClash({{"--json", &a.json}, {"--png", &a.png}},
+                               {{"ASSET", &a.asset}, {"--mesh", &a.anim.mesh}, {"--rig", &a.rig}}, a.anim.morph))
+    return clash;
   // ---- arguments that need no file ---------------------------------------------------------------
   if (!std::isnan(a.min_recall) && !(a.min_recall >= 0.0 && a.min_recall <= 1.0))
     return Fail("--min-recall " + std::to_string(a.min_recall) + " is outside [0, 1]");

@@ -21,6 +21,9 @@ struct ExportArgs {
 };
 
 int RunExport(const ExportArgs& a) {
+  if (int clash = OutputsClash({{"-o", &a.output}, {"--png", &a.png}},
+                               {{"ASSET", &a.asset}, {"--mesh", &a.anim.mesh}, {"--rig", &a.rig}}, a.anim.morph))
+    return clash;
   const bool animated = !a.anim.clip.empty() || a.anim.morph_requested();
   LoadedAsset asset;
   import::Mesh mesh;

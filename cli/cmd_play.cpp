@@ -200,6 +200,9 @@ nlohmann::json PlayJson(const PlayArgs& a, const runtime::AssetView& view, const
 }
 
 int RunPlay(const PlayArgs& a) {
+  if (int clash = OutputsClash({{"--json", &a.json}}, {{"ASSET", &a.asset}, {"--mesh", &a.anim.mesh}, {"--rig", &a.rig}},
+                               a.anim.morph))
+    return clash;
   LoadedAsset asset;
   import::Mesh mesh;
   std::string error;

@@ -17,6 +17,8 @@ struct ValidateArgs {
 };
 
 int RunValidate(const ValidateArgs& a) {
+  if (int clash = OutputsClash({{"--json", &a.json}}, {{"ASSET", &a.asset}, {"--mesh", &a.mesh}, {"--rig", &a.rig}}))
+    return clash;
   import::Context log = MakeLoggingContext();
   const import::VertexContract vertices = a.vertices == "joined"   ? import::VertexContract::kJoined
                                         : a.vertices == "source" ? import::VertexContract::kSource

@@ -43,6 +43,9 @@ struct ViewArgs {
 };
 
 int RunView(const ViewArgs& a) {
+  if (int clash = OutputsClash({{"-o", &a.output}}, {{"ASSET", &a.asset}, {"--mesh", &a.anim.mesh}, {"--rig", &a.rig}},
+                               a.anim.morph))
+    return clash;
   // three.js first: without it nothing can be written, and the message says how to get it.
   std::string looked;
   const std::string three_dir = FindThree(a.three, &looked);

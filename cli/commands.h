@@ -2,6 +2,7 @@
 #pragma once
 
 #include <functional>
+#include <initializer_list>
 #include <string>
 #include <vector>
 
@@ -41,6 +42,17 @@ import::Context MakeLoggingContext();
 /// Logs `error` as "error: <code>: <message>" and returns exit code 1.
 int Fail(const import::Error& error);
 int Fail(const std::string& message);
+
+/// One file a command reads or writes, as its flag ("-o", "--report", "ASSET") and path (empty: not given).
+struct PathArg {
+  const char* flag;
+  const std::string* path;
+};
+/// Exit code 2 with "error: --report and -o both name 'x'" (or "... is also an input") when two outputs, or
+/// an output and an input, are one file after resolving `.`, `..` and symbolic links: writing one would
+/// destroy the other. 0 when all are distinct. Call it before any output is written; reads no file.
+int OutputsClash(std::initializer_list<PathArg> outputs, std::initializer_list<PathArg> inputs,
+                 const std::vector<std::string>& more_inputs = {});
 
 /// -q/--quiet: commands print warnings and errors only — no summaries, tables, progress or "wrote" lines
 /// (`inspect` still prints the asset: that is what it is asked for; `validate` still prints its findings).

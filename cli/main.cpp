@@ -1,4 +1,6 @@
 // spherechain — the command-line tool: bake, inspect, export-debug, play, validate, evaluate, view, check.
+#include <exception>
+
 #include <CLI/CLI.hpp>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
@@ -27,5 +29,13 @@ int main(int argc, char** argv) {
   spdlog::set_pattern("%^%l%$: %v");
   spdlog::set_level(verbose ? spdlog::level::debug : quiet ? spdlog::level::warn : spdlog::level::info);
   spherechain::cli::SetQuiet(quiet);
-  return spherechain::cli::Dispatch(commands);
+  // A library call that throws (std::filesystem on a folder it may not read, an allocation) ends the
+  // command with its message and exit 1, not with std::terminate; outputs are written atomically, so
+  // none is left half-written.
+  try {
+    return spherechain::cli::Dispatch(commands);
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 1;
+  }
 }

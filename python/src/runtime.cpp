@@ -387,15 +387,18 @@ py::object NarrowPhase(PyWorkspace& self, py::handle positions, const py::object
       job.workspace = &self.narrow[kind];
       job.count = &count;
       job.stats = &stats;
-      if (self.contacts.empty()) self.contacts.resize(4096), self.depths.resize(4096);
+      // The depths first: a failed allocation must never leave fewer depths than contacts (the job writes
+      // a depth per contact slot).
+      if (self.contacts.empty()) self.depths.resize(4096), self.contacts.resize(4096);
       for (;;) {  // grows the buffers on the rare frame that needs more (then a second run)
         job.output = self.contacts.data();
         job.capacity = uint32_t(self.contacts.size());
         job.depths = job.exclusions == runtime::Exclusions::kCrease ? self.depths.data() : nullptr;
         s = job.Run();
         if (s != Status::kOkTruncated) break;
-        self.contacts.resize(size_t(stats.contacts) + stats.contacts / 4);
-        self.depths.resize(self.contacts.size());
+        const size_t grown = size_t(stats.contacts) + stats.contacts / 4;
+        self.depths.resize(grown);
+        self.contacts.resize(grown);
       }
     }
   }

@@ -74,6 +74,9 @@ Status Semantics(const Asset& a, AssetView* view) {
       return Status::kErrorNonFinite;
     if (!(f->mean_distance() > 0.0f)) return Status::kErrorPivotFrame;
   }
+  // The refit scales each radius by its pivots' spread against this one: the ratio must be a finite float.
+  for (uint32_t s = 0; s < S; ++s)  // frames->size() == S (above)
+    if (!std::isfinite(spheres->Get(s)->radius() / frames->Get(s)->mean_distance())) return Status::kErrorPivotFrame;
   if (!Finite(a.contact_margin())) return Status::kErrorNonFinite;  // NaN would silently detect nothing
   if (a.contact_margin() < 0.0f) return Status::kErrorContactMargin;
   // The fold margin (optional; < 0: none) is tested per region pair, so it needs the spheres' regions.

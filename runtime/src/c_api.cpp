@@ -299,7 +299,7 @@ SC_API sc_status sc_detect(const sc_model* model, sc_workspace* workspace, sc_de
   job.capacity = capacity;
   job.count = &written;
   job.stats = &stats;
-  job.margin = margin;  // < 0: the asset's; NaN / +inf: kErrorInvalidJob
+  job.margin = margin < 0.0f ? -1.0f : margin;  // < 0 (−inf too, as spherechain.h says): the asset's; NaN / +inf: kErrorInvalidJob
   const rt::Status s = job.Run();
   if (rt::Succeeded(s)) *count = stats.distinct_pairs;
   return C(s);

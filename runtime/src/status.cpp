@@ -28,7 +28,7 @@ const char* ToString(Status s) {
     case Status::kErrorOffsets: return "kErrorOffsets: surrounding_offsets or reach_offsets malformed";
     case Status::kErrorNonFinite: return "kErrorNonFinite: NaN or infinite value in the asset";
     case Status::kErrorRadius: return "kErrorRadius: a sphere radius is <= 0";
-    case Status::kErrorPivotFrame: return "kErrorPivotFrame: PivotFrame.mean_distance is <= 0";
+    case Status::kErrorPivotFrame: return "kErrorPivotFrame: PivotFrame.mean_distance is <= 0, or so small that radius / mean_distance overflows";
     case Status::kErrorChainOrder: return "kErrorChainOrder: chain spheres not strictly ascending";
     case Status::kErrorContactMargin: return "kErrorContactMargin: Asset.contact_margin is negative";
     case Status::kErrorSkinWeights:

@@ -240,6 +240,13 @@ TEST_CASE(
       b.CheckDetect(DetectMethod::kM2, margin);
     }
     const std::vector<Collision> m2 = b.CheckDetect(DetectMethod::kM2, -1.0f);
+    {  // −inf is below 0 too: the asset's margin, as spherechain.h says (the C++ job refuses any non-finite one)
+      std::vector<sc_pair> c(m2.size() + 1);
+      uint32_t n = 0;
+      CHECK(sc_detect(b.c_model, b.c_ws, SC_DETECT_M2, -INFINITY, c.data(), static_cast<uint32_t>(c.size()), &n) == SC_OK);
+      CHECK(n == m2.size());
+      CHECK(std::memcmp(c.data(), m2.data(), n * sizeof(sc_pair)) == 0);
+    }
     const uint32_t crease = b.CheckNarrow(*frame, Exclusions::kCrease, SC_EXCLUSIONS_CREASE, nullptr, true);
     if (frame == &bind_copy) {  // the bind pose is the skin under identity matrices: the joint-matrix cull
       REQUIRE(b.narrow.has_joint_cull());

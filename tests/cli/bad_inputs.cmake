@@ -37,6 +37,24 @@ expect_failure(bad_config "penetration_depth" bake ${WORK}/cube.obj -o ${WORK}/o
 expect_failure(inspect_missing "nothing.sphc" inspect ${WORK}/nothing.sphc)
 expect_failure(inspect_garbage "not_an_asset.sphc" inspect ${WORK}/not_an_asset.sphc)
 expect_failure(no_output_folder "folder|exist" bake ${WORK}/cube.obj -o ${WORK}/no/such/dir/out.sphc)
+# An output that is an input or another output: refused before anything is written (exit 2), the files intact.
+expect_failure(report_is_output "-o and --report both name" bake ${WORK}/cube.obj -o ${WORK}/out.sphc --report ${WORK}/out.sphc)
+expect_failure(output_is_input "-o .*cube.obj' is also the input" bake ${WORK}/cube.obj -o ${WORK}/./cube.obj)
+expect_failure(report_is_config "--report .*config_bad.json' is also --config" bake ${WORK}/cube.obj -o ${WORK}/out.sphc
+               --config ${WORK}/config_bad.json --report ${WORK}/sub/../config_bad.json)
+file(READ ${WORK}/cube.obj _cube_after)
+file(READ ${WORK}/config_bad.json _config_after)
+if(NOT _cube_after MATCHES "^v -1 -1 -1" OR NOT _config_after STREQUAL "{\"penetration_depth\": 7}")
+  message(FATAL_ERROR "an input was overwritten by a refused command")
+endif()
+file(COPY ${GOLDEN} DESTINATION ${WORK})
+get_filename_component(_golden_name ${GOLDEN} NAME)
+file(SHA256 ${WORK}/${_golden_name} _golden_sum)
+expect_failure(validate_json_is_asset "--json .* is also ASSET" validate ${WORK}/${_golden_name} --json ${WORK}/${_golden_name})
+file(SHA256 ${WORK}/${_golden_name} _golden_after)
+if(NOT _golden_sum STREQUAL _golden_after)
+  message(FATAL_ERROR "validate --json ASSET overwrote the asset")
+endif()
 # fuzz_import_gltf: a skin of two bone trees whose trunk's top is a root (it crashed the skeleton path).
 expect_failure(skin_two_trees "segment \\(skeleton\\): no recognisable limbs: the trunk's bones \\(node0\\) dominate no triangle"
                bake ${TWO_TREES} -o ${WORK}/out.sphc)

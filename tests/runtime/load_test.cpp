@@ -127,6 +127,10 @@ TEST_CASE("LoadAsset: semantic errors each give their status") {
   expect([](test::AssetData& d) {
     d.frames[2] = schema::PivotFrame(d.frames[2].local_center(), d.frames[2].centroid_offset(), 0.0f);
   }, Status::kErrorPivotFrame);
+  // So small that the refit's radius scale (radius / mean distance) is infinite.
+  expect([](test::AssetData& d) {
+    d.frames[2] = schema::PivotFrame(d.frames[2].local_center(), d.frames[2].centroid_offset(), 1e-39f);
+  }, Status::kErrorPivotFrame);
   // A NaN margin would make every overlap test false (no pair ever reported): refused, as is < 0.
   expect([](test::AssetData& d) { d.contact_margin = std::numeric_limits<float>::quiet_NaN(); }, Status::kErrorNonFinite);
   expect([](test::AssetData& d) { d.contact_margin = INFINITY; }, Status::kErrorNonFinite);

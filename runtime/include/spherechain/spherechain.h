@@ -97,7 +97,8 @@ typedef uint32_t sc_status;
 #define SC_ERROR_OFFSETS ((sc_status)0x80000207u)          ///< Region offsets malformed in the asset.
 #define SC_ERROR_NON_FINITE ((sc_status)0x80000208u)       ///< A NaN or infinite float in the asset.
 #define SC_ERROR_RADIUS ((sc_status)0x80000209u)           ///< A sphere radius <= 0 in the asset.
-#define SC_ERROR_PIVOT_FRAME ((sc_status)0x8000020Au)      ///< A pivot frame's mean distance <= 0 in the asset.
+#define SC_ERROR_PIVOT_FRAME ((sc_status)0x8000020Au)      ///< A pivot frame's mean distance <= 0 (or too small
+                                                           ///< for its radius) in the asset.
 #define SC_ERROR_CHAIN_ORDER ((sc_status)0x8000020Bu)      ///< A chain's spheres not strictly ascending.
 #define SC_ERROR_EXCLUDED_PAIRS ((sc_status)0x8000020Cu)   ///< Excluded pairs not a < b or not strictly ascending.
 #define SC_ERROR_CONTACT_MARGIN ((sc_status)0x8000020Du)   ///< The asset's contact margin is negative.

@@ -62,7 +62,8 @@ enum class [[nodiscard]] Status : uint32_t {
   kErrorNonFinite = 0x8000'0208u,        ///< A NaN or infinite float (centre, radius, pivot frame,
                                          ///< contact_margin).
   kErrorRadius = 0x8000'0209u,           ///< A sphere radius <= 0.
-  kErrorPivotFrame = 0x8000'020Au,       ///< PivotFrame.mean_distance <= 0.
+  kErrorPivotFrame = 0x8000'020Au,       ///< PivotFrame.mean_distance <= 0, or so small that a radius / it
+                                         ///< is not a finite float.
   kErrorChainOrder = 0x8000'020Bu,       ///< A chain's sphere list is not strictly ascending (sorted, unique).
   kErrorExcludedPairs = 0x8000'020Cu,    ///< An excluded pair with a >= b, or the list not strictly
                                          ///< ascending by (a, b).
