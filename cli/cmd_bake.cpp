@@ -138,20 +138,22 @@ int RunBake(const BakeArgs& a) {
     depfile = std::move(d).value();
   }
 
-  // Everything is in memory; write each output atomically (a failure leaves no partial file).
-  if (auto s = import::WriteFileAtomic(a.output, r.asset.data(), r.asset.size()); !s.ok()) return Fail(s.error());
-  if (!a.report.empty()) {
-    const std::string text = JsonText(baker::MakeBakeReport(r, config, ctx)) + "\n";
-    if (auto s = import::WriteFileAtomic(a.report, text); !s.ok()) return Fail(s.error());
-  }
-  if (!a.ray_csv.empty())
-    if (auto s = import::WriteFileAtomic(a.ray_csv, baker::TorsoRayCsv(r)); !s.ok()) return Fail(s.error());
+  // Everything is in memory; write each output atomically (a failure leaves no partial file). The PNG
+  // first (it needs an outside tool, rsvg-convert), the asset after the files about it, the depfile last:
+  // a failure leaves the previous asset in place, and no depfile that would call it up to date.
   if (!a.png.empty()) {
     runtime::AssetView view;
     if (runtime::Failed(runtime::LoadAsset(r.asset.data(), r.asset.size(), &view)))
       return Fail("internal: the baked asset does not load");
     if (auto s = playback::RenderDebugPng(r.mesh, view, a.png); !s.ok()) return Fail(s.error());
   }
+  if (!a.report.empty()) {
+    const std::string text = JsonText(baker::MakeBakeReport(r, config, ctx)) + "\n";
+    if (auto s = import::WriteFileAtomic(a.report, text); !s.ok()) return Fail(s.error());
+  }
+  if (!a.ray_csv.empty())
+    if (auto s = import::WriteFileAtomic(a.ray_csv, baker::TorsoRayCsv(r)); !s.ok()) return Fail(s.error());
+  if (auto s = import::WriteFileAtomic(a.output, r.asset.data(), r.asset.size()); !s.ok()) return Fail(s.error());
   // Last: a depfile names an asset that is there (a build system reads it once the command succeeded).
   if (!a.depfile.empty())
     if (auto s = import::WriteFileAtomic(a.depfile, depfile); !s.ok()) return Fail(s.error());

@@ -41,6 +41,10 @@ int RunExport(const ExportArgs& a) {
     if (!imported.ok()) return Fail(imported.error());
     mesh = std::move(imported).value();
   }
+  // The PNG first: it needs an outside tool (rsvg-convert), so when it fails no glTF is left behind.
+  std::string png = a.png;
+  if (png.empty()) png = std::filesystem::path(a.output).replace_extension(".png").string();
+  if (auto s = playback::RenderDebugPng(mesh, asset.view, png); !s.ok()) return Fail(s.error());
   if (animated) {
     AnimationSource anim;
     if (!OpenAnimation(mesh, a.anim, &anim, &error)) return Fail(error);
@@ -55,9 +59,6 @@ int RunExport(const ExportArgs& a) {
   } else {
     if (auto s = playback::ExportDebugGltf(mesh, asset.view, a.output); !s.ok()) return Fail(s.error());
   }
-  std::string png = a.png;
-  if (png.empty()) png = std::filesystem::path(a.output).replace_extension(".png").string();
-  if (auto s = playback::RenderDebugPng(mesh, asset.view, png); !s.ok()) return Fail(s.error());
   if (animated)
     Out("wrote %s (front and side views, bind pose)\n", png.c_str());
   else
