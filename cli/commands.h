@@ -48,7 +48,7 @@ struct PathArg {
   const char* flag;
   const std::string* path;
 };
-/// Exit code 2 with "error: --report and -o both name 'x'" (or "... is also an input") when two outputs, or
+/// Exit code 2 with "error: -o and --report both name 'x'" (or "... is also an input") when two outputs, or
 /// an output and an input, are one file after resolving `.`, `..` and symbolic links: writing one would
 /// destroy the other. 0 when all are distinct. Call it before any output is written; reads no file.
 int OutputsClash(std::initializer_list<PathArg> outputs, std::initializer_list<PathArg> inputs,
