@@ -212,26 +212,21 @@ Status Semantics(const Asset& a, AssetView* view) {
     }
   }
 
-  // Regions (optional, schema v4): what region values mean; the trunk last.
+  // Regions (optional, schema v4): what region values mean; the trunk last. Every sphere and triangle
+  // region value below their count, or below the paper's five without the table (RegionCount).
+  uint32_t region_count = 5;
   if (const auto* regions = a.regions()) {
-    const uint32_t R = regions->size();
-    if (R < 2 || R > kMaxRegions) return Status::kErrorRegions;
-    for (uint32_t r = 0; r < R; ++r)
-      if ((regions->Get(r)->kind() == schema::RegionKind::Trunk) != (r + 1 == R)) return Status::kErrorRegions;
-    if (const auto* sr = a.sphere_regions())
-      for (uint8_t r : *sr)
-        if (r >= R) return Status::kErrorRegions;
-    if (const auto* tr = a.triangle_regions())
-      for (uint8_t r : *tr)
-        if (r >= R) return Status::kErrorRegions;
-  } else {  // the paper's five regions (RegionCount)
-    if (const auto* sr = a.sphere_regions())
-      for (uint8_t r : *sr)
-        if (r >= 5) return Status::kErrorRegions;
-    if (const auto* tr = a.triangle_regions())
-      for (uint8_t r : *tr)
-        if (r >= 5) return Status::kErrorRegions;
+    region_count = regions->size();
+    if (region_count < 2 || region_count > kMaxRegions) return Status::kErrorRegions;
+    for (uint32_t r = 0; r < region_count; ++r)
+      if ((regions->Get(r)->kind() == schema::RegionKind::Trunk) != (r + 1 == region_count)) return Status::kErrorRegions;
   }
+  if (const auto* sr = a.sphere_regions())
+    for (uint8_t r : *sr)
+      if (r >= region_count) return Status::kErrorRegions;
+  if (const auto* tr = a.triangle_regions())
+    for (uint8_t r : *tr)
+      if (r >= region_count) return Status::kErrorRegions;
 
   view->asset = &a;
   view->sphere_count = S;
