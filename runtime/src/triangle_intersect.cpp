@@ -168,6 +168,16 @@ Expansion<4 * A> Product(const Expansion<A>& e, const Expansion<2>& f) {
   return h;
 }
 
+/// u_i · v_j − u_j · v_i, exactly, for single doubles.
+inline Expansion<4> Minor(double ui, double uj, double vi, double vj) {
+  Expansion<2> left, right;
+  TwoProduct(ui, vj, left.c[1], left.c[0]);
+  TwoProduct(uj, vi, right.c[1], right.c[0]);
+  left.n = right.n = 2;
+  Negate(right);
+  return Sum(left, right);
+}
+
 /// u_i · v_j − u_j · v_i, exactly.
 inline Expansion<16> Minor(const Expansion<2>& ui, const Expansion<2>& uj, const Expansion<2>& vi,
                            const Expansion<2>& vj) {
@@ -176,12 +186,22 @@ inline Expansion<16> Minor(const Expansion<2>& ui, const Expansion<2>& uj, const
   return Sum(Product(ui, vj), right);
 }
 
+// Shewchuk's error bounds (1997 §4.3 and his predicates.c; his epsilon is the unit roundoff).
+constexpr double kEpsilon = 0x1p-53;                                   // unit roundoff of double
+constexpr double kOrient2dBound = (3.0 + 16.0 * kEpsilon) * kEpsilon;  // Shewchuk's ccwerrboundA
+constexpr double kOrient3dBound = (7.0 + 56.0 * kEpsilon) * kEpsilon;  // Shewchuk's o3derrboundA
+constexpr double kOrient3dBoundB = (3.0 + 28.0 * kEpsilon) * kEpsilon;               // o3derrboundB
+constexpr double kOrient3dBoundC = (26.0 + 288.0 * kEpsilon) * kEpsilon * kEpsilon;  // o3derrboundC
+constexpr double kResultBound = (3.0 + 8.0 * kEpsilon) * kEpsilon;                   // resulterrbound
+
 // ---------------------------------------------------------------------------------------------------
-// (2) Exact predicates. Points are double[3] holding float values. Two stages: (a) the plain double
-// evaluation with the rounding error of every operation computed (TwoDiff, TwoProduct, TwoSum): when all
-// are zero, the double value is the determinant — the usual case for the exact zeros of coplanar,
-// touching or shared-vertex inputs on coarse coordinates (the role CGAL's interval filter plays);
-// (b) otherwise the expansion evaluation, exact always.
+// (2) Exact predicates. Points are double[3] holding float values (so no product of up to three
+// differences, nor any rounding error of one, leaves double's normal range: no underflow, no overflow).
+// Stages: (a) the plain double evaluation with the rounding error of every operation computed (TwoDiff,
+// TwoProduct, TwoSum): when all are zero, the double value is the determinant — the usual case for the
+// exact zeros of coplanar, touching or shared-vertex inputs on coarse coordinates (the role CGAL's
+// interval filter plays); (b, orient3d only) Shewchuk's adaptive stages B and C; (c) otherwise the full
+// expansion evaluation, exact always.
 
 /// a·b − c·d in double; clears `exact` if a rounding happened.
 inline double CheckedMinor(double a, double b, double c, double d, bool& exact) {
@@ -214,6 +234,7 @@ SPHERECHAIN_NOINLINE int Orient3dExact(const double* a, const double* b, const d
     v[k] = CheckedDiff(c[k], a[k], exact);
     w[k] = CheckedDiff(d[k], a[k], exact);
   }
+  const bool differences_exact = exact;
   if (exact) {
     const double mx = CheckedMinor(u[1], v[2], u[2], v[1], exact);
     const double my = CheckedMinor(u[2], v[0], u[0], v[2], exact);
@@ -226,7 +247,42 @@ SPHERECHAIN_NOINLINE int Orient3dExact(const double* a, const double* b, const d
     TwoSum(sum, tz, det, det_err);
     if (exact & (t_err[0] == 0) & (t_err[1] == 0) & (t_err[2] == 0) & (sum_err == 0) & (det_err == 0)) return Sign(det);
   }
-  // (b) expansions.
+  {
+    // (b) Shewchuk 1997 §4.3, orient3dadapt's stages B and C, on the transposed matrix (his rows a, b, c
+    // are our columns: his adx, ady, adz are u[0], v[0], w[0]). B: the determinant of the rounded
+    // differences exactly (a short expansion): the answer when no difference rounded, else certified by
+    // bound B. C: that estimate plus the first-order terms of the differences' tails in double, certified
+    // by bound C (ε² relative to the permanent). Mixed magnitudes (1e-40 beside 1e38 in a mutated bind
+    // pose) defeat (a) and B but rarely C; what neither certifies goes on to (c).
+    const Expansion<4> mx = Minor(u[1], u[2], v[1], v[2]);
+    const Expansion<4> my = Minor(u[2], u[0], v[2], v[0]);
+    const Expansion<4> mz = Minor(u[0], u[1], v[0], v[1]);
+    const Expansion<24> det = Sum(Sum(Scale(mx, w[0]), Scale(my, w[1])), Scale(mz, w[2]));
+    if (differences_exact) return Sign(det);
+    double estimate = 0;
+    for (int i = 0; i < det.n; ++i) estimate += det.c[i];
+    double permanent = 0;
+    for (int k = 0; k < 3; ++k) {
+      const int i = (k + 1) % 3, j = (k + 2) % 3;
+      permanent += (std::fabs(u[i] * v[j]) + std::fabs(v[i] * u[j])) * std::fabs(w[k]);
+    }
+    const double bound_b = kOrient3dBoundB * permanent;
+    if ((estimate >= bound_b) | (-estimate >= bound_b)) return Sign(estimate);
+    double du[3], dv[3], dw[3], x;
+    for (int k = 0; k < 3; ++k) {
+      TwoDiff(b[k], a[k], x, du[k]);
+      TwoDiff(c[k], a[k], x, dv[k]);
+      TwoDiff(d[k], a[k], x, dw[k]);
+    }
+    const double bound_c = kOrient3dBoundC * permanent + kResultBound * std::fabs(estimate);
+    for (int k = 0; k < 3; ++k) {
+      const int i = (k + 1) % 3, j = (k + 2) % 3;
+      estimate += w[k] * ((u[i] * dv[j] + v[j] * du[i]) - (v[i] * du[j] + u[j] * dv[i])) +
+                  dw[k] * (u[i] * v[j] - v[i] * u[j]);
+    }
+    if ((estimate >= bound_c) | (-estimate >= bound_c)) return Sign(estimate);
+  }
+  // (c) expansions.
   Expansion<2> eu[3], ev[3], ew[3];
   for (int k = 0; k < 3; ++k) {
     eu[k] = Diff(b[k], a[k]);
@@ -260,9 +316,6 @@ SPHERECHAIN_NOINLINE int Orient2dExact(const double* a, const double* b, const d
 // the permanent, the same expression with absolute values), else the exact evaluation above. The bounds
 // hold for the rounded differences computed here (they include the rounding of the differences).
 
-constexpr double kEpsilon = 0x1p-53;                                   // unit roundoff of double
-constexpr double kOrient2dBound = (3.0 + 16.0 * kEpsilon) * kEpsilon;  // Shewchuk's ccwerrboundA
-constexpr double kOrient3dBound = (7.0 + 56.0 * kEpsilon) * kEpsilon;  // Shewchuk's o3derrboundA
 
 /// A vertex: the float coordinates, converted (exactly) to double.
 struct Vec3 {
