@@ -57,7 +57,7 @@ namespace {
 // ---------------------------------------------------------------------------------------------------
 // (1) Floating-point expansions (Shewchuk 1997 §2). An expansion is a sum of doubles, stored by
 // increasing magnitude, pairwise non-overlapping (strongly, with round-to-nearest-even), zero components
-// removed; zero itself is the one component {0}. Its sign is the sign of its last (largest) component.
+// removed (Sum also takes inputs with zeros, as the two-product pairs of the short Minor); zero itself is the one component {0}. Its sign is the sign of its last (largest) component.
 
 /// x + y = a + b exactly, x = fl(a + b) (Knuth's TwoSum: no precondition on |a|, |b|).
 inline void TwoSum(double a, double b, double& x, double& y) {
@@ -223,9 +223,29 @@ inline double CheckedDiff(double b, double a, bool& exact) {
 
 /// Sign of ((b − a) × (c − a)) · (d − a), exactly: > 0 when d lies on the side the right-handed normal
 /// of (a, b, c) points to.
+/// Stage (c) alone: the sign of ((b − a) × (c − a)) · (d − a) from the full expansions.
+int Orient3dExpansions(const double* a, const double* b, const double* c, const double* d) {
+  Expansion<2> eu[3], ev[3], ew[3];
+  for (int k = 0; k < 3; ++k) {
+    eu[k] = Diff(b[k], a[k]);
+    ev[k] = Diff(c[k], a[k]);
+    ew[k] = Diff(d[k], a[k]);
+  }
+  const Expansion<64> tx = Product(Minor(eu[1], eu[2], ev[1], ev[2]), ew[0]);
+  const Expansion<64> ty = Product(Minor(eu[2], eu[0], ev[2], ev[0]), ew[1]);
+  const Expansion<64> tz = Product(Minor(eu[0], eu[1], ev[0], ev[1]), ew[2]);
+  return Sign(Sum(Sum(tx, ty), tz));
+}
+
+/// Which stage of Orient3dExact decided (detail::ExactOrientation reports it to tests).
+enum class Orient3dStage : int { kErrorFree = 0, kRoundedDifferences = 1, kTailCorrection = 2, kExpansions = 3 };
+
 SPHERECHAIN_NOINLINE int Orient3dExact(const double* a, const double* b, const double* c, const double* d,
-                                       uint64_t* counter) {
+                                       uint64_t* counter, Orient3dStage* stage = nullptr) {
   if (counter) ++*counter;
+  Orient3dStage unused;
+  Orient3dStage& decided = stage ? *stage : unused;
+  decided = Orient3dStage::kErrorFree;
   // (a) error-free double evaluation.
   bool exact = true;
   double u[3], v[3], w[3];
@@ -248,6 +268,7 @@ SPHERECHAIN_NOINLINE int Orient3dExact(const double* a, const double* b, const d
     if (exact & (t_err[0] == 0) & (t_err[1] == 0) & (t_err[2] == 0) & (sum_err == 0) & (det_err == 0)) return Sign(det);
   }
   {
+    decided = Orient3dStage::kRoundedDifferences;
     // (b) Shewchuk 1997 §4.3, orient3dadapt's stages B and C, on the transposed matrix (his rows a, b, c
     // are our columns: his adx, ady, adz are u[0], v[0], w[0]). B: the determinant of the rounded
     // differences exactly (a short expansion): the answer when no difference rounded, else certified by
@@ -268,6 +289,7 @@ SPHERECHAIN_NOINLINE int Orient3dExact(const double* a, const double* b, const d
     }
     const double bound_b = kOrient3dBoundB * permanent;
     if ((estimate >= bound_b) | (-estimate >= bound_b)) return Sign(estimate);
+    decided = Orient3dStage::kTailCorrection;
     double du[3], dv[3], dw[3], x;
     for (int k = 0; k < 3; ++k) {
       TwoDiff(b[k], a[k], x, du[k]);
@@ -275,24 +297,20 @@ SPHERECHAIN_NOINLINE int Orient3dExact(const double* a, const double* b, const d
       TwoDiff(d[k], a[k], x, dw[k]);
     }
     const double bound_c = kOrient3dBoundC * permanent + kResultBound * std::fabs(estimate);
+    // The three terms summed first ((T0 + T1) + T2), then added in one rounding: his order, which his
+    // bound counts on (adding each to the estimate would round three times at the estimate's size).
+    double tails = 0;
     for (int k = 0; k < 3; ++k) {
       const int i = (k + 1) % 3, j = (k + 2) % 3;
-      estimate += w[k] * ((u[i] * dv[j] + v[j] * du[i]) - (v[i] * du[j] + u[j] * dv[i])) +
-                  dw[k] * (u[i] * v[j] - v[i] * u[j]);
+      tails += w[k] * ((u[i] * dv[j] + v[j] * du[i]) - (v[i] * du[j] + u[j] * dv[i])) +
+               dw[k] * (u[i] * v[j] - v[i] * u[j]);
     }
+    estimate += tails;
     if ((estimate >= bound_c) | (-estimate >= bound_c)) return Sign(estimate);
   }
   // (c) expansions.
-  Expansion<2> eu[3], ev[3], ew[3];
-  for (int k = 0; k < 3; ++k) {
-    eu[k] = Diff(b[k], a[k]);
-    ev[k] = Diff(c[k], a[k]);
-    ew[k] = Diff(d[k], a[k]);
-  }
-  const Expansion<64> tx = Product(Minor(eu[1], eu[2], ev[1], ev[2]), ew[0]);
-  const Expansion<64> ty = Product(Minor(eu[2], eu[0], ev[2], ev[0]), ew[1]);
-  const Expansion<64> tz = Product(Minor(eu[0], eu[1], ev[0], ev[1]), ew[2]);
-  return Sign(Sum(Sum(tx, ty), tz));
+  decided = Orient3dStage::kExpansions;
+  return Orient3dExpansions(a, b, c, d);
 }
 
 /// Sign of (b_i − a_i)(c_j − a_j) − (b_j − a_j)(c_i − a_i), exactly: the orientation of (a, b, c)
@@ -826,6 +844,19 @@ int FloatOrientation(const float a[3], const float b[3], const float c[3], const
 bool TrianglesIntersectCounted(const float p1[3], const float q1[3], const float r1[3], const float p2[3],
                                const float q2[3], const float r2[3], uint64_t* exact_evaluations) {
   return Intersect(p1, q1, r1, p2, q2, r2, exact_evaluations);
+}
+
+int ExactOrientation(const float a[3], const float b[3], const float c[3], const float d[3], int* stage) {
+  const Vec3 A = Load(a), B = Load(b), C = Load(c), D = Load(d);
+  Orient3dStage decided = Orient3dStage::kErrorFree;
+  const int sign = Orient3dExact(A.c, B.c, C.c, D.c, nullptr, &decided);
+  if (stage) *stage = static_cast<int>(decided);
+  return sign;
+}
+
+int ExpansionOrientation(const float a[3], const float b[3], const float c[3], const float d[3]) {
+  const Vec3 A = Load(a), B = Load(b), C = Load(c), D = Load(d);
+  return Orient3dExpansions(A.c, B.c, C.c, D.c);
 }
 
 }  // namespace detail

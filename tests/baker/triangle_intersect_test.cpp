@@ -511,6 +511,57 @@ TEST_CASE("heavy: triangle_intersect: agrees with CGAL on points along one ray o
   CHECK(tally.needed_exact > 1000);
 }
 
+TEST_CASE("heavy: triangle_intersect: each stage of the exact orientation agrees with the full expansions and CGAL") {
+  // Near-degenerate orientations at mixed magnitudes, where the error-free double stage fails and the
+  // adaptive stages (rounded differences, then their tail correction) must decide or pass on: every sign
+  // equals the full expansions' and CGAL's, and each stage decides a share of the cases.
+  std::mt19937 rng(20261127u);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f), coef(-1.0f, 2.0f);
+  std::uniform_int_distribution<int> ray_exponent(-140, 122), mantissa_bits(1, 24), exponent(-60, 60),
+      spread(1, 4), tenth(-9, 9);
+  auto mixed_coord = [&] {
+    const int nb = mantissa_bits(rng);
+    const float m = std::ldexp(std::round(std::ldexp(1.0f + unit(rng), nb)), -nb);
+    return (rng() % 2 ? -1.0f : 1.0f) * std::ldexp(m, exponent(rng) / spread(rng));
+  };
+  auto ray_point = [&] {
+    const int nb = mantissa_bits(rng);
+    const float m = std::ldexp(std::round(std::ldexp(1.0f + unit(rng), nb)), -nb);
+    const float s = (rng() % 2 ? -1.0f : 1.0f) * std::ldexp(m, ray_exponent(rng));
+    return P3{s, 4.0f * s, 16.0f * s};
+  };
+  auto mesh_point = [&] { return P3{float(tenth(rng)) / 10, float(tenth(rng)) / 10, float(tenth(rng)) / 10}; };
+  uint64_t decided[4] = {0, 0, 0, 0};
+  for (int i = 0; i < 4 * kPairsPerCategory; ++i) {
+    std::array<P3, 4> p;
+    if (i % 2) {  // the fuzzed bind pose's pattern: points along one ray beside mesh points
+      for (P3& v : p) v = rng() % 2 ? ray_point() : mesh_point();
+    } else {  // d near the plane of (a, b, c), rounded to float, at mixed scales
+      for (int v = 0; v < 3; ++v) p[v] = {mixed_coord(), mixed_coord(), mixed_coord()};
+      const float s = coef(rng), t = coef(rng);
+      for (int k = 0; k < 3; ++k) p[3][k] = p[0][k] + s * (p[1][k] - p[0][k]) + t * (p[2][k] - p[0][k]);
+      if (!std::isfinite(p[3][0]) || !std::isfinite(p[3][1]) || !std::isfinite(p[3][2])) continue;
+    }
+    int stage = -1;
+    const int ours = rt::detail::ExactOrientation(p[0].data(), p[1].data(), p[2].data(), p[3].data(), &stage);
+    REQUIRE((stage >= 0 && stage <= 3));
+    ++decided[stage];
+    const int full = rt::detail::ExpansionOrientation(p[0].data(), p[1].data(), p[2].data(), p[3].data());
+    auto point = [](const P3& v) { return K::Point_3(double(v[0]), double(v[1]), double(v[2])); };
+    const int cgal = int(CGAL::orientation(point(p[0]), point(p[1]), point(p[2]), point(p[3])));
+    if (ours != full || full != cgal) {
+      CAPTURE(stage);
+      CAPTURE(Describe({p[0], p[1], p[2]}, {p[3], p[3], p[3]}));
+      CHECK(ours == cgal);
+      CHECK(full == cgal);
+    }
+  }
+  MESSAGE("exact orientation decided by stage: error-free " << decided[0] << ", rounded differences " << decided[1]
+                                                          << ", tail correction " << decided[2] << ", expansions "
+                                                          << decided[3]);
+  for (uint64_t n : decided) CHECK(n > 100);
+}
+
 TEST_CASE("heavy: triangle_intersect: the prepared float filter certifies only exact sides, a hair off the plane too") {
   // The semi-static float filter of TrianglesIntersect(PreparedTriangle, PreparedTriangle) certifies a
   // side when n_f · x − δ_f is beyond its error bound. A bound too small would certify a wrong side for

@@ -120,6 +120,15 @@ int FloatPlaneSide(const PreparedTriangle& t, const PreparedTriangle& plane_of);
 /// tell or a |coordinate| is beyond 2^40 (outside the filter's range).
 int FloatOrientation(const float a[3], const float b[3], const float c[3], const float d[3]);
 
+/// The exact orientation the triangle test falls back on, for tests: the sign of ((b − a) × (c − a)) · (d − a)
+/// for finite coordinates, and in `*stage` (opt) the stage that decided it: 0 the error-free double
+/// evaluation, 1 the determinant of the rounded differences (Shewchuk 1997 §4.3, stage B), 2 its tail
+/// correction (stage C), 3 the full expansions. 50 ns to 1 µs.
+int ExactOrientation(const float a[3], const float b[3], const float c[3], const float d[3], int* stage);
+
+/// Stage 3 of ExactOrientation alone (the full expansions, exact for finite coordinates), for tests.
+int ExpansionOrientation(const float a[3], const float b[3], const float c[3], const float d[3]);
+
 }  // namespace detail
 
 }  // namespace spherechain::runtime
