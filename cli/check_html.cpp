@@ -46,17 +46,6 @@ std::string ViewCommand(const CheckPage& a, const evaluate::CheckClip& clip, con
   return cmd + " --frames " + std::to_string(clip.frames) + " -o view.html";
 }
 
-std::string Html(const std::string& s) {
-  std::string o;
-  for (const char c : s) {
-    if (c == '<') o += "&lt;";
-    else if (c == '>') o += "&gt;";
-    else if (c == '&') o += "&amp;";
-    else if (c == '"') o += "&quot;";
-    else o += c;
-  }
-  return o;
-}
 
 }  // namespace
 
@@ -64,19 +53,19 @@ bool WriteCheckHtml(const CheckPage& a, const runtime::AssetView& view, const im
                     const evaluate::CheckOptions& options, const evaluate::CheckReport& r, std::string* error) {
   const std::string& asset_name = a.asset_name;
   std::string page =
-      "<!doctype html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>spherechain check: " + Html(a.character) +
+      "<!doctype html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>spherechain check: " + playback::XmlEscape(a.character) +
       "</title><style>body{font:14px system-ui,sans-serif;margin:24px;color:#222}table{border-collapse:collapse}"
       "td,th{padding:4px 10px;border-bottom:1px solid #ddd;text-align:left}.FAIL{color:#b00;font-weight:bold}"
       ".PASS{color:#070;font-weight:bold}figure{margin:16px 0 32px}img{max-width:100%;border:1px solid #ccc}"
       "code{background:#f4f4f4;padding:2px 4px}</style></head><body>\n";
-  page += "<h1>spherechain check: " + Html(fs::path(a.character).filename().string()) + "</h1>\n<p>" +
-          Html(a.character) + ", asset " + Html(asset_name) + ". Height " + LengthText(r.height, r) +
+  page += "<h1>spherechain check: " + playback::XmlEscape(fs::path(a.character).filename().string()) + "</h1>\n<p>" +
+          playback::XmlEscape(a.character) + ", asset " + playback::XmlEscape(asset_name) + ". Height " + LengthText(r.height, r) +
           "; default threshold " + DepthText(r.max_depth, r) + ". " + (r.failed() ? "<span class=FAIL>FAIL</span>" : "<span class=PASS>PASS</span>") +
           "</p>\n<table><tr><th>clip</th><th>frames</th><th>events</th><th>failing</th><th>deepest</th><th>result</th></tr>\n";
   for (const evaluate::CheckClip& c : r.clips) {
     size_t failing = 0;
     for (const auto& e : c.events) failing += e.failed;
-    page += "<tr><td>" + Html(c.name) + "</td><td>" + std::to_string(c.frames) + "</td><td>" +
+    page += "<tr><td>" + playback::XmlEscape(c.name) + "</td><td>" + std::to_string(c.frames) + "</td><td>" +
             std::to_string(c.events.size()) + "</td><td>" + std::to_string(failing) + "</td><td>" +
             DepthText(c.deepest(), r) + "</td><td class=" + (c.failed() ? "FAIL>FAIL" : "PASS>PASS") + "</td></tr>\n";
   }
@@ -85,7 +74,7 @@ bool WriteCheckHtml(const CheckPage& a, const runtime::AssetView& view, const im
   const fs::path png = fs::temp_directory_path() / ("spherechain-check-" + std::to_string(getpid()) + ".png");
   for (const evaluate::CheckClip& c : r.clips) {
     if (!c.failed()) continue;
-    page += "<h2>" + Html(c.name) + "</h2>\n<p>Viewer of this clip: <code>" + Html(ViewCommand(a, c, options.poses)) +
+    page += "<h2>" + playback::XmlEscape(c.name) + "</h2>\n<p>Viewer of this clip: <code>" + playback::XmlEscape(ViewCommand(a, c, options.poses)) +
             "</code>, then open the links below.</p>\n";
     for (const evaluate::CheckEvent& e : c.events) {
       if (!e.failed) continue;
@@ -110,17 +99,17 @@ bool WriteCheckHtml(const CheckPage& a, const runtime::AssetView& view, const im
                     e.first_frame, e.last_frame, e.first_time, e.last_time, e.deepest_frame, e.triangles[0],
                     e.triangles[1], e.joints[0].c_str(), e.joints[1].c_str(), unsigned(e.contacts.size()),
                     e.baseline.empty() ? "" : ("; baseline: " + e.baseline).c_str());
-      page += "<figure class=event><figcaption><b>" + Html(e.name) + "</b> depth " + DepthText(e.depth, r) +
-              " over " + DepthText(e.threshold, r) + ": " + Html(line) + "." +
+      page += "<figure class=event><figcaption><b>" + playback::XmlEscape(e.name) + "</b> depth " + DepthText(e.depth, r) +
+              " over " + DepthText(e.threshold, r) + ": " + playback::XmlEscape(line) + "." +
               (a.key_times ? std::string()
                            : " <a href=\"view.html#frame=" + std::to_string(e.deepest_frame) + "\">view at frame " +
                                  std::to_string(e.deepest_frame) + "</a>") +
-              "</figcaption>\n<img alt=\"" + Html(e.name) + " at frame " + std::to_string(e.deepest_frame) +
+              "</figcaption>\n<img alt=\"" + playback::XmlEscape(e.name) + " at frame " + std::to_string(e.deepest_frame) +
               "\" src=\"data:image/png;base64," + Base64(bytes.data(), bytes.size()) + "\"></figure>\n";
     }
     if (!c.fixed.empty()) {
       page += "<p>Fixed since the baseline:";
-      for (const std::string& f : c.fixed) page += " " + Html(f);
+      for (const std::string& f : c.fixed) page += " " + playback::XmlEscape(f);
       page += "</p>\n";
     }
   }

@@ -139,7 +139,8 @@ bool OpenOrBake(const CheckArgs& a, LoadedAsset* asset, import::Mesh* mesh, std:
 int RunCheck(const CheckArgs& a) {
   if (int clash = OutputsClash({{"--json", &a.json}, {"--junit", &a.junit}, {"--html", &a.html}},
                                {{"CHARACTER", &a.character}, {"--asset", &a.asset}, {"--rig", &a.rig},
-                                {"--policy", &a.policy}, {"--baseline", &a.baseline}}))
+                                {"--policy", &a.policy}, {"--baseline", &a.baseline}},
+                               a.poses))
     return clash;
   // ---- what needs no file -----------------------------------------------------------------------------
   if (!(a.fps > 0 && a.fps <= 1000)) return BadInput("--fps " + std::to_string(a.fps) + " is outside (0, 1000]");

@@ -24,7 +24,8 @@ struct EvaluateArgs {
   AnimationArgs anim;  // --mesh, --clip, --morph, --poses-dir, --frames
   double margin = 0.01;
   double crease = 0.03;  // --crease: the asset-independent truth's bind-distance bound, fraction of the height
-  double min_recall = std::numeric_limits<double>::quiet_NaN();
+  double min_recall = std::numeric_limits<double>::quiet_NaN();  // NaN: not given
+  CLI::Option* min_recall_option = nullptr;
   bool coverage = true;
   std::string sweep;  // "" (no sweep), "auto" (the default margins) or a comma-separated list of fractions of height
 };
@@ -34,7 +35,7 @@ int RunEvaluate(const EvaluateArgs& a) {
                                {{"ASSET", &a.asset}, {"--mesh", &a.anim.mesh}, {"--rig", &a.rig}}, a.anim.morph))
     return clash;
   // ---- arguments that need no file ---------------------------------------------------------------
-  if (!std::isnan(a.min_recall) && !(a.min_recall >= 0.0 && a.min_recall <= 1.0))
+  if (a.min_recall_option && a.min_recall_option->count() > 0 && !(a.min_recall >= 0.0 && a.min_recall <= 1.0))
     return Fail("--min-recall " + std::to_string(a.min_recall) + " is outside [0, 1]");
   if (!(a.margin >= 0.0 && a.margin < 1.0)) return Fail("--margin must be in [0, 1) (a fraction of the body height)");
   if (!a.png.empty() && a.png == a.json) return Fail("--png and --json name the same file");
@@ -116,7 +117,7 @@ void RegisterEvaluate(CLI::App& app, Commands* commands) {
   sub->add_option("--png", args->png,
                   "Write a picture of the frame with the most missed contacts: contact triangles red (missed) / amber "
                   "(found) and the refit spheres");
-  sub->add_option("--min-recall", args->min_recall,
+  args->min_recall_option = sub->add_option("--min-recall", args->min_recall,
                   "Exit 1 when the proxy's region-pair recall (the lower of M1 and M2) is below this, in [0, 1] "
                   "(for a game's CI)");
   sub->add_flag("!--no-coverage", args->coverage, "Skip the coverage / protrusion measurements (bind pose, and the refit spheres on every frame)");

@@ -14,6 +14,7 @@
 #include "spherechain/import/file_io.h"
 #include "spherechain/playback/animation_source.h"
 #include "spherechain/playback/character.h"
+#include "spherechain/playback/debug_export.h"
 #include "spherechain/playback/session.h"
 #include "spherechain/runtime/narrow_phase.h"
 
@@ -22,6 +23,7 @@ namespace spherechain::evaluate {
 namespace {
 
 using Code = import::Error::Code;
+using playback::XmlEscape;
 import::Error Fail(Code code, std::string message) { return import::MakeError(code, std::move(message)); }
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
@@ -85,23 +87,6 @@ std::string Hex64(uint64_t v) {
   return b;
 }
 
-std::string XmlEscape(const std::string& s) {
-  std::string o;
-  o.reserve(s.size());
-  for (const char c : s) {
-    switch (c) {
-      case '&': o += "&amp;"; break;
-      case '<': o += "&lt;"; break;
-      case '>': o += "&gt;"; break;
-      case '"': o += "&quot;"; break;
-      case '\'': o += "&apos;"; break;
-      case '\n': o += "&#10;"; break;
-      default:
-        if (static_cast<unsigned char>(c) >= 0x20 || c == '\t') o += c;  // XML 1.0 forbids other controls
-    }
-  }
-  return o;
-}
 
 const char* const kMorphClip = "morph";
 
@@ -217,7 +202,12 @@ import::Status LoadCheckPolicy(const std::string& path, const runtime::AssetView
   nlohmann::json j = nlohmann::json::parse(bytes->begin(), bytes->end(), nullptr, false);
   if (j.is_discarded() || !j.is_object()) return Fail(Code::kFormat, "policy '" + path + "': not a JSON object");
   const auto depth = [&](const nlohmann::json& v, const std::string& where) -> import::Result<double> {
-    if (v.is_number()) return ParseDepth(std::to_string(v.get<double>()), height, unit_scale_m);
+    if (v.is_number()) {  // model units, as a bare number is (not through text: no rounding)
+      const double d = v.get<double>();
+      if (!(d > 0) || !std::isfinite(d))
+        return Fail(Code::kConfig, "policy '" + path + "': " + where + ": " + v.dump() + " is not a depth (> 0)");
+      return d;
+    }
     if (!v.is_string()) return Fail(Code::kFormat, "policy '" + path + "': " + where + " must be a string or a number");
     auto d = ParseDepth(v.get<std::string>(), height, unit_scale_m);
     if (!d.ok()) return Fail(Code::kConfig, "policy '" + path + "': " + where + ": " + d.error().message);
@@ -297,6 +287,7 @@ import::Result<CheckReport> CheckClips(const runtime::AssetView& view, const imp
   playback::SessionOptions so;
   so.spheres = false;
   so.narrow = playback::SessionNarrow::kEvery;
+  so.grow_contacts = true;  // every contact of a frame, however many: a truncated frame could hide an event
   playback::Session session;
   if (auto s = session.Init(view, mesh, so); !s.ok()) return s.error();
   const runtime::NarrowPhaseModel& model = session.narrow_model();
@@ -395,7 +386,8 @@ import::Result<CheckReport> CheckClips(const runtime::AssetView& view, const imp
       ev.depth = std::max(ev.depth, 0.0f);
       for (int s = 0; s < 2; ++s) ev.joints[s] = TriangleJoint(mesh, ev.triangles[s]);
       ev.threshold = policy.Threshold(ev.regions);
-      ev.failed = double(ev.depth) > ev.threshold;
+      ev.over_threshold = double(ev.depth) > ev.threshold;
+      ev.failed = ev.over_threshold;
     }
     std::stable_sort(clip.events.begin(), clip.events.end(), [](const CheckEvent& a, const CheckEvent& b) {
       return std::tie(a.first_frame, a.regions) < std::tie(b.first_frame, b.regions);
@@ -413,15 +405,22 @@ import::Status ApplyBaseline(const nlohmann::json& baseline, CheckReport* report
     return Fail(Code::kConfig, "the baseline is of another character (fingerprint " +
                                    baseline["fingerprint"].get<std::string>() + ", this one " +
                                    Hex64(report->positions_hash) + ")");
-  // (clip, region pair name) → the deepest failing event of the baseline.
+  // (clip, region pair name) → the deepest event of the baseline over its threshold ("over_threshold";
+  // reports written before it existed: "failed").
   std::map<std::pair<std::string, std::string>, double> failing;
-  for (const auto& c : baseline["clips"]) {
-    if (!c.is_object() || !c.contains("events")) return Fail(Code::kConfig, "the baseline's clips hold no events");
-    for (const auto& e : c["events"]) {
-      if (!e.value("failed", false)) continue;
-      double& d = failing[{c.value("name", ""), e.value("name", "")}];
-      d = std::max(d, e.value("depth", 0.0));
+  try {
+    for (const auto& c : baseline["clips"]) {
+      if (!c.is_object() || !c.contains("events") || !c["events"].is_array())
+        return Fail(Code::kConfig, "the baseline's clips hold no events");
+      for (const auto& e : c["events"]) {
+        if (!e.is_object()) return Fail(Code::kConfig, "the baseline's events are not objects");
+        if (!e.value("over_threshold", e.value("failed", false))) continue;
+        double& d = failing[{c.value("name", ""), e.value("name", "")}];
+        d = std::max(d, e.value("depth", 0.0));
+      }
     }
+  } catch (const nlohmann::json::exception& e) {  // a value of the wrong type
+    return Fail(Code::kConfig, std::string("the baseline is not a `spherechain check --json` report: ") + e.what());
   }
   for (CheckClip& clip : report->clips) {
     std::set<std::string> failing_now;
@@ -429,8 +428,8 @@ import::Status ApplyBaseline(const nlohmann::json& baseline, CheckReport* report
       const auto it = failing.find({clip.name, ev.name});
       if (it == failing.end()) ev.baseline = "new";
       else ev.baseline = double(ev.depth) > it->second * kDeeperTolerance ? "deeper" : "known";
-      if (ev.failed) failing_now.insert(ev.name);
-      ev.failed = ev.failed && ev.baseline != "known";
+      if (ev.over_threshold) failing_now.insert(ev.name);
+      ev.failed = ev.over_threshold && ev.baseline != "known";
     }
     for (const auto& [key, d] : failing)
       if (key.first == clip.name && !failing_now.count(key.second)) clip.fixed.push_back(key.second);
@@ -459,6 +458,7 @@ nlohmann::json CheckReportJson(const CheckReport& r) {
                           {"joints", {e.joints[0], e.joints[1]}},
                           {"point", {e.point[0], e.point[1], e.point[2]}},
                           {"threshold", std::isfinite(e.threshold) ? nlohmann::json(e.threshold) : nlohmann::json("allowed")},
+                          {"over_threshold", e.over_threshold},
                           {"failed", e.failed}};
       if (!e.baseline.empty()) j["baseline"] = e.baseline;
       events.push_back(std::move(j));

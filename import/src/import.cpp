@@ -2,6 +2,7 @@
 #include "spherechain/import/import.h"
 
 #include <algorithm>
+#include <set>
 #include <cctype>
 #include <cmath>
 #include <exception>
@@ -192,6 +193,10 @@ Result<Mesh> ImportMesh(const std::string& path, const ImportOptions& options, C
       return detail::FileError(Error::Code::kFormat, path,
                                "file is " + std::to_string(bytes) + " bytes, over the input limit of " +
                                    std::to_string(kMaxInputBytes) + " bytes (512 MiB)");
+    if ((!options.rig_path.empty() || !options.weights_path.empty()) && ext != "obj")
+      return detail::FileError(Error::Code::kConfig, path,
+                               "a MakeHuman rig (--rig, or the config's \"rig\") applies to an OBJ mesh; a ." + ext +
+                                   " file carries its own skeleton, if any");
     Result<Mesh> mesh = MakeError(Error::Code::kInternal, path + ": not imported");
     if (ext == "gltf" || ext == "glb") {
       mesh = detail::ImportGltf(path, options, ctx);
@@ -208,6 +213,16 @@ Result<Mesh> ImportMesh(const std::string& path, const ImportOptions& options, C
                 " file's vertex buffer is already the one engines upload (read as is)");
     mesh->source_path = path;
     if (mesh->source_format.empty()) mesh->source_format = ext;
+    // Clips are chosen by name (--clip, check's report, a baseline): a name the file repeats gets " #2", " #3"….
+    std::set<std::string> clip_names;
+    for (Clip& clip : mesh->clips) {
+      std::string name = clip.name;
+      for (int k = 2; clip_names.count(name); ++k) name = clip.name + " #" + std::to_string(k);
+      if (name != clip.name && ctx)
+        ctx->Warn("import: " + path + ": a second clip named '" + clip.name + "' is called '" + name + "'");
+      clip.name = name;
+      clip_names.insert(name);
+    }
     if (Status s = detail::CheckMeshBudget(path, mesh->positions.size() / 3, mesh->indices.size() / 3, options); !s.ok())
       return s.error();
     Status valid = ValidateMesh(mesh.value());

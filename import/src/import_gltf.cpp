@@ -419,12 +419,33 @@ Result<Mesh> ImportGltf(const std::string& path, const ImportOptions& options, C
         if (ibm.size() < gs.joints.size() * 16)
           return FileError(Error::Code::kFormat, path, "skin '" + gs.name + "' has fewer inverse binds than joints");
       }
+      // The joints this mesh's vertices weight (SkinnedMeshBind reads only those: an unweighted helper or
+      // root joint whose inverse bind does not match its rest pose must not move the mesh); all of them
+      // when no vertex carries a weight.
+      std::vector<char> weighted(gs.joints.size(), 0);
+      bool any_weighted = false;
+      for (const tinygltf::Primitive& prim : gm.primitives)
+        for (int set = 0; set < 2; ++set) {
+          auto ji = prim.attributes.find("JOINTS_" + std::to_string(set));
+          auto wi = prim.attributes.find("WEIGHTS_" + std::to_string(set));
+          if (ji == prim.attributes.end() || wi == prim.attributes.end()) break;
+          Result<std::vector<double>> jr = ReadAccessor(model, ji->second, path, "mesh '" + gm.name + "' JOINTS_" + std::to_string(set), max_values);
+          if (!jr.ok()) return jr.error();
+          Result<std::vector<double>> wr = ReadAccessor(model, wi->second, path, "mesh '" + gm.name + "' WEIGHTS_" + std::to_string(set), max_values);
+          if (!wr.ok()) return wr.error();
+          for (size_t i = 0; i < std::min(jr->size(), wr->size()); ++i) {
+            uint32_t joint = 0;
+            if (wr.value()[i] > 0.0 && AsIndex(jr.value()[i], static_cast<double>(gs.joints.size()), &joint))
+              any_weighted = weighted[joint] = 1;
+          }
+        }
       std::vector<Eigen::Matrix4d> joint_binds;
       for (size_t k = 0; k < gs.joints.size(); ++k) {
         const int jn = gs.joints[k];
         if (jn < 0 || jn >= static_cast<int>(n_nodes) || node_slot[static_cast<size_t>(jn)] < 0)
           return FileError(Error::Code::kFormat, path,
                            "skin '" + gs.name + "' joint " + std::to_string(k) + " is not a node of the scene");
+        if (any_weighted && !weighted[k]) continue;
         Eigen::Matrix4d ib = Eigen::Matrix4d::Identity();
         if (!ibm.empty())
           for (int c = 0; c < 4; ++c)

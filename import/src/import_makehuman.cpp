@@ -68,10 +68,11 @@ bool ParseFloat(std::string_view t, float& out) {
   return r.ec == std::errc() && r.ptr == t.data() + t.size();
 }
 
-/// Two passes: the first finds whether the wanted group exists (faces are kept only inside it
-/// then), the second reads vertices and faces. Face corners are `v`, `v/vt`, `v//vn`, `v/vt/vn`,
-/// negative values relative to the vertices read so far.
-Result<ObjData> ReadObj(const std::string& path, const std::string& text, const std::string& group) {
+/// Two passes: the first finds whether the wanted group exists in a MakeHuman base mesh (a `# basemesh`
+/// comment, or `makehuman_rig`: the caller gives a rig) — faces are kept only inside it then; any other OBJ
+/// keeps every group —, the second reads vertices and faces. Face corners are `v`, `v/vt`, `v//vn`,
+/// `v/vt/vn`, negative values relative to the vertices read so far.
+Result<ObjData> ReadObj(const std::string& path, const std::string& text, const std::string& group, bool makehuman_rig) {
   ObjData d;
   auto for_lines = [&](auto&& fn) -> Status {
     size_t pos = 0;
@@ -91,12 +92,15 @@ Result<ObjData> ReadObj(const std::string& path, const std::string& text, const 
     return std::any_of(tok.begin(), tok.end(), [&](std::string_view t) { return t == group; });
   };
   if (!group.empty()) {
+    bool group_seen = false, header_seen = false;
     Status s = for_lines([&](std::string_view line, size_t) -> Status {
       if (line.size() > 1 && line[0] == 'g' && (line[1] == ' ' || line[1] == '\t') && group_matches(line))
-        d.has_group = true;
+        group_seen = true;
+      if (!line.empty() && line[0] == '#' && line.find("basemesh") != std::string_view::npos) header_seen = true;
       return Ok{};
     });
     (void)s;
+    d.has_group = group_seen && (header_seen || makehuman_rig);
   }
 
   bool in_group = !d.has_group;  // no such group: keep every face
@@ -327,7 +331,7 @@ Result<Skin> ReadMakeHumanRig(const std::string& skel_path, const std::string& w
 Result<Mesh> ImportObj(const std::string& path, const ImportOptions& options, Context* ctx) {
   std::string text;
   if (!ReadWholeFile(path, text, ctx)) return FileError(Error::Code::kIo, path, "cannot read file");
-  Result<ObjData> obj_r = ReadObj(path, text, options.obj_group);
+  Result<ObjData> obj_r = ReadObj(path, text, options.obj_group, !options.rig_path.empty());
   if (!obj_r.ok()) return obj_r.error();
   ObjData& obj = obj_r.value();
   std::string().swap(text);

@@ -365,11 +365,11 @@ std::string RenderSvg(const Mesh& mesh, const runtime::AssetView& a, const Pictu
               << "' stroke-width='" << (S.opacity > 0.5f ? 2 : 1) << "'/>\n";
         }
       }
-      svg << "<text x='" << ox + 10 << "' y='16' font-family='sans-serif' font-size='14'>" << V.name << ": "
-          << (pass == 0 ? pic.left_name : pic.right_name) << "</text>\n";
+      svg << "<text x='" << ox + 10 << "' y='16' font-family='sans-serif' font-size='14'>" << XmlEscape(V.name) << ": "
+          << XmlEscape(pass == 0 ? pic.left_name : pic.right_name) << "</text>\n";
     }
   }
-  svg << "<text x='10' y='" << height + 32 << "' font-family='sans-serif' font-size='13'>" << pic.caption
+  svg << "<text x='10' y='" << height + 32 << "' font-family='sans-serif' font-size='13'>" << XmlEscape(pic.caption)
       << "</text>\n</svg>\n";
   return svg.str();
 }
@@ -460,6 +460,24 @@ std::string RegionPairName(const runtime::AssetView& view, int a, int b) {
   if (view.valid() && view.asset->regions() && a >= 0 && b >= 0)
     s += std::string(" (") + runtime::RegionName(view, uint32_t(a)) + "-" + runtime::RegionName(view, uint32_t(b)) + ")";
   return s;
+}
+
+std::string XmlEscape(const std::string& s) {
+  std::string o;
+  o.reserve(s.size());
+  for (const char c : s) {
+    switch (c) {
+      case '&': o += "&amp;"; break;
+      case '<': o += "&lt;"; break;
+      case '>': o += "&gt;"; break;
+      case '"': o += "&quot;"; break;
+      case '\'': o += "&apos;"; break;
+      case '\n': o += "&#10;"; break;
+      default:
+        if (static_cast<unsigned char>(c) >= 0x20 || c == '\t') o += c;  // XML 1.0 forbids other controls
+    }
+  }
+  return o;
 }
 
 }  // namespace spherechain::playback

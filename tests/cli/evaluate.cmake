@@ -233,7 +233,7 @@ endif()
 message(STATUS "--min-recall 1.0 on 16 frames: exit ${rc}")
 
 # Bad input: exit 1, a message, nothing written.
-foreach(case "--min-recall;1.5;is outside \\[0, 1\\]" "--clip;nope;no clip named 'nope'"
+foreach(case "--min-recall;1.5;is outside \\[0, 1\\]" "--min-recall;nan;is outside \\[0, 1\\]" "--clip;nope;no clip named 'nope'"
              "--sweep-margin;0.01,x;'x' is not a margin")
   list(GET case 0 flag)
   list(GET case 1 value)

@@ -10,6 +10,7 @@
 #include "spherechain/evaluate/check.h"
 #include "spherechain/import/file_io.h"
 #include "spherechain/playback/animation.h"
+#include "spherechain/playback/debug_export.h"
 #include "spherechain/runtime/crease.h"
 #include "spherechain/runtime/narrow_phase.h"
 #include "test_data.h"
@@ -199,6 +200,10 @@ TEST_CASE("check: policy, depths, baseline and JUnit on the creature") {
     CHECK(policy.max_depth == doctest::Approx(0.5));
     CHECK(policy.Threshold(legs.regions) == std::numeric_limits<double>::infinity());
     CHECK(policy.Threshold({0, 1}) == doctest::Approx(0.02 * h));
+    // A depth as a JSON number is model units, exactly (not rounded through text to six decimals).
+    REQUIRE(import::WriteFileAtomic(dir + "/tiny.json", std::string(R"({"default_max_depth": 3e-7})")).ok());
+    REQUIRE(evaluate::LoadCheckPolicy(dir + "/tiny.json", b.view, h, 0, &policy).ok());
+    CHECK(policy.max_depth == 3e-7);
     REQUIRE(import::WriteFileAtomic(dir + "/bad.json", std::string(R"({"allow": ["Wing_L-ForeLeg_R"]})")).ok());
     auto s = evaluate::LoadCheckPolicy(dir + "/bad.json", b.view, h, 0, &policy);
     REQUIRE(!s.ok());
@@ -242,6 +247,40 @@ TEST_CASE("check: policy, depths, baseline and JUnit on the creature") {
     REQUIRE(!s.ok());
     CHECK(s.error().message.find("another character") != std::string::npos);
     CHECK(!evaluate::ApplyBaseline(nlohmann::json::object(), &o2).ok());
+  }
+
+  SUBCASE("baseline: a report written with a baseline is the next run's baseline (its known events stay known)") {
+    evaluate::CheckReport second = r;
+    REQUIRE(evaluate::ApplyBaseline(evaluate::CheckReportJson(r), &second).ok());
+    REQUIRE(!second.failed());
+    const nlohmann::json second_json = evaluate::CheckReportJson(second);  // known events: failed false
+    evaluate::CheckReport third = r;
+    REQUIRE(evaluate::ApplyBaseline(second_json, &third).ok());
+    CHECK(!third.failed());
+    for (const auto& c : third.clips)
+      for (const auto& e : c.events)
+        if (e.over_threshold) CHECK(e.baseline == "known");
+  }
+
+  SUBCASE("baseline: values of the wrong type are kConfig naming the problem, not an exception") {
+    for (const char* bad : {R"({"depth": "0.03", "name": "x", "over_threshold": true})", R"(3)",
+                            R"({"name": 7, "over_threshold": true})"}) {
+      CAPTURE(bad);
+      nlohmann::json j = evaluate::CheckReportJson(r);
+      j["clips"][0]["events"] = nlohmann::json::array({nlohmann::json::parse(bad)});
+      evaluate::CheckReport o3 = r;
+      auto s = evaluate::ApplyBaseline(j, &o3);
+      REQUIRE(!s.ok());
+      CHECK(s.error().code == import::Error::Code::kConfig);
+    }
+  }
+
+  SUBCASE("a picture's caption with & and < (a clip named \"Walk & Run\") is escaped in the SVG") {
+    const std::string svg =
+        playback::RenderFrameSvg(mesh, b.view, mesh.positions.data(), {}, {}, "Walk & Run <fast> 'x'", 200);
+    CHECK(svg.find("Walk &amp; Run &lt;fast&gt; &apos;x&apos;") != std::string::npos);
+    CHECK(svg.find("Walk & Run") == std::string::npos);
+    CHECK(playback::XmlEscape(std::string("a\x01" "b\tc\nd")) == "ab\tc&#10;d");
   }
 
   SUBCASE("JUnit: one testcase per clip, a failure for the failing one naming its event") {

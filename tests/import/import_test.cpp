@@ -351,13 +351,22 @@ TEST_CASE("import: OBJ with a NaN coordinate, no faces, or an out-of-range index
   }
 }
 
-TEST_CASE("import: small OBJ keeps vertex order, fan-triangulates quads and honours group body") {
+TEST_CASE("import: small OBJ keeps vertex order, fan-triangulates quads, and a MakeHuman base mesh keeps group body") {
   TempDir tmp("objok");
   const std::string p = tmp.Write("quad.obj",
                                   "v 9 9 9\n"
                                   "g helper\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 2 3 4\n"
                                   "g body\nf 2/1/1 3/2/2 4/3/3 5/4/4\n");
-  auto r = ImportMesh(p);
+  // Not a MakeHuman base mesh (no "# basemesh" comment, no rig given): every group, every vertex.
+  auto any = ImportMesh(p);
+  REQUIRE_MESSAGE(any.ok(), any.error().message);
+  CHECK(any->vertex_count() == 5);
+  CHECK(any->triangle_count() == 3);
+  // A MakeHuman base mesh: only group body.
+  const std::string mh = tmp.Write("quad_mh.obj", "# basemesh hm08\n" + std::string(std::istreambuf_iterator<char>(
+                                                                            std::ifstream(p, std::ios::binary).rdbuf()),
+                                                                        std::istreambuf_iterator<char>()));
+  auto r = ImportMesh(mh);
   REQUIRE_MESSAGE(r.ok(), r.error().message);
   // Only group body: its 4 referenced vertices (file vertices 2..5), in file order.
   CHECK(r->vertex_count() == 4);
@@ -369,7 +378,7 @@ TEST_CASE("import: small OBJ keeps vertex order, fan-triangulates quads and hono
 
   spherechain::import::ImportOptions all;
   all.obj_group.clear();
-  auto r2 = ImportMesh(p, all);
+  auto r2 = ImportMesh(mh, all);
   REQUIRE(r2.ok());
   CHECK(r2->vertex_count() == 5);
   CHECK(r2->triangle_count() == 3);
@@ -393,4 +402,77 @@ TEST_CASE("import: ValidateMesh names the first offending vertex and triangle") 
   m.positions[4] = 0.0f;
   m.indices.clear();
   CHECK(!spherechain::import::ValidateMesh(m).ok());
+}
+
+namespace {
+
+/// A skinned one-triangle glTF (data.bin beside it): the mesh node scaled by 2 (which skinning ignores),
+/// joint 0 at the origin carrying every weight, joint 1 at y = 5 carrying none, both with identity inverse
+/// binds (so joint 1's does not match its rest pose), and two animations both named "Walk".
+std::string SkinnedTriangleGltf(const TempDir& tmp) {
+  std::string bin;
+  auto put = [&](const void* p, size_t n) { bin.append(static_cast<const char*>(p), n); };
+  const float positions[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  const uint32_t indices[3] = {0, 1, 2};
+  const uint8_t joints[12] = {0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0};
+  const float weights[12] = {1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0};
+  const float identity[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+  const float times[2] = {0, 1};
+  const float rotations[8] = {0, 0, 0, 1, 0, 0, 0, 1};
+  put(positions, 36);    // 0
+  put(indices, 12);      // 36
+  put(joints, 12);       // 48
+  put(weights, 48);      // 60
+  put(identity, 64);     // 108
+  put(identity, 64);     // 172
+  put(times, 8);         // 236
+  put(rotations, 32);    // 244
+  tmp.Write("data.bin", bin);
+  const std::string walk = R"({"name":"Walk","channels":[{"sampler":0,"target":{"node":1,"path":"rotation"}}],)"
+                           R"("samplers":[{"input":5,"output":6}]})";
+  return tmp.Write("skinned.gltf",
+                   R"({"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0,1,2]}],)"
+                   R"("nodes":[{"mesh":0,"skin":0,"scale":[2,2,2]},{"name":"j0"},{"name":"j1","translation":[0,5,0]}],)"
+                   R"("skins":[{"joints":[1,2],"inverseBindMatrices":4}],)"
+                   R"("meshes":[{"primitives":[{"attributes":{"POSITION":0,"JOINTS_0":2,"WEIGHTS_0":3},"indices":1}]}],)"
+                   R"("animations":[)" + walk + "," + walk + R"(],)"
+                   R"("accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3"},)"
+                   R"({"bufferView":1,"componentType":5125,"count":3,"type":"SCALAR"},)"
+                   R"({"bufferView":2,"componentType":5121,"count":3,"type":"VEC4"},)"
+                   R"({"bufferView":3,"componentType":5126,"count":3,"type":"VEC4"},)"
+                   R"({"bufferView":4,"componentType":5126,"count":2,"type":"MAT4"},)"
+                   R"({"bufferView":5,"componentType":5126,"count":2,"type":"SCALAR","min":[0],"max":[1]},)"
+                   R"({"bufferView":6,"componentType":5126,"count":2,"type":"VEC4"}],)"
+                   R"("bufferViews":[{"buffer":0,"byteLength":36},{"buffer":0,"byteOffset":36,"byteLength":12},)"
+                   R"({"buffer":0,"byteOffset":48,"byteLength":12},{"buffer":0,"byteOffset":60,"byteLength":48},)"
+                   R"({"buffer":0,"byteOffset":108,"byteLength":128},{"buffer":0,"byteOffset":236,"byteLength":8},)"
+                   R"({"buffer":0,"byteOffset":244,"byteLength":32}],)"
+                   R"("buffers":[{"uri":"data.bin","byteLength":276}]})");
+}
+
+}  // namespace
+
+TEST_CASE("import: a skinned glTF is placed by its weighted joints only; repeated clip names are made unique") {
+  TempDir tmp("skinned_gltf");
+  const std::string path = SkinnedTriangleGltf(tmp);
+  auto r = ImportMesh(path);
+  REQUIRE_MESSAGE(r.ok(), r.error().message);
+  // Joint 0 (all the weight) agrees with its inverse bind: the mesh sits where its joints put it, at scale 1
+  // (the unweighted joint 1, whose inverse bind does not match, used to send it to its node's scale 2).
+  CHECK(Extent(r.value())[0] == doctest::Approx(1.0));
+  CHECK(Extent(r.value())[1] == doctest::Approx(1.0));
+  REQUIRE(r->clips.size() == 2);
+  CHECK(r->clips[0].name == "Walk");
+  CHECK(r->clips[1].name == "Walk #2");
+}
+
+TEST_CASE("import: a MakeHuman rig given for a file that is not an OBJ is kConfig, not ignored") {
+  TempDir tmp("rig_not_obj");
+  const std::string path = SkinnedTriangleGltf(tmp);
+  spherechain::import::ImportOptions o;
+  o.rig_path = tmp.Write("rig.mhskel", "{}");
+  auto r = ImportMesh(path, o);
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().code == Error::Code::kConfig);
+  CHECK(r.error().message.find("applies to an OBJ mesh") != std::string::npos);
 }

@@ -89,7 +89,8 @@ struct CheckEvent {
   /// every contact of the pair at deepest_frame, (triangle of regions.first, of regions.second), source indices
   std::vector<std::pair<uint32_t, uint32_t>> contacts;
   double threshold = 0;                ///< CheckPolicy::Threshold [Units: model] (+inf: allowed)
-  bool failed = false;                 ///< depth > threshold (and, with a baseline, a regression)
+  bool over_threshold = false;         ///< depth > threshold: the policy's verdict, whatever the baseline
+  bool failed = false;                 ///< over_threshold and, with a baseline, a regression (fails the run)
   std::string baseline;                ///< with a baseline: "new", "deeper", "known"; else ""
 };
 
@@ -139,13 +140,16 @@ import::Status CheckFrame(const import::Mesh& mesh, const CheckOptions& options,
 /// Marks regressions against `baseline` (CheckReportJson of an earlier run of the same character):
 /// an event fails only when it failed its policy and its clip's region pair failed no event of the
 /// baseline ("new") or failed one shallower by more than 5 % ("deeper"; else "known"); the baseline's
-/// failing pairs that fail no event now go to CheckClip::fixed. Errors: kConfig — the baseline is of
-/// another character (its "fingerprint" differs) or not a check report.
+/// failing pairs that fail no event now go to CheckClip::fixed. The baseline's failing events are those
+/// over their threshold ("over_threshold"; "failed" in reports that predate it), so a report written with a
+/// baseline serves as the next one. Errors: kConfig — the baseline is of another character (its
+/// "fingerprint" differs) or not a check report (a value of the wrong type: the message says which).
 import::Status ApplyBaseline(const nlohmann::json& baseline, CheckReport* report);
 
 /// The report as JSON: {"mesh", "fingerprint", "height", "max_depth", "crease", "failed", "clips": [{"name",
 /// "duration", "frames", "contacts", "bind_contacts", "failed", "deepest", "fixed", "events": [{"regions",
-/// "name", "first_frame", ... as CheckEvent}]}]}. Depths in model units and as "depth_rel" (of the height).
+/// "name", "first_frame", ... as CheckEvent, "over_threshold", "failed"}]}]}. Depths in model units and as
+/// "depth_rel" (of the height).
 nlohmann::json CheckReportJson(const CheckReport& report);
 
 /// The report as JUnit XML (one `testsuite` "spherechain check", one `testcase` per clip, each failing

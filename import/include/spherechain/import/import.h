@@ -58,7 +58,9 @@ struct ImportOptions {
   /// [opt] `.mhw` weights path; empty: the `weights_file` named by the `.mhskel`, else
   /// `default_weights.mhw` beside it.
   std::string weights_path;
-  /// OBJ group to keep when the file has groups named `body` (MakeHuman): "body". Empty keeps all.
+  /// OBJ group to keep when the file is a MakeHuman base mesh (a `# basemesh` comment, or `rig_path` given)
+  /// and has a group of that name: "body" (MakeHuman's helper geometry is left out). Any other OBJ keeps
+  /// every group. Empty keeps all.
   std::string obj_group = "body";
   /// Read animation clips (skins are always read when present).
   bool read_clips = true;
@@ -92,8 +94,9 @@ struct ImportOptions {
 ///   Cost: the join is O(\#V log \#V) in assimp. Mesh::up_axis: +Y (assimp's convention) unless the
 ///   file declares another (assimp's "UpAxis" scene metadata, e.g. FBX); a `.blend` is +Z (Blender's
 ///   world axis, which assimp's Blender reader keeps).
-/// - MakeHuman `base.obj`: only group `obj_group` ("body"); its vertices are the OBJ's vertices in file
-///   order restricted to those the group references (for base.obj: the first 13,380, order kept).
+/// - OBJ: every group, the file's vertices in file order. A MakeHuman base mesh (a `# basemesh` comment, or
+///   `rig_path` given): only group `obj_group` ("body"); its vertices are the OBJ's vertices in file order
+///   restricted to those the group references (for base.obj: the first 13,380, order kept).
 ///   The rig (mhskel + mhw) becomes Mesh::skin.
 /// Policy: only kSupportedExtensions; files over kMaxInputBytes and meshes over options.max_vertices /
 /// max_triangles (default kMaxInputVertices / kMaxInputTriangles) are refused; a glTF whose JSON nests
@@ -104,8 +107,11 @@ struct ImportOptions {
 /// Files: each file read — the input; glTF's external buffers and images; whatever assimp's importer opened;
 /// the MakeHuman .mhskel and .mhw — is added to ctx->files_read once read (Context::RecordFileRead), also when
 /// the import then fails.
+/// Clips keep the file's names, made unique: a name the file repeats gets " #2", " #3"… (a warning through
+/// `ctx` says so), so that a clip is found by its name.
 /// Errors: kIo (missing / unreadable), kFormat (unsupported, too large or corrupt), kInvalidMesh (no
-/// triangles, too many vertices / triangles, NaN/Inf coordinates, index out of range). Nothing is written.
+/// triangles, too many vertices / triangles, NaN/Inf coordinates, index out of range), kConfig (a MakeHuman
+/// rig or weights path given for a file that is not an OBJ). Nothing is written.
 Result<Mesh> ImportMesh(const std::string& path, const ImportOptions& options = {}, Context* ctx = nullptr);
 
 /// True when ImportMesh reads `path` through assimp (a supported extension other than glTF, GLB, OBJ):

@@ -64,4 +64,8 @@ std::string RegionLegendLine(const runtime::AssetView& view);
 /// "R1-R2" for a region pair; with the asset's names for a creature: "R1-R2 (HindLeg_L-HindLeg_R)".
 std::string RegionPairName(const runtime::AssetView& view, int a, int b);
 
+/// `text` for XML and HTML (SVG text, attributes, JUnit): & < > " ' escaped, a newline as "&#10;", the
+/// other control characters XML 1.0 forbids dropped (tab kept). Bytes ≥ 0x80 pass through unchanged.
+std::string XmlEscape(const std::string& text);
+
 }  // namespace spherechain::playback
