@@ -9,6 +9,7 @@
 #include <cstring>
 #include <fstream>
 #include <set>
+#include <type_traits>
 #include <sstream>
 
 namespace spherechain::baker {
@@ -37,6 +38,9 @@ Status ReadNumber(const json& j, const char* key, T lo, T hi, T* out, const std:
   if (!v.is_number())
     return MakeError(Error::Code::kConfig, where + ": '" + key + "' must be a number");
   const double d = v.get<double>();
+  if constexpr (std::is_integral_v<T>)
+    if (std::isfinite(d) && d != std::floor(d))
+      return MakeError(Error::Code::kConfig, where + ": '" + key + "' = " + v.dump() + " must be a whole number");
   if (!std::isfinite(d) || d < double(lo) || d > double(hi)) {
     std::ostringstream m;
     m << where << ": '" << key << "' = " << d << " is out of range [" << lo << ", " << hi << "]";
@@ -87,6 +91,10 @@ Result<BakeConfig> ParseBakeConfig(const std::string& text, const std::string& w
                        where + ": 'segmentation' must be auto, rig, geometry, skeleton or map, not '" + m + "'");
     if (m == "map" && !j.contains("region_map"))
       return MakeError(Error::Code::kConfig, where + ": segmentation 'map' needs 'region_map'");
+    if (m != "map" && j.contains("region_map"))
+      return MakeError(Error::Code::kConfig, where + ": segmentation '" + m +
+                                                 "' and a 'region_map' both given: a region map is the segmentation "
+                                                 "('map'); drop one");
   }
   for (const char* key : {"region_map", "rig"}) {
     if (!j.contains(key)) continue;
@@ -199,6 +207,12 @@ Status ApplyBakeOptions(const BakeOptions& o, BakeConfig* config) {
   if (o.disk_step > 0.0) config->fit.disk_step = o.disk_step;
   config->force = o.force;
   if (o.skin_weights) config->skin_weights = true;
+  const bool method = o.segmentation == "auto" || o.segmentation == "rig" || o.segmentation == "geometry" ||
+                      o.segmentation == "skeleton";
+  if (method && !o.region_map.empty())
+    return MakeError(Error::Code::kConfig, "segmentation '" + o.segmentation +
+                                               "' and --region-map both given: a region map is the segmentation ('map')");
+  if (method) config->region_map.clear();  // the option overrides the configuration's region map
   if (o.segmentation == "auto") config->segmentation = SegmentMethod::kAuto;
   else if (o.segmentation == "rig") config->segmentation = SegmentMethod::kRig;
   else if (o.segmentation == "geometry") config->segmentation = SegmentMethod::kGeometry;

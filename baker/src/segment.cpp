@@ -449,6 +449,12 @@ Result<Segmentation> SegmentByMap(const Mesh& mesh, const std::string& map_path,
   } catch (const std::exception& e) {
     return MakeError(Error::Code::kConfig, "segment: region map '" + map_path + "' is not valid JSON: " + e.what());
   }
+  if (j.is_object())  // a misspelt key ("Regions") would silently give the paper's five regions
+    for (auto it = j.begin(); it != j.end(); ++it)
+      if (it.key() != "triangle_regions" && it.key() != "vertex_regions" && it.key() != "regions")
+        return MakeError(Error::Code::kConfig, "segment: region map '" + map_path + "': unknown key '" +
+                                                   std::string(it.key(), 0, 64) +
+                                                   "' (known: triangle_regions, vertex_regions, regions)");
   const bool per_triangle = j.is_object() && j.contains("triangle_regions");
   const bool per_vertex = j.is_object() && j.contains("vertex_regions");
   if (per_triangle == per_vertex) {

@@ -203,6 +203,27 @@ TEST_CASE("bake: configuration errors name the key") {
   auto none = ParseBakeConfig(R"({"fold_margin_rel": -0.5})", "cfg.json");
   REQUIRE(none.ok());
   CHECK(none->fold_margin_rel == -1.0);
+  // A whole-number key given a fraction is refused, not truncated ("pivot_poses": 0.5 turned training off).
+  for (const char* bad : {R"({"rays": 80.9})", R"({"pivot_poses": 0.5})"}) {
+    auto b = ParseBakeConfig(bad, "cfg.json");
+    REQUIRE_FALSE(b.ok());
+    CHECK(b.error().message.find("must be a whole number") != std::string::npos);
+  }
+  CHECK(ParseBakeConfig(R"({"rays": 80.0})", "cfg.json").ok());
+  // A segmentation method beside a region map is refused (the map would win silently); "map" with one is fine.
+  auto both = ParseBakeConfig(R"({"segmentation": "geometry", "region_map": "m.json"})", "cfg.json");
+  REQUIRE_FALSE(both.ok());
+  CHECK(both.error().message.find("segmentation 'geometry' and a 'region_map' both given") != std::string::npos);
+  auto map = ParseBakeConfig(R"({"segmentation": "map", "region_map": "m.json"})", "cfg.json");
+  REQUIRE(map.ok());
+  // The options: a method overrides the configuration's map; beside --region-map it is refused.
+  spherechain::baker::BakeOptions method;
+  method.segmentation = "rig";
+  spherechain::baker::BakeConfig overridden = map.value();
+  REQUIRE(spherechain::baker::ApplyBakeOptions(method, &overridden).ok());
+  CHECK(overridden.region_map.empty());
+  method.region_map = "other.json";
+  CHECK_FALSE(spherechain::baker::ApplyBakeOptions(method, &overridden).ok());
 }
 
 TEST_CASE("bake: atomic write leaves the old file intact when the folder is missing, and replaces it otherwise") {

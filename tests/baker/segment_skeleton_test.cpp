@@ -219,6 +219,10 @@ TEST_CASE("segment: a region map naming its regions — a creature's layout, and
   REQUIRE(torso.ok());
   CHECK(torso->layout.paper);
   CHECK(Count(torso.value(), 4) == mesh.triangle_count());
+  // A key the map does not know (a misspelt "regions") is refused, not read as the paper's five regions.
+  auto typo = sc::SegmentByMap(mesh, Write("typo", {{"Regions", regions}, {"triangle_regions", names}}));
+  REQUIRE_FALSE(typo.ok());
+  CHECK(typo.error().message.find("unknown key 'Regions'") != std::string::npos);
   // A region named twice, too few regions.
   auto twice = sc::SegmentByMap(mesh, Write("twice", {{"regions", {"a", "a", "trunk"}}, {"triangle_regions", names}}));
   REQUIRE_FALSE(twice.ok());

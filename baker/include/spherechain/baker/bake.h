@@ -99,7 +99,8 @@ struct BakeConfig {
 };
 
 /// Parses a JSON configuration file; records it in `ctx` (Context::files_read) once read. Errors: kIo,
-/// kConfig (unknown key, wrong type, value out of range — the message names the key).
+/// kConfig (unknown key, wrong type, value out of range, a fraction for a whole-number key, a segmentation
+/// method beside "region_map" — the message names the key).
 Result<BakeConfig> LoadBakeConfig(const std::string& path, Context* ctx = nullptr);
 /// Parses JSON text (as LoadBakeConfig) — `where` names the source in messages.
 Result<BakeConfig> ParseBakeConfig(const std::string& json_text, const std::string& where);
@@ -109,7 +110,9 @@ Result<BakeConfig> ParseBakeConfig(const std::string& json_text, const std::stri
 /// configuration's key of the same meaning (ApplyBakeOptions); empty strings and 0 leave it as configured.
 struct BakeOptions {
   std::string regions;       ///< [opt] "extended" or "paper" (config "regions"; CLI --regions)
-  std::string segmentation;  ///< [opt] "auto", "rig", "geometry", "skeleton" or "map" (config "segmentation")
+  /// [opt] "auto", "rig", "geometry", "skeleton" or "map" (config "segmentation"); a method overrides the
+  /// configuration's region map too, and is refused beside `region_map`
+  std::string segmentation;
   std::string region_map;    ///< [opt] JSON region map path (config "region_map"; implies "map")
   std::string vertices;      ///< [opt] "joined" or "source" (config "vertices"; assimp formats)
   std::string rig;           ///< [opt] MakeHuman .mhskel path (config "rig")
@@ -120,8 +123,9 @@ struct BakeOptions {
 
 /// Applies `options` over `*config` (the configuration file's, or the defaults). Errors: kConfig, naming the
 /// option: a value outside its choices, a disk step that is negative or not finite, segmentation "map" with
-/// no region map in either. `*config` is unspecified after an error. The one place the CLI and Python turn
-/// options into a BakeConfig, so both bake the same bytes from the same input and options.
+/// no region map in either, a segmentation method and `region_map` both given. `*config` is unspecified
+/// after an error. The one place the CLI and Python turn options into a BakeConfig, so both bake the same
+/// bytes from the same input and options.
 Status ApplyBakeOptions(const BakeOptions& options, BakeConfig* config);
 
 /// The canonical JSON of a configuration (stable key order), hashed into the asset. With `layout`, the
