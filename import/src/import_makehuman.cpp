@@ -62,10 +62,22 @@ std::vector<std::string_view> Tokens(std::string_view s) {
   return out;
 }
 
+/// A coordinate: read as a double (an exporter writing doubles may write 1e-50), then rounded to float — a
+/// value below float's range becomes 0 or a denormal, one above it infinite (refused as non-finite later,
+/// with the vertex named). false only when `t` is not a number.
 bool ParseFloat(std::string_view t, float& out) {
   if (!t.empty() && t.front() == '+') t.remove_prefix(1);
-  const auto r = std::from_chars(t.data(), t.data() + t.size(), out);
-  return r.ec == std::errc() && r.ptr == t.data() + t.size();
+  double d = 0;
+  const auto r = std::from_chars(t.data(), t.data() + t.size(), d);
+  const bool out_of_double = r.ec == std::errc::result_out_of_range;  // 1e-400 (→ 0) or 1e400 (→ inf)
+  if ((r.ec != std::errc() && !out_of_double) || r.ptr != t.data() + t.size()) return false;
+  if (out_of_double) {
+    const size_t e = t.find_first_of("eE");
+    const bool tiny = e != std::string_view::npos && e + 1 < t.size() && t[e + 1] == '-';
+    d = tiny ? 0.0 : (t.front() == '-' ? -HUGE_VAL : HUGE_VAL);
+  }
+  out = static_cast<float>(d);
+  return true;
 }
 
 /// Two passes: the first finds whether the wanted group exists in a MakeHuman base mesh (a `# basemesh`

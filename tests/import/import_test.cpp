@@ -323,6 +323,20 @@ TEST_CASE("import: OBJ with a NaN coordinate, no faces, or an out-of-range index
     REQUIRE(!r.ok());
     CHECK(r.error().code == Error::Code::kInvalidMesh);
   }
+  SUBCASE("coordinates beyond float's range: below it read as 0 or a denormal, above it non-finite (refused)") {
+    auto r = ImportMesh(tmp.Write("tiny.obj", "v 1e-50 0 -1e-400\nv 1 0 1e-40\nv 0 1 0\nf 1 2 3\n"));
+    REQUIRE_MESSAGE(r.ok(), r.error().message);
+    CHECK(r->positions[0] == 0.0f);
+    CHECK(r->positions[2] == 0.0f);
+    CHECK(r->positions[5] == 1e-40f);
+    for (const char* big : {"1e50", "-1e400"}) {
+      auto b = ImportMesh(tmp.Write("big.obj", std::string("v 0 0 0\nv 1 ") + big + " 0\nv 0 1 0\nf 1 2 3\n"));
+      REQUIRE(!b.ok());
+      CHECK(b.error().code == Error::Code::kInvalidMesh);
+      CHECK(b.error().message.find("vertex 1 has a non-finite coordinate") != std::string::npos);
+    }
+    CHECK(!ImportMesh(tmp.Write("word.obj", "v 0 0 0\nv 1 x 0\nv 0 1 0\nf 1 2 3\n")).ok());
+  }
   SUBCASE("no faces") {
     auto r = ImportMesh(tmp.Write("nofaces.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n"));
     REQUIRE(!r.ok());
