@@ -3,7 +3,10 @@
 
 #include <unistd.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 
 #include "commands.h"
@@ -33,14 +36,29 @@ std::string LengthText(double d, const evaluate::CheckReport& r) {
   return b;
 }
 
-// The command that writes a viewer page of `clip` (its frames are CheckClips' frames).
+// `s` as one POSIX shell word: in single quotes, a quote inside as '\''; bare when only safe characters.
+std::string ShellWord(const std::string& s) {
+  const bool safe = !s.empty() && std::all_of(s.begin(), s.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || std::strchr("/._-+,:=@%", c);
+  });
+  if (safe) return s;
+  std::string o = "'";
+  for (const char c : s) o += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return o + "'";
+}
+
+// The command that writes a viewer page of `clip` (its frames are CheckClips' frames); with an asset baked
+// for this run only, the bake first.
 std::string ViewCommand(const CheckPage& a, const evaluate::CheckClip& clip, const std::vector<std::string>& poses) {
-  std::string cmd = "spherechain view " + a.asset_name + " --mesh " + a.character;
+  const std::string rig = a.rig.empty() ? "" : " --rig " + ShellWord(a.rig);
+  std::string cmd = a.baked ? "spherechain bake " + ShellWord(a.character) + rig + " -o check.sphc && spherechain view check.sphc"
+                            : "spherechain view " + ShellWord(a.asset_name);
+  cmd += " --mesh " + ShellWord(a.character) + rig;
   if (clip.name == "morph" && !poses.empty()) {
     cmd += " --morph";
-    for (const std::string& p : poses) cmd += " " + p;
+    for (const std::string& p : poses) cmd += " " + ShellWord(p);
   } else {
-    cmd += " --clip '" + clip.name + "'";
+    cmd += " --clip " + ShellWord(clip.name);
   }
   if (a.key_times) return cmd + " -o view.html  # (--key-times: the viewer's frames are uniform, not these)";
   return cmd + " --frames " + std::to_string(clip.frames) + " -o view.html";

@@ -15,6 +15,8 @@ namespace spherechain::cli {
 struct CheckPage {
   std::string path, character, asset_name;
   bool key_times = false;
+  std::string rig;      ///< --rig, passed on to the viewer's command ("" none)
+  bool baked = false;   ///< the asset was baked for this run and kept nowhere (--no-cache): the command bakes it
 };
 
 /// "1.23 cm (0.7 %)" when the report knows its units, else "0.0123 (0.7 %)": a depth and its share of the height.

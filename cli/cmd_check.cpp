@@ -238,7 +238,8 @@ int RunCheck(const CheckArgs& a) {
     Out("wrote %s\n", a.junit.c_str());
   }
   if (!a.html.empty()) {
-    if (!WriteCheckHtml({a.html, a.character, asset_name, a.key_times}, asset.view, mesh, options, r, &error)) return BadInput("--html: " + error);
+    const CheckPage page{a.html, a.character, asset_name, a.key_times, a.rig, asset_name == a.character + " (baked)"};
+    if (!WriteCheckHtml(page, asset.view, mesh, options, r, &error)) return BadInput("--html: " + error);
     Out("wrote %s\n", a.html.c_str());
   }
   return r.failed() ? kExitFailed : 0;
