@@ -117,6 +117,8 @@ Result<ObjData> ReadObj(const std::string& path, const std::string& text, const 
 
   bool in_group = !d.has_group;  // no such group: keep every face
   std::vector<int64_t> corners;
+  int64_t max_corner = -1;  // the largest vertex a kept face references (0-based), and its line: checked at the end
+  size_t max_corner_line = 0;  // (a face may reference a vertex the file gives later)
   Status s = for_lines([&](std::string_view line, size_t line_no) -> Status {
     if (line.empty()) return Ok{};
     if (line[0] == '#') {
@@ -153,6 +155,7 @@ Result<ObjData> ReadObj(const std::string& path, const std::string& text, const 
           return FileError(Error::Code::kInvalidMesh, path,
                            where + ": face references vertex " + std::string(v) + " (out of range)");
         corners.push_back(idx - 1);
+        if (idx - 1 > max_corner) max_corner = idx - 1, max_corner_line = line_no;
       }
       for (size_t c = 1; c + 1 < corners.size(); ++c) {
         for (int64_t i : {corners[0], corners[c], corners[c + 1]}) {
@@ -166,12 +169,11 @@ Result<ObjData> ReadObj(const std::string& path, const std::string& text, const 
   });
   if (!s.ok()) return s.error();
   const size_t nv = d.all_positions.size() / 3;
-  for (size_t t = 0; t < d.triangles.size(); ++t) {
-    if (d.triangles[t] >= nv)
-      return FileError(Error::Code::kInvalidMesh, path,
-                       "triangle " + std::to_string(t / 3) + " references vertex " + std::to_string(d.triangles[t] + 1) +
-                           " (1-based) but the file has " + std::to_string(nv) + " vertices");
-  }
+  if (max_corner >= static_cast<int64_t>(nv))
+    return FileError(Error::Code::kInvalidMesh, path,
+                     "line " + std::to_string(max_corner_line) + ": face references vertex " +
+                         std::to_string(max_corner + 1) + " (1-based) but the file has " + std::to_string(nv) +
+                         " vertices");
   return d;
 }
 

@@ -344,10 +344,11 @@ TEST_CASE("import: OBJ with a NaN coordinate, no faces, or an out-of-range index
     CHECK(r.error().message.find("no triangles") != std::string::npos);
   }
   SUBCASE("index past the end") {
-    auto r = ImportMesh(tmp.Write("range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n"));
+    auto r = ImportMesh(tmp.Write("range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 4\nf 1 2 3\n"));
     REQUIRE(!r.ok());
     CHECK(r.error().code == Error::Code::kInvalidMesh);
-    CHECK(r.error().message.find("vertex 4") != std::string::npos);
+    CHECK(r.error().message.find("line 5: face references vertex 4 (1-based) but the file has 3 vertices") !=
+          std::string::npos);
   }
   SUBCASE("index 0 and a relative index before the first vertex") {
     auto r0 = ImportMesh(tmp.Write("zero.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n"));
