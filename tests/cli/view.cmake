@@ -107,3 +107,22 @@ foreach(case "12;some" "0;none")
     message(FATAL_ERROR "frame ${frame}: screenshot check failed (${png})")
   endif()
 endforeach()
+
+# Names from the input files are text, never markup: a key pose named like an HTML element (the page shows
+# the frame's label) stays text in the page, and its onerror never runs.
+file(READ ${CMAKE_CURRENT_LIST_DIR}/../../data/poses/makehuman/hand_on_shoulder.json pose)
+string(REGEX REPLACE "\"name\": \"[^\"]*\"" "\"name\": \"<img src=x onerror=\\\\\"document.body.dataset.pwned=1\\\\\">\""
+       pose "${pose}")
+file(WRITE ${WORK}/evil_pose.json "${pose}")
+execute_process(COMMAND ${CLI} view ${ASSET} --mesh ${MESH} --morph ${WORK}/evil_pose.json --frames 4
+                        -o ${WORK}/evil.html RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "view with a pose named like markup failed (${rc}):\n${out}${err}")
+endif()
+execute_process(COMMAND ${chrome} --dump-dom "file://${WORK}/evil.html#frame=2&size=600x400" RESULT_VARIABLE rc
+                OUTPUT_VARIABLE dom ERROR_VARIABLE err TIMEOUT 120)
+string(REGEX MATCH "<body[^>]*>" body "${dom}")
+if(NOT body MATCHES "data-status=\"ready\"" OR body MATCHES "pwned" OR NOT dom MATCHES "&lt;img src=x")
+  message(FATAL_ERROR "a pose's name became markup in the page (or the page did not load): '${body}'")
+endif()
+message(STATUS "a pose named like markup is shown as text")
