@@ -28,36 +28,37 @@ int RunExport(const ExportArgs& a) {
   LoadedAsset asset;
   import::Mesh mesh;
   std::string error;
-  if (animated) {
-    if (!OpenAssetAndMesh(a.asset, a.anim.mesh, a.rig, &asset, &mesh, &error)) return Fail(error);
-  } else {
-    if (!LoadAssetFile(a.asset, &asset, &error)) return Fail(error);
-    import::ImportOptions opts;
-    opts.rig_path = a.rig;
-    opts.read_clips = false;
-    opts.vertices = import::ContractForReimport(asset.view, a.anim.mesh);
-    import::Context ctx = MakeLoggingContext();
-    auto imported = import::ImportMesh(a.anim.mesh, opts, &ctx);
-    if (!imported.ok()) return Fail(imported.error());
-    mesh = std::move(imported).value();
-  }
-  // The PNG first: it needs an outside tool (rsvg-convert), so when it fails no glTF is left behind.
+  // The mesh checked against the asset's fingerprint (a mesh of other triangles would be coloured wrongly).
+  if (!OpenAssetAndMesh(a.asset, a.anim.mesh, a.rig, &asset, &mesh, &error)) return Fail(error);
   std::string png = a.png;
   if (png.empty()) png = std::filesystem::path(a.output).replace_extension(".png").string();
+  // Everything that can be refused before anything is written: the animation, the output folders.
+  AnimationSource anim;
+  if (animated && !OpenAnimation(mesh, a.anim, &anim, &error)) return Fail(error);
+  for (const std::string* out : std::initializer_list<const std::string*>{&a.output, &png}) {
+    const std::filesystem::path dir = std::filesystem::path(*out).parent_path();
+    if (!dir.empty() && !std::filesystem::is_directory(dir))
+      return Fail("cannot write '" + *out + "': folder '" + dir.string() + "' does not exist");
+  }
+  // The PNG first: it needs an outside tool (rsvg-convert), so when it fails no glTF is left behind; when
+  // the glTF then fails, the PNG is removed.
   if (auto s = playback::RenderDebugPng(mesh, asset.view, png); !s.ok()) return Fail(s.error());
+  const auto fail_after_png = [&](const auto& why) {
+    std::error_code ec;
+    std::filesystem::remove(png, ec);
+    return Fail(why);
+  };
   if (animated) {
-    AnimationSource anim;
-    if (!OpenAnimation(mesh, a.anim, &anim, &error)) return Fail(error);
     playback::AnimatedGltfStats stats;
     const runtime::RefitMode mode = a.refit == "paper" ? runtime::RefitMode::kPaper : runtime::RefitMode::kPivotFrame;
     if (auto s = playback::ExportAnimatedGltf(mesh, asset.view, anim, a.output, mode, &stats); !s.ok())
-      return Fail(s.error());
+      return fail_after_png(s.error());
     Out("wrote %s (animated glTF: %s, %u frames; skinned mesh coloured by region, %u joints' nodes, %u "
                 "spheres as animated nodes; %u channels, %.1f MB)\n",
                 a.output.c_str(), anim.Describe().c_str(), stats.frames, stats.skeleton_nodes, stats.spheres,
                 stats.channels, double(stats.bytes) / 1e6);
   } else {
-    if (auto s = playback::ExportDebugGltf(mesh, asset.view, a.output); !s.ok()) return Fail(s.error());
+    if (auto s = playback::ExportDebugGltf(mesh, asset.view, a.output); !s.ok()) return fail_after_png(s.error());
   }
   if (animated)
     Out("wrote %s (front and side views, bind pose)\n", png.c_str());

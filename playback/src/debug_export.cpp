@@ -24,8 +24,11 @@ namespace spherechain::playback {
 namespace {
 
 // Element i's region in an optional Asset.sphere_regions / triangle_regions (LoadAsset: #S / #T entries when
-// present); past every region (drawn grey, as the trunk) when the asset has none.
-uint32_t RegionAt(const flatbuffers::Vector<uint8_t>* regions, uint32_t i) { return regions ? regions->Get(i) : 0xffu; }
+// present); past every region (drawn grey, as the trunk) when the asset has none or i is past its entries (a
+// mesh with more triangles than the asset: the pictures draw it, never read past the table).
+uint32_t RegionAt(const flatbuffers::Vector<uint8_t>* regions, uint32_t i) {
+  return regions && i < regions->size() ? regions->Get(i) : 0xffu;
+}
 
 
 Eigen::Vector3f UpOf(UpAxis a) {

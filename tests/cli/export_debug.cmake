@@ -24,7 +24,7 @@ if(NOT n EQUAL 1 OR NOT name STREQUAL "morph" OR channels LESS 256)
 endif()
 execute_process(COMMAND ${CLI} export-debug ${ASSET} --mesh ${MESH} --clip Walk -o ${WORK}/bad.gltf
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-if(rc EQUAL 0 OR NOT "${out}${err}" MATCHES "no clip named 'Walk'" OR EXISTS ${WORK}/bad.gltf)
+if(rc EQUAL 0 OR NOT "${out}${err}" MATCHES "no clip named 'Walk'" OR EXISTS ${WORK}/bad.gltf OR EXISTS ${WORK}/bad.png)
   message(FATAL_ERROR "export-debug --clip Walk on MakeHuman: expected a failure naming the clip:\n${out}${err}")
 endif()
 execute_process(COMMAND ${CLI} export-debug ${ASSET} --mesh ${MESH} --clip Walk --morph arms_crossed -o ${WORK}/bad.gltf
@@ -33,3 +33,20 @@ if(rc EQUAL 0 OR NOT "${out}${err}" MATCHES "exclude each other" OR EXISTS ${WOR
   message(FATAL_ERROR "export-debug --clip with --morph: expected a failure:\n${out}${err}")
 endif()
 message(STATUS "morph: ${out} (${channels} channels)")
+
+# Nothing is written when the export is refused: an output folder that does not exist (the PNG would have been
+# written first), and a mesh that is not the asset's (static export too: checked against the fingerprint).
+execute_process(COMMAND ${CLI} export-debug ${ASSET} --mesh ${MESH} -o ${WORK}/no/such/x.gltf --png ${WORK}/ok.png
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(rc EQUAL 0 OR NOT "${out}${err}" MATCHES "does not exist" OR EXISTS ${WORK}/ok.png)
+  message(FATAL_ERROR "export-debug into a missing folder: expected a failure and no PNG:\n${out}${err}")
+endif()
+get_filename_component(shared ${MESH} DIRECTORY)
+set(other ${shared}/../gltf/CesiumMan.gltf)
+if(EXISTS ${other})
+  execute_process(COMMAND ${CLI} export-debug ${ASSET} --mesh ${other} -o ${WORK}/other.gltf
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(rc EQUAL 0 OR NOT "${out}${err}" MATCHES "does not match asset" OR EXISTS ${WORK}/other.gltf OR EXISTS ${WORK}/other.png)
+    message(FATAL_ERROR "export-debug with another character's mesh: expected a failure, nothing written:\n${out}${err}")
+  endif()
+endif()
