@@ -64,6 +64,13 @@ Status MorphLocals(const Skin& skin, const Pose& key, float t, std::vector<Trans
     Quat q;
     if (t == 0.5f) {
       q = QuatMultiply(rest, delta);  // B(½) = key; skip the rounding of two slerps
+    } else if (delta[3] < 0.01f) {
+      // Within 1.2° of a half turn, C = rest·δ² is (nearly) −rest, where slerp's arc is undefined: the closed
+      // form B(t) = rest·δ^(4t(1−t)) (QuadraticBezierRotation's identity for P0 = P2) instead.
+      const float v = std::sqrt(delta[0] * delta[0] + delta[1] * delta[1] + delta[2] * delta[2]);
+      const float half = std::atan2(v, delta[3]) * 4.0f * t * (1.0f - t);
+      const float s = std::sin(half) / v;
+      q = QuatMultiply(rest, Quat{delta[0] * s, delta[1] * s, delta[2] * s, std::cos(half)});
     } else {
       const Quat control = QuatMultiply(rest, QuatMultiply(delta, delta));
       q = QuadraticBezierRotation(rest, control, rest, t);

@@ -213,6 +213,19 @@ TEST_CASE("animation: morph of the two-bone skin is the rest pose at frame 0 and
   const float a = 67.5f * 3.14159265f / 180.0f;
   CHECK(out[3] == doctest::Approx(-std::sin(a)).epsilon(1e-5));
   CHECK(out[4] == doctest::Approx(1 + std::cos(a)).epsilon(1e-5));
+
+  // A key of a half turn (the most a pose may give): the excursion sweeps 0 → 135° → 180° → 135° → 0, as
+  // below it (slerp toward C = rest·δ² = −rest has no arc: it used to stay at rest but for the key frame).
+  auto half_turn = sb::ParsePose(R"({"name": "fold", "rotations": {"child": {"axis": [0, 0, 1], "degrees": 180}}})",
+                                 *mesh.skin, "fold.json");
+  REQUIRE(half_turn.ok());
+  const std::vector<sb::Pose> folds = {half_turn.value(), half_turn.value()};
+  for (uint32_t f : {1u, 3u}) {  // t = ¼ and ¾: 180°·4·¼·¾ = 135°
+    REQUIRE(sb::SkinMorphFrame(mesh, folds, f, 8, &scratch, out.data(), out.size()).ok());
+    const float b = 135.0f * 3.14159265f / 180.0f;
+    CHECK(out[3] == doctest::Approx(-std::sin(b)).epsilon(1e-5));
+    CHECK(out[4] == doctest::Approx(1 + std::cos(b)).epsilon(1e-5));
+  }
 }
 
 TEST_CASE("animation: MakeHuman morph hits each key pose exactly at its mid frame, rest at frame 0") {

@@ -38,7 +38,10 @@ namespace spherechain::playback {
 /// Where a frame of the morph lies: which key pose's excursion and the Bézier parameter in it.
 struct MorphFrame {
   uint32_t key = 0;  ///< index into the key poses
-  float t = 0.0f;    ///< Bézier parameter, [0, 1); ½ at the key's mid frame
+  /// Bézier parameter: i/n for an excursion of an even number n of frames, i/(n − 1) for an odd one (so that
+  /// its mid frame is ½, the key), whose last frame is then t = 1 — the rest pose, as the next excursion's
+  /// first frame is. ½ at the key's mid frame.
+  float t = 0.0f;
 };
 
 /// The schedule above. Errors: kConfig when key_count == 0, frame_count < 2·key_count (each
