@@ -32,6 +32,10 @@ struct AnimationArgs {
   bool morph_requested() const { return !morph.empty() || (morph_option && morph_option->count() > 0); }
 };
 
+/// The files the animation may read besides the mesh, for OutputsClash: the --morph arguments, every file in
+/// those that are folders, and every file in --poses-dir (where pose names and a bare --morph are looked up).
+std::vector<std::string> PoseInputs(const AnimationArgs& a);
+
 /// Registers the options every animating command shares on `sub` — ASSET (positional, an existing
 /// file), --mesh (required, existing), --clip, --morph, --poses-dir, --frames and --rig — into `asset`,
 /// `rig` and `anim` (--mesh fills anim->mesh). The pointers must outlive the parse.

@@ -32,7 +32,7 @@ struct EvaluateArgs {
 
 int RunEvaluate(const EvaluateArgs& a) {
   if (int clash = OutputsClash({{"--json", &a.json}, {"--png", &a.png}},
-                               {{"ASSET", &a.asset}, {"--mesh", &a.anim.mesh}, {"--rig", &a.rig}}, a.anim.morph))
+                               {{"ASSET", &a.asset}, {"--mesh", &a.anim.mesh}, {"--rig", &a.rig}}, PoseInputs(a.anim)))
     return clash;
   // ---- arguments that need no file ---------------------------------------------------------------
   if (a.min_recall_option && a.min_recall_option->count() > 0 && !(a.min_recall >= 0.0 && a.min_recall <= 1.0))

@@ -22,7 +22,7 @@ struct ExportArgs {
 
 int RunExport(const ExportArgs& a) {
   if (int clash = OutputsClash({{"-o", &a.output}, {"--png", &a.png}},
-                               {{"ASSET", &a.asset}, {"--mesh", &a.anim.mesh}, {"--rig", &a.rig}}, a.anim.morph))
+                               {{"ASSET", &a.asset}, {"--mesh", &a.anim.mesh}, {"--rig", &a.rig}}, PoseInputs(a.anim)))
     return clash;
   const bool animated = !a.anim.clip.empty() || a.anim.morph_requested();
   LoadedAsset asset;

@@ -201,7 +201,7 @@ nlohmann::json PlayJson(const PlayArgs& a, const runtime::AssetView& view, const
 
 int RunPlay(const PlayArgs& a) {
   if (int clash = OutputsClash({{"--json", &a.json}}, {{"ASSET", &a.asset}, {"--mesh", &a.anim.mesh}, {"--rig", &a.rig}},
-                               a.anim.morph))
+                               PoseInputs(a.anim)))
     return clash;
   LoadedAsset asset;
   import::Mesh mesh;

@@ -44,7 +44,7 @@ struct ViewArgs {
 
 int RunView(const ViewArgs& a) {
   if (int clash = OutputsClash({{"-o", &a.output}}, {{"ASSET", &a.asset}, {"--mesh", &a.anim.mesh}, {"--rig", &a.rig}},
-                               a.anim.morph))
+                               PoseInputs(a.anim)))
     return clash;
   // three.js first: without it nothing can be written, and the message says how to get it.
   std::string looked;

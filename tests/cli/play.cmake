@@ -105,3 +105,17 @@ execute_process(COMMAND ${CLI} play ${ASSET} --mesh ${MESH} --frames 2 --narrow-
 if(rc EQUAL 0 OR NOT "${out}${err}" MATCHES "narrow-behind" OR EXISTS ${WORK}/np_bad.json)
   message(FATAL_ERROR "--narrow-behind -1: expected a refusal naming the option and no output, got ${rc}:\n${out}${err}")
 endif()
+
+# A report may not overwrite a key pose the morph reads, named or found in a folder (--poses-dir, --morph DIR).
+file(MAKE_DIRECTORY ${WORK}/poses)
+file(COPY ${CMAKE_CURRENT_LIST_DIR}/../../data/poses/makehuman/hand_on_shoulder.json DESTINATION ${WORK}/poses)
+file(SHA256 ${WORK}/poses/hand_on_shoulder.json before)
+foreach(morph "--morph;--poses-dir;${WORK}/poses" "--morph;${WORK}/poses")
+  execute_process(COMMAND ${CLI} play ${ASSET} --mesh ${MESH} ${morph} --frames 4
+                          --json ${WORK}/poses/hand_on_shoulder.json
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  file(SHA256 ${WORK}/poses/hand_on_shoulder.json after)
+  if(NOT rc EQUAL 2 OR NOT "${out}${err}" MATCHES "is also an input" OR NOT before STREQUAL after)
+    message(FATAL_ERROR "play ${morph} --json <a pose it reads>: expected exit 2, the pose kept; got ${rc}:\n${out}${err}")
+  endif()
+endforeach()
