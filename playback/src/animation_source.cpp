@@ -88,7 +88,8 @@ Result<Animation> OpenAnimation(const Mesh& mesh, const AnimationRequest& a) {
     if (a.morph.empty()) {
       if (dir.empty()) {
         const std::string character = DefaultPoseCharacter(mesh, a.mesh_name);
-        return fail("'" + a.mesh_name + "' has no clips and no default key poses (data/poses/" + character +
+        return fail("'" + a.mesh_name + "' has " + (mesh.clips.empty() ? "no clips and " : "") +
+                    "no default key poses (data/poses/" + character +
                     " not found in the installed share/spherechain/, the source tree or upward from the current "
                     "directory); pass --morph POSE.json... or --poses-dir DIR");
       }
