@@ -185,6 +185,27 @@ Tri Embed(const Tri& t, int plane, float c) {
 
 constexpr int kPairsPerCategory = 40000;
 
+/// ±m·2^e with m in [1, 2) of 1 to 24 mantissa bits.
+float ScaledFloat(std::mt19937& rng, int e) {
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  const int nb = std::uniform_int_distribution<int>(1, 24)(rng);
+  const float m = std::ldexp(std::round(std::ldexp(1.0f + unit(rng), nb)), -nb);
+  return (rng() % 2 ? -1.0f : 1.0f) * std::ldexp(m, e);
+}
+
+/// The pattern of a fuzzed bind pose: s·(1, 4, 16) with s = ScaledFloat at 2^−140..2^122 (on one ray through
+/// the origin where the products are exact, denormals where they are not).
+P3 RayPoint(std::mt19937& rng) {
+  const float s = ScaledFloat(rng, std::uniform_int_distribution<int>(-140, 122)(rng));
+  return P3{s, 4.0f * s, 16.0f * s};
+}
+
+/// A mesh-like point: coordinates k/10, k in −9..9.
+P3 MeshPoint(std::mt19937& rng) {
+  std::uniform_int_distribution<int> tenth(-9, 9);
+  return P3{float(tenth(rng)) / 10, float(tenth(rng)) / 10, float(tenth(rng)) / 10};
+}
+
 /// Coordinates 1e-30..1e30 (and 1 + 1 ulp): differences of these are often inexact in double.
 constexpr float kWidePalette[] = {0.0f,       1e-30f, -1e-30f, 3e-8f, 1.0f,  -1.0f,
                                   1.0000001f, 2.5f,   1e8f,    -1e8f, 1e30f, -1e30f};
@@ -488,16 +509,7 @@ TEST_CASE("heavy: triangle_intersect: agrees with CGAL on points along one ray o
   // k/10. Orientations mixing 1e-40 and 1e36 cancel far below double's rounding of the differences: the
   // adaptive stages of the exact orient3d (certified with ε² bounds) and the full expansions decide them.
   std::mt19937 rng(20261126u);
-  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
-  std::uniform_int_distribution<int> exponent(-140, 122), mantissa_bits(1, 24), tenth(-9, 9);
-  auto ray_point = [&] {
-    const int nb = mantissa_bits(rng);
-    const float m = std::ldexp(std::round(std::ldexp(1.0f + unit(rng), nb)), -nb);
-    const float s = (rng() % 2 ? -1.0f : 1.0f) * std::ldexp(m, exponent(rng));
-    return P3{s, 4.0f * s, 16.0f * s};
-  };
-  auto mesh_point = [&] { return P3{float(tenth(rng)) / 10, float(tenth(rng)) / 10, float(tenth(rng)) / 10}; };
-  auto vertex = [&] { return rng() % 2 ? ray_point() : mesh_point(); };
+  auto vertex = [&] { return rng() % 2 ? RayPoint(rng) : MeshPoint(rng); };
   Tally tally;
   for (int i = 0; i < kPairsPerCategory; ++i) {
     const Tri a = {vertex(), vertex(), vertex()};
@@ -505,7 +517,7 @@ TEST_CASE("heavy: triangle_intersect: agrees with CGAL on points along one ray o
     if (i % 2) b[0] = a[int(rng() % 3)];  // sharing a vertex: touching at least, when neither is degenerate
     Compare(a, b, rng, &tally);
   }
-  Report("(i) points along one ray, 2^-140..2^122, beside mesh points", tally);
+  Report("(j) points along one ray, 2^-140..2^122, beside mesh points", tally);
   CHECK(tally.intersecting > 100);
   CHECK(tally.disjoint > 100);
   CHECK(tally.needed_exact > 1000);
@@ -516,26 +528,14 @@ TEST_CASE("heavy: triangle_intersect: each stage of the exact orientation agrees
   // adaptive stages (rounded differences, then their tail correction) must decide or pass on: every sign
   // equals the full expansions' and CGAL's, and each stage decides a share of the cases.
   std::mt19937 rng(20261127u);
-  std::uniform_real_distribution<float> unit(0.0f, 1.0f), coef(-1.0f, 2.0f);
-  std::uniform_int_distribution<int> ray_exponent(-140, 122), mantissa_bits(1, 24), exponent(-60, 60),
-      spread(1, 4), tenth(-9, 9);
-  auto mixed_coord = [&] {
-    const int nb = mantissa_bits(rng);
-    const float m = std::ldexp(std::round(std::ldexp(1.0f + unit(rng), nb)), -nb);
-    return (rng() % 2 ? -1.0f : 1.0f) * std::ldexp(m, exponent(rng) / spread(rng));
-  };
-  auto ray_point = [&] {
-    const int nb = mantissa_bits(rng);
-    const float m = std::ldexp(std::round(std::ldexp(1.0f + unit(rng), nb)), -nb);
-    const float s = (rng() % 2 ? -1.0f : 1.0f) * std::ldexp(m, ray_exponent(rng));
-    return P3{s, 4.0f * s, 16.0f * s};
-  };
-  auto mesh_point = [&] { return P3{float(tenth(rng)) / 10, float(tenth(rng)) / 10, float(tenth(rng)) / 10}; };
+  std::uniform_real_distribution<float> coef(-1.0f, 2.0f);
+  std::uniform_int_distribution<int> exponent(-60, 60), spread(1, 4);
+  auto mixed_coord = [&] { return ScaledFloat(rng, exponent(rng) / spread(rng)); };
   uint64_t decided[4] = {0, 0, 0, 0};
   for (int i = 0; i < 4 * kPairsPerCategory; ++i) {
     std::array<P3, 4> p;
     if (i % 2) {  // the fuzzed bind pose's pattern: points along one ray beside mesh points
-      for (P3& v : p) v = rng() % 2 ? ray_point() : mesh_point();
+      for (P3& v : p) v = rng() % 2 ? RayPoint(rng) : MeshPoint(rng);
     } else {  // d near the plane of (a, b, c), rounded to float, at mixed scales
       for (int v = 0; v < 3; ++v) p[v] = {mixed_coord(), mixed_coord(), mixed_coord()};
       const float s = coef(rng), t = coef(rng);
