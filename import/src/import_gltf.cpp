@@ -435,8 +435,10 @@ Result<Mesh> ImportGltf(const std::string& path, const ImportOptions& options, C
           if (!wr.ok()) return wr.error();
           for (size_t i = 0; i < std::min(jr->size(), wr->size()); ++i) {
             uint32_t joint = 0;
-            if (wr.value()[i] > 0.0 && AsIndex(jr.value()[i], static_cast<double>(gs.joints.size()), &joint))
-              any_weighted = weighted[joint] = 1;
+            if (wr.value()[i] > 0.0 && AsIndex(jr.value()[i], static_cast<double>(gs.joints.size()), &joint)) {
+              weighted[joint] = 1;
+              any_weighted = true;
+            }
           }
         }
       std::vector<Eigen::Matrix4d> joint_binds;
@@ -472,6 +474,23 @@ Result<Mesh> ImportGltf(const std::string& path, const ImportOptions& options, C
       if (!pos.ok()) return pos.error();
       if (model.accessors[static_cast<size_t>(pos_it->second)].type != TINYGLTF_TYPE_VEC3)
         return FileError(Error::Code::kFormat, path, what + " POSITION is not VEC3");
+      // Morph targets at their default weights (the node's, else the mesh's; glTF 2.0 §3.7.2.2): the shape a
+      // viewer shows with no animation playing is the bind pose.
+      const std::vector<double>& morph_weights = !gn.weights.empty() ? gn.weights : gm.weights;
+      for (size_t ti = 0; ti < prim.targets.size() && ti < morph_weights.size(); ++ti) {
+        const double w = morph_weights[ti];
+        if (!std::isfinite(w))
+          return FileError(Error::Code::kFormat, path, what + ": morph target " + std::to_string(ti) + "'s weight is not finite");
+        const auto target_it = prim.targets[ti].find("POSITION");
+        if (w == 0.0 || target_it == prim.targets[ti].end()) continue;
+        const std::string target = what + " morph target " + std::to_string(ti) + " POSITION";
+        Result<std::vector<double>> delta = ReadAccessor(model, target_it->second, path, target, max_values);
+        if (!delta.ok()) return delta.error();
+        if (delta->size() != pos->size())
+          return FileError(Error::Code::kFormat, path, target + " has " + std::to_string(delta->size() / 3) +
+                                                           " values, POSITION " + std::to_string(pos->size() / 3));
+        for (size_t i = 0; i < pos->size(); ++i) pos.value()[i] += w * delta.value()[i];
+      }
       const size_t nv = pos->size() / 3;
       std::vector<uint32_t> idx;
       if (prim.indices >= 0) {

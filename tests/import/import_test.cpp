@@ -491,3 +491,35 @@ TEST_CASE("import: a MakeHuman rig given for a file that is not an OBJ is kConfi
   CHECK(r.error().code == Error::Code::kConfig);
   CHECK(r.error().message.find("applies to an OBJ mesh") != std::string::npos);
 }
+
+TEST_CASE("import: a glTF's morph targets are applied at their default weights (node's, else mesh's)") {
+  TempDir tmp("morph_gltf");
+  std::string bin;
+  const float positions[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  const uint32_t indices[3] = {0, 1, 2};
+  const float delta[9] = {0, 0, 0, 0, 0, 0, 0, 1, 0};  // the target lifts vertex 2 by 1 in y
+  bin.append(reinterpret_cast<const char*>(positions), 36);
+  bin.append(reinterpret_cast<const char*>(indices), 12);
+  bin.append(reinterpret_cast<const char*>(delta), 36);
+  tmp.Write("data.bin", bin);
+  auto gltf = [&](const std::string& mesh_weights, const std::string& node_weights) {
+    return tmp.Write("morph.gltf",
+                     R"({"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0)" +
+                         node_weights + R"(}],"meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1,)" +
+                         R"("targets":[{"POSITION":2}]}])" + mesh_weights + R"(}],)" +
+                         R"("accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3"},)" +
+                         R"({"bufferView":1,"componentType":5125,"count":3,"type":"SCALAR"},)" +
+                         R"({"bufferView":2,"componentType":5126,"count":3,"type":"VEC3"}],)" +
+                         R"("bufferViews":[{"buffer":0,"byteLength":36},{"buffer":0,"byteOffset":36,"byteLength":12},)" +
+                         R"({"buffer":0,"byteOffset":48,"byteLength":36}],"buffers":[{"uri":"data.bin","byteLength":84}]})");
+  };
+  auto y2 = [&](const std::string& path) {
+    auto r = ImportMesh(path);
+    REQUIRE_MESSAGE(r.ok(), r.error().message);
+    return r->positions[7];
+  };
+  CHECK(y2(gltf("", "")) == 1.0f);                                // no weights: the base shape
+  CHECK(y2(gltf(R"(,"weights":[0.5])", "")) == 1.5f);            // the mesh's default weight
+  CHECK(y2(gltf(R"(,"weights":[0.5])", R"(,"weights":[1])")) == 2.0f);  // the node's overrides it
+}
+

@@ -86,7 +86,9 @@ struct ImportOptions {
 /// Reads a character file.
 /// - `.gltf` / `.glb`: tinygltf. Primitives of every mesh node in the default scene, visited
 ///   depth-first in node order, concatenated in (node, primitive) order; node global transforms are
-///   applied so the bind pose is assembled. Skin joints, inverse binds, JOINTS_0/WEIGHTS_0 and clips.
+///   applied so the bind pose is assembled, after the morph targets' POSITION at their default weights (the
+///   node's, else the mesh's; animated morph weights are not read). Skin joints, inverse binds,
+///   JOINTS_0/WEIGHTS_0 (and _1) and clips.
 /// - every other extension: assimp, triangulated, and with `options.vertices` joined (the default)
 ///   aiProcess_JoinIdenticalVertices, nothing else that welds or reorders; meshes concatenated in
 ///   depth-first node order, then mesh order in the node. Mesh::source_vertex_count and
