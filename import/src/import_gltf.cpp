@@ -404,6 +404,8 @@ Result<Mesh> ImportGltf(const std::string& path, const ImportOptions& options, C
     if (gn.mesh < 0) continue;
     if (gn.mesh >= static_cast<int>(model.meshes.size())) return FileError(Error::Code::kFormat, path, "mesh index out of range");
     const tinygltf::Mesh& gm = model.meshes[static_cast<size_t>(gn.mesh)];
+    // Names in messages; an unnamed mesh or skin by its index.
+    const std::string mesh_label = gm.name.empty() ? "mesh " + std::to_string(gn.mesh) : "mesh '" + gm.name + "'";
     // A skinned mesh is placed where its joints put it at rest (glTF 2.0: skinning ignores the mesh
     // node's transform), B = Global(joint)·IBM(joint) when all joints agree; otherwise its node global.
     Eigen::Matrix4d M = global[slot];
@@ -411,13 +413,14 @@ Result<Mesh> ImportGltf(const std::string& path, const ImportOptions& options, C
     if (gn.skin >= 0) {
       if (gn.skin >= static_cast<int>(model.skins.size())) return FileError(Error::Code::kFormat, path, "skin index out of range");
       const tinygltf::Skin& gs = model.skins[static_cast<size_t>(gn.skin)];
+      const std::string skin_label = gs.name.empty() ? "skin " + std::to_string(gn.skin) : "skin '" + gs.name + "'";
       if (gs.inverseBindMatrices >= 0) {
-        Result<std::vector<double>> r = ReadAccessor(model, gs.inverseBindMatrices, path, "skin '" + gs.name + "' inverseBindMatrices",
+        Result<std::vector<double>> r = ReadAccessor(model, gs.inverseBindMatrices, path, skin_label + " inverseBindMatrices",
                                                      max_values);
         if (!r.ok()) return r.error();
         ibm = std::move(r.value());
         if (ibm.size() < gs.joints.size() * 16)
-          return FileError(Error::Code::kFormat, path, "skin '" + gs.name + "' has fewer inverse binds than joints");
+          return FileError(Error::Code::kFormat, path, skin_label + " has fewer inverse binds than joints");
       }
       // The joints this mesh's vertices weight (SkinnedMeshBind reads only those: an unweighted helper or
       // root joint whose inverse bind does not match its rest pose must not move the mesh); all of them
@@ -429,9 +432,9 @@ Result<Mesh> ImportGltf(const std::string& path, const ImportOptions& options, C
           auto ji = prim.attributes.find("JOINTS_" + std::to_string(set));
           auto wi = prim.attributes.find("WEIGHTS_" + std::to_string(set));
           if (ji == prim.attributes.end() || wi == prim.attributes.end()) break;
-          Result<std::vector<double>> jr = ReadAccessor(model, ji->second, path, "mesh '" + gm.name + "' JOINTS_" + std::to_string(set), max_values);
+          Result<std::vector<double>> jr = ReadAccessor(model, ji->second, path, mesh_label + " JOINTS_" + std::to_string(set), max_values);
           if (!jr.ok()) return jr.error();
-          Result<std::vector<double>> wr = ReadAccessor(model, wi->second, path, "mesh '" + gm.name + "' WEIGHTS_" + std::to_string(set), max_values);
+          Result<std::vector<double>> wr = ReadAccessor(model, wi->second, path, mesh_label + " WEIGHTS_" + std::to_string(set), max_values);
           if (!wr.ok()) return wr.error();
           for (size_t i = 0; i < std::min(jr->size(), wr->size()); ++i) {
             uint32_t joint = 0;
@@ -446,7 +449,7 @@ Result<Mesh> ImportGltf(const std::string& path, const ImportOptions& options, C
         const int jn = gs.joints[k];
         if (jn < 0 || jn >= static_cast<int>(n_nodes) || node_slot[static_cast<size_t>(jn)] < 0)
           return FileError(Error::Code::kFormat, path,
-                           "skin '" + gs.name + "' joint " + std::to_string(k) + " is not a node of the scene");
+                           skin_label + " joint " + std::to_string(k) + " is not a node of the scene");
         if (any_weighted && !weighted[k]) continue;
         Eigen::Matrix4d ib = Eigen::Matrix4d::Identity();
         if (!ibm.empty())
@@ -457,12 +460,12 @@ Result<Mesh> ImportGltf(const std::string& path, const ImportOptions& options, C
       bool consistent = false;
       M = SkinnedMeshBind(joint_binds, global[slot], &consistent);
       if (!consistent && ctx)
-        ctx->Warn("import: " + path + ": skin '" + gs.name + "': rest pose differs from the bind pose; mesh placed by its node");
+        ctx->Warn("import: " + path + ": " + skin_label + ": rest pose differs from the bind pose; mesh placed by its node");
     }
     const Eigen::Matrix4d M_inv = M.inverse();
     for (size_t pi = 0; pi < gm.primitives.size(); ++pi) {
       const tinygltf::Primitive& prim = gm.primitives[pi];
-      const std::string what = "mesh '" + gm.name + "' primitive " + std::to_string(pi);
+      const std::string what = mesh_label + " primitive " + std::to_string(pi);
       const int mode = prim.mode < 0 ? TINYGLTF_MODE_TRIANGLES : prim.mode;
       if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP && mode != TINYGLTF_MODE_TRIANGLE_FAN) {
         if (ctx) ctx->Info("import: " + path + ": " + what + " skipped (not triangles)");

@@ -521,5 +521,18 @@ TEST_CASE("import: a glTF's morph targets are applied at their default weights (
   CHECK(y2(gltf("", "")) == 1.0f);                                // no weights: the base shape
   CHECK(y2(gltf(R"(,"weights":[0.5])", "")) == 1.5f);            // the mesh's default weight
   CHECK(y2(gltf(R"(,"weights":[0.5])", R"(,"weights":[1])")) == 2.0f);  // the node's overrides it
+  // A target of another length is refused, naming the unnamed mesh by its index.
+  std::string json;
+  {
+    std::ifstream in(gltf(R"(,"weights":[0.5])", ""));
+    json.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  const std::string three = R"({"bufferView":2,"componentType":5126,"count":3,"type":"VEC3"})";
+  REQUIRE(json.find(three) != std::string::npos);
+  json.replace(json.find(three), three.size(), R"({"bufferView":2,"componentType":5126,"count":2,"type":"VEC3"})");
+  auto bad = ImportMesh(tmp.Write("short_target.gltf", json));
+  REQUIRE_FALSE(bad.ok());
+  CHECK(bad.error().message.find("mesh 0 primitive 0 morph target 0 POSITION has 2 values, POSITION 3") !=
+        std::string::npos);
 }
 
