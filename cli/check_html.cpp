@@ -63,8 +63,6 @@ std::string ViewCommand(const CheckPage& a, const evaluate::CheckClip& clip, con
   if (a.key_times) return cmd + " -o view.html  # (--key-times: the viewer's frames are uniform, not these)";
   return cmd + " --frames " + std::to_string(clip.frames) + " -o view.html";
 }
-
-
 }  // namespace
 
 bool WriteCheckHtml(const CheckPage& a, const runtime::AssetView& view, const import::Mesh& mesh,

@@ -87,7 +87,6 @@ std::string Hex64(uint64_t v) {
   return b;
 }
 
-
 const char* const kMorphClip = "morph";
 
 // The animation CheckClips plays for clip `name` (kMorphClip: the morph through options.poses).
