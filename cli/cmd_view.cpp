@@ -86,6 +86,12 @@ int RunView(const ViewArgs& a) {
   const bool crease = session.exclusions() == runtime::Exclusions::kCrease;
 
   const uint32_t V = view.vertex_count, T = view.triangle_count, S = view.sphere_count, F = anim.frames;
+  // Every frame's positions are held, then embedded (16-bit, base64: about 8 bytes a vertex a frame): a page
+  // past 512 MB is refused before any frame is skinned, not left to run out of memory.
+  const uint64_t page_bytes = uint64_t{F} * V * 8;
+  if (page_bytes > (uint64_t{512} << 20))
+    return Fail("view: " + std::to_string(F) + " frames of " + std::to_string(V) + " vertices make a page of about " +
+                std::to_string(page_bytes >> 20) + " MB, over 512 MB: ask for fewer --frames");
   std::vector<std::vector<float>> frames(F);
   std::vector<std::string> labels(F);
   playback::SkinningScratch scratch;

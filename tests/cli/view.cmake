@@ -126,3 +126,10 @@ if(NOT body MATCHES "data-status=\"ready\"" OR body MATCHES "pwned" OR NOT dom M
   message(FATAL_ERROR "a pose's name became markup in the page (or the page did not load): '${body}'")
 endif()
 message(STATUS "a pose named like markup is shown as text")
+
+# A page too large to hold is refused before any frame is skinned, nothing written.
+execute_process(COMMAND ${CLI} view ${ASSET} --mesh ${MESH} --frames 100000 -o ${WORK}/huge.html
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 1 OR NOT "${out}${err}" MATCHES "over 512 MB: ask for fewer --frames" OR EXISTS ${WORK}/huge.html)
+  message(FATAL_ERROR "view --frames 100000: expected a refusal and no page, got ${rc}:\n${out}${err}")
+endif()
