@@ -257,6 +257,24 @@ Result<std::vector<double>> ReadAccessor(const tinygltf::Model& model, int index
   return out;
 }
 
+/// Skin influence set `set` of `prim` (JOINTS_set and WEIGHTS_set, glTF 2.0 §3.7.3): false when either is
+/// absent (the sets end there), else both read into `joints`, `weights` (ReadAccessor's errors, `what` naming
+/// the primitive).
+Result<bool> ReadInfluenceSet(const tinygltf::Model& model, const tinygltf::Primitive& prim, int set, const std::string& path,
+                              const std::string& what, size_t max_values, std::vector<double>* joints,
+                              std::vector<double>* weights) {
+  const auto ji = prim.attributes.find("JOINTS_" + std::to_string(set));
+  const auto wi = prim.attributes.find("WEIGHTS_" + std::to_string(set));
+  if (ji == prim.attributes.end() || wi == prim.attributes.end()) return false;
+  Result<std::vector<double>> jr = ReadAccessor(model, ji->second, path, what + " JOINTS_" + std::to_string(set), max_values);
+  if (!jr.ok()) return jr.error();
+  Result<std::vector<double>> wr = ReadAccessor(model, wi->second, path, what + " WEIGHTS_" + std::to_string(set), max_values);
+  if (!wr.ok()) return wr.error();
+  *joints = std::move(jr).value();
+  *weights = std::move(wr).value();
+  return true;
+}
+
 /// `d` as a vertex or joint number below `limit`: false when it is not a whole number in [0, limit) (NaN
 /// included), so that converting it is defined.
 bool AsIndex(double d, double limit, uint32_t* out) {
@@ -427,18 +445,15 @@ Result<Mesh> ImportGltf(const std::string& path, const ImportOptions& options, C
       // when no vertex carries a weight.
       std::vector<char> weighted(gs.joints.size(), 0);
       bool any_weighted = false;
+      std::vector<double> set_joints, set_weights;
       for (const tinygltf::Primitive& prim : gm.primitives)
         for (int set = 0; set < 2; ++set) {
-          auto ji = prim.attributes.find("JOINTS_" + std::to_string(set));
-          auto wi = prim.attributes.find("WEIGHTS_" + std::to_string(set));
-          if (ji == prim.attributes.end() || wi == prim.attributes.end()) break;
-          Result<std::vector<double>> jr = ReadAccessor(model, ji->second, path, mesh_label + " JOINTS_" + std::to_string(set), max_values);
-          if (!jr.ok()) return jr.error();
-          Result<std::vector<double>> wr = ReadAccessor(model, wi->second, path, mesh_label + " WEIGHTS_" + std::to_string(set), max_values);
-          if (!wr.ok()) return wr.error();
-          for (size_t i = 0; i < std::min(jr->size(), wr->size()); ++i) {
+          Result<bool> read = ReadInfluenceSet(model, prim, set, path, mesh_label, max_values, &set_joints, &set_weights);
+          if (!read.ok()) return read.error();
+          if (!read.value()) break;
+          for (size_t i = 0; i < std::min(set_joints.size(), set_weights.size()); ++i) {
             uint32_t joint = 0;
-            if (wr.value()[i] > 0.0 && AsIndex(jr.value()[i], static_cast<double>(gs.joints.size()), &joint)) {
+            if (set_weights[i] > 0.0 && AsIndex(set_joints[i], static_cast<double>(gs.joints.size()), &joint)) {
               weighted[joint] = 1;
               any_weighted = true;
             }
@@ -570,20 +585,17 @@ Result<Mesh> ImportGltf(const std::string& path, const ImportOptions& options, C
         }
         const uint32_t base = base_it->second;
         for (int set = 0; set < 2; ++set) {
-          auto ji = prim.attributes.find("JOINTS_" + std::to_string(set));
-          auto wi = prim.attributes.find("WEIGHTS_" + std::to_string(set));
-          if (ji == prim.attributes.end() || wi == prim.attributes.end()) break;
-          Result<std::vector<double>> jr = ReadAccessor(model, ji->second, path, what + " JOINTS_" + std::to_string(set), max_values);
-          if (!jr.ok()) return jr.error();
-          Result<std::vector<double>> wr = ReadAccessor(model, wi->second, path, what + " WEIGHTS_" + std::to_string(set), max_values);
-          if (!wr.ok()) return wr.error();
-          if (jr->size() != nv * 4 || wr->size() != nv * 4)
+          std::vector<double> jr, wr;
+          Result<bool> read = ReadInfluenceSet(model, prim, set, path, what, max_values, &jr, &wr);
+          if (!read.ok()) return read.error();
+          if (!read.value()) break;
+          if (jr.size() != nv * 4 || wr.size() != nv * 4)
             return FileError(Error::Code::kFormat, path, what + ": JOINTS/WEIGHTS are not VEC4 per vertex");
           for (size_t v = 0; v < nv; ++v) {
             for (int k = 0; k < 4; ++k) {
-              const double w = wr.value()[v * 4 + static_cast<size_t>(k)];
+              const double w = wr[v * 4 + static_cast<size_t>(k)];
               if (!(w > 0.0)) continue;
-              const double j = jr.value()[v * 4 + static_cast<size_t>(k)];
+              const double j = jr[v * 4 + static_cast<size_t>(k)];
               uint32_t joint = 0;
               if (!AsIndex(j, static_cast<double>(gs.joints.size()), &joint))
                 return FileError(Error::Code::kInvalidMesh, path,
