@@ -57,7 +57,8 @@ namespace {
 // ---------------------------------------------------------------------------------------------------
 // (1) Floating-point expansions (Shewchuk 1997 §2). An expansion is a sum of doubles, stored by
 // increasing magnitude, pairwise non-overlapping (strongly, with round-to-nearest-even), zero components
-// removed (Sum also takes inputs with zeros, as the two-product pairs of the short Minor); zero itself is the one component {0}. Its sign is the sign of its last (largest) component.
+// removed (Sum also takes inputs with zeros, as the two-product pairs of the short Minor); zero itself is
+// the one component {0}. Its sign is the sign of its last (largest) component.
 
 /// x + y = a + b exactly, x = fl(a + b) (Knuth's TwoSum: no precondition on |a|, |b|).
 inline void TwoSum(double a, double b, double& x, double& y) {
@@ -247,14 +248,16 @@ SPHERECHAIN_NOINLINE int Orient3dExact(const double* a, const double* b, const d
   Orient3dStage& decided = stage ? *stage : unused;
   decided = Orient3dStage::kErrorFree;
   // (a) error-free double evaluation.
-  bool exact = true;
-  double u[3], v[3], w[3];
+  // The rounded differences and their tails (x + tail = exactly the difference): stage (b)'s C uses the tails.
+  double u[3], v[3], w[3], du[3], dv[3], dw[3];
   for (int k = 0; k < 3; ++k) {
-    u[k] = CheckedDiff(b[k], a[k], exact);
-    v[k] = CheckedDiff(c[k], a[k], exact);
-    w[k] = CheckedDiff(d[k], a[k], exact);
+    TwoDiff(b[k], a[k], u[k], du[k]);
+    TwoDiff(c[k], a[k], v[k], dv[k]);
+    TwoDiff(d[k], a[k], w[k], dw[k]);
   }
-  const bool differences_exact = exact;
+  const bool differences_exact = (du[0] == 0) & (du[1] == 0) & (du[2] == 0) & (dv[0] == 0) & (dv[1] == 0) &
+                                 (dv[2] == 0) & (dw[0] == 0) & (dw[1] == 0) & (dw[2] == 0);
+  bool exact = differences_exact;
   if (exact) {
     const double mx = CheckedMinor(u[1], v[2], u[2], v[1], exact);
     const double my = CheckedMinor(u[2], v[0], u[0], v[2], exact);
@@ -290,12 +293,6 @@ SPHERECHAIN_NOINLINE int Orient3dExact(const double* a, const double* b, const d
     const double bound_b = kOrient3dBoundB * permanent;
     if ((estimate >= bound_b) | (-estimate >= bound_b)) return Sign(estimate);
     decided = Orient3dStage::kTailCorrection;
-    double du[3], dv[3], dw[3], x;
-    for (int k = 0; k < 3; ++k) {
-      TwoDiff(b[k], a[k], x, du[k]);
-      TwoDiff(c[k], a[k], x, dv[k]);
-      TwoDiff(d[k], a[k], x, dw[k]);
-    }
     const double bound_c = kOrient3dBoundC * permanent + kResultBound * std::fabs(estimate);
     // The three terms summed first ((T0 + T1) + T2), then added in one rounding: his order, which his
     // bound counts on (adding each to the estimate would round three times at the estimate's size).
