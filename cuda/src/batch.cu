@@ -150,6 +150,7 @@ constexpr uint32_t kWarpsPerBlock = 4;      // kWarpPerInstance: instances per b
 constexpr size_t kSharedLimit = 48 * 1024;  // default dynamic shared memory per block
 
 struct KernelParams {
+  DeviceAssetDesc asset0;  // the batch's asset when it has one (BoxKernel kOneAsset reads it from here)
   const DeviceAssetDesc* assets;
   const DeviceInstance* instances;
   BatchCollision* pairs;
@@ -402,15 +403,25 @@ __host__ __device__ inline BoxLayout MakeBoxLayout(uint32_t max_blocks, uint32_t
 // floats: the test and the depth are symmetric in the two spheres), reported (lower id, higher id).
 // kMany: blocks of at most 256 threads under a register cap (SPHERECHAIN_CUDA_SPHERE_BLOCKS from joints,
 // SPHERECHAIN_CUDA_VERTEX_BLOCKS from vertices); else up to 512.
-template <bool kMany, bool kJoints>
-__global__ void __launch_bounds__(kMany ? 256 : 512,
+// kOneAsset (a batch of one asset): the asset's descriptor is read from the kernel's parameters, so the
+// reads of the instance, the slots and the first block pair do not wait on a read of the asset table.
+// Few instances (fewer than 4 an SM): up to SPHERECHAIN_CUDA_FEW_BLOCKS blocks an instance, of
+// SPHERECHAIN_CUDA_FEW_THREADS threads each (compile-time tuning knobs, measured in docs/performance.md).
+#ifndef SPHERECHAIN_CUDA_FEW_BLOCKS
+#define SPHERECHAIN_CUDA_FEW_BLOCKS 8
+#endif
+#ifndef SPHERECHAIN_CUDA_FEW_THREADS
+#define SPHERECHAIN_CUDA_FEW_THREADS 512
+#endif
+template <bool kMany, bool kJoints, bool kOneAsset>
+__global__ void __launch_bounds__(kMany ? 256 : SPHERECHAIN_CUDA_FEW_THREADS,
                                   kMany ? (kJoints ? SPHERECHAIN_CUDA_SPHERE_BLOCKS : SPHERECHAIN_CUDA_VERTEX_BLOCKS) : 1)
-    BoxKernel(KernelParams p) {
+    BoxKernel(const __grid_constant__ KernelParams p) {
   extern __shared__ float4 smem[];
   const uint32_t G = p.blocks_per_instance, inst = blockIdx.x / G, part = blockIdx.x % G;
   if (inst >= p.instance_count) return;  // whole block (never: the grid is N·G blocks)
   const DeviceInstance I = p.instances[inst];
-  const DeviceAssetDesc& A = p.assets[I.asset];
+  const DeviceAssetDesc& A = kOneAsset ? p.asset0 : p.assets[I.asset];
   const uint32_t B = A.block_count, slots = 8 * B, T = blockDim.x;
   const bool write = (p.flags & kFlagWriteSpheres) && part == 0, m1 = p.flags & kFlagM1;
   const float m = InstanceMargin(p, A), grow = m1 ? 0.0f : m;  // depth rounding as DetectM1 / DetectM2
@@ -425,7 +436,14 @@ __global__ void __launch_bounds__(kMany ? 256 : 512,
   uint4* kept = reinterpret_cast<uint4*>(base + L.kept);       // max_block_pairs
   uint32_t* words = reinterpret_cast<uint32_t*>(base + L.words);  // [0] kept count, [1] block hits
   if (threadIdx.x == 0) words[0] = words[1] = 0;
+  // Few instances: this thread's first block pair (step 3) is read now, so that the read overlaps the
+  // refit (with many, the registers it would hold through the refit cost more than the wait).
+  const uint4* pairs = A.block_pairs[m1 ? 0 : 1];
+  const uint32_t pair_count = A.block_pair_count[m1 ? 0 : 1], first_pair = threadIdx.x * G + part;
+  const uint4 prefetched =
+      !kMany && first_pair < pair_count ? __ldg(pairs + first_pair) : make_uint4(0u, 0u, 0u, 0u);
 
+  // meta[s] = (chain mask, fold region | sphere id << 16)
   for (uint32_t s = threadIdx.x; s < slots; s += T) {
     const uint32_t id = A.slot_spheres[s];
     if (id == kNoSphere) {
@@ -436,7 +454,7 @@ __global__ void __launch_bounds__(kMany ? 256 : 512,
     const float4 v = kJoints ? detail::DevJointSphere(A, I.joint_matrices, id)
                              : detail::DevRefitSphere(A, I.positions, I.stride_bytes, id, p.flags & kFlagFrameMode);
     sph[s] = v;
-    meta[s] = make_uint2(__ldg(A.chain_mask + id), FoldRegion(A, fold, id));
+    meta[s] = make_uint2(__ldg(A.chain_mask + id), FoldRegion(A, fold, id) | id << 16);
     if (write) p.spheres[I.sphere_offset + id] = v;
   }
   __syncthreads();
@@ -453,9 +471,8 @@ __global__ void __launch_bounds__(kMany ? 256 : 512,
   }
   __syncthreads();
 
-  const uint4* pairs = A.block_pairs[m1 ? 0 : 1];
-  for (uint32_t w = threadIdx.x * G + part, n = A.block_pair_count[m1 ? 0 : 1]; w < n; w += T * G) {
-    const uint4 e = __ldg(pairs + w);
+  for (uint32_t w = first_pair; w < pair_count; w += T * G) {
+    const uint4 e = !kMany && w == first_pair ? prefetched : __ldg(pairs + w);
     const uint32_t bi = e.x & 0xFFFFu, bj = e.x >> 16;
     const float4 li = lo[bi], hi_i = hi[bi], lj = lo[bj], hj = hi[bj];
     const float gx = fmaxf(fmaxf(lj.x - hi_i.x, li.x - hj.x), 0.0f);
@@ -474,9 +491,9 @@ __global__ void __launch_bounds__(kMany ? 256 : 512,
     const uint32_t ps = 8 * (e.x & 0xFFFFu) + (lane >> 3), qs = 8 * (e.x >> 16) + (lane & 7u);
     const float4 P = sph[ps], Q = sph[qs];
     const uint2 MP = meta[ps], MQ = meta[qs];
-    const float mp = fold >= 0.0f && MP.y == MQ.y ? fold : m;
+    const float mp = fold >= 0.0f && ((MP.y ^ MQ.y) & 0xFFFFu) == 0 ? fold : m;
     if (detail::DevOverlap(P, Q, mp)) {
-      const uint32_t a = A.slot_spheres[ps], b = A.slot_spheres[qs];
+      const uint32_t a = MP.y >> 16, b = MQ.y >> 16;
       ++hits;
       Emit(p, inst, min(a, b), max(a, b), P, Q, MP.x & MQ.x, grow);
     }
@@ -762,7 +779,7 @@ Status Batch::Run(const FrameParams& params, cudaStream_t stream) const {
   if (!(joints ? all_joints_ : all_positions_)) return Status::kErrorNullArgument;  // the source's input, per instance
   Strategy strategy = params.strategy;
   const bool few = instance_count_ < 4 * sm_count_;
-  const uint32_t box_threads = few ? 512u : std::clamp(RoundUp32(8 * max_blocks_), 32u, 256u);
+  const uint32_t box_threads = few ? SPHERECHAIN_CUDA_FEW_THREADS : std::clamp(RoundUp32(8 * max_blocks_), 32u, 256u);
   const size_t box_shm = MakeBoxLayout(max_blocks_, max_block_pairs_).bytes;
   if (strategy == Strategy::kAuto || (strategy == Strategy::kBlockBoxes && box_shm > kSharedLimit))
     strategy = box_shm <= kSharedLimit ? Strategy::kBlockBoxes : Strategy::kThreadPerSphere;
@@ -822,16 +839,19 @@ Status Batch::Run(const FrameParams& params, cudaStream_t stream) const {
     case Strategy::kBlockBoxes: {
       // Few instances: up to 8 blocks share an instance's block pairs (each refits all its spheres), so
       // a frame of one character takes a shorter path through the block-pair and sphere tests.
-      p.blocks_per_instance = few ? std::clamp(sm_count_ / instance_count_, 1u, 8u) : 1u;
+      p.blocks_per_instance = few ? std::clamp(sm_count_ / instance_count_, 1u, uint32_t{SPHERECHAIN_CUDA_FEW_BLOCKS}) : 1u;
       const uint32_t blocks = instance_count_ * p.blocks_per_instance;
+      auto launch = [&](auto kernel) { kernel<<<blocks, box_threads, box_shm, stream>>>(p); };
+      const bool one = asset_count_ == 1;
+      if (one) p.asset0 = host_assets_[0]->desc();
       if (few && joints)
-        BoxKernel<false, true><<<blocks, box_threads, box_shm, stream>>>(p);
+        one ? launch(BoxKernel<false, true, true>) : launch(BoxKernel<false, true, false>);
       else if (few)
-        BoxKernel<false, false><<<blocks, box_threads, box_shm, stream>>>(p);
+        one ? launch(BoxKernel<false, false, true>) : launch(BoxKernel<false, false, false>);
       else if (joints)
-        BoxKernel<true, true><<<blocks, box_threads, box_shm, stream>>>(p);
+        one ? launch(BoxKernel<true, true, true>) : launch(BoxKernel<true, true, false>);
       else
-        BoxKernel<true, false><<<blocks, box_threads, box_shm, stream>>>(p);
+        one ? launch(BoxKernel<true, false, true>) : launch(BoxKernel<true, false, false>);
       break;
     }
     case Strategy::kWarpPerInstance: {
