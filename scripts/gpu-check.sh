@@ -80,7 +80,7 @@ variant() {  # variant NAME CUDA_DIR [CMAKE ARGS...]
 }
 export -f variant
 export root
-step build configure 120 env FLATBUFFERS_INCLUDE_DIR="$root/.carry/include" cmake --preset cuda -DSPHERECHAIN_BUILD_BENCH=ON \
+step build configure 120 env FLATBUFFERS_INCLUDE_DIR="$root/.carry/include" cmake --preset cuda -DSPHERECHAIN_BUILD_BENCH=ON -DSPHERECHAIN_BUILD_TESTS=ON \
   -Ddoctest_DIR="$root/.carry/lib/cmake/doctest" -DSPHERECHAIN_SHARED_DATA_DIR="$root/.carry/data" || exit 99
 # The variants build beside the main build (the machine's cores shared) and bench later, on an idle GPU.
 variants=()
