@@ -5,8 +5,8 @@
 # 1. builds the `cuda` preset (runtime + spherechain::cuda + cuda_tests + cuda_bench) with the carried
 #    FlatBuffers / doctest headers, and beside it the benches of the variants (step 4);
 # 2. runs the CUDA suite on the carried assets and recorded frames (MakeHuman, CesiumMan, BCN_Epileptic)
-#    through `ctest -L cuda` (each case, then the assertions guard: no case may pass without checking
-#    anything);
+#    through `ctest -L cuda` (each case, and the assertions guard, which runs the suite once more: no
+#    case may pass without checking anything);
 # 3. runs cuda_bench on MakeHuman for 1 … 100,000 characters, from vertices and from joints, as an
 #    animated crowd (the recorded morph's frames; every strategy, with the CPU columns);
 # 4. runs the variants' benches on the same crowd (the default strategy, no CPU columns): when
@@ -24,7 +24,8 @@
 # /tmp/gpu-check, as six files (the device tool brings back only a few): summary.txt (each step's exit
 # status and time), build.log, variants.log (their builds), tests.log (suite, sanitizers, ctest),
 # bench.log, ncu.log.
-# Exit status: the number of failed steps.
+# Exit status: the number of failed steps; 100 for a bad argument or GPU_CHECK_SECONDS, 98/99 when the build
+# or its configuration fails.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 ncu_too=0 blocks_too=0
@@ -32,10 +33,12 @@ for arg in "$@"; do
   case $arg in
     --ncu) ncu_too=1 ;;
     --blocks) blocks_too=1 ;;
-    *) echo "usage: gpu-check.sh [--ncu] [--blocks]" >&2; exit 2 ;;
+    *) echo "usage: gpu-check.sh [--ncu] [--blocks]" >&2; exit 100 ;;
   esac
 done
 budget=${GPU_CHECK_SECONDS:-0}
+[[ $budget =~ ^[0-9]+$ ]] || { echo "gpu-check.sh: GPU_CHECK_SECONDS must be a whole number of seconds, not '$budget'" >&2; exit 100; }
+budget=$((10#$budget))
 out=${OUT:-/tmp/gpu-check}
 [ -n "${OUT:-}" ] || { rm -rf "$out" && mkdir -p "$out"; }
 root=$PWD
@@ -49,7 +52,7 @@ step() {  # step LOG NAME SECONDS COMMAND...: runs COMMAND with a time limit, it
   if [ "$budget" -gt 0 ] && [ $((t0 + limit)) -gt "$budget" ]; then
     limit=$((budget - t0))
     if [ $limit -lt 10 ]; then
-      echo "== $name: skipped, ${limit} s left of GPU_CHECK_SECONDS=$budget" | tee -a "$out/summary.txt"
+      echo "== $name: skipped, $((limit > 0 ? limit : 0)) s left of GPU_CHECK_SECONDS=$budget" | tee -a "$out/summary.txt"
       failed=$((failed + 1))
       return 1
     fi
@@ -83,22 +86,24 @@ export root
 step build configure 120 env FLATBUFFERS_INCLUDE_DIR="$root/.carry/include" cmake --preset cuda -DSPHERECHAIN_BUILD_BENCH=ON -DSPHERECHAIN_BUILD_TESTS=ON \
   -Ddoctest_DIR="$root/.carry/lib/cmake/doctest" -DSPHERECHAIN_SHARED_DATA_DIR="$root/.carry/data" || exit 99
 # The variants build beside the main build (the machine's cores shared) and bench later, on an idle GPU.
-variants=()
+variants=() builders=()  # the variants' builds run in the background; their exit statuses are counted at `wait`
 if [ -d .carry/base/cuda ]; then
   variants+=(base)
   step variants "build base ($(cat .carry/base/REVISION))" 300 bash -c 'variant base .carry/base/cuda' &
+  builders+=($!)
 fi
 if [ $blocks_too = 1 ]; then
   for vb in 4 5; do
     variants+=(vertex-blocks-$vb)
     step variants "build vertex-blocks-$vb" 300 bash -c "variant vertex-blocks-$vb cuda -DCMAKE_CUDA_FLAGS=-DSPHERECHAIN_CUDA_VERTEX_BLOCKS=$vb" &
+    builders+=($!)
   done
 fi
 step build build 300 cmake --build build/cuda --target cuda_tests cuda_bench -j"$(nproc)" || exit 98
 step tests ctest 180 ctest --test-dir build/cuda -L cuda --output-on-failure --timeout 150 -j8
-wait  # the variants' builds
+for b in ${builders[@]+"${builders[@]}"}; do wait "$b" || failed=$((failed + 1)); done  # the variants' builds
 step bench bench-crowd 150 build/cuda/bench/cuda_bench "${mh[@]}" "${crowd[@]}"
-for v in "${variants[@]}"; do
+for v in ${variants[@]+"${variants[@]}"}; do
   [ -x "build/$v/bench/cuda_bench" ] &&
     step bench "bench-crowd $v" 90 "build/$v/bench/cuda_bench" "${mh[@]}" "${crowd[@]}" --strategies auto --no-cpu
 done

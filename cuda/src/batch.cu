@@ -4,7 +4,8 @@
 //  - SphereKernel: a block per instance, a thread per sphere, or `split` threads per sphere when the
 //    batch has few instances (kThreadPerSphere); the pairs dealt out evenly (circular order);
 //  - GroupKernel:  a warp per instance, 4 per block (kWarpPerInstance);
-//  - BoxKernel: a block per instance (up to 8 with few instances), the CPU DetectJob's blocks of 8 spheres
+//  - BoxKernel: a block per instance (with few instances up to SPHERECHAIN_CUDA_FEW_BLOCKS, 8), the CPU
+//    DetectJob's blocks of 8 spheres
 //    and their bounds, then the sphere tests of the block pairs kept (kBlockBoxes, the default);
 //  - ChainKernel: a block per (instance, chain), a thread per chain sphere (kBlockPerChain, M1).
 // Each refits the spheres it needs into shared memory (DevRefitSphere: runtime/formulas.h, the formulas
@@ -374,7 +375,7 @@ __global__ void __launch_bounds__(kMany ? 256 : 1024, kMany ? SPHERECHAIN_CUDA_S
 }
 
 // kBlockBoxes' shared memory, byte offsets (host and device compute it alike): the spheres by slot
-// (float4; padding slots NaN), each slot's (chain mask, fold region), the blocks' bounds (lo xyz + grown
+// (float4; padding slots NaN), each slot's (chain mask, fold region | sphere id << 16), the blocks' bounds (lo xyz + grown
 // radius, hi xyz), the kept block pairs, and two words (kept count, block hits).
 struct BoxLayout {
   uint32_t meta, lo, hi, kept, words, bytes;
@@ -402,7 +403,7 @@ __host__ __device__ inline BoxLayout MakeBoxLayout(uint32_t max_blocks, uint32_t
 // kept pairs, 64 per pair dealt over the threads: the sphere test with the pair's own margin (DetectJob's
 // floats: the test and the depth are symmetric in the two spheres), reported (lower id, higher id).
 // kMany: blocks of at most 256 threads under a register cap (SPHERECHAIN_CUDA_SPHERE_BLOCKS from joints,
-// SPHERECHAIN_CUDA_VERTEX_BLOCKS from vertices); else up to 512.
+// SPHERECHAIN_CUDA_VERTEX_BLOCKS from vertices); else SPHERECHAIN_CUDA_FEW_THREADS (512).
 // kOneAsset (a batch of one asset): the asset's descriptor is read from the kernel's parameters, so the
 // reads of the instance, the slots and the first block pair do not wait on a read of the asset table.
 // Few instances (fewer than 4 an SM): up to SPHERECHAIN_CUDA_FEW_BLOCKS blocks an instance, of
@@ -413,6 +414,12 @@ __host__ __device__ inline BoxLayout MakeBoxLayout(uint32_t max_blocks, uint32_t
 #ifndef SPHERECHAIN_CUDA_FEW_THREADS
 #define SPHERECHAIN_CUDA_FEW_THREADS 512
 #endif
+static_assert(SPHERECHAIN_CUDA_FEW_BLOCKS >= 1, "SPHERECHAIN_CUDA_FEW_BLOCKS: at least one block an instance");
+static_assert(SPHERECHAIN_CUDA_FEW_THREADS % 32 == 0 && SPHERECHAIN_CUDA_FEW_THREADS >= 32 &&
+                  SPHERECHAIN_CUDA_FEW_THREADS <= 1024,
+              "SPHERECHAIN_CUDA_FEW_THREADS: whole warps (the counts are reduced a warp at a time), at most 1024");
+// meta's second word packs a sphere's fold region (8 bits: Asset.sphere_regions) and its id (< 65535).
+static_assert(runtime::kMaxSpheres <= 0xFFFFu, "sphere ids must fit the 16 bits of BoxKernel's meta");
 template <bool kMany, bool kJoints, bool kOneAsset>
 __global__ void __launch_bounds__(kMany ? 256 : SPHERECHAIN_CUDA_FEW_THREADS,
                                   kMany ? (kJoints ? SPHERECHAIN_CUDA_SPHERE_BLOCKS : SPHERECHAIN_CUDA_VERTEX_BLOCKS) : 1)
@@ -448,7 +455,7 @@ __global__ void __launch_bounds__(kMany ? 256 : SPHERECHAIN_CUDA_FEW_THREADS,
     const uint32_t id = A.slot_spheres[s];
     if (id == kNoSphere) {
       sph[s] = make_float4(__int_as_float(0x7fc00000), 0.0f, 0.0f, __int_as_float(0x7fc00000));
-      meta[s] = make_uint2(0u, 0u);
+      meta[s] = make_uint2(0u, kNoSphere << 16);  // never tested (no lane allows it); were it, id 0xFFFF
       continue;
     }
     const float4 v = kJoints ? detail::DevJointSphere(A, I.joint_matrices, id)
@@ -588,6 +595,7 @@ Batch& Batch::operator=(Batch&& o) noexcept {
     max_spheres_ = std::exchange(o.max_spheres_, 0);
     max_blocks_ = std::exchange(o.max_blocks_, 0);
     max_block_pairs_ = std::exchange(o.max_block_pairs_, 0);
+    asset0_ = std::exchange(o.asset0_, DeviceAssetDesc{});
     max_chains_ = std::exchange(o.max_chains_, 0);
     max_chain_length_ = std::exchange(o.max_chain_length_, 0);
     sm_count_ = std::exchange(o.sm_count_, 1);
@@ -615,6 +623,7 @@ void Batch::Release() {
   host_assets_ = nullptr;
   asset_count_ = instance_count_ = capacity_ = total_spheres_ = 0;
   max_spheres_ = max_chains_ = max_chain_length_ = max_blocks_ = max_block_pairs_ = 0;
+  asset0_ = DeviceAssetDesc{};
   sm_count_ = 1;
   frame_position_bytes_ = frame_joint_bytes_ = 0;
   every_asset_folds_ = all_positions_ = all_joints_ = false;
@@ -703,6 +712,7 @@ Status Batch::Init(const DeviceAsset* const* assets, uint32_t asset_count, const
   try {
     std::vector<DeviceAssetDesc> descs(asset_count);
     for (uint32_t k = 0; k < asset_count; ++k) descs[k] = assets[k]->desc();
+    asset0_ = descs[0];  // a one-asset batch's kBlockBoxes reads it from the kernel's parameters
     st = detail::CudaStatus(cudaMemcpy(asset_table_, descs.data(), asset_bytes, cudaMemcpyHostToDevice));
   } catch (const std::bad_alloc&) {
     st = Status::kErrorOutOfMemory;
@@ -843,7 +853,7 @@ Status Batch::Run(const FrameParams& params, cudaStream_t stream) const {
       const uint32_t blocks = instance_count_ * p.blocks_per_instance;
       auto launch = [&](auto kernel) { kernel<<<blocks, box_threads, box_shm, stream>>>(p); };
       const bool one = asset_count_ == 1;
-      if (one) p.asset0 = host_assets_[0]->desc();
+      if (one) p.asset0 = asset0_;
       if (few && joints)
         one ? launch(BoxKernel<false, true, true>) : launch(BoxKernel<false, true, false>);
       else if (few)

@@ -1,6 +1,7 @@
 // spherechain::cuda refit from joint matrices (FrameParams::source = RefitSource::kJoints): CPU
 // (JointRefitJob + DetectJob) == GPU bit for bit on synthetic rigged assets and on the recorded clips'
-// joint matrices, every method and strategy; graph replay; the documented statuses.
+// joint matrices, every method and strategy, also as a crowd of two assets over the many-instance
+// threshold; graph replay; the documented statuses.
 #include "cuda/batch_fixture.h"
 
 using namespace spherechain;
@@ -53,6 +54,37 @@ TEST_CASE("cuda: joint refit on synthetic rigged assets, 1-4 influences, CPU == 
   CHECK(pairs > 0);  // the motions make spheres of different joints meet
   // The same batch still refits from its positions.
   (void)RunCompared({&a, &b}, inst, batch, sc::FrameParams{RefitMode::kPivotFrame, DetectMethod::kM2, sc::Strategy::kAuto, true});
+}
+
+// The same two assets as a crowd over the many-instance threshold (4 instances an SM): a batch of several
+// assets runs the many-instance kernels that read each instance's asset from the asset table (a batch of
+// one asset reads it from the kernel's parameters; the recorded-frame crowd covers that one).
+TEST_CASE("cuda: a crowd of two synthetic rigged assets over the many-instance threshold, both refit sources, CPU == GPU") {
+  if (!RequireDevice()) return;
+  int dev_id = 0, sms = 0;
+  CUDA_REQUIRE(cudaGetDevice(&dev_id));
+  CUDA_REQUIRE(cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, dev_id));
+  const uint32_t n = 4u * static_cast<uint32_t>(sms) + 1u;
+  AssetSet a, b;
+  MakeStar(&a, 6, 12, 0.0f, -1.0f, 9);
+  MakeStar(&b, 4, 14, 0.05f, 0.02f, 3);
+  DeviceInstances inst;
+  inst.Build({&a, &b}, n, 37u);
+  std::mt19937 rng(11u);
+  for (size_t i = 0; i < inst.table.size(); ++i)
+    inst.joints.push_back(RandomJointMatrices(i % 2 == 0 ? 9 : 3, rng, 3.0f, 0.25f));
+  inst.UploadJoints();
+  const sc::DeviceAsset* dev[] = {&a.device, &b.device};
+  sc::Batch batch;
+  REQUIRE(batch.Init(dev, 2, inst.table.data(), n) == sc::Status::kOk);
+  size_t pairs = 0;
+  for (const auto& [method, strategy] : AllStrategies()) {
+    CAPTURE(int(method));
+    CAPTURE(int(strategy));
+    pairs += RunCompared({&a, &b}, inst, batch, JointParams(method, strategy)).total;
+    pairs += RunCompared({&a, &b}, inst, batch, sc::FrameParams{RefitMode::kPivotFrame, method, strategy, true}).total;
+  }
+  CHECK(pairs > 0);
 }
 
 TEST_CASE("cuda: joint refit at the bind pose (identity matrices) gives the bind spheres exactly") {

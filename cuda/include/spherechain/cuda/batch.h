@@ -37,7 +37,8 @@ enum class Strategy : uint8_t {
   /// radii (DetectJob's conservative test: it never drops a pair the sphere test reports), and tests only
   /// their allowed lanes (not excluded; M1: sharing a chain) — far fewer sphere tests than all S(S−1)/2.
   /// Few instances (fewer than 4 an SM): blocks of 512 threads, up to 8 per instance (each refits all its
-  /// spheres and tests a share of its block pairs). Needs the blocks in 48 KiB of shared memory (else
+  /// spheres and tests a share of its block pairs; compile-time knobs SPHERECHAIN_CUDA_FEW_THREADS and
+  /// SPHERECHAIN_CUDA_FEW_BLOCKS). Needs the blocks in 48 KiB of shared memory (else
   /// kThreadPerSphere runs instead).
   kBlockBoxes = 4,
 };
@@ -214,8 +215,10 @@ class Batch {
   uint32_t max_spheres_ = 0, max_chains_ = 0, max_chain_length_ = 0, sm_count_ = 1;
   uint32_t max_blocks_ = 0, max_block_pairs_ = 0;  // over the batch's assets (kBlockBoxes' shared memory)
   uint64_t frame_position_bytes_ = 0, frame_joint_bytes_ = 0;
-  bool every_asset_folds_ = false;
-  bool all_positions_ = false, all_joints_ = false;  // every instance has positions / joint matrices  // every asset of Init has a fold margin (FrameParams::fold_margin >= 0 allowed)
+  bool every_asset_folds_ = false;  // every asset of Init has a fold margin (FrameParams::fold_margin >= 0 allowed)
+  bool all_positions_ = false, all_joints_ = false;  // every instance has positions / joint matrices
+  DeviceAssetDesc asset0_{};  // the first asset's descriptor as Init uploaded it (a one-asset batch's
+                              // kBlockBoxes kernel reads it from its parameters)
   std::vector<uint32_t> sphere_offsets_;
   void* table_ = nullptr;          // device: DeviceAssetDesc[asset_count] + internal instance table
   void* asset_table_ = nullptr;    // into table_
