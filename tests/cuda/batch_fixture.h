@@ -265,6 +265,15 @@ inline float MeanBindRadius(const AssetSet& a) {
   return static_cast<float>(sum / a.view.sphere_count);
 }
 
+/// The smallest batch over the many-instance threshold of this device (Batch::Run: fewer than 4 instances
+/// an SM run the few-instance kernels, several blocks an instance): 4 · SMs + 1.
+inline uint32_t ManyInstanceCrowd() {
+  int dev_id = 0, sms = 0;
+  CUDA_REQUIRE(cudaGetDevice(&dev_id));
+  CUDA_REQUIRE(cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, dev_id));
+  return 4u * static_cast<uint32_t>(sms) + 1u;
+}
+
 /// Every (method, strategy) a batch runs: M1 with each strategy, M2 with all but kBlockPerChain (M1 only).
 inline std::vector<std::pair<runtime::DetectMethod, sc::Strategy>> MethodStrategies() {
   std::vector<std::pair<runtime::DetectMethod, sc::Strategy>> out;

@@ -239,10 +239,7 @@ TEST_CASE("cuda: recorded animation frames (MakeHuman morph, CesiumMan walk, BCN
 // and method, CPU == GPU.
 TEST_CASE("cuda: a crowd of recorded frames over the many-instance threshold, both refit sources, CPU == GPU") {
   if (!RequireDevice()) return;
-  int dev_id = 0, sms = 0;
-  CUDA_REQUIRE(cudaGetDevice(&dev_id));
-  CUDA_REQUIRE(cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, dev_id));
-  const uint32_t n = 4u * static_cast<uint32_t>(sms) + 1u;
+  const uint32_t n = ManyInstanceCrowd();
   ForEachRecordedClip([&](AssetSet& set, const std::vector<std::vector<float>>& frames) {
     std::vector<std::vector<float>> crowd(n);
     for (uint32_t i = 0; i < n; ++i) crowd[i] = frames[i % frames.size()];

@@ -26,21 +26,28 @@ sc::FrameParams JointParams(DetectMethod method, sc::Strategy strategy) {
   return fp;
 }
 
+// Two synthetic rigged assets: `a` with 9 joints (spheres of 1, 2, 3 and 4 influences), `b` with 3 (at most 3
+// influences), a contact margin and a fold margin; `n` instances alternating a, b, moved at random
+// (`seed`), each with random joint matrices (`joint_seed`), uploaded.
+void BuildRiggedPair(AssetSet* a, AssetSet* b, uint32_t n, uint32_t seed, uint32_t joint_seed, DeviceInstances* inst) {
+  MakeStar(a, 6, 12, 0.0f, -1.0f, 9);
+  MakeStar(b, 4, 14, 0.05f, 0.02f, 3);
+  REQUIRE(a->device.joint_count() == 9);
+  REQUIRE(b->device.joint_count() == 3);
+  inst->Build({a, b}, n, seed);
+  std::mt19937 rng(joint_seed);
+  for (size_t i = 0; i < inst->table.size(); ++i)
+    inst->joints.push_back(RandomJointMatrices(i % 2 == 0 ? 9 : 3, rng, 3.0f, 0.25f));
+  inst->UploadJoints();
+}
+
 }  // namespace
 
 TEST_CASE("cuda: joint refit on synthetic rigged assets, 1-4 influences, CPU == GPU bit for bit (all strategies)") {
   if (!RequireDevice()) return;
   AssetSet a, b;
-  MakeStar(&a, 6, 12, 0.0f, -1.0f, 9);        // 9 joints, spheres of 1, 2, 3 and 4 influences
-  MakeStar(&b, 4, 14, 0.05f, 0.02f, 3);       // a margin, a fold margin, at most 3 influences
-  REQUIRE(a.device.joint_count() == 9);
-  REQUIRE(b.device.joint_count() == 3);
   DeviceInstances inst;
-  inst.Build({&a, &b}, 96, 31u);
-  std::mt19937 rng(5u);
-  for (size_t i = 0; i < inst.table.size(); ++i)
-    inst.joints.push_back(RandomJointMatrices(i % 2 == 0 ? 9 : 3, rng, 3.0f, 0.25f));
-  inst.UploadJoints();
+  BuildRiggedPair(&a, &b, 96, 31u, 5u, &inst);
   const sc::DeviceAsset* dev[] = {&a.device, &b.device};
   sc::Batch batch;
   REQUIRE(batch.Init(dev, 2, inst.table.data(), 96) == sc::Status::kOk);
@@ -61,19 +68,10 @@ TEST_CASE("cuda: joint refit on synthetic rigged assets, 1-4 influences, CPU == 
 // one asset reads it from the kernel's parameters; the recorded-frame crowd covers that one).
 TEST_CASE("cuda: a crowd of two synthetic rigged assets over the many-instance threshold, both refit sources, CPU == GPU") {
   if (!RequireDevice()) return;
-  int dev_id = 0, sms = 0;
-  CUDA_REQUIRE(cudaGetDevice(&dev_id));
-  CUDA_REQUIRE(cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, dev_id));
-  const uint32_t n = 4u * static_cast<uint32_t>(sms) + 1u;
+  const uint32_t n = ManyInstanceCrowd();
   AssetSet a, b;
-  MakeStar(&a, 6, 12, 0.0f, -1.0f, 9);
-  MakeStar(&b, 4, 14, 0.05f, 0.02f, 3);
   DeviceInstances inst;
-  inst.Build({&a, &b}, n, 37u);
-  std::mt19937 rng(11u);
-  for (size_t i = 0; i < inst.table.size(); ++i)
-    inst.joints.push_back(RandomJointMatrices(i % 2 == 0 ? 9 : 3, rng, 3.0f, 0.25f));
-  inst.UploadJoints();
+  BuildRiggedPair(&a, &b, n, 37u, 11u, &inst);
   const sc::DeviceAsset* dev[] = {&a.device, &b.device};
   sc::Batch batch;
   REQUIRE(batch.Init(dev, 2, inst.table.data(), n) == sc::Status::kOk);
