@@ -469,6 +469,14 @@ struct NarrowPhaseInternal {
       const uint16_t oa = c.m.tri_sphere_[ta], ob = c.m.tri_sphere_[tb];
       if (oa == ob) return;
       if (job.exclusions == Exclusions::kAsset && c.m.IsExcluded(oa, ob)) return;
+      // Two triangles each behind both a and b meet twice under (a, b): once with ta in a's list, once
+      // with it in b's. Only the meeting whose a-side triangle has the lower id goes on.
+      auto behind = [&](uint32_t t, uint32_t s) {
+        for (uint32_t i = c.m.behind_offsets_[t]; i < c.m.behind_offsets_[t + 1]; ++i)
+          if (c.m.behind_[i] == s) return true;
+        return false;
+      };
+      if (ta > tb && behind(ta, b) && behind(tb, a)) return;
       const uint32_t key = a << 16 | b;
       for (uint32_t i = c.m.behind_offsets_[ta]; i < c.m.behind_offsets_[ta + 1]; ++i)
         for (uint32_t j = c.m.behind_offsets_[tb]; j < c.m.behind_offsets_[tb + 1]; ++j) {
@@ -643,12 +651,32 @@ void NarrowPhaseModel::MoveInto(BlockArena* arena) {
   excl_nb_ = excl_partners_.data();
 }
 
+// The arrays carved from block_ release their storage through the arena header at the block's start, so
+// they must go before the block does. The destructor destroys the members in reverse order (arrays first,
+// block_ last); a memberwise move assignment would replace block_ first and free the block under them.
+NarrowPhaseModel& NarrowPhaseModel::operator=(NarrowPhaseModel&& o) noexcept {
+  if (this != &o) {
+    this->~NarrowPhaseModel();
+    new (this) NarrowPhaseModel(std::move(o));
+  }
+  return *this;
+}
+
+NarrowPhaseWorkspace& NarrowPhaseWorkspace::operator=(NarrowPhaseWorkspace&& o) noexcept {
+  if (this != &o) {
+    this->~NarrowPhaseWorkspace();
+    new (this) NarrowPhaseWorkspace(std::move(o));
+  }
+  return *this;
+}
+
 Status NarrowPhaseModel::Init(const AssetView& view, NarrowPhaseRegions regions) {
   *this = NarrowPhaseModel{};
   if (Status s = Build(view, regions); s != Status::kOk) return s;
+  BlockPtr block;  // outlives the reset below: arrays already moved into it are released through it
   SPHERECHAIN_TRY {
     const size_t bytes = BlockArena::BlockBytes(ArrayBytes());
-    BlockPtr block = AllocateBlock(bytes);
+    block = AllocateBlock(bytes);
     BlockArena* arena = BlockArena::Create(block.get(), bytes);
     MoveInto(arena);
     assert(arena->fallbacks == 0);
@@ -793,8 +821,9 @@ void NarrowPhaseWorkspace::ForEachArray(F&& f) {
 Status NarrowPhaseWorkspace::Init(const NarrowPhaseModel& model) {
   *this = NarrowPhaseWorkspace{};
   if (!model.initialized()) return Status::kErrorInvalidJob;
+  BlockPtr block;  // outlives the reset below: arrays already carved from it are released through it
   SPHERECHAIN_TRY {
-    BlockPtr block = AllocateBlock(model.workspace_bytes_);
+    block = AllocateBlock(model.workspace_bytes_);
     BlockArena* arena = BlockArena::Create(block.get(), model.workspace_bytes_);
     if (Status s = Build(model, arena); s != Status::kOk) return s;
     assert(arena->fallbacks == 0);  // workspace_bytes() measured the same arrays

@@ -265,6 +265,74 @@ TEST_CASE("narrow phase: a tube folded on itself touches just after the fold, eq
   CHECK(AsSet(RunJob(&ctx, other, rt::Exclusions::kAsset).contacts) == BruteForce(d, other, false));
 }
 
+// A model or workspace initialised again (an asset reloaded), or moved onto one already initialised, first
+// releases its arrays from its own block: they were freed after the block (use after free; "free():
+// invalid pointer" in an optimised build).
+TEST_CASE("narrow phase: a model and a workspace initialised twice, or moved onto initialised ones, keep working") {
+  st::Mesh mesh;
+  st::Tube tube;
+  tube.rings = 14;
+  tube.sides = 12;
+  tube.spacing = 0.6f;
+  const st::AssetData d = st::MakeTubes({tube}, {}, &mesh);
+  Loaded l = Load(d);
+  const std::vector<float> folded = Fold(mesh, tube, 7, 100.0f);
+  const std::set<Contact> truth = BruteForce(d, folded, true);
+  REQUIRE(!truth.empty());
+  Narrow ctx;
+  REQUIRE(ctx.Init(l.view) == rt::Status::kOk);
+  REQUIRE(ctx.model.Init(l.view) == rt::Status::kOk);  // again, with its arrays in its block
+  REQUIRE(ctx.ws.Init(ctx.model) == rt::Status::kOk);
+  REQUIRE(ctx.ws.Init(ctx.model) == rt::Status::kOk);
+  CHECK(AsSet(RunJob(&ctx, folded, rt::Exclusions::kNone).contacts) == truth);
+  Narrow other;
+  REQUIRE(other.Init(l.view) == rt::Status::kOk);
+  ctx.model = std::move(other.model);  // onto an initialised model; the workspace is now another model's
+  CHECK_FALSE(other.model.initialized());
+  CHECK(RunJob(&ctx, folded, rt::Exclusions::kNone).status == rt::Status::kErrorWorkspaceModel);
+  ctx.ws = std::move(other.ws);  // onto an initialised workspace
+  CHECK(AsSet(RunJob(&ctx, folded, rt::Exclusions::kNone).contacts) == truth);
+}
+
+// Overlapping regions (a kReach model): each sphere's reach is its own triangles and its neighbour's
+// (s ^ 1), so two triangles of the pair (2k, 2k + 1) are both behind both spheres and the sweep of that
+// pair meets them twice, once each way round. Each contact is still reported once, the same as the
+// surrounding regions' model gives.
+TEST_CASE("narrow phase, reach regions: two triangles behind both spheres of a pair are reported once") {
+  st::Mesh mesh;
+  st::Tube tube;
+  tube.rings = 14;
+  tube.sides = 12;
+  tube.spacing = 0.6f;
+  st::AssetData d = st::MakeTubes({tube}, {}, &mesh);
+  const uint32_t S = static_cast<uint32_t>(d.spheres.size());
+  d.reach_offsets.assign(1, 0);
+  for (uint32_t s = 0; s < S; ++s) {
+    std::set<uint32_t> reach;
+    for (uint32_t j : {s, s ^ 1u})
+      if (j < S)
+        for (uint32_t k = d.surrounding_offsets[j]; k < d.surrounding_offsets[j + 1]; ++k) reach.insert(d.surrounding_triangles[k]);
+    d.reach_triangles.insert(d.reach_triangles.end(), reach.begin(), reach.end());
+    d.reach_offsets.push_back(static_cast<uint32_t>(d.reach_triangles.size()));
+  }
+  Loaded l = Load(d);
+  Narrow surrounding, reach;
+  REQUIRE(surrounding.Init(l.view) == rt::Status::kOk);
+  REQUIRE(reach.model.Init(l.view, rt::NarrowPhaseRegions::kReach) == rt::Status::kOk);
+  REQUIRE(reach.model.regions() == rt::NarrowPhaseRegions::kReach);
+  REQUIRE(reach.ws.Init(reach.model) == rt::Status::kOk);
+  const std::vector<float> folded = Fold(mesh, tube, 7, 100.0f);
+  for (rt::Exclusions ex : {rt::Exclusions::kNone, rt::Exclusions::kAsset}) {
+    const Run a = RunJob(&surrounding, folded, ex), b = RunJob(&reach, folded, ex);
+    REQUIRE(a.status == rt::Status::kOk);
+    REQUIRE(b.status == rt::Status::kOk);
+    CHECK(AsSet(b.contacts).size() == b.contacts.size());  // no contact twice
+    CHECK(AsSet(b.contacts) == AsSet(a.contacts));
+    CHECK(b.contacts.size() == a.contacts.size());
+  }
+  CHECK(!RunJob(&reach, folded, rt::Exclusions::kNone).contacts.empty());
+}
+
 TEST_CASE("narrow phase: weld ids give a triangle soup its adjacency") {
   // A tube as a soup: every triangle its own three vertices. Without weld ids, neighbouring triangles
   // of consecutive spheres touch along their shared edges and would be contacts (with no exclusions).

@@ -76,8 +76,8 @@ static_assert(sizeof(TriangleContact) == 12);
 /// and `direction` the normal that achieves it (triangle_b's normal when d_ab <= d_ba, else minus
 /// triangle_a's), so moving triangle_a by depth·direction (or triangle_b by −depth·direction) leaves no
 /// corner of one behind the other's plane. A local estimate: bounded by the triangles' size, not the depth
-/// of a whole limb in another (the deepest contact of a region pair is the best figure of that; see
-/// DeepestRegionPairs). Computed in double from the float positions; a triangle whose normal is zero in
+/// of a whole limb in another (the deepest contact of a region pair is the best figure of that, as
+/// `spherechain check` reports per region pair). Computed in double from the float positions; a triangle whose normal is zero in
 /// double gives depth 0 and direction (0, 0, 0).
 struct ContactDepth {
   float depth;         ///< [Units: model] >= 0
@@ -100,7 +100,8 @@ struct NarrowPhaseStats {
   uint32_t adjacent_skipped = 0;      ///< box-overlapping triangle pairs skipped for sharing a welded corner
   uint32_t triangle_tests = 0;        ///< exact triangle–triangle tests (TrianglesIntersect calls)
   uint32_t degenerate_triangles = 0;  ///< triangles that reached an exact test and were found degenerate
-                                      ///< (zero area, exact; once a frame each): they never make contacts
+                                      ///< (zero area, exact; once a frame each — with a kReach model once
+                                      ///< for each region it lies in): they never make contacts
   uint32_t contacts = 0;              ///< intersecting triangle pairs; > capacity ⇔ truncated
   uint32_t crease_folds = 0;          ///< kCrease: intersecting pairs found near by the graph at a job crease
                                       ///< wider than the asset's (pairs near at the asset's crease are
@@ -130,7 +131,8 @@ class NarrowPhaseModel {
   NarrowPhaseModel(const NarrowPhaseModel&) = delete;
   NarrowPhaseModel& operator=(const NarrowPhaseModel&) = delete;
   NarrowPhaseModel(NarrowPhaseModel&&) noexcept = default;
-  NarrowPhaseModel& operator=(NarrowPhaseModel&&) noexcept = default;
+  /// Releases this model's arrays (while the block they were carved from still exists), then takes `o`'s.
+  NarrowPhaseModel& operator=(NarrowPhaseModel&& o) noexcept;
 
   /// Builds the per-asset data of `view`, the triangles behind each sphere per `regions` (kReach on an
   /// asset without reach regions: the surrounding regions, and the model behaves as kSurrounding's). The
@@ -301,7 +303,8 @@ class NarrowPhaseWorkspace {
   NarrowPhaseWorkspace(const NarrowPhaseWorkspace&) = delete;
   NarrowPhaseWorkspace& operator=(const NarrowPhaseWorkspace&) = delete;
   NarrowPhaseWorkspace(NarrowPhaseWorkspace&&) noexcept = default;
-  NarrowPhaseWorkspace& operator=(NarrowPhaseWorkspace&&) noexcept = default;
+  /// Releases this workspace's arrays (while their block still exists), then takes `o`'s.
+  NarrowPhaseWorkspace& operator=(NarrowPhaseWorkspace&& o) noexcept;
 
   /// Sizes the scratch for `model` in one block of model.workspace_bytes() and records model.id(). The
   /// only allocating call (catches std::bad_alloc). Returns kOk; kErrorInvalidJob (model not
@@ -417,7 +420,9 @@ struct NarrowPhaseJob {
   /// asset's crease — a job may widen the folds, never narrow them below what was baked: kErrorInvalidJob]
   float crease = 0.0f;
   /// [opt] restrict the candidates to these sphere pairs (e.g. a DetectJob's output — then only the
-  /// contacts behind the proxy's pairs are searched); null = every sphere pair (the exact answer).
+  /// contacts behind the proxy's pairs are searched); null = every sphere pair (the exact answer). List
+  /// each pair once, as DetectJob does: a pair listed twice is searched twice and its contacts are
+  /// reported twice.
   const Collision* sphere_pairs = nullptr;
   uint32_t sphere_pair_count = 0;         ///< records in `sphere_pairs`
   TriangleContact* output = nullptr;      ///< [opt when capacity == 0] caller buffer of `capacity` records
@@ -458,7 +463,8 @@ struct NarrowPhaseJob {
   /// kErrorIndexOutOfRange (a sphere_pairs record with a >= b or b >= \#S), else kOk.
   Status Check() const;
   /// Returns Check()'s error (outputs untouched); kErrorNonFinitePositions when a vertex of a
-  /// surrounding region is NaN/Inf (count 0, stats zero); kErrorNonFiniteJoints when a joint matrix holds
+  /// surrounding region (kCrease: of any triangle that is not degenerate by its indices) is NaN/Inf
+  /// (count 0, stats zero); kErrorNonFiniteJoints when a joint matrix holds
   /// a NaN or Inf (count 0, stats zero); kOk; or kOkTruncated when more contacts than
   /// `capacity` exist: output holds the first `capacity` in the documented order, *count == capacity,
   /// stats complete.
