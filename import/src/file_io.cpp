@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -56,7 +57,11 @@ Status WriteFileAtomic(const std::string& path, const void* bytes, size_t size) 
   const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
   if (!fs::is_directory(dir, ec))
     return MakeError(Error::Code::kIo, "cannot write '" + path + "': folder '" + dir.string() + "' does not exist");
-  const fs::path tmp = dir / ("." + target.filename().string() + ".tmp" + std::to_string(::getpid()));
+  // The process and a count of its writes: two threads writing one path at once (Python releases the GIL)
+  // each write a file of their own, and the last rename wins whole.
+  static std::atomic<uint64_t> writes{0};
+  const fs::path tmp = dir / ("." + target.filename().string() + ".tmp" + std::to_string(::getpid()) + "." +
+                              std::to_string(writes.fetch_add(1)));
   {
     std::FILE* f = std::fopen(tmp.c_str(), "wb");
     if (!f) return MakeError(Error::Code::kIo, "cannot create '" + tmp.string() + "'");

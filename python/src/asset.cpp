@@ -162,7 +162,7 @@ py::object Evaluate(const PyAsset& asset, const py::object& mesh_path, std::opti
   } else if (!sweep_margin.is_none()) {
     for (const py::handle& m : sweep_margin) {
       char text[40];
-      std::snprintf(text, sizeof text, "%.17g", m.cast<double>());
+      std::snprintf(text, sizeof text, "%.17g", RealArg(m, "sweep_margin"));
       sweep += (sweep.empty() ? "" : ",") + std::string(text);
     }
   }
@@ -232,7 +232,8 @@ array made from it: they stay alive until the last of those goes, whatever close
 source units of the character the asset was baked from, in its model space (bind pose).
 )doc")
       .def("save", [](PyAsset& self, const py::object& path) {
-             const AssetPtr& data = self.Get();
+             const AssetPtr data = self.Get();  // a reference of its own: close() on another thread while
+                                                // the GIL is released must not free the bytes being written
              const std::string p = PathString(path);
              import::Status s = import::Ok{};
              {

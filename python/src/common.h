@@ -47,6 +47,10 @@ std::string StatusName(runtime::Status status);
 [[noreturn]] void ThrowOffline(PyObject* cls, const import::Error& error, const std::string& text);
 /// Raises ValueError(message).
 [[noreturn]] void ThrowValue(const std::string& message);
+/// `o` as a str, or TypeError ("`what`: expected a str, got T").
+std::string StrArg(py::handle o, const char* what);
+/// `o` as a double (a float, an int, anything with __float__ or __index__), or TypeError naming `what`.
+double RealArg(py::handle o, const char* what);
 
 /// Releases the GIL for a scope (Py_BEGIN_ALLOW_THREADS as RAII): the per-frame calls' lighter form of
 /// py::gil_scoped_release (~30 ns less a call). Nothing touching Python objects may run inside.

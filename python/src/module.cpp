@@ -44,6 +44,21 @@ void ThrowOffline(PyObject* cls, const import::Error& error, const std::string& 
 
 void ThrowValue(const std::string& message) { throw py::value_error(message); }
 
+std::string StrArg(py::handle o, const char* what) {
+  if (!py::isinstance<py::str>(o))
+    throw py::type_error(std::string(what) + ": expected a str, got " + std::string(py::str(py::type::handle_of(o).attr("__name__"))));
+  return o.cast<std::string>();
+}
+
+double RealArg(py::handle o, const char* what) {
+  const double v = PyFloat_AsDouble(o.ptr());  // a float, an int or anything with __float__ / __index__
+  if (v == -1.0 && PyErr_Occurred()) {
+    PyErr_Clear();
+    throw py::type_error(std::string(what) + ": expected a number, got " + std::string(py::str(py::type::handle_of(o).attr("__name__"))));
+  }
+  return v;
+}
+
 namespace {
 
 PyArray_Descr* g_pair_dtype = nullptr;
@@ -51,7 +66,9 @@ PyArray_Descr* g_contact_dtype = nullptr;
 
 // np.dtype(fields), checked against the C++ struct it mirrors: same size, each field at its offset.
 PyArray_Descr* MakeDtype(const py::list& fields, size_t itemsize, const std::vector<std::pair<const char*, size_t>>& offsets) {
-  py::object dtype = py::module_::import("numpy").attr("dtype")(fields);
+  // align=True: the records are read and written in place as the runtime's structs, so an array of this dtype
+  // counts as aligned (PyArray_ISALIGNED) only at the structs' alignment (4), not at any byte.
+  py::object dtype = py::module_::import("numpy").attr("dtype")(fields, py::arg("align") = true);
   if (dtype.attr("itemsize").cast<size_t>() != itemsize)
     throw std::runtime_error("spherechain: record dtype size does not match the runtime's struct");
   py::dict by_name = dtype.attr("fields");

@@ -193,8 +193,11 @@ float MarginOf(PyObject* value, const char* what) {
 // final, so its layout is pybind11's simple one).
 PyWorkspace& Self(PyObject* self) {
   auto* inst = reinterpret_cast<py::detail::instance*>(self);
+  // Constructed, not only allocated: pybind11 gives an instance made by __new__ alone raw storage on the
+  // first cast of it.
+  const bool made = inst->simple_layout ? inst->simple_holder_constructed : inst->get_value_and_holder().holder_constructed();
   void* value = inst->simple_layout ? inst->simple_value_holder[0] : inst->get_value_and_holder().value_ptr();
-  if (!value) throw py::type_error("spherechain.Workspace: not initialised (make one with Model.workspace())");
+  if (!made || !value) throw py::type_error("spherechain.Workspace: not initialised (make one with Model.workspace())");
   return *static_cast<PyWorkspace*>(value);
 }
 
@@ -348,10 +351,10 @@ py::object NarrowPhase(PyWorkspace& self, py::handle positions, const py::object
     job.sphere_pairs = static_cast<const runtime::Collision*>(PyArray_DATA(p));
     job.sphere_pair_count = uint32_t(std::min<npy_intp>(PyArray_DIM(p, 0), std::numeric_limits<uint32_t>::max()));
   }
-  std::string exclusion = exclusions.is_none() ? "" : exclusions.cast<std::string>();
+  std::string exclusion = exclusions.is_none() ? "" : StrArg(exclusions, "exclusions");
   if (!exclusion.empty() && exclusion != "crease" && exclusion != "asset" && exclusion != "none")
     ThrowValue("exclusions: expected \"crease\", \"asset\", \"none\" or None, got \"" + exclusion + "\"");
-  if (!crease.is_none()) job.crease = static_cast<float>(crease.cast<double>());
+  if (!crease.is_none()) job.crease = static_cast<float>(RealArg(crease, "crease"));
   if (!matrices.is_none()) {  // the joint-matrix cull: refit_joints()'s layout
     PyObject* object = matrices.ptr();
     auto* a = reinterpret_cast<PyArrayObject*>(object);
@@ -614,16 +617,17 @@ exclusions: "crease" (the skin's own definition: every intersecting pair not nea
     "none" (any two spheres); None: "crease" when the asset has the rule and `pairs` is None, else "asset".
 pairs: None (search every pair: the exact answer) or PAIR_DTYPE records from detect() to search behind.
 regions: "surrounding" or "reach" (the triangles behind a sphere; "reach" finds more behind `pairs`).
-crease: the fold distance [source units] of a "crease" search; None: the asset's.
+crease: the fold distance [source units] of a "crease" search (only there); None: the asset's.
 matrices: None, or the skinning matrices that deformed `positions` (as refit_joints() takes them) for a
     "crease" search on an asset baked with skin_weights=True: neighbouring skin that moved nearly rigidly is
     skipped, the same contacts found. The positions must be that linear blend skinning of the bind pose.
 Returns a new numpy.ndarray of dtype CONTACT_DTYPE: triangle_a, triangle_b (uint32, source triangle indices),
 sphere_a, sphere_b (uint16 owners, 0xFFFF for an unassigned triangle), depth (float32, source units) and
 direction (3 float32, unit) of the separating-axis push — NaN unless exclusions is "crease".
-Raises ValueError, StatusError (kErrorVertexCount, kErrorNonFinitePositions: a vertex of a surrounding region
-is NaN or inf; kErrorMissingField: "crease" on an asset without the rule, or matrices on one without skin
-weights; kErrorJointCount; kErrorNonFiniteJoints; kErrorInvalidJob: matrices with another exclusions).
+Raises TypeError (exclusions not a str, crease not a number), ValueError, StatusError (kErrorVertexCount,
+kErrorNonFinitePositions: a vertex of a surrounding region is NaN or inf; kErrorMissingField: "crease" on an
+asset without the rule, or matrices on one without skin weights; kErrorJointCount; kErrorNonFiniteJoints;
+kErrorInvalidJob: a crease or matrices with another exclusions).
 Cost: the runtime's narrow phase (docs/performance.md); the first call builds the narrow phase's model and
 scratch, and each call allocates the returned array.
 )doc")

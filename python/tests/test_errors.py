@@ -129,6 +129,8 @@ def test_bad_call_arguments(asset, ws):
         ws.refit(good, positions=good)
     with pytest.raises(TypeError):
         spherechain.Workspace()
+    with pytest.raises(TypeError, match="not initialised"):  # allocated by __new__ alone, never made
+        spherechain.Workspace.__new__(spherechain.Workspace).refit(good)
     with pytest.raises(TypeError):
         spherechain.Model("not an asset")
 
@@ -161,6 +163,20 @@ def test_bad_out_and_pairs(asset, ws):
     with pytest.raises(StatusError) as e:
         ws.narrow_phase(good, exclusions="crease", crease=1e-9)  # narrower than baked
     assert status_of(e) == "kErrorInvalidJob"
+    with pytest.raises(StatusError) as e:
+        ws.narrow_phase(good, exclusions="asset", crease=0.05)  # a crease outside the crease rule: not ignored
+    assert status_of(e) == "kErrorInvalidJob"
+    with pytest.raises(TypeError, match="exclusions"):
+        ws.narrow_phase(good, exclusions=1)
+    with pytest.raises(TypeError, match="crease"):
+        ws.narrow_phase(good, exclusions="crease", crease="wide")
+    # Records read and written in place must sit at the structs' alignment (4), not at any byte.
+    misaligned = np.frombuffer(bytearray(12 * 20 + 1), PAIR_DTYPE, count=20, offset=1)
+    assert not misaligned.flags.aligned
+    with pytest.raises(ValueError, match="PAIR_DTYPE"):
+        ws.detect(out=misaligned)
+    with pytest.raises(ValueError, match="PAIR_DTYPE"):
+        ws.narrow_phase(good, pairs=misaligned)
 
 
 def test_joint_matrices(asset, ws):

@@ -904,6 +904,8 @@ Status NarrowPhaseJob::Check() const {
     if (!model->has_crease()) return Status::kErrorMissingField;
     if (sphere_pairs || !std::isfinite(crease) || crease < 0.0f || (crease > 0.0f && crease < model->crease()))
       return Status::kErrorInvalidJob;
+  } else if (crease != 0.0f) {
+    return Status::kErrorInvalidJob;  // a crease means the crease rule; silently ignored it would mislead
   }
   if (joint_matrices) {
     if (exclusions != Exclusions::kCrease) return Status::kErrorInvalidJob;

@@ -331,7 +331,8 @@ typedef enum sc_exclusions {
 typedef struct sc_narrow_phase_options {
   sc_exclusions exclusions;   ///< which contacts count (default #SC_EXCLUSIONS_ASSET)
   /// #SC_EXCLUSIONS_CREASE only: the fold distance [Units: source]; 0 = the asset's
-  /// (sc_model_info::crease). [Limit: 0 or >= the asset's crease, finite]
+  /// (sc_model_info::crease). [Limit: 0 or >= the asset's crease, finite; 0 with other exclusions, else
+  /// #SC_ERROR_INVALID_JOB]
   float crease;
   /// [opt] restrict the search to these sphere pairs (e.g. sc_detect()'s output: only the contacts behind
   /// the broad phase's pairs); NULL = every sphere pair (the exact answer). Not with #SC_EXCLUSIONS_CREASE.

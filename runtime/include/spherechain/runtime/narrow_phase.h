@@ -417,7 +417,8 @@ struct NarrowPhaseJob {
   PositionsView positions;                ///< deformed vertex positions, same as RefitJob's
   Exclusions exclusions = Exclusions::kAsset;
   /// kCrease only: the fold distance [Units: model]; 0 = the asset's (Asset.crease). [Limit: 0 or >= the
-  /// asset's crease — a job may widen the folds, never narrow them below what was baked: kErrorInvalidJob]
+  /// asset's crease — a job may widen the folds, never narrow them below what was baked; not 0 with other
+  /// exclusions: kErrorInvalidJob]
   float crease = 0.0f;
   /// [opt] restrict the candidates to these sphere pairs (e.g. a DetectJob's output — then only the
   /// contacts behind the proxy's pairs are searched); null = every sphere pair (the exact answer). List
@@ -456,7 +457,7 @@ struct NarrowPhaseJob {
   /// kErrorNullArgument (model, workspace, count or positions.data null; output null with capacity > 0;
   /// sphere_pairs null with sphere_pair_count > 0), kErrorInvalidJob (model or workspace not
   /// initialised, unknown exclusions; kCrease with sphere_pairs or a crease below the asset's or not
-  /// finite; joint_matrices with exclusions other than kCrease), kErrorMissingField (kCrease on an asset
+  /// finite; a crease or joint_matrices with exclusions other than kCrease), kErrorMissingField (kCrease on an asset
   /// without the crease rule; joint_matrices on an asset without skin weights per vertex: re-bake),
   /// kErrorJointCount (joint_count != NarrowPhaseModel::joint_count()), kErrorAlignment (joint_matrices
   /// not 4-byte aligned), kErrorWorkspaceModel (the workspace was made for another model), kErrorAlignment (positions not 4-byte aligned), kErrorStride, kErrorVertexCount,
