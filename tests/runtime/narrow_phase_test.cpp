@@ -459,6 +459,12 @@ TEST_CASE("narrow phase: bad input gets its status and no output") {
   CHECK(job.Run() == rt::Status::kErrorIndexOutOfRange);
   job.sphere_pairs = nullptr;
   job.sphere_pair_count = 0;
+  job.crease = 1.0f;  // a crease belongs to the crease rule: refused, not ignored, under kAsset / kNone
+  CHECK(job.Run() == rt::Status::kErrorInvalidJob);
+  job.exclusions = rt::Exclusions::kNone;
+  CHECK(job.Run() == rt::Status::kErrorInvalidJob);
+  job.exclusions = rt::Exclusions::kAsset;
+  job.crease = 0.0f;
   CHECK(n == 77);  // untouched by argument errors
   std::vector<float> nan = mesh.positions;
   nan[3 * 20 + 1] = std::numeric_limits<float>::quiet_NaN();
