@@ -63,7 +63,7 @@ struct PyModel {
 struct PyWorkspace {
   ModelPtr model;
   runtime::Workspace ws;
-  std::vector<runtime::Collision> pairs;  // DetectBound of either method: never truncated
+  std::vector<runtime::Collision> pairs;  // detect()'s records: up to 4,096 at first, grown to a frame's count
   runtime::NarrowPhaseWorkspace narrow[2];
   std::vector<runtime::TriangleContact> contacts;
   std::vector<runtime::ContactDepth> depths;
@@ -331,6 +331,13 @@ PyObject* Detect(PyWorkspace& self, PyObject* method, PyObject* margin, PyObject
     NoGil release;
     s = job.Run();
   }
+  if (!into && s == Status::kOkTruncated) {  // more pairs than the buffer holds: grown to them, run again
+    self.pairs.resize(stats.distinct_pairs);
+    job.output = self.pairs.data();
+    job.capacity = uint32_t(self.pairs.size());
+    NoGil release;
+    s = job.Run();
+  }
   if (runtime::Failed(s)) ThrowStatus(s, "detect");
   if (into) return PyLong_FromUnsignedLong(stats.distinct_pairs);
   PyArrayObject* result = NewRecords(PairDtype(), count);
@@ -438,7 +445,9 @@ std::unique_ptr<PyWorkspace> MakeWorkspace(const PyModel& model) {
   auto w = std::make_unique<PyWorkspace>();
   w->model = model.data;
   if (const Status s = w->ws.Init(model.data->model); runtime::Failed(s)) ThrowStatus(s, "Workspace::Init");
-  w->pairs.resize(std::max<size_t>(1, std::max(model.data->bound[0], model.data->bound[1])));
+  // DetectBound is #S(#S−1)/2 records: 12 B × 2·10^9 for the format's largest assets. Most frames report far
+  // fewer; Detect grows the buffer when one reports more.
+  w->pairs.resize(std::max<size_t>(1, std::min<size_t>(4096, std::max(model.data->bound[0], model.data->bound[1]))));
   return w;
 }
 
@@ -447,6 +456,7 @@ std::unique_ptr<PyWorkspace> MakeWorkspace(const PyModel& model) {
 // each frame's spheres, refitted before its batch).
 py::dict TimeJobs(PyWorkspace& self, const py::list& frames, const py::object& joint_frames, int reps) {
   Exclusive exclusive(self);
+  self.pairs.resize(std::max<size_t>(1, std::max(self.model->bound[0], self.model->bound[1])));  // never truncated
   std::vector<runtime::PositionsView> views;
   for (const py::handle& f : frames) views.push_back(PositionsOf(f.ptr(), self.model->model.vertex_count()));
   std::vector<const float*> joints;

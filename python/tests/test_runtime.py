@@ -153,6 +153,12 @@ def test_out_buffer(creature):
     assert records(small) == records(expected[:1]), "truncated to the first"
     assert ws.detect("m2", None, None, out) == len(expected), "positional out"
     assert model.detect_bound("m1") <= model.detect_bound("m2")
+    # A frame with more pairs than the workspace's first buffer (4,096 records): a margin wider than the body
+    # makes every pair that is not excluded overlap. detect() grows its buffer and returns them all.
+    everything = ws.detect("m2", margin=1e6)
+    assert 4096 < len(everything) <= model.detect_bound("m2")
+    n = ws.detect("m2", margin=1e6, out=out)
+    assert n == len(everything) and records(out[:n]) == records(everything)
 
 
 def test_spheres_and_margins(creature):
