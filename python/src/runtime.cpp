@@ -681,7 +681,8 @@ method: "m1" (pairs within each chain) or "m2" (every pair).
 margin, fold_margin: contact margins [source units, >= 0]; None: the asset's (Model.contact_margin,
     Model.fold_margin).
 out: None — returns a new numpy.ndarray of dtype PAIR_DTYPE (a uint16, b uint16, depth float32 [source
-    units: rA + rB − |cA − cB|], chains uint32 bitmask), one record per pair (allocates it);
+    units: rA + rB − |cA − cB|], chains uint32 bitmask), one record per pair (allocates it; a frame with
+    more pairs than the workspace has held, past 4,096, also grows the workspace's buffer and runs twice);
     or a writable 1-D array of PAIR_DTYPE — the pairs are written into it and the call returns their total
     count n (an int; out[:min(n, len(out))] hold them; n > len(out) means truncated: size it with
     Model.detect_bound(method)). Order: runtime's (M1 by chain, M2 by (a, b)).
