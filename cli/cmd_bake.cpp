@@ -122,6 +122,8 @@ int RunBake(const BakeArgs& a) {
     const std::filesystem::path dir = std::filesystem::path(*out).parent_path();
     if (!dir.empty() && !std::filesystem::is_directory(dir))
       return Fail("cannot write '" + *out + "': folder '" + dir.string() + "' does not exist");
+    if (std::filesystem::is_directory(*out))
+      return Fail(import::Error{import::Error::Code::kIo, "cannot write '" + *out + "': it is a folder"});
   }
   auto result = baker::Bake(a.inputs.front(), config, &ctx);
   if (!result.ok()) return Fail(result.error());
@@ -139,24 +141,37 @@ int RunBake(const BakeArgs& a) {
   }
 
   // Everything is in memory; write each output atomically (a failure leaves no partial file). The PNG
-  // first (it needs an outside tool, rsvg-convert), the asset after the files about it, the depfile last:
-  // a failure leaves the previous asset in place, and no depfile that would call it up to date.
+  // first (it needs an outside tool, rsvg-convert), the asset after the files about it, the depfile last.
+  // All or nothing: when a write fails, the outputs this run already wrote are removed (the files about an
+  // asset that was not written; an asset whose depfile was not), so a build system runs the bake again
+  // instead of taking a mix of new and old files as up to date.
+  std::vector<const std::string*> written;
+  auto fail_removing = [&](const import::Error& e) {
+    std::error_code ec;
+    for (const std::string* path : written) std::filesystem::remove(*path, ec);
+    return Fail(e);
+  };
   if (!a.png.empty()) {
     runtime::AssetView view;
     if (runtime::Failed(runtime::LoadAsset(r.asset.data(), r.asset.size(), &view)))
       return Fail("internal: the baked asset does not load");
     if (auto s = playback::RenderDebugPng(r.mesh, view, a.png); !s.ok()) return Fail(s.error());
+    written.push_back(&a.png);
   }
   if (!a.report.empty()) {
     const std::string text = JsonText(baker::MakeBakeReport(r, config, ctx)) + "\n";
-    if (auto s = import::WriteFileAtomic(a.report, text); !s.ok()) return Fail(s.error());
+    if (auto s = import::WriteFileAtomic(a.report, text); !s.ok()) return fail_removing(s.error());
+    written.push_back(&a.report);
   }
-  if (!a.ray_csv.empty())
-    if (auto s = import::WriteFileAtomic(a.ray_csv, baker::TorsoRayCsv(r)); !s.ok()) return Fail(s.error());
-  if (auto s = import::WriteFileAtomic(a.output, r.asset.data(), r.asset.size()); !s.ok()) return Fail(s.error());
+  if (!a.ray_csv.empty()) {
+    if (auto s = import::WriteFileAtomic(a.ray_csv, baker::TorsoRayCsv(r)); !s.ok()) return fail_removing(s.error());
+    written.push_back(&a.ray_csv);
+  }
+  if (auto s = import::WriteFileAtomic(a.output, r.asset.data(), r.asset.size()); !s.ok()) return fail_removing(s.error());
+  written.push_back(&a.output);
   // Last: a depfile names an asset that is there (a build system reads it once the command succeeded).
   if (!a.depfile.empty())
-    if (auto s = import::WriteFileAtomic(a.depfile, depfile); !s.ok()) return Fail(s.error());
+    if (auto s = import::WriteFileAtomic(a.depfile, depfile); !s.ok()) return fail_removing(s.error());
   PrintSummary(r, ctx);
   Out("\nwrote %s (%zu bytes)", a.output.c_str(), r.asset.size());
   if (!a.report.empty()) Out(", %s", a.report.c_str());

@@ -30,8 +30,9 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr int kExitFailed = 1, kExitBadInput = 2;
-// Bump when the baker's output for the same input changes: cached assets of other versions are not reused.
-constexpr const char* kCacheVersion = "spherechain 0.1.0 bake defaults 1";
+// With the baker's version (baker::kGenerator, bumped when its output for the same input changes): bump when
+// check's own bake settings change. Cached assets of other versions are not reused.
+constexpr const char* kCacheVersion = "check bake defaults 1";
 
 struct CheckArgs {
   std::string character, asset, rig, max_depth, policy, baseline, json, junit, html, cache_dir;
@@ -59,7 +60,10 @@ fs::path CacheDir(const std::string& explicit_dir) {
 // What the bake of `mesh` depends on: bind positions and triangles, skin weights, the bone tree, the
 // importer's vertex contract, the baker's version.
 uint64_t BakeKey(const import::Mesh& mesh, const std::string& rig) {
-  std::string k = kCacheVersion;
+  std::string k = std::string(kCacheVersion) + "|" + baker::kGenerator;
+  // The importer's reading of the file beyond the vertices: the up axis and the unit steer the bake.
+  k += "|up " + std::to_string(static_cast<int>(mesh.up_axis));
+  k.append(reinterpret_cast<const char*>(&mesh.unit_scale_m), sizeof(float));
   const import::Fingerprint fp = import::ComputeFingerprint(mesh);
   k += "|" + std::to_string(fp.vertex_count) + "|" + std::to_string(fp.triangle_count) + "|" +
        std::to_string(fp.positions_hash) + "|" + std::to_string(fp.indices_hash) + "|" + mesh.vertex_contract + "|" + rig;

@@ -11,7 +11,7 @@ int main(int argc, char** argv) {
   CLI::App app{"spherechain — sphere-chain self-collision assets for animated characters\n"
                "(Madera, Ayala, Moo-Mena 2015: Self-collision Detection using Sphere Chains)"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "spherechain 0.1.0");
+  app.set_version_flag("--version", "spherechain " SPHERECHAIN_VERSION);  // the CMake project's version
   bool verbose = false, quiet = false;
   app.add_flag("-v,--verbose", verbose, "Log every stage in detail");
   app.add_flag("-q,--quiet", quiet, "Log warnings and errors only");

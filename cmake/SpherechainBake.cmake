@@ -10,8 +10,10 @@
 # read — the character file, its glTF buffers and images, a MakeHuman rig and weights, the configuration, a
 # region map — so the build rebakes exactly when one of them changes, and when the spherechain executable
 # does. A relative INPUT or CONFIG is taken from the current source folder, a relative OUTPUT or REPORT from the
-# current binary folder. OPTIONS go to `spherechain bake` as they are (docs/cli.md). The asset is written
-# atomically; a failed bake fails the build and leaves no asset. Needs CMake 3.20 (DEPFILE with every
+# current binary folder. OPTIONS go to `spherechain bake` as they are (docs/cli.md; a relative path among them
+# is taken from the binary folder, where the bake runs). The asset is written atomically; a failed bake fails
+# the build and writes nothing (an asset of an earlier bake stays, older than what changed, so the next
+# build bakes again). Needs CMake 3.20 (DEPFILE with every
 # generator Ninja and Makefiles use, and policy CMP0116, which this sets for the call's directory).
 if(COMMAND spherechain_bake)
   return()

@@ -11,8 +11,7 @@ mkdir -p out
 input=../shared/data/makehuman/base.obj
 [ -f "$input" ] || input=/usr/share/assimp/models/X/BCN_Epileptic.X
 name=$(basename "${input%.*}")
-build/release/cli/spherechain bake "$input" -o "out/$name.sphc" --report "out/$name.json" \
-  --ray-csv "out/$name.rays.csv" --png "out/$name.png"
+build/release/cli/spherechain bake "$input" -o "out/$name.sphc" --report "out/$name.json" --png "out/$name.png"
 build/release/cli/spherechain inspect "out/$name.sphc"
 build/release/cli/spherechain export-debug "out/$name.sphc" --mesh "$input" -o "out/$name.debug.gltf"
 # The Python module (built when python3-dev, python3-numpy and pybind11-dev are there: setup.sh installs them),
@@ -27,4 +26,4 @@ if [ -d build/release/python/spherechain ]; then
 fi
 echo
 echo "results in $(pwd)/out: $name.sphc (asset), $name.json (report), $name.png (front/side views),"
-echo "  $name.debug.gltf (open in any glTF viewer), $name.rays.csv (per-ray torso comparison)"
+echo "  $name.debug.gltf (open in any glTF viewer)"

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <set>
 #include <type_traits>
@@ -185,7 +186,14 @@ Result<BakeConfig> LoadBakeConfig(const std::string& path, Context* ctx) {
   auto bytes = ReadFileBytes(path, 16u << 20);
   if (!bytes.ok()) return bytes.error();
   if (ctx) ctx->RecordFileRead(path);
-  return ParseBakeConfig(std::string(bytes->begin(), bytes->end()), path);
+  auto config = ParseBakeConfig(std::string(bytes->begin(), bytes->end()), path);
+  if (!config.ok()) return config;
+  // A configuration names its region map and rig relative to its own folder (it travels with them, and a
+  // build system runs the bake from another folder).
+  const std::filesystem::path dir = std::filesystem::path(path).parent_path();
+  for (std::string* p : {&config->region_map, &config->import.rig_path})
+    if (!p->empty() && std::filesystem::path(*p).is_relative() && !dir.empty()) *p = (dir / *p).string();
+  return config;
 }
 
 Status ApplyBakeOptions(const BakeOptions& o, BakeConfig* config) {

@@ -141,7 +141,7 @@ std::vector<uint8_t> BuildAsset(const AssetInputs& in) {
 
   auto accuracy = fb::CreateAccuracy(b, ToStats(b, in.accuracy.phi1), ToStats(b, in.accuracy.phi1_adjusted),
                                      ToStats(b, in.accuracy.phi2));
-  auto generator = b.CreateString("spherechain-baker 0.2.0");
+  auto generator = b.CreateString(kGenerator);
   auto fit_method = b.CreateString(FitMethodName(in.params.method));
   flatbuffers::Offset<fb::Coverage> coverage = 0;
   if (in.coverage)

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <numeric>
+#include <cerrno>
 #include <cstring>
 #include <system_error>
 
@@ -57,14 +58,10 @@ Status WriteFileAtomic(const std::string& path, const void* bytes, size_t size) 
   const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
   if (!fs::is_directory(dir, ec))
     return MakeError(Error::Code::kIo, "cannot write '" + path + "': folder '" + dir.string() + "' does not exist");
-  // The process and a count of its writes: two threads writing one path at once (Python releases the GIL)
-  // each write a file of their own, and the last rename wins whole.
-  static std::atomic<uint64_t> writes{0};
-  const fs::path tmp = dir / ("." + target.filename().string() + ".tmp" + std::to_string(::getpid()) + "." +
-                              std::to_string(writes.fetch_add(1)));
+  const fs::path tmp = TemporaryPathFor(path);
   {
     std::FILE* f = std::fopen(tmp.c_str(), "wb");
-    if (!f) return MakeError(Error::Code::kIo, "cannot create '" + tmp.string() + "'");
+    if (!f) return MakeError(Error::Code::kIo, "cannot create '" + tmp.string() + "': " + std::strerror(errno));
     const bool ok = std::fwrite(bytes, 1, size, f) == size && std::fflush(f) == 0 && ::fsync(::fileno(f)) == 0;
     const bool closed = std::fclose(f) == 0;
     if (!ok || !closed) {
@@ -74,10 +71,23 @@ Status WriteFileAtomic(const std::string& path, const void* bytes, size_t size) 
   }
   fs::rename(tmp, target, ec);
   if (ec) {
+    const std::string why = ec.message();  // before the removal below reuses `ec`
     fs::remove(tmp, ec);
-    return MakeError(Error::Code::kIo, "cannot rename the temporary file onto '" + path + "': " + ec.message());
+    return MakeError(Error::Code::kIo, "cannot rename the temporary file onto '" + path + "': " + why);
   }
   return Ok{};
+}
+
+std::string TemporaryPathFor(const std::string& path, const std::string& suffix) {
+  namespace fs = std::filesystem;
+  // The process and a count of its temporary files: two threads writing one path at once (Python releases
+  // the GIL) each write a file of their own, and the last rename wins whole.
+  static std::atomic<uint64_t> count{0};
+  const fs::path target(path);
+  const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
+  return (dir / ("." + target.filename().string() + ".tmp" + std::to_string(::getpid()) + "." +
+                 std::to_string(count.fetch_add(1)) + suffix))
+      .string();
 }
 
 Result<std::string> MakeDepfile(const std::string& target, const std::vector<std::string>& prerequisites) {

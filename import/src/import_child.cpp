@@ -23,6 +23,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <mutex>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -261,20 +262,28 @@ void ChildPhase(char phase) {
 
 Result<Mesh> ImportInChild(const std::string& path, const ImportOptions& options, Context* ctx, ChildImporter import) {
   int fds[2];
-  if (::pipe2(fds, O_CLOEXEC) != 0)
-    return FileError(Error::Code::kInternal, path, std::string("cannot start the parser's process: pipe: ") + std::strerror(errno));
-  std::fflush(nullptr);
-  const pid_t pid = ::fork();
-  if (pid < 0) {
-    ::close(fds[0]);
+  pid_t pid = -1;
+  {
+    // From the pipe to the parent's close of its write end, no other import forks: a child forked by
+    // another thread in between (a batch bake, -j) would hold this pipe's write end (the child never
+    // execs, so O_CLOEXEC does not close it), and this import would wait for that child's end.
+    static std::mutex fork_mutex;
+    std::lock_guard<std::mutex> lock(fork_mutex);
+    if (::pipe2(fds, O_CLOEXEC) != 0)
+      return FileError(Error::Code::kInternal, path, std::string("cannot start the parser's process: pipe: ") + std::strerror(errno));
+    std::fflush(nullptr);
+    pid = ::fork();
+    if (pid < 0) {
+      ::close(fds[0]);
+      ::close(fds[1]);
+      return FileError(Error::Code::kInternal, path, std::string("cannot start the parser's process: fork: ") + std::strerror(errno));
+    }
+    if (pid == 0) {
+      ::close(fds[0]);
+      RunChild(fds[1], path, options, import);
+    }
     ::close(fds[1]);
-    return FileError(Error::Code::kInternal, path, std::string("cannot start the parser's process: fork: ") + std::strerror(errno));
   }
-  if (pid == 0) {
-    ::close(fds[0]);
-    RunChild(fds[1], path, options, import);
-  }
-  ::close(fds[1]);
 
   // Read what the child sends until it closes the pipe or the time is up. Phases: 'R' reading with the
   // parser, 'C' converting its scene, then 'D', the size and the answer.

@@ -419,9 +419,11 @@ std::string RenderFrameSvg(const Mesh& mesh, const runtime::AssetView& a, const 
 
 Status SvgToPng(const std::string& svg, const std::string& png_path, bool keep_svg) {
   namespace fs = std::filesystem;
-  const std::string svg_path = png_path + ".svg";
+  // The SVG beside the PNG when it is kept (an output), else under a temporary name of its own, as the PNG
+  // is until its rename: a file of the user's named like either is never touched.
+  const std::string svg_path = keep_svg ? png_path + ".svg" : import::TemporaryPathFor(png_path, ".svg");
   if (Status s = import::WriteFileAtomic(svg_path, svg); !s.ok()) return s;
-  const std::string tmp_png = png_path + ".tmp.png";
+  const std::string tmp_png = import::TemporaryPathFor(png_path, ".png");
   // rsvg-convert -f png -o TMP SVG, without a shell (paths are passed as they are).
   std::vector<std::string> args = {"rsvg-convert", "-f", "png", "-o", tmp_png, svg_path};
   std::vector<char*> argv;
@@ -440,7 +442,11 @@ Status SvgToPng(const std::string& svg, const std::string& png_path, bool keep_s
     return MakeError(Error::Code::kIo, "rsvg-convert failed (install Debian librsvg2-bin) while writing '" + png_path + "'");
   }
   fs::rename(tmp_png, png_path, ec);
-  if (ec) return MakeError(Error::Code::kIo, "cannot move the PNG onto '" + png_path + "': " + ec.message());
+  if (ec) {
+    const std::string why = ec.message();
+    fs::remove(tmp_png, ec);
+    return MakeError(Error::Code::kIo, "cannot move the PNG onto '" + png_path + "': " + why);
+  }
   return Ok{};
 }
 

@@ -2,7 +2,8 @@
 # (paths with spaces, '#' and '$'), and a failed bake writes neither the asset nor the depfile.
 #   1. boxes.obj + --config fast.json + --region-map limbs_detached.json + --force: the three files, absolute.
 #   2. The same without --force fails its plausibility checks: exit 1, no asset, no depfile (an old one stays
-#      untouched, as the asset does).
+#      untouched, as the asset does); a depfile path that is a folder is refused before the bake; a
+#      configuration's relative region map is read from the configuration's folder.
 #   3. The creature in a folder named "a b#c$d": its depfile read by GNU make (`make -q`: up to date, then
 #      out of date once the input is touched) and by Ninja (`ninja -t deps` lists the path; a second build does
 #      nothing, a touched input rebuilds).
@@ -68,7 +69,32 @@ execute_process(COMMAND ${CLI} -q bake ${IMPLAUSIBLE}/boxes.obj -o ${WORK}/x.sph
 if(NOT rc EQUAL 1 OR EXISTS ${WORK}/x.sphc OR NOT err MATCHES "folder")
   message(FATAL_ERROR "--depfile into a missing folder: exit ${rc}, expected 1 before any bake:\n${out}${err}")
 endif()
-message(STATUS "a failed bake: exit 1, no asset, no depfile, an old depfile untouched")
+# An output that is a folder is refused before the bake (it used to fail only at its rename, after the
+# asset was written: Make then took the asset as up to date, with no depfile).
+file(MAKE_DIRECTORY ${WORK}/folder.d)
+execute_process(COMMAND ${CLI} -q bake ${IMPLAUSIBLE}/boxes.obj -o ${WORK}/folder.sphc --depfile ${WORK}/folder.d
+                        --config ${IMPLAUSIBLE}/fast.json --region-map ${IMPLAUSIBLE}/limbs_detached.json --force
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 1 OR EXISTS ${WORK}/folder.sphc OR NOT err MATCHES "is a folder")
+  message(FATAL_ERROR "--depfile onto a folder: exit ${rc}, expected 1 before any bake, no asset:\n${out}${err}")
+endif()
+message(STATUS "a failed bake: exit 1, no asset, no depfile, an old depfile untouched; an output that is a folder refused")
+
+# A configuration's region map is relative to the configuration's folder, wherever the bake runs from.
+file(MAKE_DIRECTORY ${WORK}/cfg ${WORK}/elsewhere)
+file(COPY ${IMPLAUSIBLE}/limbs_detached.json DESTINATION ${WORK}/cfg)
+file(WRITE ${WORK}/cfg/bake.json "{\"cover_voxel_rel\": 0.01, \"region_map\": \"limbs_detached.json\"}")
+execute_process(COMMAND ${CLI} -q bake ${IMPLAUSIBLE}/boxes.obj -o ${WORK}/relative.sphc --depfile ${WORK}/relative.d
+                        --config ../cfg/bake.json --force
+                WORKING_DIRECTORY ${WORK}/elsewhere RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "a configuration's relative region map, run from another folder: exit ${rc}:\n${out}${err}")
+endif()
+file(READ ${WORK}/relative.d text)
+if(NOT text MATCHES "cfg/limbs_detached.json")
+  message(FATAL_ERROR "the depfile does not name the configuration's region map:\n${text}")
+endif()
+message(STATUS "a configuration's region map is found beside it")
 
 # ---- 3. Make and Ninja read it back -------------------------------------------------------------------
 set(odd "${WORK}/a b#c$d")

@@ -16,6 +16,10 @@
 
 namespace spherechain::baker {
 
+/// The baker's name and version, written into every asset (Asset.generator). Bump the version when the
+/// baker's output for the same input changes: `spherechain check` keys its cache of bakes on it.
+inline constexpr const char* kGenerator = "spherechain-baker 0.2.0";
+
 /// Overall accuracy (schema Accuracy).
 struct AccuracySummary {
   AccuracyStats phi1, phi1_adjusted, phi2;

@@ -36,6 +36,9 @@ uint64_t Hash64(const void* data, size_t size);
 /// Writes `bytes` to `path` atomically: a temporary file in the same folder, flushed, then renamed over
 /// `path`. On any failure the temporary is removed and `path` is untouched. Errors: kIo.
 Status WriteFileAtomic(const std::string& path, const void* bytes, size_t size);
+/// A hidden temporary name beside `path` that no other write of this process or another uses
+/// (".NAME.tmpPID.N" + `suffix`, in path's folder): what WriteFileAtomic writes before its rename.
+std::string TemporaryPathFor(const std::string& path, const std::string& suffix = {});
 inline Status WriteFileAtomic(const std::string& path, const std::string& text) {
   return WriteFileAtomic(path, text.data(), text.size());
 }
