@@ -167,6 +167,15 @@ std::set<std::pair<uint32_t, uint32_t>> SkinContactsBruteForce(const st::AssetDa
   return truth;
 }
 
+/// A tube of 14 rings of 12 sides 0.6 apart (radius 1), straight: the asset of the folding tests (Fold at
+/// ring 7).
+st::AssetData ShortTube(st::Mesh* mesh, st::Tube* tube) {
+  tube->rings = 14;
+  tube->sides = 12;
+  tube->spacing = 0.6f;
+  return st::MakeTubes({*tube}, {}, mesh);
+}
+
 /// A tube of 30 rings of 12 sides 0.6 apart (radius 1, length 17.4), its straight bind pose carried by the
 /// asset with a crease of 3 (the crease rule on).
 st::AssetData CreaseTube(st::Mesh* mesh, st::Tube* tube) {
@@ -232,10 +241,7 @@ TEST_CASE("narrow phase: tubes apart have no candidate pair between them and no 
 TEST_CASE("narrow phase: a tube folded on itself touches just after the fold, equal to brute force") {
   st::Mesh mesh;
   st::Tube tube;
-  tube.rings = 14;
-  tube.sides = 12;
-  tube.spacing = 0.6f;
-  const st::AssetData d = st::MakeTubes({tube}, {}, &mesh);
+  const st::AssetData d = ShortTube(&mesh, &tube);
   Loaded l = Load(d);
   Narrow ctx;
   REQUIRE(ctx.Init(l.view) == rt::Status::kOk);
@@ -271,10 +277,7 @@ TEST_CASE("narrow phase: a tube folded on itself touches just after the fold, eq
 TEST_CASE("narrow phase: a model and a workspace initialised twice, or moved onto initialised ones, keep working") {
   st::Mesh mesh;
   st::Tube tube;
-  tube.rings = 14;
-  tube.sides = 12;
-  tube.spacing = 0.6f;
-  const st::AssetData d = st::MakeTubes({tube}, {}, &mesh);
+  const st::AssetData d = ShortTube(&mesh, &tube);
   Loaded l = Load(d);
   const std::vector<float> folded = Fold(mesh, tube, 7, 100.0f);
   const std::set<Contact> truth = BruteForce(d, folded, true);
@@ -301,10 +304,7 @@ TEST_CASE("narrow phase: a model and a workspace initialised twice, or moved ont
 TEST_CASE("narrow phase, reach regions: two triangles behind both spheres of a pair are reported once") {
   st::Mesh mesh;
   st::Tube tube;
-  tube.rings = 14;
-  tube.sides = 12;
-  tube.spacing = 0.6f;
-  st::AssetData d = st::MakeTubes({tube}, {}, &mesh);
+  st::AssetData d = ShortTube(&mesh, &tube);
   const uint32_t S = static_cast<uint32_t>(d.spheres.size());
   d.reach_offsets.assign(1, 0);
   for (uint32_t s = 0; s < S; ++s) {
