@@ -177,8 +177,7 @@ PyArrayObject* NewRecords(PyArray_Descr* dtype, npy_intp count) {
 
 float MarginOf(PyObject* value, const char* what) {
   if (!value || value == Py_None) return -1.0f;  // the asset's
-  const double v = PyFloat_AsDouble(value);
-  if (v == -1.0 && PyErr_Occurred()) throw py::error_already_set();
+  const double v = RealArg(value, what);
   if (v < 0.0)
     ThrowValue(std::string(what) + ": " + std::to_string(v) + " must be >= 0 (source units), or None for the asset's");
   return static_cast<float>(v);  // NaN and inf: the runtime's kErrorInvalidJob
