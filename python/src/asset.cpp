@@ -380,6 +380,7 @@ coverage: measure coverage (the costly part); sweep_margin: None, "auto" or a li
 the height); png: write the picture of the frame with the most missed contacts there.
 Raises EvaluateError (.code, .message; str() is what the CLI prints after "error: ").
 )doc");
+  RefuseBareNew(m.attr("Asset"), "Asset", "use spherechain.load() or spherechain.bake()");
 }
 
 }  // namespace spherechain::python

@@ -52,6 +52,12 @@ std::string StrArg(py::handle o, const char* what);
 /// `o` as a double (a float, an int, anything with __float__ or __index__), or TypeError naming `what`.
 double RealArg(py::handle o, const char* what);
 
+/// Sets `cls.__new__` to one that raises TypeError "spherechain.<name> cannot be made directly: <how>".
+/// For the classes the module makes itself (Asset, Workspace): pybind11 would give an instance made by
+/// `Class.__new__(Class)` alone uninitialised storage, which its methods would then read. The module's own
+/// instances are made without __new__ (pybind11 casts allocate them directly), so they are unaffected.
+void RefuseBareNew(py::handle cls, const char* name, const char* how);
+
 /// Releases the GIL for a scope (Py_BEGIN_ALLOW_THREADS as RAII): the per-frame calls' lighter form of
 /// py::gil_scoped_release (~30 ns less a call). Nothing touching Python objects may run inside.
 class NoGil {

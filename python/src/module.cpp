@@ -59,6 +59,13 @@ double RealArg(py::handle o, const char* what) {
   return v;
 }
 
+void RefuseBareNew(py::handle cls, const char* name, const char* how) {
+  const std::string message = std::string("spherechain.") + name + " cannot be made directly: " + how;
+  cls.attr("__new__") = py::cpp_function([message](py::handle, const py::args&, const py::kwargs&) -> py::object {
+    throw py::type_error(message);
+  }, py::name("__new__"));
+}
+
 namespace {
 
 PyArray_Descr* g_pair_dtype = nullptr;

@@ -440,6 +440,21 @@ py::object Spheres(PyWorkspace& self) {
   return py::reinterpret_steal<py::object>(a);
 }
 
+// Model(asset): runtime::Model::Init of the asset's bytes (without the GIL) and its DetectBounds.
+PyModel BuildModel(const PyAsset& asset) {
+  auto data = std::make_shared<ModelData>();
+  data->asset = asset.Get();
+  Status s;
+  {
+    py::gil_scoped_release release;
+    s = data->model.Init(data->asset->view());
+  }
+  if (runtime::Failed(s)) ThrowStatus(s, "Model::Init");
+  data->bound[0] = runtime::DetectBound(data->asset->view(), runtime::DetectMethod::kM1);
+  data->bound[1] = runtime::DetectBound(data->asset->view(), runtime::DetectMethod::kM2);
+  return PyModel{std::move(data)};
+}
+
 std::unique_ptr<PyWorkspace> MakeWorkspace(const PyModel& model) {
   auto w = std::make_unique<PyWorkspace>();
   w->model = model.data;
@@ -567,25 +582,19 @@ void RegisterRuntime(py::module_& m) {
         py::arg("reps") = 200,
         "bench/python_bench.py's C++ row: RefitJob, DetectJob M1/M2 (and JointRefitJob) on `workspace` over the "
         "frames, timed in C++ as bench/runtime_bench does; a dict of µs per call.");
-  py::class_<PyModel>(m, "Model", R"doc(
+  py::class_<PyModel> model(m, "Model", py::is_final(), R"doc(
 What every character of one asset shares (runtime::Model): built once from an Asset, immutable, shared by
 any number of Workspaces and threads. Holds the asset's bytes alive. The narrow phase's model is built on
 the first Workspace.narrow_phase() call that needs it (NarrowPhaseModel::Init: slow with the crease rule).
-)doc")
-      .def(py::init([](const PyAsset& asset) {
-             auto data = std::make_shared<ModelData>();
-             data->asset = asset.Get();
-             Status s;
-             {
-               py::gil_scoped_release release;
-               s = data->model.Init(data->asset->view());
-             }
-             if (runtime::Failed(s)) ThrowStatus(s, "Model::Init");
-             data->bound[0] = runtime::DetectBound(data->asset->view(), runtime::DetectMethod::kM1);
-             data->bound[1] = runtime::DetectBound(data->asset->view(), runtime::DetectMethod::kM2);
-             return PyModel{std::move(data)};
-           }),
-           py::arg("asset"), "Builds the model of `asset` (an Asset). Raises StatusError (kErrorNullArgument for a "
+)doc");
+  // Model(asset) builds the model in __new__, so that Model.__new__(Model) alone cannot leave an instance
+  // whose storage was never constructed (pybind11 gives such an instance raw storage, which its methods would
+  // read). The __init__ that follows is pybind11's, and it skips an instance already built; it builds one
+  // only when an instance was allocated past this __new__ (pybind11_object.__new__(Model)).
+  model.attr("__new__") = py::cpp_function([](py::handle, const PyAsset& asset) { return py::cast(BuildModel(asset)); },
+                                           py::name("Model"), py::arg("cls"), py::arg("asset"));
+  model
+      .def(py::init(&BuildModel), py::arg("asset"), "Builds the model of `asset` (an Asset). Raises StatusError (kErrorNullArgument for a "
                              "closed asset, kErrorOutOfMemory).")
       .def("workspace", &MakeWorkspace, R"doc(
 A new Workspace: one character's spheres (at the bind pose) and scratch, and the buffers its calls write.
@@ -614,6 +623,7 @@ One character's state for a Model (runtime::Workspace): its current spheres and 
 per-frame calls. Made by Model.workspace(). One call at a time (a second thread gets RuntimeError): use one
 Workspace per thread. Every call releases the GIL while the runtime runs.
 )doc");
+  RefuseBareNew(workspace, "Workspace", "use Model.workspace()");
   workspace
       .def("narrow_phase", &NarrowPhase, py::arg("positions"), py::arg("exclusions") = py::none(),
            py::arg("pairs") = py::none(), py::arg("regions") = "surrounding", py::arg("crease") = py::none(),

@@ -129,10 +129,28 @@ def test_bad_call_arguments(asset, ws):
         ws.refit(good, positions=good)
     with pytest.raises(TypeError):
         spherechain.Workspace()
-    with pytest.raises(TypeError, match="not initialised"):  # allocated by __new__ alone, never made
-        spherechain.Workspace.__new__(spherechain.Workspace).refit(good)
     with pytest.raises(TypeError):
         spherechain.Model("not an asset")
+
+
+def test_no_instance_without_its_data(asset):
+    # __new__ alone must not give an object whose methods read storage that was never constructed.
+    with pytest.raises(TypeError, match="Workspace cannot be made directly: use Model.workspace"):
+        spherechain.Workspace.__new__(spherechain.Workspace)
+    with pytest.raises(TypeError, match="Asset cannot be made directly: use spherechain.load"):
+        spherechain.Asset.__new__(spherechain.Asset)
+    with pytest.raises(TypeError, match="Model"):
+        spherechain.Model.__new__(spherechain.Model)
+    bare = spherechain.Workspace.__mro__[1].__new__(spherechain.Workspace)  # past it: pybind11's own __new__
+    with pytest.raises(TypeError, match="not initialised"):
+        bare.refit(np.asarray(asset.bind_positions))
+    model = spherechain.Model.__new__(spherechain.Model, asset)  # __new__ builds it whole
+    assert model.sphere_count == asset.sphere_count and model.vertex_count == asset.vertex_count
+    assert model.workspace().spheres.shape == (asset.sphere_count, 4)
+    model.__init__(asset)  # a second __init__ changes nothing
+    assert spherechain.Model(asset=asset).sphere_count == asset.sphere_count
+    with pytest.raises(TypeError):
+        type("Sub", (spherechain.Model,), {})  # final: a subclass would get a Model from __new__
 
 
 def test_bad_out_and_pairs(asset, ws):
