@@ -85,7 +85,17 @@ bool StrideFits(size_t stride_bytes) { return stride_bytes <= UINT32_MAX; }
 
 }  // namespace
 
+// The header's versions are the build's: CMake passes PROJECT_VERSION's parts, the runtime its schema range.
+static_assert(SC_VERSION_MAJOR == SPHERECHAIN_VERSION_MAJOR && SC_VERSION_MINOR == SPHERECHAIN_VERSION_MINOR &&
+                  SC_VERSION_PATCH == SPHERECHAIN_VERSION_PATCH,
+              "spherechain.h's SC_VERSION_* differ from the project's version (CMakeLists.txt project())");
+static_assert(SC_SCHEMA_VERSION_OLDEST == spherechain::runtime::kMinSchemaVersion &&
+                  SC_SCHEMA_VERSION_NEWEST == spherechain::runtime::kSchemaVersion,
+              "spherechain.h's SC_SCHEMA_VERSION_* differ from the runtime's (runtime/asset.h)");
+
 extern "C" {
+
+SC_API uint32_t sc_version(void) { return SC_VERSION; }
 
 SC_API const char* sc_status_string(sc_status status) {
   switch (status) {

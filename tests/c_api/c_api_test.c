@@ -212,6 +212,8 @@ static void TestGolden(const char* v3_path, const char* v1_path) {
   CHECK_STATUS(sc_model_get_info(model, &info), SC_OK);
   CHECK_STATUS(sc_model_get_info(model_v1, &info_v1), SC_OK);
   CHECK(info.schema_version == 3 && info_v1.schema_version == 1);
+  CHECK(info_v1.schema_version == SC_SCHEMA_VERSION_OLDEST && info.schema_version <= SC_SCHEMA_VERSION_NEWEST);
+  CHECK(sc_version() == SC_VERSION && SC_VERSION == SC_VERSION_MAJOR * 10000 + SC_VERSION_MINOR * 100 + SC_VERSION_PATCH);
   CHECK(info.sphere_count > 8 && info.chain_count == 6 && info.region_count == 5);
   CHECK(info.vertex_count > 0 && info.triangle_count > 0 && info.joint_count > 0 && info_v1.joint_count == 0);
   CHECK(info.has_narrow_phase == 0 && info.has_crease == 0 && info.crease == 0.0f && info.contact_margin >= 0.0f);

@@ -111,6 +111,26 @@ typedef uint32_t sc_status;
 /// that is none of them. Never null. Lifetime: static. Thread-safe, O(1).
 SC_API const char* sc_status_string(sc_status status);
 
+/* ---- versions ---------------------------------------------------------------------------------------- */
+
+/// The SDK version this header belongs to (the project's version, CMake `PROJECT_VERSION`): major, minor,
+/// patch, and as one number major·10000 + minor·100 + patch. The shared library's SONAME carries major.minor
+/// (`libspherechain_c.so.0.1`): a library of another major.minor may not match this header.
+#define SC_VERSION_MAJOR 0
+#define SC_VERSION_MINOR 1
+#define SC_VERSION_PATCH 0
+#define SC_VERSION (SC_VERSION_MAJOR * 10000 + SC_VERSION_MINOR * 100 + SC_VERSION_PATCH)
+
+/// The Asset.schema_version values this SDK loads (docs/format.md): older assets give
+/// #SC_ERROR_VERSION_TOO_OLD (re-bake), newer ones #SC_ERROR_VERSION_TOO_NEW.
+#define SC_SCHEMA_VERSION_OLDEST 1
+#define SC_SCHEMA_VERSION_NEWEST 4
+
+/// #SC_VERSION of the library actually loaded, for a binding that loads `libspherechain_c` at run time and
+/// was written against some header: compare `sc_version() / 100` with `SC_VERSION / 100` (major and minor).
+/// Never fails. Thread-safe, O(1).
+SC_API uint32_t sc_version(void);
+
 /* ---- model: one asset ---------------------------------------------------------------------------------- */
 
 /// What every character of one asset shares (the runtime's Model, plus its NarrowPhaseModel when created
