@@ -28,6 +28,13 @@ std::string DepthText(double d, const evaluate::CheckReport& r) {
 
 namespace {
 
+// "1.234" (seconds, three decimals).
+std::string Seconds(double t) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.3f", t);
+  return b;
+}
+
 // "150.66 cm" with units, else "1.507 units".
 std::string LengthText(double d, const evaluate::CheckReport& r) {
   char b[48];
@@ -54,7 +61,7 @@ std::string ViewCommand(const CheckPage& a, const evaluate::CheckClip& clip, con
   std::string cmd = a.baked ? "spherechain bake " + ShellWord(a.character) + rig + " -o check.sphc && spherechain view check.sphc"
                             : "spherechain view " + ShellWord(a.asset_name);
   cmd += " --mesh " + ShellWord(a.character) + rig;
-  if (clip.name == "morph" && !poses.empty()) {
+  if (clip.morph) {
     cmd += " --morph";
     for (const std::string& p : poses) cmd += " " + ShellWord(p);
   } else {
@@ -65,8 +72,9 @@ std::string ViewCommand(const CheckPage& a, const evaluate::CheckClip& clip, con
 }
 }  // namespace
 
-bool WriteCheckHtml(const CheckPage& a, const runtime::AssetView& view, const import::Mesh& mesh,
-                    const evaluate::CheckOptions& options, const evaluate::CheckReport& r, std::string* error) {
+bool MakeCheckHtml(const CheckPage& a, const runtime::AssetView& view, const import::Mesh& mesh,
+                   const evaluate::CheckOptions& options, const evaluate::CheckReport& r, std::string* page_out,
+                   std::string* error) {
   const std::string& asset_name = a.asset_name;
   std::string page =
       "<!doctype html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>spherechain check: " + playback::XmlEscape(a.character) +
@@ -98,23 +106,24 @@ bool WriteCheckHtml(const CheckPage& a, const runtime::AssetView& view, const im
         return *error = s.error().message, false;
       std::vector<uint8_t> marks(mesh.triangle_count(), 0);
       for (const auto& [ta, tb] : e.contacts) marks[ta] = marks[tb] = 1;
-      char caption[256];
-      std::snprintf(caption, sizeof caption, "%s frame %u (%.3f s): %s, depth %s", c.name.c_str(), e.deepest_frame,
-                    e.deepest_time, e.name.c_str(), DepthText(e.depth, r).c_str());
+      const std::string caption = c.name + " frame " + std::to_string(e.deepest_frame) + " (" +
+                                  Seconds(e.deepest_time) + " s): " + e.name + ", depth " + DepthText(e.depth, r);
       const std::string svg = playback::RenderFrameSvg(mesh, view, positions.data(), {}, marks, caption, 1200);
-      if (auto s = playback::SvgToPng(svg, png.string()); !s.ok()) return *error = s.error().message, false;
+      if (auto s = playback::SvgToPng(svg, png.string()); !s.ok())
+        return *error = "the picture of " + c.name + ": " + e.name + " at frame " + std::to_string(e.deepest_frame) +
+                        ": " + s.error().message,
+               false;
       std::string bytes;
       const bool read = ReadText(png, &bytes);
       std::error_code ec;
       fs::remove(png, ec);
       if (!read) return *error = "cannot read the picture " + png.string(), false;
-      char line[512];
-      std::snprintf(line, sizeof line,
-                    "frames %u–%u (%.3f–%.3f s), deepest at frame %u; triangles %u / %u, joints %s / %s; %u contacts "
-                    "there%s",
-                    e.first_frame, e.last_frame, e.first_time, e.last_time, e.deepest_frame, e.triangles[0],
-                    e.triangles[1], e.joints[0].c_str(), e.joints[1].c_str(), unsigned(e.contacts.size()),
-                    e.baseline.empty() ? "" : ("; baseline: " + e.baseline).c_str());
+      const std::string line = "frames " + std::to_string(e.first_frame) + "–" + std::to_string(e.last_frame) + " (" +
+                               Seconds(e.first_time) + "–" + Seconds(e.last_time) + " s), deepest at frame " +
+                               std::to_string(e.deepest_frame) + "; triangles " + std::to_string(e.triangles[0]) + " / " +
+                               std::to_string(e.triangles[1]) + ", joints " + e.joints[0] + " / " + e.joints[1] + "; " +
+                               std::to_string(e.contacts.size()) + " contacts there" +
+                               (e.baseline.empty() ? "" : "; baseline: " + e.baseline);
       page += "<figure class=event><figcaption><b>" + playback::XmlEscape(e.name) + "</b> depth " + DepthText(e.depth, r) +
               " over " + DepthText(e.threshold, r) + ": " + playback::XmlEscape(line) + "." +
               (a.key_times ? std::string()
@@ -130,7 +139,7 @@ bool WriteCheckHtml(const CheckPage& a, const runtime::AssetView& view, const im
     }
   }
   page += "</body></html>\n";
-  if (auto s = import::WriteFileAtomic(a.path, page); !s.ok()) return *error = s.error().message, false;
+  *page_out = std::move(page);
   return true;
 }
 

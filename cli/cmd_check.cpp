@@ -122,7 +122,9 @@ bool OpenOrBake(const CheckArgs& a, LoadedAsset* asset, import::Mesh* mesh, std:
   *mesh = std::move(baked->mesh);
   if (!a.no_cache) {
     fs::create_directories(cached.parent_path(), ec);
-    if (auto s = import::WriteFileAtomic(cached.string(), bytes.data(), bytes.size()); s.ok()) {
+    if (ec) {
+      spdlog::warn("cannot cache the bake: cannot make the folder '{}': {}", cached.parent_path().string(), ec.message());
+    } else if (auto s = import::WriteFileAtomic(cached.string(), bytes.data(), bytes.size()); s.ok()) {
       spdlog::info("asset: {} (baked, cached)", cached.string());
       if (import::LoadAssetFile(cached.string(), asset).ok()) return *asset_name = cached.string(), true;
     } else {
@@ -153,6 +155,7 @@ int RunCheck(const CheckArgs& a) {
     const fs::path dir = fs::path(*out).parent_path();
     if (!dir.empty() && !fs::is_directory(dir))
       return BadInput("cannot write '" + *out + "': folder '" + dir.string() + "' does not exist");
+    if (fs::is_directory(*out)) return BadInput("cannot write '" + *out + "': it is a folder");
   }
   nlohmann::json baseline;
   if (!a.baseline.empty()) {
@@ -184,14 +187,14 @@ int RunCheck(const CheckArgs& a) {
     }
   }
   const double height = evaluate::BodyHeight(mesh);
-  if (!a.max_depth.empty()) {
+  if (!a.policy.empty())
+    if (auto s = evaluate::LoadCheckPolicy(a.policy, asset.view, height, mesh.unit_scale_m, &options.policy); !s.ok())
+      return BadInput(s.error().message);
+  if (!a.max_depth.empty()) {  // after the policy: the command line overrides its default_max_depth
     auto d = evaluate::ParseDepth(a.max_depth, height, mesh.unit_scale_m);
     if (!d.ok()) return BadInput("--max-depth: " + d.error().message);
     options.policy.max_depth = d.value();
   }
-  if (!a.policy.empty())
-    if (auto s = evaluate::LoadCheckPolicy(a.policy, asset.view, height, mesh.unit_scale_m, &options.policy); !s.ok())
-      return BadInput(s.error().message);
 
   const bool tty = isatty(2) && !Quiet();
   const auto start = std::chrono::steady_clock::now();
@@ -231,21 +234,26 @@ int RunCheck(const CheckArgs& a) {
   }
   Out("threshold %s by default; %s\n", DepthText(r.max_depth, r).c_str(), r.failed() ? "FAIL" : "PASS");
 
-  // ---- the reports (each written whole, atomically) ---------------------------------------------------
-  if (!a.json.empty()) {
-    if (auto s = import::WriteFileAtomic(a.json, JsonText(evaluate::CheckReportJson(r)) + "\n"); !s.ok())
-      return BadInput(s.error().message);
-    Out("wrote %s\n", a.json.c_str());
-  }
-  if (!a.junit.empty()) {
-    if (auto s = import::WriteFileAtomic(a.junit, evaluate::CheckReportJUnit(r)); !s.ok()) return BadInput(s.error().message);
-    Out("wrote %s\n", a.junit.c_str());
-  }
+  // ---- the reports: all made first, then each written whole, atomically; on a failure none is left ----
+  std::vector<std::pair<const std::string*, std::string>> reports;
+  if (!a.json.empty()) reports.emplace_back(&a.json, JsonText(evaluate::CheckReportJson(r)) + "\n");
+  if (!a.junit.empty()) reports.emplace_back(&a.junit, evaluate::CheckReportJUnit(r));
   if (!a.html.empty()) {
-    const CheckPage page{a.html, a.character, asset_name, a.key_times, a.rig, asset_name == a.character + " (baked)"};
-    if (!WriteCheckHtml(page, asset.view, mesh, options, r, &error)) return BadInput("--html: " + error);
-    Out("wrote %s\n", a.html.c_str());
+    const CheckPage page{a.character, asset_name, a.key_times, a.rig, asset_name == a.character + " (baked)"};
+    std::string html;
+    if (!MakeCheckHtml(page, asset.view, mesh, options, r, &html, &error))
+      return BadInput("--html '" + a.html + "': " + error + " (the check itself: " + (r.failed() ? "FAIL" : "PASS") +
+                      "; no report written)");
+    reports.emplace_back(&a.html, std::move(html));
   }
+  for (size_t i = 0; i < reports.size(); ++i) {
+    if (auto s = import::WriteFileAtomic(*reports[i].first, reports[i].second); !s.ok()) {
+      std::error_code ec;
+      for (size_t k = 0; k < i; ++k) fs::remove(*reports[k].first, ec);
+      return BadInput(s.error().message + " (the check itself: " + (r.failed() ? "FAIL" : "PASS") + "; no report written)");
+    }
+  }
+  for (const auto& [path, text] : reports) Out("wrote %s\n", path->c_str());
   return r.failed() ? kExitFailed : 0;
 }
 
@@ -273,10 +281,13 @@ void RegisterCheck(CLI::App& app, Commands* commands) {
                                        "Also check the morph through key poses (files, folders); bare: the "
                                        "character's default poses. How a mesh without clips is checked")
                            ->expected(0, CLI::detail::expected_max_vector_size);
-  sub->add_option("--morph-frames", args->morph_frames, "Frames of the morph (default 40)")->check(CLI::PositiveNumber);
-  sub->add_option("--fps", args->fps, "Frames per second a clip is sampled at (default 30)");
+  sub->add_option("--morph-frames", args->morph_frames, "Frames of the morph (default 40)")
+      ->check(CLI::PositiveNumber)
+      ->needs(args->poses_option);
+  CLI::Option* fps = sub->add_option("--fps", args->fps, "Frames per second a clip is sampled at (default 30)");
   sub->add_flag("--key-times", args->key_times,
-                "Play each clip at its own key times instead of --fps (the poses the animator set)");
+                "Play each clip at its own key times instead of --fps (the poses the animator set)")
+      ->excludes(fps);
   sub->add_option("--max-depth", args->max_depth,
                   "Deepest penetration allowed: 1cm, 5mm, 0.02m, 1% (of the height; the default) or model units");
   sub->add_option("--policy", args->policy, "JSON policy: allowed region pairs and per-pair depths (see below)")

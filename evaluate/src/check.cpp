@@ -2,6 +2,7 @@
 #include "spherechain/evaluate/check.h"
 
 #include <algorithm>
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -17,6 +18,7 @@
 #include "spherechain/playback/debug_export.h"
 #include "spherechain/playback/session.h"
 #include "spherechain/runtime/narrow_phase.h"
+#include "evaluate_internal.h"
 
 namespace spherechain::evaluate {
 
@@ -87,17 +89,16 @@ std::string Hex64(uint64_t v) {
   return b;
 }
 
-const char* const kMorphClip = "morph";
-
-// The animation CheckClips plays for clip `name` (kMorphClip: the morph through options.poses).
-// (CheckOptions::key_times: a clip at its own key times, playback::Animation::times.)
+// The animation CheckClips plays: the morph through options.poses, or the character's clip `name`
+// (CheckOptions::key_times: at its own key times, playback::Animation::times).
 import::Result<playback::Animation> OpenCheckAnimation(const import::Mesh& mesh, const CheckOptions& o,
-                                                       const std::string& name) {
+                                                       const std::string& name, bool morph) {
   playback::AnimationRequest request;
   request.mesh_name = o.mesh_name;
-  if (name == kMorphClip && !o.poses.empty()) {
+  if (morph) {
     request.morph = o.poses;
     request.frames = o.morph_frames;
+    request.frames_option = "--morph-frames";
     return playback::OpenAnimation(mesh, request);
   }
   const import::Clip* clip = nullptr;
@@ -131,7 +132,7 @@ import::Result<playback::Animation> OpenCheckAnimation(const import::Mesh& mesh,
 
 import::Status CheckFrame(const import::Mesh& mesh, const CheckOptions& options, const CheckClip& clip,
                           uint32_t frame, std::vector<float>* positions) {
-  auto anim = OpenCheckAnimation(mesh, options, clip.name);
+  auto anim = OpenCheckAnimation(mesh, options, clip.name, clip.morph);
   if (!anim.ok()) return anim.error();
   if (frame >= anim->frames)
     return Fail(Code::kConfig, "clip '" + clip.name + "' has " + std::to_string(anim->frames) + " frames, not " +
@@ -171,14 +172,11 @@ import::Result<double> ParseDepth(const std::string& text, double height, double
     return Fail(Code::kConfig, "'" + text + "' is not a depth (a number > 0 of model units, or with a unit: 1cm, "
                                             "5mm, 0.02m, or a share of the body height: 1%)");
   };
-  size_t used = 0;
+  // Decimal only (from_chars: no hexadecimal, sign or leading space, as std::stod would take).
   double value = 0;
-  try {
-    value = std::stod(text, &used);
-  } catch (const std::exception&) {
-    return bad();
-  }
-  std::string unit = text.substr(used);
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value, std::chars_format::general);
+  if (ec != std::errc()) return bad();
+  std::string unit(end, text.data() + text.size());
   unit.erase(0, unit.find_first_not_of(' '));
   if (!(value > 0) || !std::isfinite(value)) return bad();
   if (unit.empty()) return value;
@@ -224,9 +222,13 @@ import::Status LoadCheckPolicy(const std::string& path, const runtime::AssetView
     } else if (key == "max_depth") {
       if (!value.is_object())
         return Fail(Code::kFormat, "policy '" + path + "': \"max_depth\" must map region pairs to depths");
+      std::map<CheckPair, std::string> spelled;  // pair → its key, to name both of two spellings of one pair
       for (const auto& [name, d] : value.items()) {
         auto pair = ParsePair(asset, name);
         if (!pair.ok()) return Fail(Code::kConfig, "policy '" + path + "': " + pair.error().message);
+        if (auto [at, fresh] = spelled.try_emplace(pair.value(), name); !fresh)
+          return Fail(Code::kConfig, "policy '" + path + "': \"max_depth\" gives one region pair twice, as \"" +
+                                         at->second + "\" and \"" + name + "\"");
         auto v = depth(d, "max_depth." + name);
         if (!v.ok()) return v.error();
         policy->pair_max_depth[pair.value()] = v.value();
@@ -264,6 +266,9 @@ import::Result<CheckReport> CheckClips(const runtime::AssetView& view, const imp
 
   // The clips to play, in the mesh's order (or the order asked).
   std::vector<std::string> names = o.clips;
+  for (size_t i = 0; i < names.size(); ++i)
+    if (std::find(names.begin(), names.begin() + i, names[i]) != names.begin() + i)
+      return Fail(Code::kConfig, "clip '" + names[i] + "' is asked for twice");
   if (names.empty())
     for (const import::Clip& c : mesh.clips) names.push_back(c.name);
   if (names.empty() && o.poses.empty())
@@ -271,15 +276,22 @@ import::Result<CheckReport> CheckClips(const runtime::AssetView& view, const imp
                                "to check a morph through them)");
   std::vector<playback::Animation> animations;
   for (const std::string& name : names) {
-    auto anim = OpenCheckAnimation(mesh, o, name);
+    auto anim = OpenCheckAnimation(mesh, o, name, false);
     if (!anim.ok()) return anim.error();
     animations.push_back(std::move(anim).value());
   }
+  const size_t morph = o.poses.empty() ? names.size() + 1 : names.size();  // its index, when played
   if (!o.poses.empty()) {
-    auto anim = OpenCheckAnimation(mesh, o, kMorphClip);
+    auto anim = OpenCheckAnimation(mesh, o, "", true);
     if (!anim.ok()) return anim.error();
     animations.push_back(std::move(anim).value());
-    names.push_back(kMorphClip);
+    // "morph", unless the character has a clip of that name (reports and baselines name one clip each)
+    std::string name = "morph";
+    const auto taken = [&](const std::string& n) {
+      return std::any_of(mesh.clips.begin(), mesh.clips.end(), [&](const import::Clip& c) { return c.name == n; });
+    };
+    while (taken(name)) name += name == "morph" ? " (key poses)" : "'";
+    names.push_back(name);
   }
 
   // The frame pipeline without spheres: skin each frame, then every skin contact (the crease rule) with depths.
@@ -301,6 +313,7 @@ import::Result<CheckReport> CheckClips(const runtime::AssetView& view, const imp
     const playback::Animation& anim = animations[c];
     CheckClip clip;
     clip.name = names[c];
+    clip.morph = c == morph;
     clip.frames = anim.frames;
     clip.duration = anim.clip ? anim.clip->duration_s : anim.frames / playback::Animation::kMorphFps;
     std::map<CheckPair, size_t> open;  // region pair → index of its event running up to the previous frame
@@ -497,14 +510,12 @@ std::string CheckReportJUnit(const CheckReport& r) {
     for (const CheckEvent& e : c.events) {
       if (!e.failed) continue;
       ++n;
-      char b[512];
-      std::snprintf(b, sizeof b, "%s frames %u-%u (%.3f-%.3f s): depth %.4g (%.2f %% of the height) at frame %u, over %.4g; "
-                                 "triangles %u/%u, joints %s/%s%s\n",
-                    e.name.c_str(), e.first_frame, e.last_frame, e.first_time, e.last_time, e.depth,
-                    100.0 * e.depth / (r.height > 0 ? r.height : 1.0), e.deepest_frame, e.threshold, e.triangles[0],
-                    e.triangles[1], e.joints[0].c_str(), e.joints[1].c_str(),
-                    e.baseline.empty() ? "" : (" (" + e.baseline + ")").c_str());
-      lines += b;
+      detail::Appendf(&lines, "%s frames %u-%u (%.3f-%.3f s): depth %.4g (%.2f %% of the height) at frame %u, over %.4g; "
+                              "triangles %u/%u, joints %s/%s%s\n",
+                      e.name.c_str(), e.first_frame, e.last_frame, e.first_time, e.last_time, e.depth,
+                      100.0 * e.depth / (r.height > 0 ? r.height : 1.0), e.deepest_frame, e.threshold, e.triangles[0],
+                      e.triangles[1], e.joints[0].c_str(), e.joints[1].c_str(),
+                      e.baseline.empty() ? "" : (" (" + e.baseline + ")").c_str());
     }
     const std::string message = std::to_string(n) + " self-contact event(s) over the depth threshold";
     x << ">\n      <failure type=\"self-contact\" message=\"" << XmlEscape(message) << "\">" << XmlEscape(lines)

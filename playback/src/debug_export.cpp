@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <functional>
 #include <numeric>
@@ -430,16 +431,20 @@ Status SvgToPng(const std::string& svg, const std::string& png_path, bool keep_s
   for (std::string& s : args) argv.push_back(s.data());
   argv.push_back(nullptr);
   pid_t pid = 0;
-  int rc = posix_spawnp(&pid, "rsvg-convert", nullptr, nullptr, argv.data(), environ);
-  if (rc == 0) {
-    int status = 0;
-    if (waitpid(pid, &status, 0) < 0 || !WIFEXITED(status) || WEXITSTATUS(status) != 0) rc = -1;
-  }
+  const int spawned = posix_spawnp(&pid, "rsvg-convert", nullptr, nullptr, argv.data(), environ);
+  int status = 0;
+  const bool rendered = spawned == 0 && waitpid(pid, &status, 0) == pid && WIFEXITED(status) && WEXITSTATUS(status) == 0;
   std::error_code ec;
   if (!keep_svg) fs::remove(svg_path, ec);
-  if (rc != 0) {
+  if (!rendered) {
     fs::remove(tmp_png, ec);
-    return MakeError(Error::Code::kIo, "rsvg-convert failed (install Debian librsvg2-bin) while writing '" + png_path + "'");
+    if (spawned != 0)
+      return MakeError(Error::Code::kIo, "rsvg-convert is not installed (Debian librsvg2-bin), needed to write '" +
+                                             png_path + "': " + std::strerror(spawned));
+    return MakeError(Error::Code::kIo, "rsvg-convert could not render the picture for '" + png_path + "' (" +
+                                           (WIFEXITED(status) ? "exit " + std::to_string(WEXITSTATUS(status))
+                                                              : "signal " + std::to_string(WTERMSIG(status))) +
+                                           "; its message is above)");
   }
   fs::rename(tmp_png, png_path, ec);
   if (ec) {
@@ -471,10 +476,44 @@ std::string RegionPairName(const runtime::AssetView& view, int a, int b) {
   return s;
 }
 
+namespace {
+
+// The length of the well-formed UTF-8 sequence at s[i] (1–4), or 0 when none starts there (RFC 3629: no
+// overlong forms, no surrogates, nothing above U+10FFFF).
+size_t Utf8SequenceAt(const std::string& s, size_t i) {
+  const auto byte = [&](size_t k) { return k < s.size() ? static_cast<unsigned char>(s[k]) : 0u; };
+  const unsigned b0 = byte(i);
+  const auto cont = [&](size_t k, unsigned lo, unsigned hi) { return byte(k) >= lo && byte(k) <= hi; };
+  if (b0 < 0x80) return 1;
+  if (b0 >= 0xC2 && b0 <= 0xDF) return cont(i + 1, 0x80, 0xBF) ? 2 : 0;
+  if (b0 >= 0xE0 && b0 <= 0xEF) {
+    const unsigned lo = b0 == 0xE0 ? 0xA0 : 0x80, hi = b0 == 0xED ? 0x9F : 0xBF;
+    return cont(i + 1, lo, hi) && cont(i + 2, 0x80, 0xBF) ? 3 : 0;
+  }
+  if (b0 >= 0xF0 && b0 <= 0xF4) {
+    const unsigned lo = b0 == 0xF0 ? 0x90 : 0x80, hi = b0 == 0xF4 ? 0x8F : 0xBF;
+    return cont(i + 1, lo, hi) && cont(i + 2, 0x80, 0xBF) && cont(i + 3, 0x80, 0xBF) ? 4 : 0;
+  }
+  return 0;
+}
+
+}  // namespace
+
 std::string XmlEscape(const std::string& s) {
   std::string o;
   o.reserve(s.size());
-  for (const char c : s) {
+  for (size_t i = 0; i < s.size(); ++i) {
+    const char c = s[i];
+    if (static_cast<unsigned char>(c) >= 0x80) {
+      const size_t n = Utf8SequenceAt(s, i);
+      if (n == 0) {
+        o += "\xEF\xBF\xBD";  // U+FFFD
+      } else {
+        o.append(s, i, n);
+        i += n - 1;
+      }
+      continue;
+    }
     switch (c) {
       case '&': o += "&amp;"; break;
       case '<': o += "&lt;"; break;

@@ -82,10 +82,13 @@ Status CreaseGraph::Init(const float* bind, uint32_t V, const uint32_t* tris, ui
       g.length_[i] = static_cast<float>(std::sqrt(d2));
     }
     for (uint32_t n = 0; n < g.node_count_; ++n) g.offsets_[n + 1] += g.offsets_[n];
-    // Connected components (of the nodes some triangle uses; a vertex in no triangle is its own piece).
+    // Connected components of the nodes some triangle uses (a vertex in no triangle is no piece of the
+    // surface; a triangle whose corners weld into one node is a piece of its own).
+    std::vector<uint8_t> used(g.node_count_, 0);
+    for (size_t i = 0; i < size_t{3} * T; ++i) used[g.node_of_[tris[i]]] = 1;
     std::vector<uint32_t> comp(g.node_count_, ~0u), stack;
     for (uint32_t s = 0; s < g.node_count_; ++s) {
-      if (comp[s] != ~0u) continue;
+      if (comp[s] != ~0u || !used[s]) continue;
       comp[s] = g.components_;
       stack.assign(1, s);
       while (!stack.empty()) {

@@ -356,10 +356,16 @@
     for (uint32_t p = 0; p < C; ++p) {
       influence.clear();
       double lo[3] = {kInfinity, kInfinity, kInfinity}, hi[3] = {-kInfinity, -kInfinity, -kInfinity};
+      // Unskinned, for the bound: a vertex of no joint, or whose weights do not sum to 255 (LoadAsset allows
+      // that within rounding, for assets another tool wrote): skinned with its weights as stored, such a
+      // vertex strays from its joints' rigid motions by (Σ/255 − 1) of its skinned position, which no bound
+      // of the matrices alone holds. Its patch is never culled.
       bool unskinned = false;
       for (uint32_t i = m.cl_vert_offsets_[p]; i < m.cl_vert_offsets_[p + 1]; ++i) {
         const uint32_t v = m.cl_vert_[i];
-        unskinned |= counts->Get(v) == 0;
+        uint32_t sum = 0;
+        for (uint32_t e = first[v]; e < first[v + 1]; ++e) sum += weights->Get(e);
+        unskinned |= counts->Get(v) == 0 || sum != 255;
         for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], double{bind[3 * size_t{v} + k]}), hi[k] = std::max(hi[k], double{bind[3 * size_t{v} + k]});
         for (uint32_t e = first[v]; e < first[v + 1]; ++e) {
           const uint32_t j = joints->Get(e);

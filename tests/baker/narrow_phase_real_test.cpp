@@ -8,6 +8,7 @@
 #include <doctest/doctest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <limits>
 #include <cstring>
@@ -594,6 +595,70 @@ TEST_CASE("the joint-matrix cull: the creature's crossing legs unchanged; bad ma
   CHECK(n == 0);
   job.model = &plain.narrow, job.workspace = &plain.narrow_ws;
   CHECK(job.Run() == runtime::Status::kErrorMissingField);
+}
+
+TEST_CASE("the joint-matrix cull: skin rows that do not sum to 255 (an asset the baker did not write) cull nothing wrong") {
+  // LoadAsset takes rows whose weights sum to 255 within half their count (weights rounded by another tool).
+  // An engine skinning with those weights as stored (q / 255) moves such a vertex by (Σq/255 − 1) of its
+  // skinned position away from the rigid motion the cull's bound assumes: far from the origin, more than the
+  // bound. The creature baked with the skin weights, one unit taken off one weight of every row of two or more
+  // joints (sum 254, still loaded), the bind pose turned and moved 10 and 20 extents away by the same matrix
+  // for every joint and skinned with the stored weights: the job with the matrices reports what it reports
+  // without them.
+  baker::BakeConfig config;
+  config.skin_weights = true;
+  Baked b;
+  BakeAndLoad(test::SourceFile("tests/data/creature/creature.gltf"), &b, config);
+  const schema::Asset& a = *b.view.asset;
+  REQUIRE(a.skin_counts());
+  std::vector<uint8_t> bytes = b.bake.asset;
+  const size_t at = static_cast<size_t>(a.skin_weights()->data() - b.loaded.bytes());  // the weights' offset
+  size_t e = 0, changed = 0;
+  for (uint8_t c : *a.skin_counts()) {
+    if (c >= 2 && bytes[at + e] > 1) --bytes[at + e], ++changed;
+    e += c;
+  }
+  REQUIRE(changed >= 20);  // 40 of the creature's rows have two joints or more
+  Baked m;
+  REQUIRE(import::LoadAssetBytes(bytes.data(), bytes.size(), "the changed bake", &m.loaded).ok());
+  m.view = m.loaded.view;
+  REQUIRE(m.narrow.Init(m.view) == runtime::Status::kOk);
+  REQUIRE(m.narrow_ws.Init(m.narrow) == runtime::Status::kOk);
+  REQUIRE(m.narrow.has_joint_cull());
+  const schema::Asset& ma = *m.view.asset;
+  double h = 0;  // the bind pose's largest extent
+  for (int r = 0; r < 3; ++r) {
+    float lo = std::numeric_limits<float>::max(), hi = -lo;
+    for (size_t i = r; i < b.bake.mesh.positions.size(); i += 3)
+      lo = std::min(lo, b.bake.mesh.positions[i]), hi = std::max(hi, b.bake.mesh.positions[i]);
+    h = std::max(h, double{hi} - lo);
+  }
+  uint64_t contacts = 0;
+  for (double k : {10.0, 20.0}) {
+    CAPTURE(k);
+    const float angle = 0.35f, c = std::cos(angle), sn = std::sin(angle);
+    const float t[3] = {float(k * h), float(0.5 * k * h), float(0.25 * k * h)};
+    playback::Matrix4 mat = {c, 0, -sn, 0, 0, 1, 0, 0, sn, 0, c, 0, t[0], t[1], t[2], 1};  // column-major: turn about y, move
+    const std::vector<playback::Matrix4> matrices(b.narrow.joint_count(), mat);
+    std::vector<float> pos(b.bake.mesh.positions.size());
+    size_t row = 0;
+    for (uint32_t v = 0; v < m.view.vertex_count; ++v) {
+      const float* x = &b.bake.mesh.positions[3 * size_t{v}];
+      const uint8_t count = ma.skin_counts()->Get(v);
+      double w = 0;  // Σ q / 255: every matrix is the same
+      for (uint32_t i = 0; i < count; ++i) w += ma.skin_weights()->Get(uint32_t(row + i)) / 255.0;
+      row += count;
+      if (count == 0) w = 1.0;
+      for (int r = 0; r < 3; ++r)
+        pos[3 * size_t{v} + r] = float(w * (mat[r] * x[0] + mat[4 + r] * x[1] + mat[8 + r] * x[2] + mat[12 + r]));
+    }
+    const CullRun plain = CreaseRun(&m, pos, nullptr), cull = CreaseRun(&m, pos, &matrices);
+    REQUIRE(cull.contacts.size() == plain.contacts.size());
+    CHECK(std::memcmp(cull.contacts.data(), plain.contacts.data(), plain.contacts.size() * sizeof(runtime::TriangleContact)) == 0);
+    contacts += plain.contacts.size();
+  }
+  MESSAGE(changed << " rows summing to 254; " << contacts << " contacts at 10 and 20 extents away");
+  CHECK(contacts > 0);  // the rows' drift crumples the skin: there is something to lose
 }
 
 namespace {

@@ -155,7 +155,10 @@ TEST_CASE("check: policy, depths, baseline and JUnit on the creature") {
     CHECK(evaluate::ParseDepth("1cm", h, 1.0).value() == doctest::Approx(0.01));
     CHECK(evaluate::ParseDepth("5mm", h, 0.1).value() == doctest::Approx(0.05));  // decimetre units
     CHECK(!evaluate::ParseDepth("1cm", h, 0).ok());                               // units unknown
-    for (const char* bad : {"", "-1", "0", "1parsec", "cm", "nan"}) {
+    CHECK(evaluate::ParseDepth("1e-3", h, 0).value() == doctest::Approx(0.001));
+    CHECK(evaluate::ParseDepth("2 cm", h, 1.0).value() == doctest::Approx(0.02));  // a space before the unit
+    // decimal only: std::stod would read hexadecimal (0x10 = 16 units), a sign, a leading space, "inf"
+    for (const char* bad : {"", "-1", "0", "1parsec", "cm", "nan", "0x10", "0x1p-4m", "+1", " 1", "inf", "1e999"}) {
       CAPTURE(bad);
       CHECK(!evaluate::ParseDepth(bad, h, 1.0).ok());
     }
@@ -211,6 +214,17 @@ TEST_CASE("check: policy, depths, baseline and JUnit on the creature") {
     CHECK(s.error().message.find("ForeLeg_L") != std::string::npos);  // the regions there are
     REQUIRE(import::WriteFileAtomic(dir + "/key.json", std::string(R"({"alow": []})")).ok());
     CHECK(!evaluate::LoadCheckPolicy(dir + "/key.json", b.view, h, 0, &policy).ok());
+    // One pair under two spellings: refused, both named (else the winner would be the keys' sorted order).
+    const auto symbol = [&](int r) { return "R" + std::to_string(r); };
+    const std::string by_symbol = symbol(legs.regions.first) + "-" + symbol(legs.regions.second);
+    REQUIRE(import::WriteFileAtomic(dir + "/twice.json", R"({"max_depth": {"ForeLeg_R-ForeLeg_L": "1%", ")" + by_symbol +
+                                                             R"(": "20%"}})").ok());
+    s = evaluate::LoadCheckPolicy(dir + "/twice.json", b.view, h, 0, &policy);
+    REQUIRE(!s.ok());
+    CHECK(s.error().code == import::Error::Code::kConfig);
+    CHECK(s.error().message.find("twice") != std::string::npos);
+    CHECK(s.error().message.find("\"ForeLeg_R-ForeLeg_L\"") != std::string::npos);
+    CHECK(s.error().message.find("\"" + by_symbol + "\"") != std::string::npos);
   }
 
   SUBCASE("baseline: the same run is known; deeper fails; a vanished event is fixed; another character refused") {
@@ -283,6 +297,30 @@ TEST_CASE("check: policy, depths, baseline and JUnit on the creature") {
     CHECK(playback::XmlEscape(std::string("a\x01" "b\tc\nd")) == "ab\tc&#10;d");
   }
 
+  SUBCASE("XmlEscape keeps well-formed UTF-8 and replaces every other byte by U+FFFD") {
+    const std::string fffd = "\xEF\xBF\xBD";
+    CHECK(playback::XmlEscape("F\xC3\xBC\xC3\x9F \xE2\x80\x93 \xF0\x9F\xA6\xB4") == "F\xC3\xBC\xC3\x9F \xE2\x80\x93 \xF0\x9F\xA6\xB4");
+    CHECK(playback::XmlEscape("caf\xE9.gltf") == "caf" + fffd + ".gltf");            // Latin-1
+    CHECK(playback::XmlEscape("\xC3") == fffd);                                         // a character cut short
+    CHECK(playback::XmlEscape("\xC0\xAF") == fffd + fffd);                              // overlong '/'
+    CHECK(playback::XmlEscape("\xED\xA0\x80") == fffd + fffd + fffd);                   // a surrogate
+    CHECK(playback::XmlEscape("\xF4\x90\x80\x80") == fffd + fffd + fffd + fffd);       // above U+10FFFF
+    CHECK(playback::XmlEscape("\xE2\x80<") == fffd + fffd + "&lt;");
+  }
+
+  SUBCASE("JUnit: long non-ASCII names are written whole, a path in another encoding as U+FFFD") {
+    evaluate::CheckReport named = r;
+    std::string joint = "ForeLeg_R_02_";
+    for (int i = 0; i < 250; ++i) joint += "\xC3\xB6";  // ö: 513 bytes, over any line buffer of 512
+    evaluate::CheckClip& c = named.clips[cross == &r.clips[0] ? 0 : 1];
+    for (evaluate::CheckEvent& e : c.events) e.joints[1] = joint;
+    named.mesh_name = "caf\xE9.gltf";
+    const std::string x = evaluate::CheckReportJUnit(named);
+    CHECK(x.find(joint) != std::string::npos);
+    CHECK(x.find("caf\xEF\xBF\xBD.gltf") != std::string::npos);
+    CHECK(x.find("caf\xE9") == std::string::npos);
+  }
+
   SUBCASE("JUnit: one testcase per clip, a failure for the failing one naming its event") {
     const std::string x = evaluate::CheckReportJUnit(r);
     size_t cases = 0, failures = 0;
@@ -310,5 +348,50 @@ TEST_CASE("check: policy, depths, baseline and JUnit on the creature") {
     e = evaluate::CheckClips(b.view, no_clips, o);
     REQUIRE(!e.ok());
     CHECK(e.error().message.find("nothing to check") != std::string::npos);
+    bad = o;
+    bad.clips = {"cross", "still", "cross"};
+    e = evaluate::CheckClips(b.view, mesh, bad);
+    REQUIRE(!e.ok());
+    CHECK(e.error().message.find("'cross' is asked for twice") != std::string::npos);
+  }
+
+  SUBCASE("the morph through key poses and a clip of the character named \"morph\" are two clips") {
+    const std::string dir = std::string(SPHERECHAIN_BINARY_DIR) + "/tests/check_morph";
+    std::filesystem::create_directories(dir);
+    REQUIRE(import::WriteFileAtomic(dir + "/tail.json",
+                                    std::string(R"({"name": "tail", "rotations": {"Tail01": {"axis": [0, 0, 1], "degrees": 5}}})"))
+                .ok());
+    import::Mesh renamed = mesh;  // the failing clip "cross" renamed "morph"
+    for (import::Clip& clip : renamed.clips)
+      if (clip.name == "cross") clip.name = "morph";
+    evaluate::CheckOptions m = o;
+    m.poses = {dir + "/tail.json"};
+    auto both = evaluate::CheckClips(b.view, renamed, m);
+    REQUIRE(both.ok());
+    REQUIRE(both->clips.size() == 3);
+    const evaluate::CheckClip& file_clip = both->clips[0];  // the character's order, then the morph
+    CHECK(file_clip.name == "morph");
+    CHECK(!file_clip.morph);
+    CHECK(file_clip.failed());          // the crossing legs are played, not the key poses' morph
+    CHECK(file_clip.frames == cross->frames);
+    CHECK(both->clips[2].name == "morph (key poses)");
+    CHECK(both->clips[2].morph);
+    CHECK(!both->clips[2].failed());
+    CHECK(both->failed());
+    std::vector<float> positions;  // a picture's frame is the clip's own
+    CHECK(evaluate::CheckFrame(renamed, m, file_clip, file_clip.frames - 1, &positions).ok());
+    CHECK(!evaluate::CheckFrame(renamed, m, both->clips[2], m.morph_frames, &positions).ok());
+    // Without a clip of that name the morph is "morph", and --clip morph names no clip of the file.
+    auto plain = evaluate::CheckClips(b.view, mesh, m);
+    REQUIRE(plain.ok());
+    CHECK(plain->clips.back().name == "morph");
+    CHECK(plain->clips.back().morph);
+    m.clips = {"morph"};
+    CHECK(!evaluate::CheckClips(b.view, mesh, m).ok());
+    m.clips = {};
+    m.morph_frames = 1;  // too few for one key pose: the message names check's option
+    auto few = evaluate::CheckClips(b.view, mesh, m);
+    REQUIRE(!few.ok());
+    CHECK(few.error().message.rfind("--morph-frames 1 is too few", 0) == 0);
   }
 }

@@ -141,3 +141,29 @@ TEST_CASE("crease rule: the bucketed search equals a textbook Dijkstra on every 
     CheckEveryVertex(mesh, 1e-44f, 8);
   }
 }
+
+TEST_CASE("crease rule: the welded surface's pieces are counted over the vertices some triangle uses") {
+  // Two tubes are two pieces; vertices no triangle uses (an OBJ's or a glTF buffer's spare vertices) are no
+  // piece at all; a triangle whose corners weld into one node is a piece of its own.
+  st::Mesh mesh;
+  st::Tube a, b;
+  b.origin[1] = 5.0f;
+  (void)st::MakeTubes({a, b}, {}, &mesh);
+  const auto pieces = [](const st::Mesh& m, const uint32_t* weld) {
+    rt::CreaseGraph graph;
+    REQUIRE(graph.Init(m.positions.data(), m.vertex_count(), m.triangles.data(), m.triangle_count(), weld, 1.0f) ==
+            rt::Status::kOk);
+    return graph.components();
+  };
+  CHECK(pieces(mesh, nullptr) == 2);
+  st::Mesh spare = mesh;
+  for (int i = 0; i < 3; ++i) spare.positions.insert(spare.positions.end(), {9.0f + i, 9.0f, 9.0f});
+  CHECK(pieces(spare, nullptr) == 2);
+  st::Mesh point = spare;  // one more triangle, its three corners at one position (welded into one node)
+  const uint32_t v = spare.vertex_count();
+  for (int i = 0; i < 3; ++i) point.positions.insert(point.positions.end(), {-9.0f, -9.0f, -9.0f});
+  point.triangles.insert(point.triangles.end(), {v, v + 1, v + 2});
+  std::vector<uint32_t> weld(point.vertex_count());
+  for (uint32_t k = 0; k < point.vertex_count(); ++k) weld[k] = k < v ? k : v;
+  CHECK(pieces(point, weld.data()) == 3);
+}

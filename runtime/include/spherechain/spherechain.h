@@ -126,7 +126,7 @@ SC_API const char* sc_status_string(sc_status status);
 #define SC_SCHEMA_VERSION_OLDEST 1
 #define SC_SCHEMA_VERSION_NEWEST 4
 
-/// #SC_VERSION of the library actually loaded, for a binding that loads `libspherechain_c` at run time and
+/// `SC_VERSION` of the library actually loaded, for a binding that loads `libspherechain_c` at run time and
 /// was written against some header: compare `sc_version() / 100` with `SC_VERSION / 100` (major and minor).
 /// Never fails. Thread-safe, O(1).
 SC_API uint32_t sc_version(void);

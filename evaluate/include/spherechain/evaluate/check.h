@@ -40,7 +40,8 @@ struct CheckPolicy {
 double BodyHeight(const import::Mesh& mesh);
 
 /// Parses a depth: "1cm", "5mm", "0.02m" (needs `unit_scale_m` > 0: metres per model unit, import
-/// Mesh::unit_scale_m), "1%" (of `height`, model units) or a bare number (model units). Errors: kConfig
+/// Mesh::unit_scale_m), "1%" (of `height`, model units) or a bare number (model units); the number is
+/// decimal ("2", "0.5", "1e-3"; no hexadecimal, sign, "inf" or leading space), a space allowed before its unit. Errors: kConfig
 /// "'x' is not a depth (…)", or "'1cm': the character's units are unknown; give the depth in model units or %".
 import::Result<double> ParseDepth(const std::string& text, double height, double unit_scale_m);
 
@@ -48,7 +49,8 @@ import::Result<double> ParseDepth(const std::string& text, double height, double
 /// "default_max_depth": "1%"} — region pairs by name (runtime::RegionName) or symbol ("R3"), joined by '-';
 /// depths as ParseDepth. Fills `policy` (max_depth only when "default_max_depth" is present). Errors: kIo
 /// (unreadable), kFormat (not JSON, a key of another type), kConfig (an unknown key, an unknown region — the
-/// message lists the regions —, a bad depth). Cost: one file read.
+/// message lists the regions —, a bad depth, one region pair given twice in "max_depth" under two spellings,
+/// e.g. "R3-R4" and "ForeLeg_L-ForeLeg_R", both keys named). Cost: one file read.
 import::Status LoadCheckPolicy(const std::string& path, const runtime::AssetView& asset, double height,
                                double unit_scale_m, CheckPolicy* policy);
 
@@ -56,11 +58,13 @@ import::Status LoadCheckPolicy(const std::string& path, const runtime::AssetView
 struct CheckOptions {
   std::string mesh_name = "mesh";    ///< the character's file, for messages and the reports
   std::string asset_name = "asset";  ///< the asset's file, for messages
-  std::vector<std::string> clips;  ///< [opt] clip names to check; empty: every clip of the mesh
-  /// [opt] key poses (files, or folders of *.json; playback::LoadPose) played as one extra clip "morph"
-  /// (the paper's Bézier morph, playback morph.h): how a mesh without clips (MakeHuman) is checked.
+  std::vector<std::string> clips;  ///< [opt] clip names to check, each once (kConfig); empty: every clip of the mesh
+  /// [opt] key poses (files, or folders of *.json; playback::LoadPose) played as one extra clip named "morph"
+  /// (the paper's Bézier morph, playback morph.h): how a mesh without clips (MakeHuman) is checked. When
+  /// the character has a clip named "morph" of its own, the morph is "morph (key poses)" (CheckClip::morph
+  /// tells them apart in any case).
   std::vector<std::string> poses;
-  uint32_t morph_frames = 40;      ///< frames of the morph [Limit: >= 2 × \#poses]
+  uint32_t morph_frames = 40;      ///< frames of the morph [Limit: >= 2 × \#poses; kConfig "--morph-frames N is too few …"]
   double fps = 30;                 ///< clip sampling rate [Units: frames/s] [Limit: (0, 1000]]: a clip of
                                    ///< duration d plays max(1, ceil(d · fps)) frames at t = d · f / frames,
                                    ///< the frames of `play/evaluate/view --clip C --frames N`
@@ -96,7 +100,8 @@ struct CheckEvent {
 
 /// One clip's result.
 struct CheckClip {
-  std::string name;             ///< clip name ("morph" for CheckOptions::poses)
+  std::string name;             ///< clip name ("morph" for CheckOptions::poses; see there)
+  bool morph = false;           ///< the morph through CheckOptions::poses, not a clip of the character
   float duration = 0;           ///< [Units: s]
   uint32_t frames = 0;          ///< frames played
   uint32_t frames_with_contacts = 0;

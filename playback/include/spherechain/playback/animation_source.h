@@ -21,6 +21,7 @@ struct AnimationRequest {
   bool use_morph = false;          ///< play the morph even when the mesh has clips (`morph` empty: every pose in `poses_dir`)
   std::string poses_dir;           ///< [opt] folder of the character's default key poses (see DefaultPoseCharacter)
   uint32_t frames = 40;            ///< [Limit: > 0; >= 2 × \#keys for the morph] frames to play
+  std::string frames_option = "--frames";  ///< how the caller's users set `frames`, for its errors
 };
 
 /// The folder name a character's default key poses live under (`data/poses/<name>`): "makehuman" for a

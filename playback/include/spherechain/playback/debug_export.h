@@ -50,7 +50,8 @@ std::string RenderFrameSvg(const Mesh& mesh, const runtime::AssetView& asset, co
                            const std::string& caption, int width_px = 1600);
 
 /// Writes `svg` to PNG with `rsvg-convert` (Debian librsvg2-bin), atomically (nothing is left at
-/// `png_path` on failure). Errors: kIo when the tool is missing or fails.
+/// `png_path` on failure). Errors: kIo "rsvg-convert is not installed …" when it cannot be started, "rsvg-convert
+/// could not render the picture …" when it fails (its own message is on stderr).
 Status SvgToPng(const std::string& svg, const std::string& png_path, bool keep_svg = false);
 
 /// Renders RenderDebugSvg to PNG with `rsvg-convert` (Debian librsvg2-bin). Errors: kIo when the tool
@@ -65,7 +66,9 @@ std::string RegionLegendLine(const runtime::AssetView& view);
 std::string RegionPairName(const runtime::AssetView& view, int a, int b);
 
 /// `text` for XML and HTML (SVG text, attributes, JUnit): & < > " ' escaped, a newline as "&#10;", the
-/// other control characters XML 1.0 forbids dropped (tab kept). Bytes ≥ 0x80 pass through unchanged.
+/// other control characters XML 1.0 forbids dropped (tab kept). Well-formed UTF-8 passes through unchanged;
+/// each byte that does not start or continue a well-formed sequence (a name in another encoding, a cut
+/// character) becomes U+FFFD, so the output is always well-formed UTF-8.
 std::string XmlEscape(const std::string& text);
 
 }  // namespace spherechain::playback

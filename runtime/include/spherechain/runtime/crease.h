@@ -90,7 +90,7 @@ class CreaseScratch {
  public:
   /// Sizes the scratch for `graph`: its arrays on the heap, or carved from `arena` [opt] (a workspace's
   /// block, which must outlive the scratch; what does not fit goes to the heap). Returns kOk,
-  /// kErrorInvalidJob (graph not initialised), kErrorOutOfMemory. Cost O(\#nodes + \#edges); memory 5 B
+  /// kErrorInvalidJob (graph not initialised), kErrorOutOfMemory. Cost O(\#nodes + \#edges); memory 9 B
   /// per node + 20 B per directed edge.
   Status Init(const CreaseGraph& graph, BlockArena* arena = nullptr);
   /// True when sized for a graph of `graph`'s node count (what Near needs of it).

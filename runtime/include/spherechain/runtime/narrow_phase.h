@@ -443,7 +443,9 @@ struct NarrowPhaseJob {
   /// skipped when σ_min(A_r)·gap > E_p + E_q + margin, gap a lower bound on the bind distance of their pairs
   /// not near (the least distance of their bind boxes, at Init), margin 1e-4 × the largest |coordinate| of
   /// the frame, of the bind pose and of the matrices' translations (float skinning's rounding); different
-  /// references add |(M_rq − M_rp) x| over q's bind sphere. [Precondition: `positions` are the asset's
+  /// references add |(M_rq − M_rp) x| over q's bind sphere. The bound needs each vertex's weights to sum to
+  /// 1: a patch with a vertex whose stored weights do not sum to 255 (an asset another tool wrote; LoadAsset
+  /// allows that within rounding) is never culled. [Precondition: `positions` are the asset's
   /// bind positions skinned by linear blend with these matrices and the asset's skin weights (within float
   /// rounding), as `play`, `evaluate` and an engine's CPU skinning give; other deformations (dual-quaternion
   /// skinning, blend shapes, cloth) must not pass matrices: contacts could be missed.] Null: no cull.
