@@ -9,7 +9,10 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <limits>
+
+#include <spdlog/spdlog.h>
 
 #include "animation_source.h"
 #include "commands.h"
@@ -34,13 +37,24 @@ int RunEvaluate(const EvaluateArgs& a) {
   if (int clash = OutputsClash({{"--json", &a.json}, {"--png", &a.png}},
                                {{"ASSET", &a.asset}, {"--mesh", &a.anim.mesh}, {"--rig", &a.rig}}, PoseInputs(a.anim)))
     return clash;
-  // ---- arguments that need no file ---------------------------------------------------------------
+  // ---- arguments that need no file: usage errors (exit 2), before any frame is computed ------------
+  const auto usage = [](const std::string& message) {  // the line Python's EvaluateError carries too
+    spdlog::error("{}", message);
+    return 2;
+  };
   if (a.min_recall_option && a.min_recall_option->count() > 0 && !(a.min_recall >= 0.0 && a.min_recall <= 1.0))
-    return Fail("--min-recall " + std::to_string(a.min_recall) + " is outside [0, 1]");
-  if (!(a.margin >= 0.0 && a.margin < 1.0)) return Fail("--margin must be in [0, 1) (a fraction of the body height)");
-  if (!a.png.empty() && a.png == a.json) return Fail("--png and --json name the same file");
+    return usage("--min-recall " + std::to_string(a.min_recall) + " is outside [0, 1]");
+  if (!(a.margin >= 0.0 && a.margin < 1.0)) return usage("--margin must be in [0, 1) (a fraction of the body height)");
+  if (!a.png.empty() && a.png == a.json) return usage("--png and --json name the same file");
   evaluate::EvaluateOptions options;
-  if (auto s = evaluate::ParseSweepMargins(a.sweep, &options.sweep_margins_rel); !s.ok()) return Fail(s.error().message);
+  if (auto s = evaluate::ParseSweepMargins(a.sweep, &options.sweep_margins_rel); !s.ok()) return usage(s.error().message);
+  for (const std::string* out : {&a.json, &a.png}) {  // where the outputs go, checked before minutes of frames
+    if (out->empty()) continue;
+    const std::filesystem::path dir = std::filesystem::path(*out).parent_path();
+    if (!dir.empty() && !std::filesystem::is_directory(dir))
+      return usage("cannot write '" + *out + "': folder '" + dir.string() + "' does not exist");
+    if (std::filesystem::is_directory(*out)) return usage("cannot write '" + *out + "': it is a folder");
+  }
 
   LoadedAsset asset;
   import::Mesh mesh;
@@ -68,14 +82,18 @@ int RunEvaluate(const EvaluateArgs& a) {
   };
   import::Context log = MakeLoggingContext();
   auto result = evaluate::Evaluate(asset.view, mesh, anim, options, &log);
-  if (!result.ok()) return Fail(result.error().message);
+  if (!result.ok()) return Fail(result.error());
   const evaluate::Evaluation& e = result.value();
   if (!Quiet()) std::fputs(e.text.c_str(), stdout);
-  if (e.png_frame >= 0) Out("wrote %s (frame %d)\n", a.png.c_str(), e.png_frame);
   if (!a.json.empty()) {
-    if (auto s = import::WriteFileAtomic(a.json, JsonText(e.report) + "\n"); !s.ok()) return Fail(s.error());
-    Out("wrote %s\n", a.json.c_str());
+    if (auto s = import::WriteFileAtomic(a.json, JsonText(e.report) + "\n"); !s.ok()) {
+      std::error_code ec;
+      if (e.png_frame >= 0) std::filesystem::remove(a.png, ec);  // no output of a failed run is left
+      return Fail(s.error());
+    }
   }
+  if (e.png_frame >= 0) Out("wrote %s (frame %d)\n", a.png.c_str(), e.png_frame);
+  if (!a.json.empty()) Out("wrote %s\n", a.json.c_str());
   if (!std::isnan(a.min_recall)) {
     const double recall = std::min(e.recall_m1, e.recall_m2);
     if (recall < a.min_recall) {

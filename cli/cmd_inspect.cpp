@@ -41,7 +41,8 @@ int RunInspect(const InspectArgs& args) {
     std::printf("  R%-2u %-10s triangles %6zu  spheres %3zu", k, name.c_str(), r["triangles"].get<size_t>(),
                 r["spheres"].get<size_t>());
     if (r.contains("kind"))
-      std::printf("  %s, from bone %s%s", r["kind"].get<std::string>().c_str(), r["bone"].get<std::string>().c_str(),
+      std::printf("  %s%s%s", r["kind"].get<std::string>().c_str(),
+                  r["bone"].get<std::string>().empty() ? "" : (", from bone " + r["bone"].get<std::string>()).c_str(),
                   r.contains("mirror") ? (", mirror " + r["mirror"].get<std::string>()).c_str() : "");
     std::printf("\n");
   }

@@ -56,12 +56,13 @@ void RegisterValidate(CLI::App& app, Commands* commands) {
       "(severity, code, location, message); exit 1 on any error (warnings do not fail). C++: "
       "playback::ValidateAsset");
   sub->add_option("asset", args->asset, "Asset (.sphc)")->required();
-  sub->add_option("--mesh", args->mesh, "The character file it should belong to (fingerprint, bind pose)");
-  sub->add_option("--rig", args->rig, "MakeHuman rig (.mhskel), as for bake");
+  CLI::Option* mesh = sub->add_option("--mesh", args->mesh, "The character file it should belong to (fingerprint, bind pose)");
+  sub->add_option("--rig", args->rig, "MakeHuman rig (.mhskel) of --mesh, as for bake")->needs(mesh);
   sub->add_option("--vertices", args->vertices,
                   "Vertex contract to read an assimp-format --mesh with, i.e. the buffer your game feeds: joined or "
                   "source (default: the one the asset records)")
-      ->check(CLI::IsMember({"joined", "source"}));
+      ->check(CLI::IsMember({"joined", "source"}))
+      ->needs(mesh);
   sub->add_option("--json", args->json, "Write the findings as JSON (code, severity, location, where{file, sphere, other_sphere, chain, field}, message)");
   commands->handlers.emplace_back(sub, [args] { return RunValidate(*args); });
 }

@@ -134,6 +134,10 @@ import::Status CheckEvaluateOptions(const runtime::AssetView& view, const import
   if (a.refit != "paper" && a.refit != "frame" && a.refit != "joints")
     return Fail(Code::kConfig, "--refit '" + a.refit + "': expected paper, frame or joints");
   if (!view.valid()) return Fail(Code::kConfig, "'" + a.asset_name + "' is not a loaded asset");
+  if (a.paper_regions && view.asset->regions() && !view.asset->biped())
+    return Fail(Code::kConfig, "--regions paper: '" + a.asset_name + "' is a creature (" +
+                                   std::to_string(view.asset->regions()->size()) +
+                                   " regions of its own skeleton), not a biped: it has no paper regions to map onto");
   for (double m : a.sweep_margins_rel)
     if (!(m >= 0.0 && m <= 0.1))
       return Fail(Code::kConfig, "--sweep-margin: " + std::to_string(m) + " is not a margin in [0, 0.1] (a fraction of the body height)");
@@ -194,11 +198,10 @@ import::Status Picture(const Context& c, const std::vector<FrameEval>& rows, uin
   for (uint32_t s = 0; 4 * s < sp.size(); ++s)
     spheres.push_back({{sp[4 * s], sp[4 * s + 1], sp[4 * s + 2]}, sp[4 * s + 3],
                        playback::RegionColor(c.view, uint32_t(std::max(c.SphereRegion(s), 0))), 0.35f});
-  char caption[256];
-  std::snprintf(caption, sizeof caption,
-                "frame %u (%s): %u contacts, %u missed by the proxy's sphere pairs (red), the rest found (amber); "
-                "refit spheres (M2)",
-                f, label.c_str(), rows[f].contacts, rows[f].missed_sphere_contacts);
+  std::string caption;
+  detail::Appendf(&caption, "frame %u (%s): %u contacts, %u missed by the proxy's sphere pairs (red), the rest found (amber); "
+                            "refit spheres (M2)",
+                  f, label.c_str(), rows[f].contacts, rows[f].missed_sphere_contacts);
   return playback::SvgToPng(playback::RenderFrameSvg(c.mesh, c.view, positions.data(), spheres, marks, caption),
                             c.a.png_path);
 }

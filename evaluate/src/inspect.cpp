@@ -1,6 +1,7 @@
 // spherechain evaluate — what an asset holds, as JSON (inspect.h).
 #include "spherechain/evaluate/inspect.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <vector>
 
@@ -53,7 +54,7 @@ nlohmann::json DescribeAsset(const runtime::AssetView& v) {
       if (info->mirror() >= 0 && uint32_t(info->mirror()) < R) e["mirror"] = runtime::RegionName(v, uint32_t(info->mirror()));
     }
   }
-  if (a.regions()) j["body"] = "creature (any-skeleton path)";
+  if (a.regions()) j["body"] = a.biped() ? "biped (extended layout: head, hands and feet)" : "creature (any-skeleton path)";
   nlohmann::json chains = nlohmann::json::array();
   size_t total = 0;
   for (const auto* c : *a.chains()) {
@@ -69,7 +70,14 @@ nlohmann::json DescribeAsset(const runtime::AssetView& v) {
   // cull; an asset without them runs the narrow phase's exclusion-based definition only.
   j["skin_contacts"] = {{"crease", a.crease() > 0.0f ? nlohmann::json(a.crease()) : nlohmann::json(nullptr)},
                         {"skin_weights", a.skin_counts() != nullptr}};
-  j["unassigned_triangles"] = v.triangle_count - (a.surrounding_triangles() ? a.surrounding_triangles()->size() : 0);
+  {  // triangles in no surrounding region (counted, not subtracted: the loader does not require the regions to
+     // partition the triangles, and a hand-made asset may list one twice)
+    std::vector<uint8_t> owned(v.triangle_count, 0);
+    if (const auto* st = a.surrounding_triangles())
+      for (uint32_t t : *st)
+        if (t < v.triangle_count) owned[t] = 1;
+    j["unassigned_triangles"] = size_t(std::count(owned.begin(), owned.end(), uint8_t{0}));
+  }
   // Reach regions (absent before them): how many spheres a triangle stands behind, on average.
   j["reach_spheres_per_triangle"] =
       a.reach_triangles() && v.triangle_count ? nlohmann::json(double(a.reach_triangles()->size()) / v.triangle_count)

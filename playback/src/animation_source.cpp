@@ -33,15 +33,15 @@ float Animation::FrameTime(uint32_t f) const {
 }
 
 std::string Animation::FrameLabel(uint32_t f) const {
-  char text[160];
+  char t[32];  // the time alone: a pose's name may be any length
   if (clip) {
-    std::snprintf(text, sizeof text, "t=%.3fs", FrameTime(f));
-  } else {
-    auto mf = MorphFrameAt(f, frames, static_cast<uint32_t>(poses.size()));
-    if (!mf.ok()) return "frame " + std::to_string(f);
-    std::snprintf(text, sizeof text, "%s t=%.3f", poses[mf->key].name.c_str(), mf->t);
+    std::snprintf(t, sizeof t, "t=%.3fs", FrameTime(f));
+    return t;
   }
-  return text;
+  auto mf = MorphFrameAt(f, frames, static_cast<uint32_t>(poses.size()));
+  if (!mf.ok()) return "frame " + std::to_string(f);
+  std::snprintf(t, sizeof t, " t=%.3f", mf->t);
+  return poses[mf->key].name + t;
 }
 
 Status Animation::FrameLocals(const Skin& skin, uint32_t f, std::vector<Transform>* locals) const {

@@ -43,9 +43,9 @@ def cli(*args, check=True):
 
 
 def cli_error(*args):
-    """The CLI's error line without 'error: ' (it must fail with exit 1)."""
+    """The CLI's error line without 'error: ' (it must fail: exit 1, or 2 for a usage error)."""
     r = cli(*args, check=False)
-    assert r.returncode == 1, f"exit {r.returncode}: {r.stdout}{r.stderr}"
+    assert r.returncode in (1, 2), f"exit {r.returncode}: {r.stdout}{r.stderr}"
     lines = [line for line in r.stderr.splitlines() if line.startswith("error: ")]
     assert lines, r.stderr
     return lines[-1][len("error: "):]

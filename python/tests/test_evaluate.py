@@ -28,9 +28,9 @@ def saved(tmp_path_factory):
 
 @pytest.mark.parametrize("kwargs, flags", [
     ({"clip": "cross", "frames": 6}, ["--clip", "cross", "--frames", "6"]),
-    ({"clip": "cross", "frames": 4, "refit": "joints", "regions": "paper", "coverage": False, "crease": 0.05,
+    ({"clip": "cross", "frames": 4, "refit": "joints", "regions": "asset", "coverage": False, "crease": 0.05,
       "sweep_margin": [0.0, 0.004]},
-     ["--clip", "cross", "--frames", "4", "--refit", "joints", "--regions", "paper", "--no-coverage", "--crease", "0.05",
+     ["--clip", "cross", "--frames", "4", "--refit", "joints", "--regions", "asset", "--no-coverage", "--crease", "0.05",
       "--sweep-margin=0,0.004"]),
     ({"frames": 4, "margin": 0.02, "sweep_margin": "auto", "coverage": False},
      ["--frames", "4", "--margin", "0.02", "--sweep-margin", "--no-coverage"]),

@@ -59,6 +59,18 @@ run(validate ${CLI} validate ${WORK}/c.sphc --mesh ${DATA}/creature.gltf)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "validate: exit ${rc}:\n${out}")
 endif()
+run(validate_rig ${CLI} validate ${WORK}/c.sphc --rig ${WORK}/no.mhskel)  # --rig belongs to --mesh
+if(NOT rc EQUAL 2 OR NOT out MATCHES "--rig requires --mesh")
+  message(FATAL_ERROR "validate --rig without --mesh: expected a usage error (exit 2), got ${rc}:\n${out}")
+endif()
+run(inspect_json ${CLI} inspect --json ${WORK}/c.sphc)
+if(NOT out MATCHES "\"body\": \"creature \\(any-skeleton path\\)\"")
+  message(FATAL_ERROR "inspect --json: the creature is not called a creature:\n${out}")
+endif()
+# --regions paper has nothing to map on a creature: refused, nothing written
+run(evaluate_paper ${CLI} evaluate ${WORK}/c.sphc --mesh ${DATA}/creature.gltf --clip cross --frames 2 --no-coverage
+    --regions paper --json ${WORK}/bad.json)
+expect_refused("evaluate --regions paper on a creature" "config: --regions paper: .* is a creature")
 
 run(snake ${CLI} bake ${DATA}/snake.gltf -o ${WORK}/bad.sphc --segmentation skeleton --report ${WORK}/bad.json)
 expect_refused("a skeleton with no recognisable limbs" "segmentation: segment \\(skeleton\\): no recognisable limbs: no bone has three branches")

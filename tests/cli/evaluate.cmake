@@ -1,7 +1,8 @@
 # `spherechain evaluate` on the MakeHuman morph (the asset of the cli_bake_makehuman fixture): the narrow
 # phase equals the exact ground truth (recall = precision = 1), the JSON has the documented keys, the
-# PNG is written, --min-recall gates the exit code; bad input (a --min-recall outside [0, 1], the wrong
-# mesh, an unknown clip) exits 1 with a message and writes nothing. Skips visibly when data is absent.
+# PNG is written, --min-recall gates the exit code; bad input (the wrong mesh, an unknown clip: exit 1; a
+# --min-recall outside [0, 1], a missing output folder: exit 2) gets a message and writes nothing. Skips
+# visibly when data is absent.
 foreach(f ${MESH} ${ASSET})
   if(NOT EXISTS ${f})
     message("SKIPPED: ${f} not found (../shared/data is absent)")
@@ -232,16 +233,20 @@ if(NOT (rc EQUAL 1 AND err MATCHES "is below --min-recall 1.000") AND NOT (rc EQ
 endif()
 message(STATUS "--min-recall 1.0 on 16 frames: exit ${rc}")
 
-# Bad input: exit 1, a message, nothing written.
-foreach(case "--min-recall;1.5;is outside \\[0, 1\\]" "--min-recall;nan;is outside \\[0, 1\\]" "--clip;nope;no clip named 'nope'"
-             "--sweep-margin;0.01,x;'x' is not a margin")
-  list(GET case 0 flag)
-  list(GET case 1 value)
-  list(GET case 2 expect)
+# Bad input: a message, nothing written; exit 2 for a value out of range or an output folder that does not
+# exist (usage errors, refused before any frame), 1 for what the files say.
+# (the expected exit first: a ';' after a '[' in a pattern would not split the list)
+foreach(case "2;--min-recall;1.5;is outside \\[0, 1\\]" "2;--min-recall;nan;is outside \\[0, 1\\]"
+             "2;--margin;1;--margin must be in .0, 1." "1;--clip;nope;no clip named 'nope'"
+             "2;--sweep-margin;0.01,x;'x' is not a margin" "2;--png;${WORK}/no/such/folder/x.png;folder .* does not exist")
+  list(GET case 0 expect_rc)
+  list(GET case 1 flag)
+  list(GET case 2 value)
+  list(GET case 3 expect)
   execute_process(COMMAND ${CLI} evaluate ${ASSET} --mesh ${MESH} ${flag} ${value} --json ${WORK}/bad.json
                   RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-  if(NOT rc EQUAL 1 OR NOT "${out}${err}" MATCHES "${expect}" OR EXISTS ${WORK}/bad.json)
-    message(FATAL_ERROR "${flag} ${value}: expected exit 1 with '${expect}' and no output, got ${rc}:\n${out}${err}")
+  if(NOT rc EQUAL expect_rc OR NOT "${out}${err}" MATCHES "${expect}" OR EXISTS ${WORK}/bad.json)
+    message(FATAL_ERROR "${flag} ${value}: expected exit ${expect_rc} with '${expect}' and no output, got ${rc}:\n${out}${err}")
   endif()
 endforeach()
 if(EXISTS ${WRONG})

@@ -61,7 +61,8 @@ struct EvaluateOptions {
   /// (JointRefitJob from the frame's skinning matrices; needs an asset with joint weights and a rigged mesh).
   std::string refit = "frame";
   /// Region pairs by the paper's five regions (an extended asset's hands count as arms, feet as legs, the
-  /// head as the torso), comparable with a paper-layout asset; false: the asset's own regions.
+  /// head as the torso), comparable with a paper-layout asset; false: the asset's own regions. A creature
+  /// asset has no paper regions: kConfig.
   bool paper_regions = false;
   /// Measure bind-pose coverage of φ1, φ1', φ2 and the refit spheres' coverage on every frame (the costly part).
   bool coverage = true;
