@@ -27,9 +27,9 @@ int RunInspect(const InspectArgs& args) {
   }
   std::printf("%s: spherechain asset, schema v%u, %zu bytes (%s)\n", args.asset.c_str(), j["schema_version"].get<unsigned>(),
               asset.size, j["generator"].get<std::string>().c_str());
-  std::printf("mesh: %u vertices, %u triangles, %zu part(s), units %s, up %s\n", asset.view.vertex_count,
-              asset.view.triangle_count, j["parts"].size(), j["units"].get<std::string>().c_str(),
-              j["up_axis"].get<std::string>().c_str());
+  std::printf("mesh: %u vertices, %u triangles, %zu part(s), units %s, up %s, vertex contract %s\n",
+              asset.view.vertex_count, asset.view.triangle_count, j["parts"].size(), j["units"].get<std::string>().c_str(),
+              j["up_axis"].get<std::string>().c_str(), j["vertex_contract"].get<std::string>().c_str());
   for (const auto& p : j["parts"])
     std::printf("  part %-24s vertices %u+%u  triangles %u+%u\n", p["name"].get<std::string>().c_str(),
                 p["first_vertex"].get<unsigned>(), p["vertices"].get<unsigned>(), p["first_triangle"].get<unsigned>(),
