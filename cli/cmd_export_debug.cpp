@@ -21,7 +21,10 @@ struct ExportArgs {
 };
 
 int RunExport(const ExportArgs& a) {
-  if (int clash = OutputsClash({{"-o", &a.output}, {"--png", &a.png}},
+  // The PNG's path first (default: -o with .png), so that an -o ending in .png clashes with it.
+  std::string png = a.png;
+  if (png.empty()) png = std::filesystem::path(a.output).replace_extension(".png").string();
+  if (int clash = OutputsClash({{"-o", &a.output}, {a.png.empty() ? "the picture (-o with .png)" : "--png", &png}},
                                {{"ASSET", &a.asset}, {"--mesh", &a.anim.mesh}, {"--rig", &a.rig}}, PoseInputs(a.anim)))
     return clash;
   const bool animated = !a.anim.clip.empty() || a.anim.morph_requested();
@@ -30,8 +33,6 @@ int RunExport(const ExportArgs& a) {
   std::string error;
   // The mesh checked against the asset's fingerprint (a mesh of other triangles would be coloured wrongly).
   if (!OpenAssetAndMesh(a.asset, a.anim.mesh, a.rig, &asset, &mesh, &error)) return Fail(error);
-  std::string png = a.png;
-  if (png.empty()) png = std::filesystem::path(a.output).replace_extension(".png").string();
   // Everything that can be refused before anything is written: the animation, the output folders.
   AnimationSource anim;
   if (animated && !OpenAnimation(mesh, a.anim, &anim, &error)) return Fail(error);
@@ -39,6 +40,7 @@ int RunExport(const ExportArgs& a) {
     const std::filesystem::path dir = std::filesystem::path(*out).parent_path();
     if (!dir.empty() && !std::filesystem::is_directory(dir))
       return Fail("cannot write '" + *out + "': folder '" + dir.string() + "' does not exist");
+    if (std::filesystem::is_directory(*out)) return Fail("cannot write '" + *out + "': it is a folder");
   }
   // The PNG first: it needs an outside tool (rsvg-convert), so when it fails no glTF is left behind; when
   // the glTF then fails, the PNG is removed.
@@ -51,8 +53,13 @@ int RunExport(const ExportArgs& a) {
   if (animated) {
     playback::AnimatedGltfStats stats;
     const runtime::RefitMode mode = a.refit == "paper" ? runtime::RefitMode::kPaper : runtime::RefitMode::kPivotFrame;
-    if (auto s = playback::ExportAnimatedGltf(mesh, asset.view, anim, a.output, mode, &stats); !s.ok())
-      return fail_after_png(s.error());
+    import::Status s = import::Ok{};
+    try {  // out of memory (a huge --frames) or a writer's exception: no PNG of this run left either
+      s = playback::ExportAnimatedGltf(mesh, asset.view, anim, a.output, mode, &stats);
+    } catch (const std::exception& e) {
+      return fail_after_png(std::string("export-debug: the animated glTF of '") + a.output + "': " + e.what());
+    }
+    if (!s.ok()) return fail_after_png(s.error());
     Out("wrote %s (animated glTF: %s, %u frames; skinned mesh coloured by region, %u joints' nodes, %u "
                 "spheres as animated nodes; %u channels, %.1f MB)\n",
                 a.output.c_str(), anim.Describe().c_str(), stats.frames, stats.skeleton_nodes, stats.spheres,

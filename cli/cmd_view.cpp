@@ -86,9 +86,11 @@ int RunView(const ViewArgs& a) {
   const bool crease = session.exclusions() == runtime::Exclusions::kCrease;
 
   const uint32_t V = view.vertex_count, T = view.triangle_count, S = view.sphere_count, F = anim.frames;
-  // Every frame's positions are held, then embedded (16-bit, base64: about 8 bytes a vertex a frame): a page
-  // past 512 MB is refused before any frame is skinned, not left to run out of memory.
-  const uint64_t page_bytes = uint64_t{F} * V * 8;
+  // Every frame's positions are held, then embedded (16-bit, base64: about 8 bytes a vertex a frame), and its
+  // spheres (float32, base64: about 22 bytes a sphere a frame): a page past 512 MB is refused before any
+  // frame is skinned, not left to run out of memory. The contacts are known only after; the page is checked
+  // again before it is written.
+  const uint64_t page_bytes = uint64_t{F} * (uint64_t{V} * 8 + uint64_t{S} * 22);
   if (page_bytes > (uint64_t{512} << 20))
     return Fail("view: " + std::to_string(F) + " frames of " + std::to_string(V) + " vertices make a page of about " +
                 std::to_string(page_bytes >> 20) + " MB, over 512 MB: ask for fewer --frames");
@@ -209,6 +211,9 @@ int RunView(const ViewArgs& a) {
   if (!ReplaceOnce(&page, "<!--SPHERECHAIN_IMPORTMAP-->", importmap) ||
       !ReplaceOnce(&page, "<!--SPHERECHAIN_DATA-->", ScriptSafeJson(data)))
     return Fail("view: the compiled-in page (viewer/page.html) lacks its markers");
+  if (page.size() > (size_t{512} << 20))
+    return Fail("view: " + std::to_string(F) + " frames make a page of " + std::to_string(page.size() >> 20) +
+                " MB, over 512 MB: ask for fewer --frames (nothing written)");
   if (auto s = import::WriteFileAtomic(a.output, page); !s.ok()) return Fail(s.error());
   Out("view: %s + %s — %s, %u frames, %u spheres; %s pairs max %u, contacts %llu (max %u a frame)\n",
               a.asset.c_str(), a.anim.mesh.c_str(), anim.Describe().c_str(), F, S, a.method == "m1" ? "M1" : "M2", max_pairs,

@@ -19,6 +19,7 @@
 #include <tiny_gltf.h>
 
 #include "spherechain/import/file_io.h"
+#include "utf8.h"
 
 namespace spherechain::playback {
 
@@ -476,10 +477,8 @@ std::string RegionPairName(const runtime::AssetView& view, int a, int b) {
   return s;
 }
 
-namespace {
+namespace detail {
 
-// The length of the well-formed UTF-8 sequence at s[i] (1–4), or 0 when none starts there (RFC 3629: no
-// overlong forms, no surrogates, nothing above U+10FFFF).
 size_t Utf8SequenceAt(const std::string& s, size_t i) {
   const auto byte = [&](size_t k) { return k < s.size() ? static_cast<unsigned char>(s[k]) : 0u; };
   const unsigned b0 = byte(i);
@@ -497,7 +496,23 @@ size_t Utf8SequenceAt(const std::string& s, size_t i) {
   return 0;
 }
 
-}  // namespace
+std::string ValidUtf8(const std::string& s) {
+  std::string o;
+  o.reserve(s.size());
+  for (size_t i = 0; i < s.size();) {
+    const size_t n = Utf8SequenceAt(s, i);
+    if (n == 0) {
+      o += "\xEF\xBF\xBD";  // U+FFFD
+      ++i;
+    } else {
+      o.append(s, i, n);
+      i += n;
+    }
+  }
+  return o;
+}
+
+}  // namespace detail
 
 std::string XmlEscape(const std::string& s) {
   std::string o;
@@ -505,7 +520,7 @@ std::string XmlEscape(const std::string& s) {
   for (size_t i = 0; i < s.size(); ++i) {
     const char c = s[i];
     if (static_cast<unsigned char>(c) >= 0x80) {
-      const size_t n = Utf8SequenceAt(s, i);
+      const size_t n = detail::Utf8SequenceAt(s, i);
       if (n == 0) {
         o += "\xEF\xBF\xBD";  // U+FFFD
       } else {

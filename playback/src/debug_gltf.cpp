@@ -13,6 +13,7 @@
 #include "spherechain/playback/session.h"
 #include "spherechain/import/file_io.h"
 #include "spherechain/runtime/runtime.h"
+#include "utf8.h"
 
 namespace spherechain::playback {
 
@@ -162,7 +163,7 @@ Status ExportAnimatedGltf(const Mesh& mesh, const runtime::AssetView& asset, con
   for (uint32_t n = 0; n < N; ++n) {
     const Node& src = skin.nodes[n];
     tinygltf::Node node;
-    node.name = src.name.empty() ? "node_" + std::to_string(n) : src.name;
+    node.name = src.name.empty() ? "node_" + std::to_string(n) : detail::ValidUtf8(src.name);  // JSON is UTF-8
     node.translation = {src.translation[0], src.translation[1], src.translation[2]};
     node.rotation = {src.rotation[0], src.rotation[1], src.rotation[2], src.rotation[3]};
     node.scale = {src.scale[0], src.scale[1], src.scale[2]};
@@ -316,7 +317,7 @@ Status ExportAnimatedGltf(const Mesh& mesh, const runtime::AssetView& asset, con
 
   // ---- the animation -----------------------------------------------------------------------------------
   tinygltf::Animation a;
-  a.name = anim.clip ? anim.clip->name : "morph";
+  a.name = anim.clip ? detail::ValidUtf8(anim.clip->name) : "morph";
   const int input = g.Floats(times, TINYGLTF_TYPE_SCALAR, 1, true);
   auto channel = [&](int node, const char* path, const float* values, size_t floats, int type, int comps) {
     std::vector<float> v(values, values + floats);

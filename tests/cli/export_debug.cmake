@@ -41,6 +41,12 @@ execute_process(COMMAND ${CLI} export-debug ${ASSET} --mesh ${MESH} -o ${WORK}/n
 if(rc EQUAL 0 OR NOT "${out}${err}" MATCHES "does not exist" OR EXISTS ${WORK}/ok.png)
   message(FATAL_ERROR "export-debug into a missing folder: expected a failure and no PNG:\n${out}${err}")
 endif()
+# -o ending in .png: the picture's default path is -o itself (it was written, then overwritten by the glTF)
+execute_process(COMMAND ${CLI} export-debug ${ASSET} --mesh ${MESH} -o ${WORK}/same.png
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 2 OR NOT "${out}${err}" MATCHES "both name" OR EXISTS ${WORK}/same.png)
+  message(FATAL_ERROR "export-debug -o same.png: expected a clash (exit 2), nothing written:\n${out}${err}")
+endif()
 get_filename_component(shared ${MESH} DIRECTORY)
 set(other ${shared}/../gltf/CesiumMan.gltf)
 if(EXISTS ${other})

@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <algorithm>
 #include <filesystem>
 #include <map>
 
@@ -253,5 +254,32 @@ TEST_CASE("animated debug glTF of a synthetic rig: one animation, 3 channels a n
   auto missing = sc::playback::ExportAnimatedGltf(r.mesh, r.view, anim.value(), "/nonexistent/dir/x.gltf");
   REQUIRE(!missing.ok());
   CHECK(missing.error().code == sc::import::Error::Code::kIo);
+  std::filesystem::remove(out);
+}
+
+TEST_CASE("animated debug glTF: joint and clip names in another encoding are written as U+FFFD, not refused") {
+  // FBX, X and DAE files from Latin-1 tools carry names that are not UTF-8; glTF's JSON must be. The writer
+  // threw (nlohmann type_error.316) on them; each invalid byte is now U+FFFD and the rest of the name kept.
+  sc::test::Rig r;
+  sc::test::MakeRig(&r);
+  REQUIRE(r.mesh.skin);
+  REQUIRE(!r.mesh.clips.empty());
+  r.mesh.skin->nodes[0].name = "Tail\xE9" "06";
+  r.mesh.clips[0].name = "Lauf\xFC" "bung";
+  sc::playback::AnimationRequest req;
+  req.mesh_name = "tubes";
+  req.clip = r.mesh.clips[0].name;
+  req.frames = 4;
+  auto anim = sc::playback::OpenAnimation(r.mesh, req);
+  REQUIRE(anim.ok());
+  const std::string out = std::string(SPHERECHAIN_BINARY_DIR) + "/tests/animated_latin1.gltf";
+  auto s = sc::playback::ExportAnimatedGltf(r.mesh, r.view, anim.value(), out);
+  REQUIRE_MESSAGE(s.ok(), (s.ok() ? "" : s.error().message));
+  tinygltf::Model m;
+  tinygltf::TinyGLTF loader;
+  std::string err, warn;
+  REQUIRE_MESSAGE(loader.LoadASCIIFromFile(&m, &err, &warn, out), err);
+  CHECK(m.animations[0].name == "Lauf\xEF\xBF\xBD" "bung");
+  CHECK(std::any_of(m.nodes.begin(), m.nodes.end(), [](const tinygltf::Node& n) { return n.name == "Tail\xEF\xBF\xBD" "06"; }));
   std::filesystem::remove(out);
 }
