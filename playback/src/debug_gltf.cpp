@@ -179,7 +179,17 @@ Status ExportAnimatedGltf(const Mesh& mesh, const runtime::AssetView& asset, con
     tinygltf::Node node;
     node.name = "static";
     m.nodes.push_back(node);
-    roots.push_back(static_node);
+  }
+  // One root above the bone trees and "static" (the identity): a skin's joints must share a common root
+  // (glTF 2.0, skins; the Khronos validator's SKIN_NO_COMMON_ROOT), and no global transform changes.
+  const int skeleton_node = int(m.nodes.size());
+  {
+    tinygltf::Node node;
+    node.name = "skeleton";
+    node.children = roots;
+    node.children.push_back(static_node);
+    m.nodes.push_back(node);
+    roots.assign(1, skeleton_node);
   }
 
   // ---- materials: the character's regions, one translucent material per region for the spheres ------

@@ -9,6 +9,7 @@
 #include <cstring>
 #include <algorithm>
 #include <filesystem>
+#include <set>
 #include <map>
 
 #include <tiny_gltf.h>
@@ -161,7 +162,15 @@ void CheckAnimatedExport(const std::string& input, sc::playback::AnimationReques
   for (uint32_t n = 0; n < N; ++n) {  // parents first (Skin::nodes order)
     REQUIRE((key_t[n] && key_r[n] && key_s[n]));
     const M4 local = Trs(key_t[n], key_r[n], key_s[n]);
-    global[n] = parent[n] >= 0 ? Mul(global[parent[n]], local) : local;
+    if (parent[n] >= int(N)) {  // a bone tree's root: under the file's one "skeleton" root, the identity
+      const tinygltf::Node& root = m.nodes[size_t(parent[n])];
+      CHECK(root.name == "skeleton");
+      CHECK((root.translation.empty() && root.rotation.empty() && root.scale.empty() && root.matrix.empty()));
+      CHECK(parent[size_t(parent[n])] == -1);
+      global[n] = local;
+    } else {
+      global[n] = parent[n] >= 0 ? Mul(global[size_t(parent[n])], local) : local;
+    }
   }
   const tinygltf::Skin& skin = m.skins[0];
   std::vector<M4> joint(skin.joints.size());
@@ -238,6 +247,16 @@ TEST_CASE("animated debug glTF of a synthetic rig: one animation, 3 channels a n
   REQUIRE_MESSAGE(loader.LoadASCIIFromFile(&m, &err, &warn, out), err);
   REQUIRE(m.animations.size() == 1);
   CHECK(m.animations[0].name == "lower");
+  // The skin's joints share one root (glTF 2.0: a skin's joints must have a common root).
+  std::vector<int> parent(m.nodes.size(), -1);
+  for (size_t n = 0; n < m.nodes.size(); ++n)
+    for (int c : m.nodes[n].children) parent[size_t(c)] = int(n);
+  std::set<int> joint_roots;
+  for (int j : m.skins.at(0).joints) {
+    while (parent[size_t(j)] >= 0) j = parent[size_t(j)];
+    joint_roots.insert(j);
+  }
+  CHECK(joint_roots.size() == 1);
   CHECK(m.animations[0].channels.size() == 3 * 3 + 2 * 16);
   FloatReader rd{m};
   // The last key of sphere 12's translation (tube B): 9 units below its bind centre at t = 0.75 s.
