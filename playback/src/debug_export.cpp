@@ -477,8 +477,9 @@ std::string RegionPairName(const runtime::AssetView& view, int a, int b) {
   return s;
 }
 
-namespace detail {
+namespace {
 
+// The length of the well-formed UTF-8 sequence at s[i] (1–4), or 0 when none starts there.
 size_t Utf8SequenceAt(const std::string& s, size_t i) {
   const auto byte = [&](size_t k) { return k < s.size() ? static_cast<unsigned char>(s[k]) : 0u; };
   const unsigned b0 = byte(i);
@@ -495,6 +496,10 @@ size_t Utf8SequenceAt(const std::string& s, size_t i) {
   }
   return 0;
 }
+
+}  // namespace
+
+namespace detail {
 
 std::string ValidUtf8(const std::string& s) {
   std::string o;
@@ -517,18 +522,7 @@ std::string ValidUtf8(const std::string& s) {
 std::string XmlEscape(const std::string& s) {
   std::string o;
   o.reserve(s.size());
-  for (size_t i = 0; i < s.size(); ++i) {
-    const char c = s[i];
-    if (static_cast<unsigned char>(c) >= 0x80) {
-      const size_t n = detail::Utf8SequenceAt(s, i);
-      if (n == 0) {
-        o += "\xEF\xBF\xBD";  // U+FFFD
-      } else {
-        o.append(s, i, n);
-        i += n - 1;
-      }
-      continue;
-    }
+  for (const char c : detail::ValidUtf8(s)) {  // bytes >= 0x80 are then whole characters: kept as they are
     switch (c) {
       case '&': o += "&amp;"; break;
       case '<': o += "&lt;"; break;

@@ -10,7 +10,4 @@ namespace spherechain::playback::detail {
 /// forms, no surrogates, nothing above U+10FFFF) replaced by U+FFFD; well-formed text unchanged. O(length).
 std::string ValidUtf8(const std::string& text);
 
-/// The length of the well-formed UTF-8 sequence at text[i] (1–4), or 0 when none starts there.
-size_t Utf8SequenceAt(const std::string& text, size_t i);
-
 }  // namespace spherechain::playback::detail
