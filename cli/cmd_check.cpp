@@ -152,10 +152,7 @@ int RunCheck(const CheckArgs& a) {
   if (!(a.fps > 0 && a.fps <= 1000)) return BadInput("--fps " + std::to_string(a.fps) + " is outside (0, 1000]");
   for (const std::string* out : {&a.json, &a.junit, &a.html}) {
     if (out->empty()) continue;
-    const fs::path dir = fs::path(*out).parent_path();
-    if (!dir.empty() && !fs::is_directory(dir))
-      return BadInput("cannot write '" + *out + "': folder '" + dir.string() + "' does not exist");
-    if (fs::is_directory(*out)) return BadInput("cannot write '" + *out + "': it is a folder");
+    if (const std::string why = OutputPathProblem(*out); !why.empty()) return BadInput(why);
   }
   nlohmann::json baseline;
   if (!a.baseline.empty()) {

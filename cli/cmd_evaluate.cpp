@@ -50,10 +50,7 @@ int RunEvaluate(const EvaluateArgs& a) {
   if (auto s = evaluate::ParseSweepMargins(a.sweep, &options.sweep_margins_rel); !s.ok()) return usage(s.error().message);
   for (const std::string* out : {&a.json, &a.png}) {  // where the outputs go, checked before minutes of frames
     if (out->empty()) continue;
-    const std::filesystem::path dir = std::filesystem::path(*out).parent_path();
-    if (!dir.empty() && !std::filesystem::is_directory(dir))
-      return usage("cannot write '" + *out + "': folder '" + dir.string() + "' does not exist");
-    if (std::filesystem::is_directory(*out)) return usage("cannot write '" + *out + "': it is a folder");
+    if (const std::string why = OutputPathProblem(*out); !why.empty()) return usage(why);
   }
 
   LoadedAsset asset;

@@ -37,10 +37,7 @@ int RunExport(const ExportArgs& a) {
   AnimationSource anim;
   if (animated && !OpenAnimation(mesh, a.anim, &anim, &error)) return Fail(error);
   for (const std::string* out : std::initializer_list<const std::string*>{&a.output, &png}) {
-    const std::filesystem::path dir = std::filesystem::path(*out).parent_path();
-    if (!dir.empty() && !std::filesystem::is_directory(dir))
-      return Fail("cannot write '" + *out + "': folder '" + dir.string() + "' does not exist");
-    if (std::filesystem::is_directory(*out)) return Fail("cannot write '" + *out + "': it is a folder");
+    if (const std::string why = OutputPathProblem(*out); !why.empty()) return Fail(why);
   }
   // The PNG first: it needs an outside tool (rsvg-convert), so when it fails no glTF is left behind; when
   // the glTF then fails, the PNG is removed.

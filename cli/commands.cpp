@@ -76,6 +76,14 @@ std::filesystem::path Resolved(const std::string& p) {
 }
 }  // namespace
 
+std::string OutputPathProblem(const std::string& path) {
+  const std::filesystem::path dir = std::filesystem::path(path).parent_path();
+  if (!dir.empty() && !std::filesystem::is_directory(dir))
+    return "cannot write '" + path + "': folder '" + dir.string() + "' does not exist";
+  if (std::filesystem::is_directory(path)) return "cannot write '" + path + "': it is a folder";
+  return {};
+}
+
 int OutputsClash(std::initializer_list<PathArg> outputs, std::initializer_list<PathArg> inputs,
                  const std::vector<std::string>& more_inputs) {
   std::vector<std::pair<const char*, std::filesystem::path>> written;

@@ -54,6 +54,11 @@ struct PathArg {
 int OutputsClash(std::initializer_list<PathArg> outputs, std::initializer_list<PathArg> inputs,
                  const std::vector<std::string>& more_inputs = {});
 
+/// Why output file `path` cannot be written, found before the work: "cannot write 'p': folder 'd' does not
+/// exist" or "cannot write 'p': it is a folder"; empty when it can be tried (the write may still fail).
+/// Two stats.
+std::string OutputPathProblem(const std::string& path);
+
 /// -q/--quiet: commands print warnings and errors only — no summaries, tables, progress or "wrote" lines
 /// (`inspect` still prints the asset: that is what it is asked for; `validate` still prints its findings).
 void SetQuiet(bool quiet);
