@@ -11,6 +11,7 @@
 #include <filesystem>
 
 #include <nlohmann/json.hpp>
+#include <spdlog/spdlog.h>
 
 #include "animation_source.h"
 #include "commands.h"
@@ -203,6 +204,16 @@ int RunPlay(const PlayArgs& a) {
   if (int clash = OutputsClash({{"--json", &a.json}}, {{"ASSET", &a.asset}, {"--mesh", &a.anim.mesh}, {"--rig", &a.rig}},
                                PoseInputs(a.anim)))
     return clash;
+  // Usage errors (exit 2), before the asset is read and the frames are played.
+  const auto usage = [](const std::string& message) {
+    spdlog::error("{}", message);
+    return 2;
+  };
+  if (a.asset_exclusions && !a.narrow_phase && !(a.narrow_behind > 0.0f))
+    return usage("--asset-exclusions chooses the narrow phase's definition of a contact: it needs --narrow-phase "
+                 "or --narrow-behind");
+  if (!a.json.empty())
+    if (const std::string why = OutputPathProblem(a.json); !why.empty()) return usage(why);
   LoadedAsset asset;
   import::Mesh mesh;
   std::string error;

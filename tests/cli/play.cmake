@@ -106,6 +106,18 @@ if(rc EQUAL 0 OR NOT "${out}${err}" MATCHES "narrow-behind" OR EXISTS ${WORK}/np
   message(FATAL_ERROR "--narrow-behind -1: expected a refusal naming the option and no output, got ${rc}:\n${out}${err}")
 endif()
 
+# Usage errors before any frame: --asset-exclusions without a narrow phase, a --json in a missing folder.
+foreach(bad "--asset-exclusions;--json;${WORK}/np_bad.json;needs --narrow-phase"
+            "--narrow-phase;--json;${WORK}/missing/np.json;folder .* does not exist")
+  list(GET bad -1 expect)
+  list(REMOVE_AT bad -1)
+  execute_process(COMMAND ${CLI} play ${ASSET} --mesh ${MESH} --frames 2 ${bad}
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 2 OR NOT "${out}${err}" MATCHES "${expect}" OR NOT "${out}" STREQUAL "" OR EXISTS ${WORK}/np_bad.json)
+    message(FATAL_ERROR "play ${bad}: expected exit 2 ('${expect}'), nothing played; got ${rc}:\n${out}${err}")
+  endif()
+endforeach()
+
 # A report may not overwrite a key pose the morph reads, named or found in a folder (--poses-dir, --morph DIR).
 file(MAKE_DIRECTORY ${WORK}/poses)
 file(COPY ${CMAKE_CURRENT_LIST_DIR}/../../data/poses/makehuman/hand_on_shoulder.json DESTINATION ${WORK}/poses)

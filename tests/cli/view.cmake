@@ -19,6 +19,16 @@ if(NOT rc EQUAL 1 OR NOT "${out}${err}" MATCHES "three.js not found.*npm ci" OR 
   message(FATAL_ERROR "view without three.js: expected exit 1, a message naming `npm ci` and no file; got ${rc}:\n${out}${err}")
 endif()
 
+# An output folder that does not exist, or an output that is a folder: exit 2 before three.js or a frame.
+foreach(out "${WORK}/missing/v.html" "${WORK}")
+  execute_process(COMMAND ${CLI} view ${ASSET} --mesh ${MESH} --three ${WORK} -o ${out}
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out_text ERROR_VARIABLE err)
+  if(NOT rc EQUAL 2 OR NOT "${out_text}${err}" MATCHES "cannot write .*(does not exist|it is a folder)"
+     OR EXISTS ${WORK}/missing)
+    message(FATAL_ERROR "view -o ${out}: expected exit 2 naming the path; got ${rc}:\n${out_text}${err}")
+  endif()
+endforeach()
+
 execute_process(COMMAND ${CLI} view ${ASSET} --mesh ${MESH} -o ${WORK}/makehuman.html
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc EQUAL 0)
