@@ -116,14 +116,12 @@ int RunBake(const BakeArgs& a) {
   if (auto s = baker::ApplyBakeOptions(a.options, &config); !s.ok()) return Fail(s.error());
   if (batch) return RunBatchBake(a.inputs, a.out_dir, a.jobs, config);
 
-  // Fail before the work when an output cannot be written.
+  // Fail before the work when an output cannot be written: exit 1 and an io: error, as a failed write (a build
+  // system's rule sees the same failure either way).
   for (const std::string* out : {&a.output, &a.report, &a.ray_csv, &a.png, &a.depfile}) {
     if (out->empty()) continue;
-    const std::filesystem::path dir = std::filesystem::path(*out).parent_path();
-    if (!dir.empty() && !std::filesystem::is_directory(dir))
-      return Fail("cannot write '" + *out + "': folder '" + dir.string() + "' does not exist");
-    if (std::filesystem::is_directory(*out))
-      return Fail(import::Error{import::Error::Code::kIo, "cannot write '" + *out + "': it is a folder"});
+    if (const std::string why = OutputPathProblem(*out); !why.empty())
+      return Fail(import::Error{import::Error::Code::kIo, why});
   }
   auto result = baker::Bake(a.inputs.front(), config, &ctx);
   if (!result.ok()) return Fail(result.error());
