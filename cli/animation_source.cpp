@@ -24,22 +24,7 @@ std::string FindPosesDir(const std::string& character, const std::string& explic
   return playback::FindPosesDir(character, data_dirs);
 }
 
-std::vector<std::string> PoseInputs(const AnimationArgs& a) {
-  std::vector<std::string> files;
-  auto add_folder = [&](const std::string& dir) {
-    std::error_code ec;
-    for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec))
-      if (it->is_regular_file(ec)) files.push_back(it->path().string());
-  };
-  for (const std::string& m : a.morph) {
-    if (m.empty()) continue;
-    files.push_back(m);
-    std::error_code ec;
-    if (fs::is_directory(m, ec)) add_folder(m);
-  }
-  if (!a.poses_dir.empty()) add_folder(a.poses_dir);
-  return files;
-}
+std::vector<std::string> PoseInputs(const AnimationArgs& a) { return playback::PoseInputFiles(a.morph, a.poses_dir); }
 
 void AddAnimationOptions(CLI::App* sub, std::string* asset, std::string* rig, AnimationArgs* anim) {
   sub->add_option("asset", *asset, ".sphc asset baked from the mesh")->required()->check(CLI::ExistingFile);

@@ -67,46 +67,12 @@ int Fail(const std::string& message) {
   return 1;
 }
 
-namespace {
-// `p` absolute with `.`, `..` and symbolic links of its existing part resolved; lexically when that fails.
-std::filesystem::path Resolved(const std::string& p) {
-  std::error_code ec;
-  std::filesystem::path r = std::filesystem::weakly_canonical(std::filesystem::absolute(p, ec), ec);
-  return ec ? std::filesystem::path(p).lexically_normal() : r;
-}
-}  // namespace
-
-std::string OutputPathProblem(const std::string& path) {
-  const std::filesystem::path dir = std::filesystem::path(path).parent_path();
-  if (!dir.empty() && !std::filesystem::is_directory(dir))
-    return "cannot write '" + path + "': folder '" + dir.string() + "' does not exist";
-  if (std::filesystem::is_directory(path)) return "cannot write '" + path + "': it is a folder";
-  return {};
-}
-
 int OutputsClash(std::initializer_list<PathArg> outputs, std::initializer_list<PathArg> inputs,
                  const std::vector<std::string>& more_inputs) {
-  std::vector<std::pair<const char*, std::filesystem::path>> written;
-  for (const PathArg& out : outputs) {
-    if (out.path->empty()) continue;
-    const std::filesystem::path r = Resolved(*out.path);
-    for (const auto& [flag, other] : written)
-      if (other == r) {
-        spdlog::error("{} and {} both name '{}': one would overwrite the other", flag, out.flag, *out.path);
-        return 2;
-      }
-    auto clash = [&](const char* flag, const std::string& in) {
-      if (in.empty() || Resolved(in) != r) return false;
-      spdlog::error("{} '{}' is also {}: writing it would destroy what is read", out.flag, *out.path, flag);
-      return true;
-    };
-    for (const PathArg& in : inputs)
-      if (clash(in.flag, *in.path)) return 2;
-    for (const std::string& in : more_inputs)
-      if (clash("an input", in)) return 2;
-    written.emplace_back(out.flag, r);
-  }
-  return 0;
+  const std::string clash = import::OutputsClash(outputs, inputs, more_inputs);
+  if (clash.empty()) return 0;
+  spdlog::error("{}", clash);
+  return 2;
 }
 
 }  // namespace spherechain::cli

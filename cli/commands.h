@@ -9,6 +9,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json_fwd.hpp>
 
+#include "spherechain/import/file_io.h"
 #include "spherechain/import/types.h"
 #include "spherechain/playback/debug_export.h"
 #include "spherechain/runtime/asset.h"
@@ -43,21 +44,13 @@ import::Context MakeLoggingContext();
 int Fail(const import::Error& error);
 int Fail(const std::string& message);
 
-/// One file a command reads or writes, as its flag ("-o", "--report", "ASSET") and path (empty: not given).
-struct PathArg {
-  const char* flag;
-  const std::string* path;
-};
-/// Exit code 2 with "error: -o and --report both name 'x'" (or "... is also an input") when two outputs, or
-/// an output and an input, are one file after resolving `.`, `..` and symbolic links: writing one would
-/// destroy the other. 0 when all are distinct. Call it before any output is written; reads no file.
+using import::OutputPathProblem;  // "cannot write 'p': ..." before the work (import/file_io.h)
+using import::PathArg;
+/// Exit code 2 after logging import::OutputsClash's message ("error: -o and --report both name 'x'", "... is
+/// also an input") when two outputs, or an output and an input, are one file: writing one would destroy the
+/// other. 0 when all are distinct. Call it before any output is written; reads no file.
 int OutputsClash(std::initializer_list<PathArg> outputs, std::initializer_list<PathArg> inputs,
                  const std::vector<std::string>& more_inputs = {});
-
-/// Why output file `path` cannot be written, found before the work: "cannot write 'p': folder 'd' does not
-/// exist" or "cannot write 'p': it is a folder"; empty when it can be tried (the write may still fail).
-/// Two stats.
-std::string OutputPathProblem(const std::string& path);
 
 /// -q/--quiet: commands print warnings and errors only — no summaries, tables, progress or "wrote" lines
 /// (`inspect` still prints the asset: that is what it is asked for; `validate` still prints its findings).

@@ -160,4 +160,44 @@ Status LoadAssetFile(const std::string& path, LoadedAsset* out) {
   return LoadAssetBytes(bytes->data(), bytes->size(), "'" + path + "'", out);
 }
 
+namespace {
+// `p` absolute with `.`, `..` and symbolic links of its existing part resolved; lexically when that fails.
+std::filesystem::path Resolved(const std::string& p) {
+  std::error_code ec;
+  std::filesystem::path r = std::filesystem::weakly_canonical(std::filesystem::absolute(p, ec), ec);
+  return ec ? std::filesystem::path(p).lexically_normal() : r;
+}
+}  // namespace
+
+std::string OutputPathProblem(const std::string& path) {
+  std::error_code ec;
+  const std::filesystem::path dir = std::filesystem::path(path).parent_path();
+  if (!dir.empty() && !std::filesystem::is_directory(dir, ec))
+    return "cannot write '" + path + "': folder '" + dir.string() + "' does not exist";
+  if (std::filesystem::is_directory(path, ec)) return "cannot write '" + path + "': it is a folder";
+  return {};
+}
+
+std::string OutputsClash(const std::vector<PathArg>& outputs, const std::vector<PathArg>& inputs,
+                         const std::vector<std::string>& more_inputs) {
+  std::vector<std::pair<const char*, std::filesystem::path>> written;
+  for (const PathArg& out : outputs) {
+    if (out.path->empty()) continue;
+    const std::filesystem::path r = Resolved(*out.path);
+    for (const auto& [name, other] : written)
+      if (other == r)
+        return std::string(name) + " and " + out.name + " both name '" + *out.path + "': one would overwrite the other";
+    auto is = [&](const std::string& in) { return !in.empty() && Resolved(in) == r; };
+    auto clash = [&](const char* name) {
+      return std::string(out.name) + " '" + *out.path + "' is also " + name + ": writing it would destroy what is read";
+    };
+    for (const PathArg& in : inputs)
+      if (is(*in.path)) return clash(in.name);
+    for (const std::string& in : more_inputs)
+      if (is(in)) return clash("an input");
+    written.emplace_back(out.name, r);
+  }
+  return {};
+}
+
 }  // namespace spherechain::import

@@ -21,6 +21,23 @@ std::string FindPosesDir(const std::string& character, const std::vector<std::st
   return {};
 }
 
+std::vector<std::string> PoseInputFiles(const std::vector<std::string>& morph, const std::string& poses_dir) {
+  std::vector<std::string> files;
+  auto add_folder = [&](const std::string& dir) {
+    std::error_code ec;
+    for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec))
+      if (it->is_regular_file(ec)) files.push_back(it->path().string());
+  };
+  for (const std::string& m : morph) {
+    if (m.empty()) continue;
+    files.push_back(m);
+    std::error_code ec;
+    if (fs::is_directory(m, ec)) add_folder(m);
+  }
+  if (!poses_dir.empty()) add_folder(poses_dir);
+  return files;
+}
+
 std::string Animation::Describe() const {
   if (clip) return "clip '" + clip->name + "' (" + std::to_string(clip->duration_s) + " s)";
   return "morph through " + std::to_string(poses.size()) + " key poses from " + poses_from;

@@ -15,7 +15,7 @@ PAIR_DTYPE: np.dtype[np.void]
 #: (source units); direction float32 (3,) (unit push). 28 bytes.
 CONTACT_DTYPE: np.dtype[np.void]
 
-_Path = Union[str, os.PathLike[str]]
+_Path = Union[str, bytes, os.PathLike[str], os.PathLike[bytes]]
 _Float32Array = npt.NDArray[np.float32]
 _Records = npt.NDArray[np.void]
 
@@ -179,7 +179,7 @@ def evaluate(
     clip: str | None = None,
     frames: int = 40,
     *,
-    morph: bool | Sequence[_Path] | None = None,
+    morph: bool | _Path | Sequence[_Path] | None = None,
     poses_dir: _Path | None = None,
     rig: _Path | None = None,
     margin: float = 0.01,

@@ -14,6 +14,7 @@
 #include "spherechain/baker/bake.h"
 #include "spherechain/evaluate/evaluate.h"
 #include "spherechain/evaluate/inspect.h"
+#include "spherechain/import/file_io.h"
 #include "spherechain/playback/animation_source.h"
 #include "spherechain/playback/character.h"
 
@@ -58,7 +59,13 @@ py::object JsonToPython(const nlohmann::json& j) {
   return py::module_::import("json").attr("loads")(j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
 }
 
-std::string PathString(const py::handle& path) { return py::str(py::module_::import("os").attr("fspath")(path)); }
+// A path argument (str, bytes or os.PathLike) as the file system's bytes (os.fsencode: a str in the file system
+// encoding, undecodable bytes kept as they were); TypeError for anything else.
+std::string PathString(const py::handle& path) {
+  return py::bytes(py::module_::import("os").attr("fsencode")(path)).cast<std::string>();
+}
+// A path as Python shows it (os.fsdecode of its bytes).
+py::object PathObject(const std::string& path) { return py::module_::import("os").attr("fsdecode")(py::bytes(path)); }
 
 AssetPtr LoadOrThrow(const std::function<import::Status(import::LoadedAsset*)>& load) {
   auto data = std::make_shared<AssetData>();
@@ -79,8 +86,10 @@ PyAsset Load(const py::object& source) {
   PyAsset asset;
   if (PyObject_CheckBuffer(source.ptr())) {
     py::buffer_info b = py::buffer(source).request();
-    if (b.ndim > 1 || (b.ndim == 1 && b.strides[0] != b.itemsize))
-      ThrowValue("load(): a bytes-like source must be contiguous, got " + DescribeArray(source.ptr()));
+    bool contiguous = true;  // C order: each dimension's stride the product of the later ones
+    for (py::ssize_t d = b.ndim - 1, step = b.itemsize; d >= 0; step *= b.shape[size_t(d)], --d)
+      contiguous = contiguous && (b.shape[size_t(d)] <= 1 || b.strides[size_t(d)] == step);
+    if (!contiguous) ThrowValue("load(): a bytes-like source must be C-contiguous, got " + DescribeArray(source.ptr()));
     const auto* bytes = static_cast<const uint8_t*>(b.ptr);
     const size_t size = size_t(b.size) * size_t(b.itemsize);
     asset.data = LoadOrThrow([&](import::LoadedAsset* out) { return import::LoadAssetBytes(bytes, size, "bytes", out); });
@@ -104,9 +113,22 @@ PyAsset Bake(const py::object& path, const py::object& config, std::optional<std
   baker::BakeConfig bake_config;
   if (!config.is_none()) {
     const bool mapping = py::isinstance(config, py::module_::import("collections.abc").attr("Mapping"));
+    std::string text;
+    if (mapping) {
+      // numpy scalars (np.float64(0.01), np.int64(64)) as the Python numbers they hold (.item()).
+      const py::cpp_function plain([](py::handle value) -> py::object {
+        if (py::hasattr(value, "item")) return value.attr("item")();
+        throw py::type_error(std::string(py::str(py::type::handle_of(value).attr("__name__"))) + " is not a JSON value");
+      });
+      try {
+        text = py::str(py::module_::import("json").attr("dumps")(py::dict(config), py::arg("default") = plain));
+      } catch (const py::error_already_set& e) {
+        if (!e.matches(PyExc_TypeError) && !e.matches(PyExc_ValueError)) throw;
+        fail(import::MakeError(import::Error::Code::kConfig, std::string("the config dict: ") + e.what()));
+      }
+    }
     import::Result<baker::BakeConfig> parsed =
-        mapping ? baker::ParseBakeConfig(py::str(py::module_::import("json").attr("dumps")(py::dict(config))), "the config dict")
-                : baker::LoadBakeConfig(PathString(config));
+        mapping ? baker::ParseBakeConfig(text, "the config dict") : baker::LoadBakeConfig(PathString(config));
     if (!parsed.ok()) fail(parsed.error());
     bake_config = std::move(parsed).value();
   }
@@ -182,12 +204,29 @@ py::object Evaluate(const PyAsset& asset, const py::object& mesh_path, std::opti
   request.frames = frames;
   if (py::isinstance<py::bool_>(morph)) {
     request.use_morph = morph.cast<bool>();
+  } else if (py::isinstance<py::str>(morph) || py::isinstance<py::bytes>(morph) || py::hasattr(morph, "__fspath__")) {
+    request.use_morph = true;  // one pose file, name or folder
+    request.morph.push_back(PathString(morph));
   } else if (!morph.is_none()) {
+    if (!py::isinstance<py::iterable>(morph))
+      throw py::type_error("morph: expected True, a path or a list of paths, got " +
+                           std::string(py::str(py::type::handle_of(morph).attr("__name__"))));
     request.use_morph = true;
     for (const py::handle& p : morph) request.morph.push_back(PathString(p));
   }
   const std::string explicit_poses = poses_dir.is_none() ? "" : PathString(poses_dir);
   const std::string rig_path = rig.is_none() ? "" : PathString(rig);
+  // Where the outputs go, before any frame (as the CLI): no output over an input, no missing folder.
+  if (!options.png_path.empty()) {
+    const std::string asset_path = asset.path;
+    if (const std::string clash = import::OutputsClash(
+            {{"png", &options.png_path}}, {{"asset", &asset_path}, {"mesh", &options.mesh_name}, {"rig", &rig_path}},
+            playback::PoseInputFiles(request.morph, explicit_poses));
+        !clash.empty())
+      fail(import::MakeError(import::Error::Code::kConfig, clash));
+    if (const std::string why = import::OutputPathProblem(options.png_path); !why.empty())
+      fail(import::MakeError(import::Error::Code::kIo, why));
+  }
   // Default key poses: the package's data/ (installed beside the module), else the source tree's.
   const fs::path module_file = PathString(py::module_::import("spherechain._spherechain").attr("__file__"));
   const std::vector<std::string> data_dirs = {(module_file.parent_path() / "data").string(), SPHERECHAIN_SOURCE_DATA_DIR};
@@ -267,7 +306,7 @@ their own reference); every later use of this Asset raises StatusError kErrorNul
       .def("__enter__", [](PyAsset& self) -> PyAsset& { return self; }, py::return_value_policy::reference)
       .def("__exit__", [](PyAsset& self, const py::args&) { self.data.reset(); })
       .def_property_readonly("path", [](const PyAsset& self) -> py::object {
-             return self.path.empty() ? py::object(py::none()) : py::object(py::str(self.path));
+             return self.path.empty() ? py::object(py::none()) : PathObject(self.path);
            }, "The file the asset was loaded from or last saved to; None for one only in memory.")
       .def_property_readonly("report", [](const PyAsset& self) -> py::object {
              return self.report_json.empty() ? py::object(py::none()) : JsonToPython(nlohmann::json::parse(self.report_json));
@@ -327,7 +366,7 @@ before the crease rule.
       .def("__repr__", [](const PyAsset& self) {
         if (!self.data) return std::string("<spherechain.Asset (closed)>");
         const runtime::AssetView& v = self.data->view();
-        return "<spherechain.Asset " + (self.path.empty() ? std::string("(in memory)") : "'" + self.path + "'") + ": " +
+        return "<spherechain.Asset " + (self.path.empty() ? std::string("(in memory)") : std::string(py::repr(PathObject(self.path)))) + ": " +
                std::to_string(v.sphere_count) + " spheres, " + std::to_string(v.vertex_count) + " vertices, " +
                std::to_string(v.triangle_count) + " triangles>";
       });
@@ -336,8 +375,8 @@ before the crease rule.
 Loads a .sphc asset and verifies it with the runtime loader (runtime LoadAsset: identifier, version, every
 offset, count and index).
 
-source: a path (str or os.PathLike), or the file's bytes (bytes, bytearray, memoryview, a contiguous uint8
-array: copied once into aligned memory).
+source: a path (str or os.PathLike), or the file's bytes (bytes, bytearray, memoryview, a C-contiguous numpy
+array, read as its raw bytes: copied once into aligned memory).
 Raises StatusError with the loader's status (kErrorIdentifier, kErrorVersionTooOld, kErrorCorrupt, ...) when
 the bytes are not a loadable asset; FileNotFoundError / OSError when the file cannot be read.
 )doc");
@@ -352,7 +391,8 @@ lines go to the logging module's "spherechain" logger.
 
 path: the character (.gltf/.glb, .obj, .fbx, .dae, .x, .blend, ...), str or os.PathLike.
 config: None (defaults), a dict of configuration keys (as a `--config` JSON file: "regions", "max_spheres",
-    "fit", "chains", ... — docs/guide.md), or the path of such a JSON file.
+    "fit", "chains", ... — docs/guide.md; numpy scalars are taken as the numbers they hold), or the path of
+    such a JSON file.
 regions: "extended" or "paper" (`--regions`); segmentation: "auto", "rig", "geometry", "skeleton", "map";
 region_map: path of a JSON region map; vertices: "joined" or "source" (assimp formats); rig: a MakeHuman
 .mhskel; disk_step: the torso disk step in source units (> 0); force: write the asset although a
@@ -372,12 +412,13 @@ Releases the GIL; slow (the exact truth: ~0.1 s a frame on 27k triangles, more w
 asset: an Asset (its path names it in the report); mesh: the character it was baked from (checked by
 fingerprint), str or os.PathLike.
 clip: the clip to play (None: the first, or the morph through the default key poses when there is none);
-frames: frames to play (> 0). morph: True (the default key poses) or a list of pose files / names;
+frames: frames to play (> 0). morph: True (the default key poses), a pose file / name / folder, or a list of them;
 poses_dir: the folder of key poses; rig: a MakeHuman .mhskel.
 margin: false-alarm distance, a fraction of the body height [0, 1); crease: the truth's bind distance, a
 fraction of the height [0, 1]; refit: "frame", "paper" or "joints"; regions: "asset" or "paper";
 coverage: measure coverage (the costly part); sweep_margin: None, "auto" or a list of margins (fractions of
-the height); png: write the picture of the frame with the most missed contacts there.
+the height); png: write the picture of the frame with the most missed contacts there (checked before any
+frame: EvaluateError config when it names an input, io when its folder is missing or it is a folder).
 Raises EvaluateError (.code, .message; str() is what the CLI prints after "error: ").
 )doc");
   RefuseBareNew(m.attr("Asset"), "Asset", "use spherechain.load() or spherechain.bake()");

@@ -52,10 +52,13 @@ std::string StrArg(py::handle o, const char* what);
 /// `o` as a double (a float, an int, anything with __float__ or __index__), or TypeError naming `what`.
 double RealArg(py::handle o, const char* what);
 
-/// Sets `cls.__new__` to one that raises TypeError "spherechain.<name> cannot be made directly: <how>".
-/// For the classes the module makes itself (Asset, Workspace): pybind11 would give an instance made by
-/// `Class.__new__(Class)` alone uninitialised storage, which its methods would then read. The module's own
-/// instances are made without __new__ (pybind11 casts allocate them directly), so they are unaffected.
+/// Makes `cls.__new__` (already set on the class) the only way to a new instance: the type's tp_new calls
+/// it, so that `pybind11_object.__new__(cls)` and `object.__new__(cls)` are refused by Python ("is not safe")
+/// instead of allocating an instance whose storage was never constructed (pybind11 gives such an instance
+/// raw storage, which its methods would read: a crash). pybind11's own casts allocate without tp_new.
+void SealNew(py::handle cls);
+/// Sets `cls.__new__` to one that raises TypeError "spherechain.<name> cannot be made directly: <how>", and
+/// seals it (SealNew). For the classes the module makes itself (Asset, Workspace).
 void RefuseBareNew(py::handle cls, const char* name, const char* how);
 
 /// Releases the GIL for a scope (Py_BEGIN_ALLOW_THREADS as RAII): the per-frame calls' lighter form of

@@ -59,11 +59,33 @@ double RealArg(py::handle o, const char* what) {
   return v;
 }
 
+namespace {
+// A sealed type's tp_new: calls the `__new__` the type holds (the module's own: it refuses or builds).
+PyObject* OwnNew(PyTypeObject* type, PyObject* args, PyObject* kwargs) {
+  PyObject* fn = PyObject_GetAttrString(reinterpret_cast<PyObject*>(type), "__new__");
+  if (!fn) return nullptr;
+  PyObject* head = PyTuple_Pack(1, reinterpret_cast<PyObject*>(type));
+  PyObject* full = head ? PySequence_Concat(head, args) : nullptr;
+  PyObject* result = full ? PyObject_Call(fn, full, kwargs) : nullptr;
+  Py_XDECREF(full);
+  Py_XDECREF(head);
+  Py_DECREF(fn);
+  return result;
+}
+}  // namespace
+
+void SealNew(py::handle cls) {
+  auto* type = reinterpret_cast<PyTypeObject*>(cls.ptr());
+  type->tp_new = &OwnNew;
+  PyType_Modified(type);
+}
+
 void RefuseBareNew(py::handle cls, const char* name, const char* how) {
   const std::string message = std::string("spherechain.") + name + " cannot be made directly: " + how;
   cls.attr("__new__") = py::cpp_function([message](py::handle, const py::args&, const py::kwargs&) -> py::object {
     throw py::type_error(message);
   }, py::name("__new__"));
+  SealNew(cls);
 }
 
 namespace {

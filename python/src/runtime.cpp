@@ -360,13 +360,18 @@ py::object NarrowPhase(PyWorkspace& self, py::handle positions, const py::object
   std::string exclusion = exclusions.is_none() ? "" : StrArg(exclusions, "exclusions");
   if (!exclusion.empty() && exclusion != "crease" && exclusion != "asset" && exclusion != "none")
     ThrowValue("exclusions: expected \"crease\", \"asset\", \"none\" or None, got \"" + exclusion + "\"");
-  if (!crease.is_none()) job.crease = static_cast<float>(RealArg(crease, "crease"));
+  if (!crease.is_none()) {
+    const double c = RealArg(crease, "crease");
+    if (!(c > 0.0 && c <= double(std::numeric_limits<float>::max())))
+      ThrowValue("crease: " + std::to_string(c) + " must be a finite number > 0 (source units), or None for the asset's");
+    job.crease = static_cast<float>(c);
+  }
   if (!matrices.is_none()) {  // the joint-matrix cull: refit_joints()'s layout
     PyObject* object = matrices.ptr();
     auto* a = reinterpret_cast<PyArrayObject*>(object);
     if (!PyArray_Check(object) || PyArray_TYPE(a) != NPY_FLOAT32 || !PyArray_ISNOTSWAPPED(a) || PyArray_NDIM(a) != 3 ||
-        PyArray_DIM(a, 1) != 3 || PyArray_DIM(a, 2) != 4 || !PyArray_IS_C_CONTIGUOUS(a))
-      ThrowValue("matrices: expected a C-contiguous numpy.ndarray of float32, shape (#J, 3, 4) (refit_joints()'s); got " +
+        PyArray_DIM(a, 1) != 3 || PyArray_DIM(a, 2) != 4 || !PyArray_IS_C_CONTIGUOUS(a) || !PyArray_ISALIGNED(a))
+      ThrowValue("matrices: expected an aligned, C-contiguous numpy.ndarray of float32, shape (#J, 3, 4) (refit_joints()'s); got " +
                  DescribeArray(object));
     job.joint_matrices = static_cast<const float*>(PyArray_DATA(a));
     job.joint_count = PyArray_DIM(a, 0) > npy_intp(std::numeric_limits<uint32_t>::max()) ? 0 : uint32_t(PyArray_DIM(a, 0));
@@ -414,9 +419,17 @@ py::object NarrowPhase(PyWorkspace& self, py::handle positions, const py::object
   if (runtime::Failed(s)) {
     if (s == Status::kErrorVertexCount || s == Status::kErrorStride || s == Status::kErrorAlignment)
       ThrowJob(s, "narrow_phase", positions.ptr(), self.model->model.vertex_count());
-    ThrowStatus(s, where + (s == Status::kErrorInvalidJob && job.sphere_pairs && job.exclusions == runtime::Exclusions::kCrease
-                                ? ": exclusions \"crease\" searches every pair (pairs must be None)"
-                                : ""));
+    std::string why;  // kErrorInvalidJob: which argument
+    if (s == Status::kErrorInvalidJob) {
+      const bool rule = job.exclusions == runtime::Exclusions::kCrease;
+      if (rule && job.sphere_pairs) why = ": exclusions \"crease\" searches every pair (pairs must be None)";
+      else if (!rule && job.crease != 0.0f) why = ": crease is for exclusions \"crease\" only";
+      else if (!rule && job.joint_matrices) why = ": matrices are for exclusions \"crease\" only";
+      else if (rule && job.model && job.crease != 0.0f && job.crease < job.model->crease())
+        why = ": crease " + std::to_string(job.crease) + " is below the asset's " + std::to_string(job.model->crease()) +
+              " (a job may widen the folds, not narrow them)";
+    }
+    ThrowStatus(s, where + why);
   }
   PyArrayObject* result = NewRecords(ContactDtype(), count);
   auto* o = static_cast<unsigned char*>(PyArray_DATA(result));
@@ -589,10 +602,11 @@ the first Workspace.narrow_phase() call that needs it (NarrowPhaseModel::Init: s
 )doc");
   // Model(asset) builds the model in __new__, so that Model.__new__(Model) alone cannot leave an instance
   // whose storage was never constructed (pybind11 gives such an instance raw storage, which its methods would
-  // read). The __init__ that follows is pybind11's, and it skips an instance already built; it builds one
-  // only when an instance was allocated past this __new__ (pybind11_object.__new__(Model)).
+  // read), and the type's tp_new is that __new__ (SealNew: no other __new__ reaches it). The __init__ that
+  // follows is pybind11's, and it skips an instance already built.
   model.attr("__new__") = py::cpp_function([](py::handle, const PyAsset& asset) { return py::cast(BuildModel(asset)); },
                                            py::name("Model"), py::arg("cls"), py::arg("asset"));
+  SealNew(model);
   model
       .def(py::init(&BuildModel), py::arg("asset"), "Builds the model of `asset` (an Asset). Raises StatusError (kErrorNullArgument for a "
                              "closed asset, kErrorOutOfMemory).")
@@ -643,10 +657,12 @@ matrices: None, or the skinning matrices that deformed `positions` (as refit_joi
 Returns a new numpy.ndarray of dtype CONTACT_DTYPE: triangle_a, triangle_b (uint32, source triangle indices),
 sphere_a, sphere_b (uint16 owners, 0xFFFF for an unassigned triangle), depth (float32, source units) and
 direction (3 float32, unit) of the separating-axis push — NaN unless exclusions is "crease".
-Raises TypeError (exclusions not a str, crease not a number), ValueError, StatusError (kErrorVertexCount,
+Raises TypeError (exclusions not a str, crease not a number), ValueError (a bad exclusions or regions word, a
+crease not finite or <= 0, arrays of the wrong shape, dtype or alignment), StatusError (kErrorVertexCount,
 kErrorNonFinitePositions: a vertex of a surrounding region is NaN or inf; kErrorMissingField: "crease" on an
 asset without the rule, or matrices on one without skin weights; kErrorJointCount; kErrorNonFiniteJoints;
-kErrorInvalidJob: a crease or matrices with another exclusions).
+kErrorInvalidJob: a crease or matrices with another exclusions, or a crease below the asset's; the message
+says which).
 Cost: the runtime's narrow phase (docs/performance.md); the first call builds the narrow phase's model and
 scratch, and each call allocates the returned array.
 )doc")

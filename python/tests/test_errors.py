@@ -141,9 +141,20 @@ def test_no_instance_without_its_data(asset):
         spherechain.Asset.__new__(spherechain.Asset)
     with pytest.raises(TypeError, match="Model"):
         spherechain.Model.__new__(spherechain.Model)
-    bare = spherechain.Workspace.__mro__[1].__new__(spherechain.Workspace)  # past it: pybind11's own __new__
-    with pytest.raises(TypeError, match="not initialised"):
-        bare.refit(np.asarray(asset.bind_positions))
+    # Nor pybind11's own __new__ or object's, past the class's: Python refuses them (the type's tp_new is its own).
+    for cls in (spherechain.Workspace, spherechain.Asset, spherechain.Model):
+        for base_new in (cls.__mro__[1].__new__, object.__new__):
+            with pytest.raises(TypeError, match="is not safe"):
+                base_new(cls)
+    class Sub(spherechain.Asset):  # a Python subclass inherits the refusal, with or without its own __new__
+        pass
+    with pytest.raises(TypeError, match="Asset cannot be made directly"):
+        Sub()
+    class SubNew(spherechain.Asset):
+        def __new__(cls):
+            return spherechain.Asset.__mro__[1].__new__(cls)
+    with pytest.raises(TypeError, match="is not safe"):
+        SubNew()
     model = spherechain.Model.__new__(spherechain.Model, asset)  # __new__ builds it whole
     assert model.sphere_count == asset.sphere_count and model.vertex_count == asset.vertex_count
     assert model.workspace().spheres.shape == (asset.sphere_count, 4)
@@ -180,10 +191,13 @@ def test_bad_out_and_pairs(asset, ws):
     assert status_of(e) == "kErrorIndexOutOfRange"
     with pytest.raises(StatusError) as e:
         ws.narrow_phase(good, exclusions="crease", crease=1e-9)  # narrower than baked
-    assert status_of(e) == "kErrorInvalidJob"
+    assert status_of(e) == "kErrorInvalidJob" and "below the asset's" in str(e.value)
     with pytest.raises(StatusError) as e:
         ws.narrow_phase(good, exclusions="asset", crease=0.05)  # a crease outside the crease rule: not ignored
-    assert status_of(e) == "kErrorInvalidJob"
+    assert status_of(e) == "kErrorInvalidJob" and "crease is for exclusions \"crease\" only" in str(e.value)
+    for bad in (0.0, -0.05, float("nan"), float("inf"), 1e300):
+        with pytest.raises(ValueError, match="crease: .* must be a finite number > 0"):
+            ws.narrow_phase(good, exclusions="crease", crease=bad)
     with pytest.raises(TypeError, match="exclusions"):
         ws.narrow_phase(good, exclusions=1)
     with pytest.raises(TypeError, match="crease"):
@@ -220,6 +234,11 @@ def test_joint_matrices(asset, ws):
         ws.refit_joints(nan)
     assert status_of(e) == "kErrorNonFiniteJoints"
     np.testing.assert_array_equal(ws.spheres, asset.bind_spheres)  # untouched
+    # The narrow phase's matrices: the same shape, and aligned (an unaligned view is not a positions problem).
+    misaligned = np.frombuffer(bytearray(identity.nbytes + 1), np.float32, count=J * 12, offset=1).reshape(J, 3, 4)
+    assert not misaligned.flags.aligned
+    with pytest.raises(ValueError, match="matrices: expected an aligned"):
+        ws.narrow_phase(np.asarray(asset.bind_positions), exclusions="crease", matrices=misaligned)
     old = spherechain.Model(spherechain.load(GOLDEN / "v2" / "cesium_man.sphc")).workspace()
     with pytest.raises(StatusError) as e:
         old.refit_joints(np.zeros((0, 3, 4), np.float32))

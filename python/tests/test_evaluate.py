@@ -49,3 +49,36 @@ def test_evaluate_in_memory_asset_and_png(tmp_path):
                                   png=png)
     assert report["asset"] == "(in memory)" and len(report["frames"]) == 4
     assert png.exists() or not report["summary"], "the picture is written when rsvg-convert is there"
+
+
+def test_evaluate_outputs_checked_before_any_frame(saved, tmp_path):
+    """png may not name an input (the CLI refuses it too), nor a missing folder or a folder; refused before a frame."""
+    import shutil
+    asset_copy = tmp_path / "creature.sphc"
+    shutil.copy(saved, asset_copy)
+    before = asset_copy.read_bytes()
+    asset = spherechain.load(asset_copy)
+    for png, code, words in ((asset_copy, "config", "png '.*' is also asset"),
+                             (CREATURE, "config", "png '.*' is also mesh"),
+                             (tmp_path / "missing" / "m.png", "io", "folder '.*' does not exist"),
+                             (tmp_path, "io", "it is a folder")):
+        with pytest.raises(spherechain.EvaluateError, match=words) as e:
+            spherechain.evaluate(asset, CREATURE, clip="cross", frames=2, coverage=False, png=png)
+        assert e.value.code == code
+    assert asset_copy.read_bytes() == before
+    pose = tmp_path / "pose.json"
+    pose.write_text("{}")
+    with pytest.raises(spherechain.EvaluateError, match="is also an input"):
+        spherechain.evaluate(asset, CREATURE, frames=2, coverage=False, morph=[pose], png=pose)
+    assert pose.read_text() == "{}"
+
+
+def test_evaluate_morph_one_path(saved, tmp_path):
+    """morph= a str or a pathlib.Path is one pose file (not a sequence of one-letter names)."""
+    import pathlib
+    missing = tmp_path / "no_such_pose.json"
+    for morph in (str(missing), pathlib.Path(missing)):
+        with pytest.raises(spherechain.EvaluateError, match="no_such_pose"):
+            spherechain.evaluate(spherechain.load(saved), CREATURE, frames=4, coverage=False, morph=morph)
+    with pytest.raises(TypeError, match="morph"):
+        spherechain.evaluate(spherechain.load(saved), CREATURE, frames=4, coverage=False, morph=3)

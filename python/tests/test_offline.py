@@ -79,6 +79,27 @@ def test_save_and_load_round_trip(baked, tmp_path):
         from_bytes = spherechain.load(source)
         assert from_bytes.path is None and from_bytes.to_bytes() == asset.to_bytes()
     assert "spheres" in repr(loaded) and str(path) in repr(loaded)
+    # A 2-D C-contiguous array is its bytes too; a strided one is refused.
+    two_d = np.frombuffer(asset.to_bytes(), dtype=np.uint8).reshape(-1, 8)
+    assert spherechain.load(two_d).to_bytes() == asset.to_bytes()
+    with pytest.raises(ValueError, match="C-contiguous"):
+        spherechain.load(np.frombuffer(asset.to_bytes() * 2, dtype=np.uint8)[::2])
+    # A bytes path is the file system's name (os.fsencode), not the text "b'...'" (load() takes bytes as content).
+    as_bytes = tmp_path / "as_bytes.sphc"
+    asset.save(bytes(as_bytes))
+    assert as_bytes.read_bytes() == asset.to_bytes() and asset.path == str(as_bytes)
+    assert spherechain.bake(bytes(CREATURE), FAST).to_bytes() == asset.to_bytes()
+
+
+def test_config_dict_takes_numpy_scalars(baked):
+    _, asset = baked
+    as_numpy = {k: (np.float64(v) if isinstance(v, float) else np.int64(v) if isinstance(v, int) and
+                    not isinstance(v, bool) else v) for k, v in FAST.items()}
+    assert any(isinstance(v, np.generic) for v in as_numpy.values())
+    assert spherechain.bake(CREATURE, as_numpy).to_bytes() == asset.to_bytes()
+    with pytest.raises(spherechain.BakeError, match="the config dict") as e:
+        spherechain.bake(CREATURE, {"max_spheres": object()})
+    assert e.value.code == "config"
 
 
 def test_arrays_view_what_info_counts(baked):

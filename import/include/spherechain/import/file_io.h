@@ -43,6 +43,25 @@ inline Status WriteFileAtomic(const std::string& path, const std::string& text) 
   return WriteFileAtomic(path, text.data(), text.size());
 }
 
+/// Why output file `path` cannot be written, found before the work that would write it: "cannot write 'p':
+/// folder 'd' does not exist" or "cannot write 'p': it is a folder"; empty when it can be tried (the write
+/// may still fail). Two stats; reads no file.
+std::string OutputPathProblem(const std::string& path);
+
+/// One file a command reads or writes: how its users name it ("-o", "--report", "ASSET"; in Python the
+/// argument's name) and its path (empty: not given). Both pointers must outlive the call.
+struct PathArg {
+  const char* name;
+  const std::string* path;
+};
+/// Whether writing the outputs would destroy a file the command reads or another output: "-o and --report
+/// both name 'x': one would overwrite the other" or "--png 'x' is also ASSET: writing it would destroy what
+/// is read" (`more_inputs` are named "an input"), for two paths that are one file after resolving `.`, `..`
+/// and symbolic links of their existing part (lexically when that fails); empty when all are distinct.
+/// Reads no file; a few stats per path.
+std::string OutputsClash(const std::vector<PathArg>& outputs, const std::vector<PathArg>& inputs,
+                         const std::vector<std::string>& more_inputs = {});
+
 /// A dependency file in Makefile syntax ("depfile", what `gcc -MD -MP` writes), read by Make, Ninja and CMake
 /// (add_custom_command DEPFILE): the rule `target: prerequisites...`, then an empty rule per prerequisite so
 /// that Make does not stop when one is deleted. Every path is escaped as Make reads it: a space or tab as

@@ -34,6 +34,11 @@ std::string DefaultPoseCharacter(const Mesh& mesh, const std::string& mesh_name)
 /// Cost: one stat per candidate.
 std::string FindPosesDir(const std::string& character, const std::vector<std::string>& data_dirs);
 
+/// The files a morph may read besides the mesh, for import::OutputsClash: each of `morph` (pose files, names,
+/// folders), every file in those that are folders, and every file in `poses_dir` (where pose names and the
+/// default key poses are looked up). Lists folders; reads no file.
+std::vector<std::string> PoseInputFiles(const std::vector<std::string>& morph, const std::string& poses_dir);
+
 /// The chosen animation. Frame f (< frames) of a clip samples t = duration · f / frames [s] (no wrap:
 /// the last frame is one step before the end), or times[f] when `times` is given; the morph's frames follow
 /// MorphFrameAt.
