@@ -55,10 +55,29 @@ function(spherechain_bake)
     get_filename_component(out_name "${output}" NAME)
     set(arg_COMMENT "Baking ${name} into ${out_name}")
   endif()
+  # Ninja reads the depfile through CMake's rewrite of it (CMP0116), which unescapes `$` and `#` but does not
+  # escape them again for Ninja: a path holding either is split, and the asset rebakes on every build.
+  if(CMAKE_GENERATOR MATCHES "Ninja")
+    foreach(path IN LISTS depends outputs)
+      if(path MATCHES "[$#]" AND NOT path MATCHES "^\\$<")
+        message(WARNING "spherechain_bake: '${path}' holds a '$' or '#': with the Ninja generator CMake's depfile "
+                        "rewrite cannot name it, and ${arg_OUTPUT} will bake on every build (Unix Makefiles has no "
+                        "such limit)")
+      endif()
+    endforeach()
+  endif()
+  # The output and report folders: Ninja makes them, Make does not (and the bake refuses a missing folder).
+  set(folders "")
+  foreach(path IN LISTS outputs)
+    get_filename_component(folder "${path}" DIRECTORY)
+    list(APPEND folders "${folder}")
+  endforeach()
+  list(REMOVE_DUPLICATES folders)
   # Depfile paths are absolute; CMP0116 NEW makes Ninja read them as CMake writes its own (3.20+).
   cmake_policy(PUSH)
   cmake_policy(SET CMP0116 NEW)
   add_custom_command(OUTPUT ${outputs}
+                     COMMAND ${CMAKE_COMMAND} -E make_directory ${folders}
                      COMMAND spherechain::cli -q bake ${args} ${arg_OPTIONS}
                      DEPENDS ${depends}
                      DEPFILE "${output}.d"

@@ -134,11 +134,12 @@ SC_API const char* sc_status_string(sc_status status) {
       return "SC_ERROR_TOO_MANY_CHAINS: more than 32 chains, or too many candidate pairs in them";
     case SC_ERROR_COUNT_MISMATCH: return "SC_ERROR_COUNT_MISMATCH: asset array lengths disagree (#S, #T, #V)";
     case SC_ERROR_INDEX_OUT_OF_RANGE:
-      return "SC_ERROR_INDEX_OUT_OF_RANGE: a sphere, triangle or vertex index is out of range";
+      return "SC_ERROR_INDEX_OUT_OF_RANGE: a sphere, triangle, vertex or joint index is out of range";
     case SC_ERROR_OFFSETS: return "SC_ERROR_OFFSETS: surrounding_offsets or reach_offsets malformed";
     case SC_ERROR_NON_FINITE: return "SC_ERROR_NON_FINITE: NaN or infinite value in the asset";
     case SC_ERROR_RADIUS: return "SC_ERROR_RADIUS: a sphere radius is <= 0";
-    case SC_ERROR_PIVOT_FRAME: return "SC_ERROR_PIVOT_FRAME: a pivot frame's mean distance is <= 0";
+    case SC_ERROR_PIVOT_FRAME:
+      return "SC_ERROR_PIVOT_FRAME: a pivot frame's mean distance is <= 0 or too small for its radius";
     case SC_ERROR_CHAIN_ORDER: return "SC_ERROR_CHAIN_ORDER: chain spheres not strictly ascending";
     case SC_ERROR_EXCLUDED_PAIRS: return "SC_ERROR_EXCLUDED_PAIRS: excluded pairs not a < b or not strictly ascending";
     case SC_ERROR_CONTACT_MARGIN: return "SC_ERROR_CONTACT_MARGIN: the asset's contact margin is negative";

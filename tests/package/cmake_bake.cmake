@@ -82,3 +82,39 @@ foreach(touched ${art}/CesiumMan.gltf ${art}/CesiumMan.bin ${WORK}/src/bake.json
   build("the build after that" nothing)
 endforeach()
 message("cmake_bake: baked once, a second build did nothing, touching the .gltf, the .bin and bake.json each rebaked")
+
+# With Unix Makefiles (which, unlike Ninja, makes no output folder), an OUTPUT and a REPORT in folders that do not
+# exist yet: spherechain_bake makes them.
+find_program(MAKE_PROGRAM NAMES make gmake)
+if(MAKE_PROGRAM)
+  file(WRITE ${WORK}/make_src/CMakeLists.txt "cmake_minimum_required(VERSION 3.20)
+project(make_bake LANGUAGES NONE)
+find_package(spherechain CONFIG REQUIRED COMPONENTS cli)
+spherechain_bake(OUTPUT assets/hero.sphc INPUT \"${art}/CesiumMan.gltf\" CONFIG \"${SRC}/samples/cmake_bake/bake.json\"
+                 REPORT reports/hero.json)
+add_custom_target(assets ALL DEPENDS \"\${CMAKE_CURRENT_BINARY_DIR}/assets/hero.sphc\")
+")
+  run("configure (Unix Makefiles)" ${CMAKE_COMMAND} -S ${WORK}/make_src -B ${WORK}/make_build -G "Unix Makefiles"
+      -DCMAKE_PREFIX_PATH=${WORK}/prefix)
+  run("build (Unix Makefiles)" ${CMAKE_COMMAND} --build ${WORK}/make_build)
+  foreach(f assets/hero.sphc reports/hero.json)
+    if(NOT EXISTS ${WORK}/make_build/${f})
+      message(FATAL_ERROR "Unix Makefiles: spherechain_bake did not write ${f} into its new folder:\n${out}")
+    endif()
+  endforeach()
+  message("cmake_bake: with Unix Makefiles, the asset and report written into folders the build made")
+else()
+  message("SKIPPED: the Unix Makefiles bake (no make)")
+endif()
+
+# With Ninja, an input whose path holds '#' cannot be named through CMake's depfile rewrite: the configure warns.
+file(WRITE ${WORK}/hash_src/CMakeLists.txt "cmake_minimum_required(VERSION 3.20)
+project(hash_bake LANGUAGES NONE)
+find_package(spherechain CONFIG REQUIRED COMPONENTS cli)
+spherechain_bake(OUTPUT hero.sphc INPUT \"art#1/hero.gltf\")
+")
+run("configure (Ninja, a '#' in the input's path)" ${CMAKE_COMMAND} -S ${WORK}/hash_src -B ${WORK}/hash_build -G Ninja
+    -DCMAKE_MAKE_PROGRAM=${NINJA} -DCMAKE_PREFIX_PATH=${WORK}/prefix)
+if(NOT out MATCHES "holds a '\\$' or '#'")
+  message(FATAL_ERROR "spherechain_bake did not warn about a '#' in a path under Ninja:\n${out}")
+endif()

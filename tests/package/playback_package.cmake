@@ -41,3 +41,11 @@ if(NOT rc EQUAL 1 OR NOT out2 MATCHES "SPHC-LOAD")
   message(FATAL_ERROR "the consumer on an empty asset: exit ${rc}, expected 1 with SPHC-LOAD:\n${out2}")
 endif()
 message("playback consumer built against ${WORK}/prefix: ${out}")
+# A C game against the whole install: find_package(spherechain COMPONENTS c) looks for none of the offline tools'
+# dependencies, so CGAL's configuration messages and warnings do not appear in the game's configure.
+run("configure a C-only consumer" ${CMAKE_COMMAND} -S ${SRC}/tests/package/consumer -B ${WORK}/consumer_c_only -G Ninja
+    -DC_ONLY=ON -DCMAKE_PREFIX_PATH=${WORK}/prefix)
+if(out MATCHES "CGAL|assimp|Eigen")
+  message(FATAL_ERROR "find_package(spherechain COMPONENTS c) looked for the offline dependencies:\n${out}")
+endif()
+run("build the C-only consumer" ${CMAKE_COMMAND} --build ${WORK}/consumer_c_only)

@@ -141,7 +141,7 @@ typedef struct sc_model sc_model;
 typedef struct sc_workspace sc_workspace;
 
 /// sc_model_create() flag: also build the narrow phase (sc_narrow_phase()), from the surrounding regions.
-/// Costs time and memory at creation (with the crease rule: MakeHuman, 26,756 triangles, ~0.5 s and a few MB;
+/// Costs time and memory at creation (with the crease rule: MakeHuman, 26,756 triangles, ~0.3 s and a few MB;
 /// CesiumMan, 4,672 triangles, ~10 ms); needs an asset with `triangles` and `weld_ids` (else
 /// #SC_ERROR_MISSING_FIELD).
 #define SC_MODEL_NARROW_PHASE 0x1u
