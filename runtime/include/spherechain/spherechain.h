@@ -305,7 +305,8 @@ typedef struct sc_pair {
 
 /// Most pairs sc_detect() can report with `method` for this model: a buffer of that many ::sc_pair is never
 /// truncated. M2: \#S(\#S−1)/2; M1: min(Σ_chains n(n−1)/2, \#S(\#S−1)/2). 0 for a NULL model or an
-/// unknown method. O(\#chains), thread-safe.
+/// unknown method. O(\#chains), thread-safe. Its byte size (× sizeof(::sc_pair), 12) fits a 64-bit size_t
+/// for any asset; on a 32-bit target it overflows past about 26,700 spheres: check before allocating there.
 SC_API uint32_t sc_detect_bound(const sc_model* model, sc_detect_method method);
 
 /// Broad phase: the overlapping, non-excluded sphere pairs of the character's current spheres (after a
