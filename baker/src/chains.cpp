@@ -123,9 +123,11 @@ Result<std::vector<Chain>> BuildChains(const std::vector<FittedSphere>& spheres,
       const int region = TokenRegion(token, layout, &label);
       if (region < 0) {
         const std::string last = std::to_string(layout.count() - 1);
+        const std::string trunk = layout.paper ? RegionSymbol(layout.trunk()) : std::string();  // its labels
         return MakeError(Error::Code::kConfig,
                          "chain '" + def.name + "': unknown member '" + token + "' (expected R0..R" + last +
-                             (layout.paper ? ", R4L, R4R, R4T or R4D" : " or a region name of the layout") + ")");
+                             (layout.paper ? ", " + trunk + "L, " + trunk + "R, " + trunk + "T or " + trunk + "D"
+                                           : " or a region name of the layout") + ")");
       }
       for (size_t i = 0; i < spheres.size(); ++i)
         if (static_cast<int>(spheres[i].region) == region && (label == 0 || (spheres[i].labels & label) != 0))

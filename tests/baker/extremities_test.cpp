@@ -259,6 +259,10 @@ TEST_CASE("extended layout: Table 1's chains extended — each limb with its han
   // ζ3 both legs and feet: a foot on the other shin.
   for (const char* m : {"R2", "R7", "R9D", "R3", "R8"}) CHECK_MESSAGE(has(defs[3], m), "zeta3 " << m);
   CHECK_FALSE(has(defs[3], "R4"));
+  // The torso's labels belong to R9 here: R4L (the paper's) is refused, and the message names R9's.
+  auto refused = sc::BuildChains({}, {{"bad", {"R4L"}}}, L);
+  REQUIRE_FALSE(refused.ok());
+  CHECK(refused.error().message.find("(expected R0..R9, R9L, R9R, R9T or R9D)") != std::string::npos);
 }
 
 TEST_CASE("extended layout: the junction exclusion follows the parent — a hand with its forearm, not with the torso") {

@@ -54,11 +54,11 @@ struct PathArg {
   const char* name;
   const std::string* path;
 };
-/// Whether writing the outputs would destroy a file the command reads or another output: "-o and --report
-/// both name 'x': one would overwrite the other" or "--png 'x' is also ASSET: writing it would destroy what
-/// is read" (`more_inputs` are named "an input"), for two paths that are one file after resolving `.`, `..`
-/// and symbolic links of their existing part (lexically when that fails); empty when all are distinct.
-/// Reads no file; a few stats per path.
+/// Whether writing the outputs would destroy a file the command reads or another output. The message says
+/// which: two outputs "both name 'x': one would overwrite the other"; an output "is also" an input (those of
+/// `more_inputs` are called an input) "writing it would destroy what is read". Two paths are one file when
+/// they are equal after resolving dot segments and symbolic links of their existing part (lexically when that
+/// fails). Empty when all are distinct. Reads no file; a few stats per path.
 std::string OutputsClash(const std::vector<PathArg>& outputs, const std::vector<PathArg>& inputs,
                          const std::vector<std::string>& more_inputs = {});
 
