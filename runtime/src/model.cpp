@@ -235,7 +235,8 @@ Status Model::InitInPlace(const AssetView& view, const ModelOptions& options, vo
   if (!options.narrow_phase) return InitInPlace(view, memory, bytes);
   if (!view.valid() || !memory) return Status::kErrorNullArgument;
   if (reinterpret_cast<uintptr_t>(memory) % kMinAlign != 0) return Status::kErrorAlignment;
-  if (bytes < RequiredBytes(view)) return Status::kErrorBufferTooSmall;
+  // The narrow phase first: when it cannot be built, RequiredBytes(view, options) said 0, and the reason (a
+  // missing field, out of memory) is what the caller needs, not kErrorBufferTooSmall.
   NarrowPhaseModel narrow;
   size_t narrow_bytes = 0;
   if (Status s = BuildNarrow(view, options, narrow, narrow_bytes); s != Status::kOk) return s;

@@ -7,7 +7,8 @@ const char* ToString(Status s) {
     case Status::kOk: return "kOk";
     case Status::kOkTruncated: return "kOkTruncated: success, but the output buffer was too small";
     case Status::kErrorNullArgument: return "kErrorNullArgument: a required pointer is null";
-    case Status::kErrorAlignment: return "kErrorAlignment: asset bytes must be 8-byte aligned, positions 4-byte aligned";
+    case Status::kErrorAlignment: return "kErrorAlignment: a pointer below its documented alignment (asset bytes 8, positions and joint matrices 4, "
+                                         "caller memory of InitInPlace 16)";
     case Status::kErrorInvalidJob: return "kErrorInvalidJob: job fields inconsistent (model or workspace not initialised, bad mode)";
     case Status::kErrorVertexCount: return "kErrorVertexCount: positions count differs from the asset's vertex count";
     case Status::kErrorStride: return "kErrorStride: positions stride must be >= 12 and a multiple of 4";

@@ -477,6 +477,14 @@ TEST_CASE("narrow phase: bad input gets its status and no output") {
   rt::NarrowPhaseModel ctx_old;
   CHECK(ctx_old.Init(old.view) == rt::Status::kErrorMissingField);
   CHECK(!ctx_old.initialized());
+  // Asked of a Model, in caller memory: RequiredBytes says 0, and InitInPlace the reason, not the buffer's size.
+  rt::ModelOptions with_narrow;
+  with_narrow.narrow_phase = true;
+  CHECK(rt::Model::RequiredBytes(old.view, with_narrow) == 0);
+  alignas(64) static unsigned char small_block[64];
+  rt::Model old_model;
+  CHECK(old_model.InitInPlace(old.view, with_narrow, small_block, 0) == rt::Status::kErrorMissingField);
+  CHECK(old_model.InitInPlace(old.view, with_narrow, small_block, sizeof small_block) == rt::Status::kErrorMissingField);
   // Corrupt narrow-phase arrays are refused by LoadAsset.
   st::Mesh m2, m3;
   st::AssetData bad_weld = st::TwoTubes(true, &m2);

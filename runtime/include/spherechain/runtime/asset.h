@@ -99,7 +99,8 @@ struct AssetView {
 ///     their count, or below 5 (the paper's regions) without Asset.regions (kErrorRegions).
 /// Returns kOk with `*out` filled.
 /// Cost: O(size) reads, no allocation, no exceptions; thread-safe (pure function of its inputs).
-/// Untrusted input: every truncated prefix and bit flip returns an error, never crashes (tested).
+/// Untrusted input: every truncated prefix and bit flip gives an error or a valid view (a flipped bit of a
+/// float may still be a valid asset), never a crash (tested).
 Status LoadAsset(const void* bytes, size_t size, AssetView* out);
 
 /// Span of triangle indices (into the source mesh's triangle order, < \#T).

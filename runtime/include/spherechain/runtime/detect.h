@@ -26,7 +26,8 @@ struct Collision {
   uint16_t a;      ///< sphere index, a < b
   uint16_t b;      ///< sphere index
   float depth;     ///< penetration depth rA + rB − ‖cA − cB‖ of the spheres themselves [Units: source
-                   ///< units]: > 0 overlapping; in (−2·margin, 0] apart but within the contact margin
+                   ///< units]: > 0 overlapping; in (−2·m, 0] apart but within the margin m the pair was tested
+                   ///< with (the contact margin, or the fold margin for two spheres of one region)
   uint32_t chains; ///< bit c set ⇔ Asset.chains[c] contains both a and b (M1: never 0; M2: may be 0)
 };
 static_assert(sizeof(Collision) == 12);

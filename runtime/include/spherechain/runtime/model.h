@@ -123,7 +123,8 @@ class Model {
   static size_t RequiredBytes(const AssetView& view);
   /// The same for a model built with `options`. With options.narrow_phase it builds the narrow phase on
   /// the heap to measure it (NarrowPhaseModel::Init's cost: ~0.26 s for MakeHuman), so it allocates and
-  /// may return 0 also when that build fails (the asset lacks its fields, out of memory). Thread-safe.
+  /// may return 0 also when that build fails (the asset lacks its fields, out of memory): InitInPlace with
+  /// the same options then returns that failure's status, whatever the buffer. Thread-safe.
   static size_t RequiredBytes(const AssetView& view, const ModelOptions& options);
 
   /// Builds the model of `view` in one allocation of RequiredBytes(view) bytes (the only allocation),
@@ -277,7 +278,8 @@ class Workspace {
   /// Current spheres (see SphereArrays for lifetime).
   SphereArrays spheres() const { return {x_, y_, z_, r_, sphere_count_}; }
   /// Writable spheres (\#S each): lets a caller set them directly (tests, a GPU path copying back)
-  /// before a DetectJob. Same lifetime as spheres().
+  /// before a DetectJob. Same lifetime as spheres(). [Limit: radii >= 0, as a refit writes them: with a
+  /// negative radius DetectJob may miss pairs when a fold margin applies]
   float* mutable_x() { return x_; }
   float* mutable_y() { return y_; }
   float* mutable_z() { return z_; }
