@@ -80,12 +80,6 @@ void PrintSummary(const baker::BakeResult& r, const import::Context& ctx) {
   Out("  total=%.1f\n", total);
 }
 
-/// Usage errors found after parsing (which outputs go with how many inputs): exit 2, as CLI11's own.
-int UsageError(const std::string& message) {
-  Fail(message);
-  return 2;
-}
-
 int RunBake(const BakeArgs& a) {
   const bool batch = !a.out_dir.empty();
   if (batch && !a.output.empty()) return UsageError("bake: give -o (one input) or --out-dir (any number), not both");

@@ -29,7 +29,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr int kExitFailed = 1, kExitBadInput = 2;
+constexpr int kExitFailed = 1;  // usage errors: UsageError (2)
 // With the baker's version (baker::kGenerator, bumped when its output for the same input changes): bump when
 // check's own bake settings change. Cached assets of other versions are not reused.
 constexpr const char* kCacheVersion = "check bake defaults 1";
@@ -42,11 +42,6 @@ struct CheckArgs {
   uint32_t morph_frames = 40;
   bool no_cache = false, key_times = false;
 };
-
-int BadInput(const std::string& message) {
-  spdlog::error("{}", message);
-  return kExitBadInput;
-}
 
 // The cache folder: --cache-dir, $SPHERECHAIN_CACHE_DIR, $XDG_CACHE_HOME/spherechain, ~/.cache/spherechain.
 fs::path CacheDir(const std::string& explicit_dir) {
@@ -149,23 +144,23 @@ int RunCheck(const CheckArgs& a) {
                                a.poses))
     return clash;
   // ---- what needs no file -----------------------------------------------------------------------------
-  if (!(a.fps > 0 && a.fps <= 1000)) return BadInput("--fps " + std::to_string(a.fps) + " is outside (0, 1000]");
+  if (!(a.fps > 0 && a.fps <= 1000)) return UsageError("--fps " + std::to_string(a.fps) + " is outside (0, 1000]");
   for (const std::string* out : {&a.json, &a.junit, &a.html}) {
     if (out->empty()) continue;
-    if (const std::string why = OutputPathProblem(*out); !why.empty()) return BadInput(why);
+    if (const std::string why = OutputPathProblem(*out); !why.empty()) return UsageError(why);
   }
   nlohmann::json baseline;
   if (!a.baseline.empty()) {
     auto bytes = import::ReadFileBytes(a.baseline);
-    if (!bytes.ok()) return BadInput(bytes.error().message);
+    if (!bytes.ok()) return UsageError(bytes.error().message);
     baseline = nlohmann::json::parse(bytes->begin(), bytes->end(), nullptr, false);
-    if (baseline.is_discarded()) return BadInput("--baseline '" + a.baseline + "' is not JSON");
+    if (baseline.is_discarded()) return UsageError("--baseline '" + a.baseline + "' is not JSON");
   }
 
   LoadedAsset asset;
   import::Mesh mesh;
   std::string asset_name, error;
-  if (!OpenOrBake(a, &asset, &mesh, &asset_name, &error)) return BadInput(error);
+  if (!OpenOrBake(a, &asset, &mesh, &asset_name, &error)) return UsageError(error);
 
   evaluate::CheckOptions options;
   options.mesh_name = a.character;
@@ -179,17 +174,17 @@ int RunCheck(const CheckArgs& a) {
       if (!p.empty()) options.poses.push_back(p);
     if (options.poses.empty()) {  // bare --poses: the character's default key poses
       const std::string dir = FindPosesDir(playback::DefaultPoseCharacter(mesh, a.character), "");
-      if (dir.empty()) return BadInput("--poses: no default key poses for '" + a.character + "'; name pose files or a folder");
+      if (dir.empty()) return UsageError("--poses: no default key poses for '" + a.character + "'; name pose files or a folder");
       options.poses.push_back(dir);
     }
   }
   const double height = evaluate::BodyHeight(mesh);
   if (!a.policy.empty())
     if (auto s = evaluate::LoadCheckPolicy(a.policy, asset.view, height, mesh.unit_scale_m, &options.policy); !s.ok())
-      return BadInput(s.error().message);
+      return UsageError(s.error().message);
   if (!a.max_depth.empty()) {  // after the policy: the command line overrides its default_max_depth
     auto d = evaluate::ParseDepth(a.max_depth, height, mesh.unit_scale_m);
-    if (!d.ok()) return BadInput("--max-depth: " + d.error().message);
+    if (!d.ok()) return UsageError("--max-depth: " + d.error().message);
     options.policy.max_depth = d.value();
   }
 
@@ -207,10 +202,10 @@ int RunCheck(const CheckArgs& a) {
     }
   };
   auto checked = evaluate::CheckClips(asset.view, mesh, options);
-  if (!checked.ok()) return BadInput(checked.error().message);
+  if (!checked.ok()) return UsageError(checked.error().message);
   evaluate::CheckReport& r = checked.value();
   if (!a.baseline.empty())
-    if (auto s = evaluate::ApplyBaseline(baseline, &r); !s.ok()) return BadInput("--baseline: " + s.error().message);
+    if (auto s = evaluate::ApplyBaseline(baseline, &r); !s.ok()) return UsageError("--baseline: " + s.error().message);
 
   // ---- the table ------------------------------------------------------------------------------------
   Out("%-24s %7s %7s %8s  %-22s %s\n", "clip", "frames", "events", "failing", "deepest", "result");
@@ -239,7 +234,7 @@ int RunCheck(const CheckArgs& a) {
     const CheckPage page{a.character, asset_name, a.key_times, a.rig, asset_name == a.character + " (baked)"};
     std::string html;
     if (!MakeCheckHtml(page, asset.view, mesh, options, r, &html, &error))
-      return BadInput("--html '" + a.html + "': " + error + " (the check itself: " + (r.failed() ? "FAIL" : "PASS") +
+      return UsageError("--html '" + a.html + "': " + error + " (the check itself: " + (r.failed() ? "FAIL" : "PASS") +
                       "; no report written)");
     reports.emplace_back(&a.html, std::move(html));
   }
@@ -247,7 +242,7 @@ int RunCheck(const CheckArgs& a) {
     if (auto s = import::WriteFileAtomic(*reports[i].first, reports[i].second); !s.ok()) {
       std::error_code ec;
       for (size_t k = 0; k < i; ++k) fs::remove(*reports[k].first, ec);
-      return BadInput(s.error().message + " (the check itself: " + (r.failed() ? "FAIL" : "PASS") + "; no report written)");
+      return UsageError(s.error().message + " (the check itself: " + (r.failed() ? "FAIL" : "PASS") + "; no report written)");
     }
   }
   for (const auto& [path, text] : reports) Out("wrote %s\n", path->c_str());

@@ -12,7 +12,6 @@
 #include <filesystem>
 #include <limits>
 
-#include <spdlog/spdlog.h>
 
 #include "animation_source.h"
 #include "commands.h"
@@ -37,20 +36,17 @@ int RunEvaluate(const EvaluateArgs& a) {
   if (int clash = OutputsClash({{"--json", &a.json}, {"--png", &a.png}},
                                {{"ASSET", &a.asset}, {"--mesh", &a.anim.mesh}, {"--rig", &a.rig}}, PoseInputs(a.anim)))
     return clash;
-  // ---- arguments that need no file: usage errors (exit 2), before any frame is computed ------------
-  const auto usage = [](const std::string& message) {  // the line Python's EvaluateError carries too
-    spdlog::error("{}", message);
-    return 2;
-  };
+  // ---- arguments that need no file: usage errors (exit 2; the line Python's EvaluateError carries too),
+  // before any frame is computed ------------------------------------------------------------------------
   if (a.min_recall_option && a.min_recall_option->count() > 0 && !(a.min_recall >= 0.0 && a.min_recall <= 1.0))
-    return usage("--min-recall " + std::to_string(a.min_recall) + " is outside [0, 1]");
-  if (!(a.margin >= 0.0 && a.margin < 1.0)) return usage("--margin must be in [0, 1) (a fraction of the body height)");
-  if (!a.png.empty() && a.png == a.json) return usage("--png and --json name the same file");
+    return UsageError("--min-recall " + std::to_string(a.min_recall) + " is outside [0, 1]");
+  if (!(a.margin >= 0.0 && a.margin < 1.0)) return UsageError("--margin must be in [0, 1) (a fraction of the body height)");
+  if (!a.png.empty() && a.png == a.json) return UsageError("--png and --json name the same file");
   evaluate::EvaluateOptions options;
-  if (auto s = evaluate::ParseSweepMargins(a.sweep, &options.sweep_margins_rel); !s.ok()) return usage(s.error().message);
+  if (auto s = evaluate::ParseSweepMargins(a.sweep, &options.sweep_margins_rel); !s.ok()) return UsageError(s.error().message);
   for (const std::string* out : {&a.json, &a.png}) {  // where the outputs go, checked before minutes of frames
     if (out->empty()) continue;
-    if (const std::string why = OutputPathProblem(*out); !why.empty()) return usage(why);
+    if (const std::string why = OutputPathProblem(*out); !why.empty()) return UsageError(why);
   }
 
   LoadedAsset asset;

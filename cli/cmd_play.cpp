@@ -11,7 +11,6 @@
 #include <filesystem>
 
 #include <nlohmann/json.hpp>
-#include <spdlog/spdlog.h>
 
 #include "animation_source.h"
 #include "commands.h"
@@ -205,15 +204,11 @@ int RunPlay(const PlayArgs& a) {
                                PoseInputs(a.anim)))
     return clash;
   // Usage errors (exit 2), before the asset is read and the frames are played.
-  const auto usage = [](const std::string& message) {
-    spdlog::error("{}", message);
-    return 2;
-  };
   if (a.asset_exclusions && !a.narrow_phase && !(a.narrow_behind > 0.0f))
-    return usage("--asset-exclusions chooses the narrow phase's definition of a contact: it needs --narrow-phase "
+    return UsageError("--asset-exclusions chooses the narrow phase's definition of a contact: it needs --narrow-phase "
                  "or --narrow-behind");
   if (!a.json.empty())
-    if (const std::string why = OutputPathProblem(a.json); !why.empty()) return usage(why);
+    if (const std::string why = OutputPathProblem(a.json); !why.empty()) return UsageError(why);
   LoadedAsset asset;
   import::Mesh mesh;
   std::string error;

@@ -19,7 +19,6 @@
 #include <sstream>
 
 #include <nlohmann/json.hpp>
-#include <spdlog/spdlog.h>
 
 #include "animation_source.h"
 #include "commands.h"
@@ -47,10 +46,7 @@ int RunView(const ViewArgs& a) {
   if (int clash = OutputsClash({{"-o", &a.output}}, {{"ASSET", &a.asset}, {"--mesh", &a.anim.mesh}, {"--rig", &a.rig}},
                                PoseInputs(a.anim)))
     return clash;
-  if (const std::string why = OutputPathProblem(a.output); !why.empty()) {  // before minutes of frames
-    spdlog::error("{}", why);
-    return 2;
-  }
+  if (const std::string why = OutputPathProblem(a.output); !why.empty()) return UsageError(why);  // before the frames
   // three.js first: without it nothing can be written, and the message says how to get it.
   std::string looked;
   const std::string three_dir = FindThree(a.three, &looked);

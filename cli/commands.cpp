@@ -67,6 +67,11 @@ int Fail(const std::string& message) {
   return 1;
 }
 
+int UsageError(const std::string& message) {
+  spdlog::error("{}", message);
+  return 2;
+}
+
 int OutputsClash(std::initializer_list<PathArg> outputs, std::initializer_list<PathArg> inputs,
                  const std::vector<std::string>& more_inputs) {
   const std::string clash = import::OutputsClash(outputs, inputs, more_inputs);

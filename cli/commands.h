@@ -43,6 +43,9 @@ import::Context MakeLoggingContext();
 /// Logs `error` as "error: <code>: <message>" and returns exit code 1.
 int Fail(const import::Error& error);
 int Fail(const std::string& message);
+/// A usage error found after parsing (a value out of range, an output that cannot be written, options that do
+/// not go together): logs "error: <message>" and returns exit code 2, as CLI11's own usage errors.
+int UsageError(const std::string& message);
 
 using import::OutputPathProblem;  // "cannot write 'p': ..." before the work (import/file_io.h)
 using import::PathArg;
