@@ -123,6 +123,12 @@ struct FrameEval {
   uint32_t skin_narrow = 0, skin_narrow_true = 0;
   runtime::NarrowPhaseStats skin_stats;
   double skin_us = 0;
+  // The restricted path under the same rule (what play --narrow-behind runs): behind M2's pairs at the
+  // session's behind margin and the proxy's folds (playback::BehindPairs), on the reach regions: its
+  // contacts, those true, their (region pair)s among skin_regions, its time with M2 and the folds, the pairs.
+  uint32_t skin_restricted = 0, skin_restricted_true = 0, restricted_pairs = 0, restricted_folds = 0;
+  std::set<RegionPair> skin_restricted_regions;
+  double skin_restricted_us = 0;
   std::vector<float> spheres;  // with a picture asked for: the refit spheres, x, y, z, r per sphere
 };
 
@@ -157,6 +163,7 @@ struct Context {
   std::set<baker::TrianglePair> skin_at_bind;  // skin contacts of the bind pose itself
   std::vector<runtime::TriangleContact> contacts;  // the output of the consumer's own narrow-phase jobs
   std::vector<runtime::Collision> out_m1, out_m2;  // the output of the sweep's detect jobs
+  std::vector<runtime::Collision> behind;          // the restricted skin contacts' pairs (BehindPairs)
 
   const runtime::NarrowPhaseModel& narrow() const { return session.narrow_model(); }
   int SphereRegion(uint32_t s) const;

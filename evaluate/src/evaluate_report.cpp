@@ -53,6 +53,8 @@ struct Totals {
   size_t skin = 0, skin_bind = 0, skin_hidden = 0, skin_behind_reach[2] = {0, 0}, skin_regions = 0;
   size_t skin_found[2] = {0, 0}, skin_narrow = 0, skin_narrow_true = 0, skin_folds = 0;
   std::vector<double> skin_us;  // sorted
+  size_t restricted = 0, restricted_true = 0, restricted_regions = 0, restricted_pairs = 0, restricted_folds = 0;
+  std::vector<double> restricted_us;  // sorted
   double recall_m1 = 1, recall_m2 = 1, srecall_m1 = 1, srecall_m2 = 1, n_recall = 1, n_precision = 1;
   double skin_recall = 1, skin_precision = 1, sphere_precision_m2 = 1, apart_recall_sphere = 1, apart_recall_region = 1;
 };
@@ -86,7 +88,10 @@ Totals Sum(const Context& c, const std::vector<FrameEval>& rows) {
     t.skin += r.skin, t.skin_bind += r.skin_bind, t.skin_hidden += r.skin_hidden, t.skin_regions += r.skin_regions.size();
     t.skin_found[0] += CountIn(r.skin_regions, r.m1_regions), t.skin_found[1] += CountIn(r.skin_regions, r.m2_regions);
     t.skin_narrow += r.skin_narrow, t.skin_narrow_true += r.skin_narrow_true, t.skin_folds += r.skin_stats.crease_folds;
-    if (c.crease_job) t.skin_us.push_back(r.skin_us);
+    if (c.crease_job) t.skin_us.push_back(r.skin_us), t.restricted_us.push_back(r.skin_restricted_us);
+    t.restricted += r.skin_restricted, t.restricted_true += r.skin_restricted_true;
+    t.restricted_regions += CountIn(r.skin_regions, r.skin_restricted_regions);
+    t.restricted_pairs += r.restricted_pairs, t.restricted_folds += r.restricted_folds;
     t.reported_m2 += r.m2_spheres.size();
     t.gt += r.contacts;
     t.narrow_total += r.narrow.contacts;
@@ -99,6 +104,7 @@ Totals Sum(const Context& c, const std::vector<FrameEval>& rows) {
   }
   std::sort(t.narrow_us.begin(), t.narrow_us.end());
   std::sort(t.skin_us.begin(), t.skin_us.end());
+  std::sort(t.restricted_us.begin(), t.restricted_us.end());
   t.recall_m1 = Ratio(double(t.found_m1), double(t.exact_regions)), t.recall_m2 = Ratio(double(t.found_m2), double(t.exact_regions));
   t.srecall_m1 = Ratio(double(t.sfound_m1), double(t.exact_spheres)), t.srecall_m2 = Ratio(double(t.sfound_m2), double(t.exact_spheres));
   t.n_recall = Ratio(double(t.narrow_true), double(t.gt)), t.n_precision = Ratio(double(t.narrow_true), double(t.narrow_total));
@@ -174,6 +180,17 @@ void TableOfTotals(const Context& c, const Totals& t, std::string* text) {
             "a frame\n",
             100 * t.skin_recall, t.skin_narrow_true, t.skin, 100 * t.skin_precision, t.skin_narrow_true, t.skin_narrow,
             t.skin_folds, Median(t.skin_us), Max(t.skin_us));
+  if (c.crease_job)
+    Appendf(text, "narrow phase, crease rule behind the proxy's pairs and folds (M2 at %.3g x the margin, folds closing "
+            "by %.3g x it; reach regions; %.1f pairs a frame, %.1f of them folds): contacts %.2f %% (%zu/%zu), (frame, "
+            "region pair)s %.2f %% (%zu/%zu), precision %.2f %% (%zu/%zu); median %.1f us, max %.1f us a frame with "
+            "M2 and the folds\n",
+            double(playback::SessionOptions{}.narrow_behind_margin), double(playback::SessionOptions{}.fold_closing),
+            Ratio(double(t.restricted_pairs), double(t.restricted_us.size())), Ratio(double(t.restricted_folds), double(t.restricted_us.size())),
+            100 * Ratio(double(t.restricted_true), skin), t.restricted_true, t.skin,
+            100 * Ratio(double(t.restricted_regions), double(t.skin_regions)), t.restricted_regions, t.skin_regions,
+            100 * Ratio(double(t.restricted_true), double(t.restricted)), t.restricted_true, t.restricted,
+            Median(t.restricted_us), Max(t.restricted_us));
   else
     Appendf(text, "narrow phase, crease rule: the asset was baked without it (no Asset.crease): re-bake to run it\n");
   Appendf(text, "sphere-pair precision M2 (reported pairs whose own surrounding regions come within the margin): "
@@ -313,7 +330,16 @@ nlohmann::json SummaryJson(const Context& c, const Totals& t, const nlohmann::js
         {"narrow", c.crease_job ? nlohmann::json{{"recall", t.skin_recall}, {"precision", t.skin_precision},
                                                  {"contacts", t.skin_narrow}, {"folds", t.skin_folds},
                                                  {"median_us", Median(t.skin_us)}, {"max_us", Max(t.skin_us)}}
-                                : nlohmann::json(nullptr)}}},
+                                : nlohmann::json(nullptr)},
+        {"behind_proxy_and_folds",
+         c.crease_job ? nlohmann::json{{"behind_margin", playback::SessionOptions{}.narrow_behind_margin},
+                                       {"fold_closing", playback::SessionOptions{}.fold_closing},
+                                       {"recall", Ratio(double(t.restricted_true), skin)},
+                                       {"region_recall", Ratio(double(t.restricted_regions), double(t.skin_regions))},
+                                       {"precision", Ratio(double(t.restricted_true), double(t.restricted))},
+                                       {"contacts", t.restricted}, {"pairs", t.restricted_pairs}, {"folds", t.restricted_folds},
+                                       {"median_us", Median(t.restricted_us)}, {"max_us", Max(t.restricted_us)}}
+                      : nlohmann::json(nullptr)}}},
       {"narrow", {{"recall", t.n_recall}, {"precision", t.n_precision}, {"contacts", t.narrow_total},
                   {"median_us", Median(t.narrow_us)}, {"max_us", Max(t.narrow_us)}}},
       {"coverage", bind_coverage["coverage"]},

@@ -43,6 +43,39 @@ import::Status MeasureSkinContacts(Context& c, const playback::SessionFrame& fr,
   row->skin_narrow = row->skin_stats.contacts;
   for (uint32_t i = 0; i < n; ++i)
     row->skin_narrow_true += skin_pairs.count(Ordered(c.contacts[i].triangle_a, c.contacts[i].triangle_b)) > 0;
+  // The restricted path (play --narrow-behind's, at the session's defaults): the same rule behind M2's pairs
+  // at the wider margin and the proxy's folds, on the reach regions; timed with M2 and the folds.
+  const playback::SessionOptions defaults;
+  const float margin = c.session.model().contact_margin();
+  runtime::NarrowPhaseJob behind;
+  behind.model = &c.session.reach_model();
+  behind.workspace = &c.session.reach_workspace();
+  behind.positions = job.positions;
+  behind.exclusions = runtime::Exclusions::kCrease;
+  behind.crease = job.crease;
+  behind.output = c.contacts.data();
+  behind.capacity = static_cast<uint32_t>(c.contacts.size());
+  behind.count = &n;
+  runtime::NarrowPhaseStats behind_stats;
+  behind.stats = &behind_stats;
+  const auto t1 = std::chrono::steady_clock::now();
+  runtime::Status bs = playback::BehindPairs(c.view, c.session.model(), c.session.workspace(), c.session.reach_model(),
+                                             defaults.narrow_behind_margin * margin, defaults.fold_closing * margin,
+                                             &c.behind, &row->restricted_pairs, &row->restricted_folds);
+  if (runtime::Succeeded(bs)) {
+    behind.sphere_pairs = c.behind.data();
+    behind.sphere_pair_count = row->restricted_pairs;
+    bs = behind.Run();
+  }
+  row->skin_restricted_us = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t1).count();
+  if (runtime::Failed(bs)) return Fail(std::string("narrow phase (crease rule, behind the proxy): ") + runtime::ToString(bs));
+  row->skin_restricted = behind_stats.contacts;
+  for (uint32_t i = 0; i < n; ++i) {
+    const runtime::TriangleContact& k = c.contacts[i];
+    if (!skin_pairs.count(Ordered(k.triangle_a, k.triangle_b))) continue;
+    ++row->skin_restricted_true;
+    if (k.sphere_a != 0xFFFF && k.sphere_b != 0xFFFF) row->skin_restricted_regions.insert(c.RegionPairOf(k.sphere_a, k.sphere_b));
+  }
   return import::Ok{};
 }
 

@@ -77,6 +77,7 @@ void Record(const runtime::AssetView& view, const SessionFrame& fr, const PlayOp
     row->narrow = fr.narrow;
     row->narrow_us = fr.narrow_us;
     row->narrow_pairs = fr.behind_pairs;
+    row->narrow_folds = fr.behind_folds;
     const bool depths = fr.exclusions == runtime::Exclusions::kCrease;
     std::map<std::pair<int, int>, float> cr;  // region pair → its deepest contact (0 without depths)
     for (size_t i = 0; i < fr.contacts.size(); ++i) {

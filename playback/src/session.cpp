@@ -75,6 +75,9 @@ Status Session::Init(const runtime::AssetView& view, const Mesh& mesh, const Ses
   if (o.narrow == SessionNarrow::kBehindM2 && !(std::isfinite(o.narrow_behind_margin) && o.narrow_behind_margin > 0.0f))
     return ConfigError("narrow_behind_margin " + std::to_string(o.narrow_behind_margin) +
                        ": expected a finite multiple of the contact margin > 0");
+  if (o.narrow == SessionNarrow::kBehindM2 && !(std::isfinite(o.fold_closing) && o.fold_closing >= 0.0f))
+    return ConfigError("fold_closing " + std::to_string(o.fold_closing) +
+                       ": expected a finite multiple of the contact margin >= 0");
   if (o.narrow != SessionNarrow::kNone && o.contact_capacity == 0) return ConfigError("contact_capacity must be > 0");
   options_ = o;
   mesh_ = &mesh;
@@ -101,8 +104,9 @@ Status Session::Init(const runtime::AssetView& view, const Mesh& mesh, const Ses
     if (o.m2) out_m2_.resize(runtime::DetectBound(view, runtime::DetectMethod::kM2));
   }
   if (o.narrow != SessionNarrow::kNone) {
-    if (behind) out_behind_.resize(runtime::DetectBound(view, runtime::DetectMethod::kM2));
-    if (o.narrow == SessionNarrow::kEvery && o.crease && narrow_model().has_crease())
+    if (behind)  // M2's pairs, then (the crease rule) the folds: BehindPairs
+      out_behind_.resize(size_t{runtime::DetectBound(view, runtime::DetectMethod::kM2)} + narrow_model().fold_pair_count());
+    if (o.narrow != SessionNarrow::kNone && o.crease && narrow_model().has_crease())
       exclusions_ = runtime::Exclusions::kCrease;
     contacts_.resize(o.contact_capacity);
     if (exclusions_ == runtime::Exclusions::kCrease) depths_.resize(o.contact_capacity);
@@ -262,13 +266,21 @@ Status Session::Narrow(const float* positions, const float* joint_matrices) {
     // joint, and the exact narrow phase behind them cannot cry wolf.
     if (model_.fold_margin() >= 0.0f) broad.fold_margin = broad.margin;
     job.sphere_pairs = out_behind_.data();
+    frame_.behind_folds = 0;
   } else if (crease && joint_matrices && job.model->has_joint_cull()) {
     // The frame was skinned by these matrices (Animation::Frame: linear blend of the mesh's own weights).
     job.joint_matrices = joint_matrices;
     job.joint_count = job.model->joint_count();
   }
   auto run = [&] {
-    if (behind) {
+    if (behind && crease) {  // the skin's contacts behind M2's pairs and the proxy's folds
+      const runtime::Status s =
+          BehindPairs(view_, model_, workspace_, *job.model, broad.margin, options_.fold_closing * model_.contact_margin(),
+                      &out_behind_, &frame_.behind_pairs, &frame_.behind_folds);
+      if (runtime::Failed(s)) return s;
+      job.sphere_pairs = out_behind_.data();
+      job.sphere_pair_count = frame_.behind_pairs;
+    } else if (behind) {
       if (const runtime::Status s = broad.Run(); runtime::Failed(s)) return s;
       job.sphere_pair_count = frame_.behind_pairs;
     }
@@ -288,6 +300,30 @@ Status Session::Narrow(const float* positions, const float* joint_matrices) {
   frame_.contacts = {contacts_.data(), count};
   if (crease) frame_.depths = {depths_.data(), count};
   return Ok{};
+}
+
+runtime::Status BehindPairs(const runtime::AssetView& view, const runtime::Model& model, runtime::Workspace& workspace,
+                            const runtime::NarrowPhaseModel& narrow, float margin, float closing,
+                            std::vector<runtime::Collision>* out, uint32_t* count, uint32_t* folds) {
+  *count = 0, *folds = 0;
+  const size_t need = size_t{runtime::DetectBound(view, runtime::DetectMethod::kM2)} + narrow.fold_pair_count();
+  if (out->size() < need) out->resize(need);
+  runtime::DetectJob broad;
+  broad.model = &model;
+  broad.workspace = &workspace;
+  broad.method = runtime::DetectMethod::kM2;
+  broad.output = out->data();
+  broad.capacity = static_cast<uint32_t>(out->size());
+  uint32_t pairs = 0;
+  broad.count = &pairs;
+  broad.margin = margin;
+  if (model.fold_margin() >= 0.0f) broad.fold_margin = margin;
+  if (const runtime::Status s = broad.Run(); runtime::Failed(s)) return s;
+  const runtime::Status s = runtime::FoldPairs(narrow, workspace.spheres(), closing, out->data() + pairs,
+                                               static_cast<uint32_t>(out->size()) - pairs, folds);
+  if (runtime::Failed(s)) return s;
+  *count = pairs + *folds;
+  return runtime::Status::kOk;
 }
 
 }  // namespace spherechain::playback

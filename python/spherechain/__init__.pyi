@@ -147,6 +147,8 @@ class Workspace:
         matrices: _Float32Array | None = None,
     ) -> _Records:
         """Exact triangle contacts: a new CONTACT_DTYPE array."""
+    def fold_pairs(self, closing: float) -> _Records:
+        """Excluded sphere pairs whose centres closed by more than `closing` since bind: a new PAIR_DTYPE array."""
     def reset(self) -> None:
         """Spheres back to the bind pose."""
     @property

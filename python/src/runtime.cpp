@@ -344,6 +344,28 @@ PyObject* Detect(PyWorkspace& self, PyObject* method, PyObject* margin, PyObject
   return reinterpret_cast<PyObject*>(result);
 }
 
+py::object FoldPairsOf(PyWorkspace& self, double closing) {
+  Exclusive exclusive(self);
+  if (!std::isfinite(closing) || closing < 0.0) ThrowValue("closing: expected a finite distance >= 0, got " + std::to_string(closing));
+  const runtime::NarrowPhaseModel* model = nullptr;
+  Status s;
+  uint32_t count = 0;
+  std::vector<runtime::Collision> out;
+  {
+    py::gil_scoped_release release;
+    s = self.model->Narrow(0, &model);
+    if (runtime::Succeeded(s)) {
+      out.resize(model->fold_pair_count());
+      s = runtime::FoldPairs(*model, self.ws.spheres(), float(closing), out.data(), uint32_t(out.size()), &count);
+    }
+  }
+  if (runtime::Failed(s))
+    ThrowStatus(s, s == Status::kErrorInvalidJob ? "fold_pairs: the asset has no crease rule (bake it again)" : "fold_pairs");
+  PyArrayObject* result = NewRecords(PairDtype(), count);
+  if (count) std::memcpy(PyArray_DATA(result), out.data(), size_t(count) * sizeof(runtime::Collision));
+  return py::reinterpret_steal<py::object>(reinterpret_cast<PyObject*>(result));
+}
+
 py::object NarrowPhase(PyWorkspace& self, py::handle positions, const py::object& exclusions, const py::object& pairs,
                        const std::string& regions, const py::object& crease, const py::object& matrices) {
   Exclusive exclusive(self);
@@ -422,8 +444,7 @@ py::object NarrowPhase(PyWorkspace& self, py::handle positions, const py::object
     std::string why;  // kErrorInvalidJob: which argument
     if (s == Status::kErrorInvalidJob) {
       const bool rule = job.exclusions == runtime::Exclusions::kCrease;
-      if (rule && job.sphere_pairs) why = ": exclusions \"crease\" searches every pair (pairs must be None)";
-      else if (!rule && job.crease != 0.0f) why = ": crease is for exclusions \"crease\" only";
+      if (!rule && job.crease != 0.0f) why = ": crease is for exclusions \"crease\" only";
       else if (!rule && job.joint_matrices) why = ": matrices are for exclusions \"crease\" only";
       else if (rule && job.model && job.crease != 0.0f && job.crease < job.model->crease())
         why = ": crease " + std::to_string(job.crease) + " is below the asset's " + std::to_string(job.model->crease()) +
@@ -648,7 +669,9 @@ positions: as refit() (float32 (#V, 3), strided rows).
 exclusions: "crease" (the skin's own definition: every intersecting pair not near on the bind surface;
     needs an asset baked with the crease rule), "asset" (pairs of different spheres, not an excluded pair),
     "none" (any two spheres); None: "crease" when the asset has the rule and `pairs` is None, else "asset".
-pairs: None (search every pair: the exact answer) or PAIR_DTYPE records from detect() to search behind.
+pairs: None (search every pair: the exact answer) or PAIR_DTYPE records to search behind: detect()'s, and
+    with "crease" also fold_pairs()' (the restricted skin contacts: the pairs of 16-triangle patches whose
+    triangles stand behind the two spheres of a listed pair, and the bind pose's own contacts).
 regions: "surrounding" or "reach" (the triangles behind a sphere; "reach" finds more behind `pairs`).
 crease: the fold distance [source units] of a "crease" search (only there); None: the asset's.
 matrices: None, or the skinning matrices that deformed `positions` (as refit_joints() takes them) for a
@@ -665,6 +688,15 @@ kErrorInvalidJob: a crease or matrices with another exclusions, or a crease belo
 says which).
 Cost: the runtime's narrow phase (docs/performance.md); the first call builds the narrow phase's model and
 scratch, and each call allocates the returned array.
+)doc")
+      .def("fold_pairs", &FoldPairsOf, py::arg("closing"), R"doc(
+The proxy's folds (runtime FoldPairs): the sphere pairs detect() never reports (the asset's excluded
+neighbours) whose centres are now closer than at bind pose by more than `closing` [source units, finite,
+>= 0], from the current spheres (the last refit). With detect()'s pairs they are what
+narrow_phase(exclusions="crease", pairs=...) searches behind, as `play --narrow-behind` does with closing
+0.5 x Model.contact_margin and detect("m2", margin=1.5 x it, fold_margin=the same). Returns a new numpy.ndarray of PAIR_DTYPE (a < b; depth rA + rB − |cA −
+cB|; chains 0). Raises ValueError (closing), StatusError (kErrorInvalidJob: an asset without the crease rule).
+Cost: one distance per excluded pair; builds the narrow phase's model on first use.
 )doc")
       .def("reset", [](PyWorkspace& self) {
              Exclusive exclusive(self);

@@ -182,10 +182,14 @@ def test_bad_out_and_pairs(asset, ws):
     with pytest.raises(ValueError, match="regions"):
         ws.narrow_phase(good, regions="everywhere")
     pairs = np.zeros(1, PAIR_DTYPE)
+    pairs[0] = (5, 5, 0.0, 0)  # a >= b
     with pytest.raises(StatusError) as e:
         ws.narrow_phase(good, exclusions="crease", pairs=pairs)
-    assert status_of(e) == "kErrorInvalidJob" and "pairs must be None" in str(e.value)
-    pairs[0] = (5, 5, 0.0, 0)  # a >= b
+    assert status_of(e) == "kErrorIndexOutOfRange"
+    with pytest.raises(ValueError, match="closing"):
+        ws.fold_pairs(-1.0)
+    with pytest.raises(ValueError, match="closing"):
+        ws.fold_pairs(float("nan"))
     with pytest.raises(StatusError) as e:
         ws.narrow_phase(good, pairs=pairs)
     assert status_of(e) == "kErrorIndexOutOfRange"

@@ -88,6 +88,23 @@ def test_narrow_phase_equals_play(creature):
     assert np.isnan(every["depth"]).all(), "depths only under the crease rule"
     reach = ws.narrow_phase(positions, pairs=pairs, regions="reach")
     assert len(reach) >= len(behind)
+    # The skin's contacts behind the proxy's pairs and its folds (play --narrow-behind): a subset of the crease
+    # answer, with its depths; the folds are excluded neighbours that came closer than at bind.
+    crease = ws.narrow_phase(positions)
+    margin = ws.model.contact_margin
+    wide = ws.detect("m2", margin=1.5 * margin, fold_margin=None if ws.model.fold_margin is None else 1.5 * margin)
+    folds = ws.fold_pairs(0.5 * margin)
+    assert folds.dtype == spherechain.PAIR_DTYPE and (folds["a"] < folds["b"]).all()
+    assert len(ws.fold_pairs(1e6)) == 0, "no pair closes by a kilometre"
+    restricted = ws.narrow_phase(positions, exclusions="crease", pairs=np.concatenate([wide, folds]), regions="reach")
+    assert {key(c) for c in restricted} <= {key(c) for c in crease}
+    assert len(restricted) > 0 and not np.isnan(restricted["depth"]).any()
+    # Every pair listed: every contact between two different owners.
+    S = len(ws.spheres)
+    every_pair = np.zeros(S * (S - 1) // 2, spherechain.PAIR_DTYPE)
+    every_pair["a"], every_pair["b"] = np.triu_indices(S, 1)
+    whole = {key(c) for c in ws.narrow_phase(positions, exclusions="crease", pairs=every_pair)}
+    assert {key(c) for c in crease if c["sphere_a"] != c["sphere_b"]} <= whole
 
 
 def test_narrow_phase_with_joint_matrices(creature):

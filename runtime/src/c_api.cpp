@@ -316,6 +316,19 @@ SC_API sc_status sc_detect(const sc_model* model, sc_workspace* workspace, sc_de
   return C(s);
 }
 
+SC_API sc_status sc_fold_pairs(const sc_model* model, const sc_workspace* workspace, float closing, sc_pair* pairs,
+                               uint32_t capacity, uint32_t* count) {
+  if (count) *count = 0;
+  if (!model || !workspace || !count || (!pairs && capacity > 0)) return SC_ERROR_NULL_ARGUMENT;
+  if (!workspace->ws.made_for(model->model)) return SC_ERROR_WORKSPACE_MODEL;
+  if (!model->model.narrow_phase()) return SC_ERROR_INVALID_JOB;
+  uint32_t found = 0;
+  const rt::Status s = rt::FoldPairs(*model->model.narrow_phase(), workspace->ws.spheres(), closing,
+                                     reinterpret_cast<rt::Collision*>(pairs), capacity, &found);
+  if (rt::Succeeded(s)) *count = found;
+  return C(s);
+}
+
 SC_API sc_status sc_narrow_phase(const sc_model* model, sc_workspace* workspace, const float* positions,
                                  uint32_t vertex_count, size_t stride_bytes, const sc_narrow_phase_options* options,
                                  sc_contact* contacts, sc_contact_depth* depths, uint32_t capacity, uint32_t* count) {

@@ -634,6 +634,8 @@ void NarrowPhaseModel::ForEachArray(F&& f) {
   f(cl_valid_), f(cl_local_), f(cl_count_);
   f(cull_pairs_), f(cl_ref_), f(cl_cull_offsets_), f(cl_cull_pair_), f(near_cross_);
   f(cull_anchor_), f(cl_slack_), f(cl_cull_w_), f(cl_cull_reach_), f(near_gap_), f(near_cross_reach_);
+  f(sphere_patch_offsets_), f(sphere_patches_), f(patch_sphere_bits_), f(bind_patches_), f(patch_bind_);
+  f(fold_pairs_), f(fold_bind_distance_);
   f(behind_offsets_), f(behind_), f(weld_), f(tri_sphere_);
   f(region_offsets_), f(region_tri_), f(region_v_), f(region_w_), f(vert_offsets_), f(vert_ids_), f(region_local_);
   f(excl_offsets_), f(excl_partners_), f(pool_offsets_), f(chunk_offsets_);
@@ -814,7 +816,8 @@ void NarrowPhaseWorkspace::ForEachArray(F&& f) {
     for (int k = 0; k < 3; ++k) f(l->lo[k]), f(l->hi[k]);
   }
   f(patch_box_), f(group_box_), f(sweep_), f(sweep_box_), f(sweep_hits_), f(patch_tri_box_), f(tri_prepared_), f(tri_frame_);
-  f(cull_t_), f(cull_f_), f(cull_smin_), f(cull_e_), f(patch_tri_frame_);
+  f(cull_t_), f(cull_f_), f(cull_smin_), f(cull_e_), f(patch_tri_frame_), f(patch_active_), f(sphere_active_);
+  f(sphere_partner_bits_), f(patch_partner_bits_);
   crease_scratch_.ForEachArray(f);
 }
 
@@ -902,7 +905,7 @@ Status NarrowPhaseJob::Check() const {
     return Status::kErrorInvalidJob;
   if (exclusions == Exclusions::kCrease) {
     if (!model->has_crease()) return Status::kErrorMissingField;
-    if (sphere_pairs || !std::isfinite(crease) || crease < 0.0f || (crease > 0.0f && crease < model->crease()))
+    if (!std::isfinite(crease) || crease < 0.0f || (crease > 0.0f && crease < model->crease()))
       return Status::kErrorInvalidJob;
   } else if (crease != 0.0f) {
     return Status::kErrorInvalidJob;  // a crease means the crease rule; silently ignored it would mislead
@@ -968,6 +971,27 @@ Status NarrowPhaseJob::Run() const {
   *count = std::min(st.contacts, capacity);
   if (stats) *stats = st;
   return st.contacts > capacity ? Status::kOkTruncated : Status::kOk;
+}
+
+Status FoldPairs(const NarrowPhaseModel& model, const SphereArrays& spheres, float closing, Collision* out,
+                 uint32_t capacity, uint32_t* count) {
+  if (!count || (!out && capacity > 0) || !spheres.x || !spheres.y || !spheres.z || !spheres.r)
+    return Status::kErrorNullArgument;
+  if (!model.initialized() || !model.has_crease() || !std::isfinite(closing) || closing < 0.0f)
+    return Status::kErrorInvalidJob;
+  if (spheres.count != model.sphere_count()) return Status::kErrorCountMismatch;
+  uint32_t n = 0;
+  for (size_t i = 0; i < model.fold_pairs_.size(); ++i) {
+    const uint32_t a = model.fold_pairs_[i] >> 16, b = model.fold_pairs_[i] & 0xFFFFu;
+    const float dx = spheres.x[a] - spheres.x[b], dy = spheres.y[a] - spheres.y[b], dz = spheres.z[a] - spheres.z[b];
+    const float d = std::sqrt(dx * dx + dy * dy + dz * dz);
+    if (!(d < model.fold_bind_distance_[i] - closing)) continue;  // NaN: false
+    if (n < capacity)
+      out[n] = Collision{static_cast<uint16_t>(a), static_cast<uint16_t>(b), spheres.r[a] + spheres.r[b] - d, 0u};
+    ++n;
+  }
+  *count = n;
+  return n > capacity ? Status::kOkTruncated : Status::kOk;
 }
 
 }  // namespace spherechain::runtime

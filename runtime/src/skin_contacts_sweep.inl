@@ -48,6 +48,19 @@
     return kFarPair;
   }
 
+  /// The restricted path: patches a and b hold triangles behind the two spheres of a listed pair, or both
+  /// hold a contact of the bind pose.
+  static bool Listed(const NarrowPhaseModel& m, const NarrowPhaseWorkspace& w, uint32_t a, uint32_t b) {
+    if (m.patch_bind_[a] & m.patch_bind_[b]) return true;
+    const size_t words = SphereWords(m);
+    const uint64_t* partners = &w.patch_partner_bits_[a * words];
+    const uint64_t* spheres = &m.patch_sphere_bits_[b * words];
+    uint64_t any = 0;
+    for (size_t k = 0; k < words; ++k) any |= partners[k] & spheres[k];
+    return any != 0;
+  }
+  static size_t SphereWords(const NarrowPhaseModel& m) { return (size_t{m.sphere_count_} + 63) / 64; }
+
   /// Patches and near bits (file comment) from the bind pose `bind` (#V×3) and the model's graph.
   static Status BuildPatches(NarrowPhaseModel& m, const float* bind) {
     const CreaseGraph& g = m.crease_graph_;
@@ -521,8 +534,10 @@
   /// of 4 patches 6 rows of 4) and its 16 triangle boxes (patch_tri_box_: 6 rows of 16, inverted padding)
   /// from them (cl_local_), each group's box (group_box_: 6 rows of #G), and the box of them all (lo, hi).
   /// False when a vertex is NaN or a box not finite (nothing reported).
+  /// `active` (null: every patch): a patch p with active[p] != stamp is not read: its box inverted (it meets
+  /// nothing), no triangle boxes; `lo`, `hi` bound the patches read (at least one).
   static bool Boxes(const NarrowPhaseModel& m, NarrowPhaseWorkspace& w, const char* base, size_t stride, float lo[3],
-                    float hi[3], bool tri_boxes) {
+                    float hi[3], bool tri_boxes, const uint32_t* active, uint32_t stamp) {
     const uint32_t C = PatchCount(m), G = GroupCount(m);
     float* box = w.patch_box_.data();
     float* group = w.group_box_.data();
@@ -537,11 +552,12 @@
       const uint32_t nv = m.cl_vert_offsets_[p + 1] - m.cl_vert_offsets_[p];
       const uint8_t* corner = &m.cl_local_[3 * kPatch * size_t{p}];
       float* tb = &w.patch_tri_box_[6 * kPatch * size_t{p}];
-      if (p + kAhead < C)  // the positions are the caller's: fetched a few patches ahead (random reads)
-        for (uint32_t k = m.cl_vert_offsets_[p + kAhead]; k < m.cl_vert_offsets_[p + kAhead + 1]; ++k)
+      const bool skip = active && active[p] != stamp;
+      if (p + kAhead < C && (!active || active[p + kAhead] == stamp))  // the positions are the caller's: fetched
+        for (uint32_t k = m.cl_vert_offsets_[p + kAhead]; k < m.cl_vert_offsets_[p + kAhead + 1]; ++k)  // ahead
           _mm_prefetch(base + stride * m.cl_vert_[k], _MM_HINT_T0);
       __m128 vl = _mm_set1_ps(kInfinity), vh = _mm_set1_ps(-kInfinity);
-      for (uint32_t i = 0; i < nv; ++i) {
+      for (uint32_t i = 0; i < (skip ? 0 : nv); ++i) {
         const float* q = reinterpret_cast<const float*>(base + stride * vert[i]);
         // x, y, z, 0 without reading past the vertex (the positions are only 4-byte aligned)
         const __m128 v = _mm_movelh_ps(_mm_unpacklo_ps(_mm_load_ss(q), _mm_load_ss(q + 1)), _mm_load_ss(q + 2));
@@ -559,7 +575,7 @@
         all_lo = _mm_min_ps(all_lo, group_lo), all_hi = _mm_max_ps(all_hi, group_hi);
         group_lo = _mm_set1_ps(kInfinity), group_hi = _mm_set1_ps(-kInfinity);
       }
-      if (!tri_boxes) continue;  // the joint-matrix cull: built when a pair needs them (EnsureTriBoxes)
+      if (!tri_boxes || skip) continue;  // the joint-matrix cull: built when a pair needs them (EnsureTriBoxes)
       // Four triangles at a time: each box from its corners, then transposed into the rows (padding slots
       // have corners 0, 0, 0: a box, inverted below).
       for (uint32_t t = 0; t < kPatch; t += 4) {
@@ -592,7 +608,8 @@
       float* tb = &w.patch_tri_box_[6 * kPatch * size_t{p}];
       float bl[3] = {kInfinity, kInfinity, kInfinity}, bh[3] = {-kInfinity, -kInfinity, -kInfinity};
       bool nan = false;  // std::min/max would drop a NaN
-      for (uint32_t i = 0; i < nv; ++i) {
+      const bool skip = active && active[p] != stamp;
+      for (uint32_t i = 0; i < (skip ? 0 : nv); ++i) {
         const float* q = reinterpret_cast<const float*>(base + stride * m.cl_vert_[first + i]);
         for (int k = 0; k < 3; ++k) bl[k] = std::min(bl[k], q[k]), bh[k] = std::max(bh[k], q[k]), nan |= q[k] != q[k];
       }
@@ -600,13 +617,13 @@
       float* pb = box + 6 * kGroup * size_t{p / kGroup} + p % kGroup;
       float* gb = group + p / kGroup;
       for (int k = 0; k < 3; ++k) {
-        if (!std::isfinite(bl[k]) || !std::isfinite(bh[k])) return false;
+        if (!skip && (!std::isfinite(bl[k]) || !std::isfinite(bh[k]))) return false;
         pb[kGroup * k] = bl[k], pb[kGroup * (3 + k)] = bh[k];
         if (p % kGroup == 0) gb[k * size_t{G}] = kInfinity, gb[(3 + k) * size_t{G}] = -kInfinity;
         gb[k * size_t{G}] = std::min(gb[k * size_t{G}], bl[k]), gb[(3 + k) * size_t{G}] = std::max(gb[(3 + k) * size_t{G}], bh[k]);
         lo[k] = std::min(lo[k], bl[k]), hi[k] = std::max(hi[k], bh[k]);
       }
-      if (tri_boxes) TriBoxes(m, base, stride, p, tb);
+      if (tri_boxes && !skip) TriBoxes(m, base, stride, p, tb);
     }
 #endif
     return true;
@@ -779,7 +796,8 @@
   /// One frame: patch boxes, the sweep, every pair. False (nothing reported) when a patch vertex is NaN/Inf.
   template <class OnContact>
   static bool Collide(const NarrowPhaseModel& m, NarrowPhaseWorkspace& w, const char* base, size_t stride,
-                      float crease, const float* joints, Counters* c, OnContact&& on_contact) {
+                      float crease, const float* joints, const uint32_t* active, uint32_t stamp, Counters* c,
+                      OnContact&& on_contact) {
     const uint32_t C = GroupCount(m);
     if (++w.frame_ >= 0x7fffffffu) {  // stamps wrap: forget them all
       std::fill(w.tri_frame_.begin(), w.tri_frame_.end(), uint64_t{0});
@@ -790,7 +808,9 @@
     if (C == 0) return true;  // no patch (every triangle degenerate by weld ids): no vertex to read, no contact
     float lo[3], hi[3];
     const bool lazy = joints != nullptr;
-    if (!Boxes(m, w, base, stride, lo, hi, !lazy)) return false;
+    // Triangle boxes when a pair first needs them: with the joint-matrix cull, and on the restricted path.
+    const bool lazy_boxes = lazy || active;
+    if (!Boxes(m, w, base, stride, lo, hi, !lazy_boxes, active, stamp)) return false;
     float margin = 0.0f;
     if (lazy) {  // float skinning's rounding grows with every term it adds: frame, bind pose and translations
       margin = std::max(JointFrame(m, w, joints), m.cull_bind_extent_);
@@ -831,13 +851,13 @@
         const uint32_t bit = static_cast<uint32_t>(__builtin_ctz(overlap));
         const uint32_t a = kGroup * g + bit % kGroup, b = kGroup * h + bit / kGroup;
         const uint32_t block = NearBlock(m, a, b);
-        if (block == kAllNear) continue;
+        if ((active && !Listed(m, w, a, b)) || block == kAllNear) continue;
         if (block == kFarPair) {
-          Pair(m, w, base, stride, a, b, kFar, m.cl_valid_[a] | m.cl_valid_[b] << 16, crease, lazy, c, on_contact);
+          Pair(m, w, base, stride, a, b, kFar, m.cl_valid_[a] | m.cl_valid_[b] << 16, crease, lazy_boxes, c, on_contact);
         } else if (lazy && JointCulled(m, w, a, b, block, margin)) {
           ++c->patch_pairs, ++c->joint_culled;
         } else {
-          Pair(m, w, base, stride, a, b, &m.near_rows_[kPatch * size_t{block}], m.near_far_[block], crease, lazy, c,
+          Pair(m, w, base, stride, a, b, &m.near_rows_[kPatch * size_t{block}], m.near_far_[block], crease, lazy_boxes, c,
                on_contact);
         }
       }
@@ -893,10 +913,56 @@
     NarrowPhaseWorkspace w;
     if (Status s = InitWorkspace(w, m, nullptr); s != Status::kOk) return s;
     Counters c;
-    Collide(m, w, reinterpret_cast<const char*>(bind->data()), 12, m.crease_graph_.crease(), nullptr, &c,
+    Collide(m, w, reinterpret_cast<const char*>(bind->data()), 12, m.crease_graph_.crease(), nullptr, nullptr, 0, &c,
             [&](uint32_t t, uint32_t u) { m.bind_contacts_.push_back(uint64_t{std::min(t, u)} << 32 | std::max(t, u)); });
     std::sort(m.bind_contacts_.begin(), m.bind_contacts_.end());
+    BuildRestricted(m, a);
     return Status::kOk;
+  }
+
+  /// The restricted path's model part (NarrowPhaseModel: sphere_patches_ … fold_bind_distance_).
+  static void BuildRestricted(NarrowPhaseModel& m, const schema::Asset& a) {
+    const uint32_t S = m.sphere_count_, T = static_cast<uint32_t>(m.tri_v_.size() / 3);
+    std::vector<uint32_t> patch_of(T, kNone), list;
+    for (size_t k = 0; k < m.cl_tri_.size(); ++k)
+      if (m.cl_tri_[k] != kNone) patch_of[m.cl_tri_[k]] = static_cast<uint32_t>(k / kPatch);
+    auto sorted = [&list] {
+      std::sort(list.begin(), list.end());
+      list.erase(std::unique(list.begin(), list.end()), list.end());
+    };
+    m.sphere_patch_offsets_.assign(1, 0);
+    m.sphere_patches_.clear();
+    for (uint32_t s = 0; s < S; ++s) {  // the model's regions: reach or surrounding (degenerate triangles left out)
+      list.clear();
+      for (uint32_t k = m.region_offsets_[s]; k < m.region_offsets_[s + 1]; ++k)
+        if (const uint32_t p = patch_of[m.region_tri_[k]]; p != kNone) list.push_back(p);
+      sorted();
+      m.sphere_patches_.insert(m.sphere_patches_.end(), list.begin(), list.end());
+      m.sphere_patch_offsets_.push_back(static_cast<uint32_t>(m.sphere_patches_.size()));
+    }
+    const size_t words = SphereWords(m);
+    m.patch_sphere_bits_.assign(size_t{PatchCount(m)} * words, 0);
+    for (uint32_t s = 0; s < S; ++s)
+      for (uint32_t k = m.sphere_patch_offsets_[s]; k < m.sphere_patch_offsets_[s + 1]; ++k)
+        m.patch_sphere_bits_[m.sphere_patches_[k] * words + s / 64] |= uint64_t{1} << (s % 64);
+    list.clear();
+    for (uint64_t key : m.bind_contacts_)
+      for (uint32_t t : {static_cast<uint32_t>(key >> 32), static_cast<uint32_t>(key)})
+        if (patch_of[t] != kNone) list.push_back(patch_of[t]);
+    sorted();
+    m.bind_patches_.assign(list.begin(), list.end());
+    m.patch_bind_.assign(PatchCount(m), 0);
+    for (uint32_t p : list) m.patch_bind_[p] = 1;
+    m.fold_pairs_.clear();
+    m.fold_bind_distance_.clear();
+    if (const auto* ex = a.excluded_pairs(); ex && a.spheres())
+      for (const schema::SpherePair* p : *ex) {
+        const schema::Vec3& ca = a.spheres()->Get(p->a())->center();
+        const schema::Vec3& cb = a.spheres()->Get(p->b())->center();
+        const float dx = ca.x() - cb.x(), dy = ca.y() - cb.y(), dz = ca.z() - cb.z();
+        m.fold_pairs_.push_back(uint32_t{p->a()} << 16 | p->b());
+        m.fold_bind_distance_.push_back(std::sqrt(dx * dx + dy * dy + dz * dz));
+      }
   }
 
   static Status InitWorkspace(NarrowPhaseWorkspace& w, const NarrowPhaseModel& m, BlockArena* arena) {
@@ -919,7 +985,12 @@
     w.cull_f_.assign(m.cull_pairs_.size(), 0.0f);
     w.cull_smin_.assign(m.cull_joint_count_, 0.0f);
     w.cull_e_.assign(m.cull_joint_count_ ? PatchCount(m) : 0, 0.0f);
-    w.patch_tri_frame_.assign(m.cull_joint_count_ ? PatchCount(m) : 0, 0u);
+    w.patch_tri_frame_.assign(PatchCount(m), 0u);
+    w.patch_active_.assign(PatchCount(m), 0u);
+    w.sphere_active_.assign(m.sphere_count_, 0u);
+    w.sphere_partner_bits_.assign(size_t{m.sphere_count_} * SphereWords(m), 0u);
+    w.patch_partner_bits_.assign(size_t{PatchCount(m)} * SphereWords(m), 0u);
+    w.active_stamp_ = 0;
     return w.crease_scratch_.Init(m.crease_graph_, arena);
   }
 
@@ -938,7 +1009,45 @@
     if (job.joint_matrices)
       for (size_t i = 0; i < size_t{job.joint_count} * kJointMatrixFloats; ++i)
         if (!std::isfinite(job.joint_matrices[i])) return Status::kErrorNonFiniteJoints;
-    const bool finite = Collide(m, w, base, stride, crease, job.joint_matrices,
+    // The restricted path: the patches behind the listed spheres, and those of the bind pose's contacts.
+    const uint32_t* active = nullptr;
+    uint32_t stamp = 0, swept = 0;
+    if (job.sphere_pairs) {
+      if (++w.active_stamp_ == 0) {  // stamps wrap: forget them all
+        std::fill(w.patch_active_.begin(), w.patch_active_.end(), 0u);
+        std::fill(w.sphere_active_.begin(), w.sphere_active_.end(), 0u);
+        w.active_stamp_ = 1;
+      }
+      stamp = w.active_stamp_;
+      const size_t words = SphereWords(m);
+      // Each patch behind a listed sphere: swept, its partner bits the union of its spheres' partners.
+      auto patch = [&](uint32_t p, const uint64_t* partners) {
+        uint64_t* bits = &w.patch_partner_bits_[p * words];
+        if (w.patch_active_[p] != stamp) {
+          ++swept;
+          w.patch_active_[p] = stamp;
+          std::fill(bits, bits + words, uint64_t{0});
+        }
+        if (partners)
+          for (size_t k = 0; k < words; ++k) bits[k] |= partners[k];
+      };
+      for (uint32_t i = 0; i < job.sphere_pair_count; ++i) {
+        const uint32_t a = job.sphere_pairs[i].a, b = job.sphere_pairs[i].b;
+        w.sphere_partner_bits_[a * words + b / 64] |= uint64_t{1} << (b % 64);
+        w.sphere_partner_bits_[b * words + a / 64] |= uint64_t{1} << (a % 64);
+      }
+      for (uint32_t i = 0; i < job.sphere_pair_count; ++i)
+        for (uint32_t s : {uint32_t{job.sphere_pairs[i].a}, uint32_t{job.sphere_pairs[i].b}}) {
+          if (w.sphere_active_[s] == stamp) continue;
+          w.sphere_active_[s] = stamp;
+          for (uint32_t k = m.sphere_patch_offsets_[s]; k < m.sphere_patch_offsets_[s + 1]; ++k)
+            patch(m.sphere_patches_[k], &w.sphere_partner_bits_[s * words]);
+        }
+      for (uint32_t p : m.bind_patches_) patch(p, nullptr);
+      active = w.patch_active_.data();
+    }
+    const bool finite = (active && swept == 0) ||  // nothing to sweep: no vertex read, no contact
+                        Collide(m, w, base, stride, crease, job.joint_matrices, active, stamp,
                                 &c, [&](uint32_t t, uint32_t u) {
                                   st.bind_contacts += m.IntersectsAtBind(t, u);
                                   if (written >= job.capacity) return;
@@ -955,6 +1064,12 @@
                                   }
                                   job.output[written++] = TriangleContact{t, u, sa, sb};
                                 });
+    if (job.sphere_pairs) {  // the partner bits, cleared for the next job
+      const size_t words = SphereWords(m);
+      for (uint32_t i = 0; i < job.sphere_pair_count; ++i)
+        for (uint32_t s : {uint32_t{job.sphere_pairs[i].a}, uint32_t{job.sphere_pairs[i].b}})
+          std::fill_n(&w.sphere_partner_bits_[s * words], words, uint64_t{0});
+    }
     if (!finite) return Status::kErrorNonFinitePositions;
     st.candidate_pairs = c.patch_pairs;
     st.box_tests = c.box_tests;

@@ -232,7 +232,8 @@ PairSet SkinTruth(const Baked& b, const std::vector<float>& pos, float crease) {
   return truth;
 }
 
-PairSet CreaseContacts(Baked* b, const std::vector<float>& pos, runtime::NarrowPhaseStats* stats, float crease = 0) {
+PairSet CreaseContacts(Baked* b, const std::vector<float>& pos, runtime::NarrowPhaseStats* stats, float crease = 0,
+                       const std::vector<runtime::Collision>* pairs = nullptr) {
   std::vector<runtime::TriangleContact> out(1u << 18);
   std::vector<runtime::ContactDepth> depth(out.size());
   uint32_t n = 0;
@@ -242,6 +243,8 @@ PairSet CreaseContacts(Baked* b, const std::vector<float>& pos, runtime::NarrowP
   job.depths = depth.data();
   job.exclusions = runtime::Exclusions::kCrease;
   job.crease = crease;
+  static const runtime::Collision kNoPair{};  // an empty list is a non-null pointer (null: every pair)
+  if (pairs) job.sphere_pairs = pairs->empty() ? &kNoPair : pairs->data(), job.sphere_pair_count = static_cast<uint32_t>(pairs->size());
   job.positions = {pos.data(), b->view.vertex_count, 12};
   job.output = out.data();
   job.capacity = static_cast<uint32_t>(out.size());
@@ -323,6 +326,34 @@ CullRun CreaseRun(Baked* b, const std::vector<float>& pos, const std::vector<pla
 }
 
 // The joint-matrix cull changes nothing the job reports: the same records, depths and order, frame for frame.
+// The restricted path (kCrease with sphere_pairs) on one frame whose exact skin contacts are `all`: it reports
+// a subset of them, each once, and at least every contact whose two triangles' owners are a listed pair (their
+// patches hold triangles behind the pair's two spheres) and every contact of the bind pose. Listing every
+// sphere pair finds every contact between triangles of two different owners. Returns the restricted contacts.
+PairSet CheckRestricted(Baked* b, const std::vector<float>& pos, const PairSet& all,
+                        const std::vector<runtime::Collision>& listed) {
+  runtime::NarrowPhaseStats st;
+  std::set<std::pair<uint32_t, uint32_t>> pairs;
+  for (const runtime::Collision& c : listed) pairs.insert({c.a, c.b});
+  const PairSet some = CreaseContacts(b, pos, &st, 0.0f, &listed);
+  CHECK(st.contacts == some.size());
+  for (const baker::TrianglePair& p : some) CHECK(all.count(p) == 1);
+  for (const baker::TrianglePair& p : all) {
+    const uint32_t sa = b->narrow.triangle_sphere(p.a), sb = b->narrow.triangle_sphere(p.b);
+    if (pairs.count({std::min(sa, sb), std::max(sa, sb)}) || b->narrow.IntersectsAtBind(p.a, p.b)) CHECK(some.count(p) == 1);
+  }
+  std::vector<runtime::Collision> every;
+  for (uint32_t a = 0; a < b->view.sphere_count; ++a)
+    for (uint32_t c = a + 1; c < b->view.sphere_count; ++c) every.push_back({uint16_t(a), uint16_t(c), 0.0f, 0u});
+  const PairSet whole = CreaseContacts(b, pos, &st, 0.0f, &every);
+  for (const baker::TrianglePair& p : all) {
+    const uint32_t sa = b->narrow.triangle_sphere(p.a), sb = b->narrow.triangle_sphere(p.b);
+    if (sa != 0xFFFF && sb != 0xFFFF && sa != sb) CHECK(whole.count(p) == 1);
+  }
+  for (const baker::TrianglePair& p : whole) CHECK(all.count(p) == 1);
+  return some;
+}
+
 void CheckJointCull(Baked* b, const std::vector<float>& pos, const playback::SkinningScratch& scratch,
                     uint64_t* culled, uint64_t* contacts) {
   const CullRun plain = CreaseRun(b, pos, nullptr);
@@ -360,8 +391,14 @@ TEST_CASE("heavy: the crease rule on real frames: CesiumMan walk and BCN_Epilept
     const baker::Clip& clip = b.bake.mesh.clips.front();
     std::vector<float> pos(b.bake.mesh.positions.size());
     playback::SkinningScratch scratch;
-    size_t total = 0, hidden = 0;
+    size_t total = 0, hidden = 0, restricted = 0;
     uint64_t culled = 0, cull_contacts = 0;
+    // The restricted path behind the first ten excluded pairs (neighbours the proxy never reports).
+    std::vector<runtime::Collision> folds;
+    for (uint32_t i = 0; i < 10 && i < b.view.asset->excluded_pairs()->size(); ++i) {
+      const auto* e = b.view.asset->excluded_pairs()->Get(i);
+      folds.push_back({e->a(), e->b(), 0.0f, 0u});
+    }
     for (uint32_t f = 0; f < 40; f += 8) {
       CAPTURE(f);
       REQUIRE(playback::SkinClip(b.bake.mesh, clip, clip.duration_s * float(f) / 40.0f, &scratch, pos.data(), pos.size()).ok());
@@ -373,6 +410,7 @@ TEST_CASE("heavy: the crease rule on real frames: CesiumMan walk and BCN_Epilept
         const PairSet truth = SkinTruth(b, pos, crease);
         CHECK(found == truth);
         if (scale != 1.0f) continue;
+        restricted += CheckRestricted(&b, pos, found, folds).size();
         total += found.size();
         for (const baker::TrianglePair& p : found) {
           const uint32_t sa = b.narrow.triangle_sphere(p.a), sb = b.narrow.triangle_sphere(p.b);
@@ -381,7 +419,9 @@ TEST_CASE("heavy: the crease rule on real frames: CesiumMan walk and BCN_Epilept
       }
     }
     MESSAGE(path << ": " << total << " skin contacts over 5 frames, " << hidden << " of them in one sphere or an excluded pair; "
-                 << culled << " pairs of patches culled by the joint matrices");
+                 << culled << " pairs of patches culled by the joint matrices; " << restricted
+                 << " behind ten excluded pairs (restricted path)");
+    CHECK(restricted < total);  // the restriction leaves contacts out
     CHECK(total > 0);
     CHECK(cull_contacts == total);
     CHECK(culled > 0);
@@ -452,7 +492,67 @@ TEST_CASE("the crease rule: the synthetic creature's crossing fore legs are cont
     CHECK(((ra == "ForeLeg_L" && rb == "ForeLeg_R") || (ra == "ForeLeg_R" && rb == "ForeLeg_L")));
   }
   CHECK(CreaseContacts(&b, b.bake.mesh.positions, &st).empty());
-  // Bad jobs: a crease below the asset's, not finite, or with a sphere-pair list.
+  // The restricted path: behind no sphere pair (an empty list), only the bind pose's contacts are swept —
+  // none here, so no vertex is read (NaN positions pass); behind the two fore legs' spheres, every contact.
+  {
+    runtime::NarrowPhaseStats none_st;
+    const std::vector<runtime::Collision> none;
+    std::vector<float> nan_pos(pos.size(), std::numeric_limits<float>::quiet_NaN());
+    CHECK(CreaseContacts(&b, nan_pos, &none_st, 0.0f, &none).empty());
+    CHECK(none_st.candidate_pairs == 0);
+    std::set<uint16_t> legs;
+    for (const baker::TrianglePair& p : mid) legs.insert(b.narrow.triangle_sphere(p.a)), legs.insert(b.narrow.triangle_sphere(p.b));
+    std::vector<runtime::Collision> leg_pairs;
+    for (uint16_t x : legs)
+      for (uint16_t y : legs)
+        if (x < y) leg_pairs.push_back({x, y, 0.0f, 0u});
+    REQUIRE(!leg_pairs.empty());
+    CHECK(CreaseContacts(&b, pos, &none_st, 0.0f, &leg_pairs) == mid);
+  }
+  // FoldPairs: the excluded pairs whose centres came closer than at bind by more than `closing`. The bind
+  // spheres themselves: none; one sphere moved onto its excluded partner: that pair, its overlap as depth.
+  {
+    const auto* sp = b.view.asset->spheres();
+    const uint32_t S = b.view.sphere_count;
+    std::vector<float> x(S), y(S), z(S), r(S);
+    for (uint32_t i = 0; i < S; ++i)
+      x[i] = sp->Get(i)->center().x(), y[i] = sp->Get(i)->center().y(), z[i] = sp->Get(i)->center().z(), r[i] = sp->Get(i)->radius();
+    runtime::SphereArrays arrays{x.data(), y.data(), z.data(), r.data(), S};
+    std::vector<runtime::Collision> folds(b.narrow.fold_pair_count());
+    REQUIRE(b.narrow.fold_pair_count() == b.view.asset->excluded_pairs()->size());
+    REQUIRE(!folds.empty());
+    uint32_t count = 99;
+    CHECK(runtime::FoldPairs(b.narrow, arrays, 0.0f, folds.data(), uint32_t(folds.size()), &count) == runtime::Status::kOk);
+    CHECK(count == 0);
+    const auto* e = b.view.asset->excluded_pairs()->Get(0);
+    const float d = std::hypot(x[e->a()] - x[e->b()], y[e->a()] - y[e->b()], z[e->a()] - z[e->b()]);
+    x[e->b()] = x[e->a()], y[e->b()] = y[e->a()], z[e->b()] = z[e->a()];
+    CHECK(runtime::FoldPairs(b.narrow, arrays, 0.5f * d, folds.data(), uint32_t(folds.size()), &count) == runtime::Status::kOk);
+    REQUIRE(count >= 1);
+    bool seen = false;
+    for (uint32_t i = 0; i < count; ++i) {
+      CHECK(folds[i].a < folds[i].b);
+      CHECK(b.narrow.IsExcluded(folds[i].a, folds[i].b));
+      if (folds[i].a != e->a() || folds[i].b != e->b()) continue;
+      seen = true;
+      CHECK(folds[i].depth == r[e->a()] + r[e->b()]);
+    }
+    CHECK(seen);
+    CHECK(runtime::FoldPairs(b.narrow, arrays, 2.0f * d, folds.data(), uint32_t(folds.size()), &count) == runtime::Status::kOk);
+    for (uint32_t i = 0; i < count; ++i) CHECK_FALSE((folds[i].a == e->a() && folds[i].b == e->b()));
+    CHECK(runtime::FoldPairs(b.narrow, arrays, 0.5f * d, nullptr, 0, &count) == runtime::Status::kOkTruncated);
+    CHECK(count >= 1);
+    CHECK(runtime::FoldPairs(b.narrow, arrays, -1.0f, folds.data(), 1, &count) == runtime::Status::kErrorInvalidJob);
+    CHECK(runtime::FoldPairs(b.narrow, arrays, std::numeric_limits<float>::quiet_NaN(), folds.data(), 1, &count) ==
+          runtime::Status::kErrorInvalidJob);
+    CHECK(runtime::FoldPairs(b.narrow, arrays, 0.0f, folds.data(), 1, nullptr) == runtime::Status::kErrorNullArgument);
+    arrays.count = S - 1;
+    CHECK(runtime::FoldPairs(b.narrow, arrays, 0.0f, folds.data(), 1, &count) == runtime::Status::kErrorCountMismatch);
+    runtime::NarrowPhaseModel empty;
+    arrays.count = S;
+    CHECK(runtime::FoldPairs(empty, arrays, 0.0f, folds.data(), 1, &count) == runtime::Status::kErrorInvalidJob);
+  }
+  // Bad jobs: a crease below the asset's, or not finite.
   runtime::NarrowPhaseJob job;
   std::vector<runtime::TriangleContact> out(16);
   uint32_t n = 0;
@@ -469,9 +569,9 @@ TEST_CASE("the crease rule: the synthetic creature's crossing fore legs are cont
   CHECK(job.Run() == runtime::Status::kErrorInvalidJob);
   job.crease = 0.0f;
   runtime::Collision one{};
-  one.a = 0, one.b = 1;
+  one.a = 1, one.b = 1;  // a >= b
   job.sphere_pairs = &one, job.sphere_pair_count = 1;
-  CHECK(job.Run() == runtime::Status::kErrorInvalidJob);
+  CHECK(job.Run() == runtime::Status::kErrorIndexOutOfRange);
   job.sphere_pairs = nullptr, job.sphere_pair_count = 0;
   CHECK(job.Run() == runtime::Status::kOkTruncated);  // more than 16 contacts: the first 16, count complete
   CHECK(n == 16);

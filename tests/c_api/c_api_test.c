@@ -640,7 +640,7 @@ static void TestReal(const char* path) {
         free(again);
       }
     }
-    /* A wider crease calls more pairs folds: never more contacts. A narrower one, NaN, or sphere pairs: refused. */
+    /* A wider crease calls more pairs folds: never more contacts. A narrower one, or NaN: refused. */
     crease.crease = 2.0f * info.crease;
     CHECK_STATUS(sc_narrow_phase(model, ws, deformed, vertex_count, 12, &crease, contacts, NULL, n_crease, &n_wide),
                  SC_OK);
@@ -653,10 +653,42 @@ static void TestReal(const char* path) {
     CHECK_STATUS(sc_narrow_phase(model, ws, deformed, vertex_count, 12, &crease, contacts, NULL, n_crease, &count),
                  SC_ERROR_INVALID_JOB);
     crease.crease = 0.0f;
-    crease.sphere_pairs = m2;
-    crease.sphere_pair_count = n_m2;
-    CHECK_STATUS(sc_narrow_phase(model, ws, deformed, vertex_count, 12, &crease, contacts, NULL, n_crease, &count),
-                 SC_ERROR_INVALID_JOB);
+    /* Behind the proxy: the M2 pairs and the folds (sc_fold_pairs), a subset of the crease rule's contacts. */
+    {
+      uint32_t n_folds = 0, n_behind = 0, k;
+      sc_pair* behind_pairs = (sc_pair*)malloc(sizeof(sc_pair) * (n_m2 + 1024));
+      sc_contact* every = (sc_contact*)malloc(sizeof(sc_contact) * (n_crease + 1));
+      sc_contact* behind = (sc_contact*)malloc(sizeof(sc_contact) * (n_crease + 1));
+      CHECK_STATUS(sc_fold_pairs(model, ws, (float)NAN, NULL, 0, &n_folds), SC_ERROR_INVALID_JOB);
+      CHECK_STATUS(sc_fold_pairs(model, ws, -1.0f, NULL, 0, &n_folds), SC_ERROR_INVALID_JOB);
+      CHECK_STATUS(sc_fold_pairs(model, ws, 0.0f, NULL, 0, NULL), SC_ERROR_NULL_ARGUMENT);
+      CHECK_STATUS(sc_fold_pairs(model, ws, 0.0f, NULL, 1, &n_folds), SC_ERROR_NULL_ARGUMENT);
+      CHECK_STATUS(sc_fold_pairs(model, ws, 1e30f, NULL, 0, &n_folds), SC_OK);
+      CHECK(n_folds == 0);
+      if (behind_pairs && every && behind) {
+        memcpy(behind_pairs, m2, sizeof(sc_pair) * n_m2);
+        CHECK_STATUS(sc_fold_pairs(model, ws, 0.5f * info.contact_margin, behind_pairs + n_m2, 1024, &n_folds), SC_OK);
+        for (k = 0; k < n_folds; ++k) CHECK(behind_pairs[n_m2 + k].a < behind_pairs[n_m2 + k].b);
+        CHECK_STATUS(sc_narrow_phase(model, ws, deformed, vertex_count, 12, &crease, every, NULL, n_crease, &count),
+                     SC_OK);
+        crease.sphere_pairs = behind_pairs;
+        crease.sphere_pair_count = n_m2 + n_folds;
+        CHECK_STATUS(sc_narrow_phase(model, ws, deformed, vertex_count, 12, &crease, behind, NULL, n_crease, &n_behind),
+                     SC_OK);
+        CHECK(n_behind > 0 && n_behind <= n_crease);
+        for (i = 0; i < n_behind; ++i) {
+          int found = 0;
+          for (j = 0; j < n_crease && !found; ++j) found = SameContact(behind + i, every + j);
+          CHECK(found);
+        }
+        printf("%s: behind the M2 pairs and %u folds, %u of the %u skin contacts\n", path, n_folds, n_behind, n_crease);
+        crease.sphere_pairs = NULL;
+        crease.sphere_pair_count = 0;
+      }
+      free(behind_pairs);
+      free(every);
+      free(behind);
+    }
 
     /* The asset's exclusions (NULL options = zero-initialised options), unrestricted, and restricted to the M2
      * pairs: the restricted contacts are among the unrestricted ones. */

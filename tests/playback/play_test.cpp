@@ -9,6 +9,7 @@
 
 #include "playback/rig.h"
 #include "spherechain/playback/play.h"
+#include "spherechain/playback/session.h"
 
 namespace sc = spherechain;
 
@@ -104,6 +105,17 @@ TEST_CASE("play: documented errors — joint refit without weights, a bad narrow
     REQUIRE(!e.ok());
     CHECK(e.error().code == sc::import::Error::Code::kConfig);
     CHECK(e.error().message.find("narrow_behind_margin") != std::string::npos);
+  }
+  for (float bad : {-1.0f, std::nanf(""), INFINITY}) {  // the folds' closing behind M2's pairs: finite, >= 0
+    sc::playback::Session session;
+    sc::playback::SessionOptions so;
+    so.narrow = sc::playback::SessionNarrow::kBehindM2;
+    so.fold_closing = bad;
+    auto e = session.Init(r.view, r.mesh, so);
+    REQUIRE(!e.ok());
+    CHECK(e.error().code == sc::import::Error::Code::kConfig);
+    CHECK(e.error().message.find("fold_closing") != std::string::npos);
+    CHECK_FALSE(session.initialized());
   }
   o.narrow_phase = false;
   o.narrow_behind_margin = 0.0f;

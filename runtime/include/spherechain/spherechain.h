@@ -330,6 +330,24 @@ SC_API uint32_t sc_detect_bound(const sc_model* model, sc_detect_method method);
 SC_API sc_status sc_detect(const sc_model* model, sc_workspace* workspace, sc_detect_method method, float margin,
                            sc_pair* pairs, uint32_t capacity, uint32_t* count);
 
+/// The proxy's folds (runtime FoldPairs): the sphere pairs sc_detect() never reports (the asset's excluded
+/// neighbours) whose centres are now closer than at bind pose by more than `closing` — a bent joint, where
+/// the skin on either side may meet. With sc_detect()'s pairs they are the `sphere_pairs` of a
+/// #SC_EXCLUSIONS_CREASE narrow phase behind the proxy (`spherechain play --narrow-behind` uses sc_detect's
+/// margin 1.5 × the contact margin and `closing` 0.5 × it).
+/// @param model      the asset's model, created with #SC_MODEL_NARROW_PHASE on an asset with the crease rule.
+/// @param workspace  the character, made for `model` (its current spheres read).
+/// @param closing    [Units: source] [Limit: finite, >= 0].
+/// @param pairs      [opt when capacity == 0] caller buffer of `capacity` records (a < b, ascending; depth as
+///                   sc_detect's; chains 0).
+/// @param capacity   records `pairs` holds; the asset's excluded pairs never truncate.
+/// @param count      out: the folds found — also when more than `capacity`; 0 on failure.
+/// @return #SC_OK; #SC_OK_TRUNCATED; #SC_ERROR_NULL_ARGUMENT; #SC_ERROR_WORKSPACE_MODEL;
+///         #SC_ERROR_INVALID_JOB (no narrow phase or no crease rule, closing NaN, infinite or < 0).
+/// Cost: one distance per excluded pair; no allocation.
+SC_API sc_status sc_fold_pairs(const sc_model* model, const sc_workspace* workspace, float closing, sc_pair* pairs,
+                               uint32_t capacity, uint32_t* count);
+
 /* ---- per frame: narrow phase ----------------------------------------------------------------------------- */
 
 /// Which triangle pairs sc_narrow_phase() reports (runtime Exclusions).
@@ -341,8 +359,10 @@ typedef enum sc_exclusions {
   SC_EXCLUSIONS_NONE = 1,
   /// The skin's own definition: every pair of intersecting triangles that share no welded corner and are
   /// not within the crease of each other on the welded bind surface (nor within two triangle rings),
-  /// whichever spheres own them. Needs an asset with the crease rule (else #SC_ERROR_MISSING_FIELD) and
-  /// every sphere pair (sphere_pairs NULL). Penetration depths on request.
+  /// whichever spheres own them. Needs an asset with the crease rule (else #SC_ERROR_MISSING_FIELD).
+  /// sphere_pairs NULL: the exact answer; given: only the skin behind them (runtime narrow_phase.h,
+  /// Exclusions::kCrease: the pairs of patches behind a listed pair's two spheres, and the bind pose's own
+  /// contacts). Penetration depths on request.
   SC_EXCLUSIONS_CREASE = 2,
   SC_EXCLUSIONS_MAX_ENUM = 0x7FFFFFFF  ///< not a value: keeps the type 32 bits wide (any other value is refused)
 } sc_exclusions;

@@ -74,7 +74,9 @@ struct FrameReport {
   /// (runtime::ContactDepth); empty otherwise
   std::vector<float> contact_region_depth;
   std::vector<runtime::ContactDepth> depths;        ///< crease rule: per contact (parallel to `contacts`), else empty
-  uint32_t narrow_pairs = 0;                 ///< narrow_behind_margin > 0: M2's pairs the narrow phase ran behind
+  uint32_t narrow_pairs = 0;                 ///< narrow_behind_margin > 0: the sphere pairs the narrow phase ran
+                                             ///< behind (M2's, and with the crease rule the folds)
+  uint32_t narrow_folds = 0;                 ///< of those, the proxy's folds (crease rule; SessionFrame::behind_folds)
   std::vector<float> spheres;  ///< keep_spheres: the refit spheres, \#S×4 (x, y, z, r), source units, model space
 };
 

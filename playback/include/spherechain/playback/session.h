@@ -44,7 +44,10 @@ enum class SessionNarrow : uint8_t {
   /// Only behind M2's pairs found with SessionOptions::narrow_behind_margin times the asset's contact margin,
   /// on the reach regions (NarrowPhaseRegions::kReach): what a game running the spheres as its broad phase
   /// gets. One margin for every pair (an asset's fold margin set to it: the exact narrow phase cannot cry
-  /// wolf). That M2 run is timed with the narrow phase (SessionFrame::narrow_us).
+  /// wolf). With SessionOptions::crease and an asset that carries the rule: the skin's contacts
+  /// (Exclusions::kCrease, with depths) behind those pairs and the proxy's folds (runtime::FoldPairs at
+  /// SessionOptions::fold_closing; BehindPairs); else the asset's exclusions behind M2's pairs. That M2 run
+  /// (and FoldPairs) is timed with the narrow phase (SessionFrame::narrow_us).
   kBehindM2,
 };
 
@@ -60,11 +63,16 @@ struct SessionOptions {
   bool m1 = true;  ///< run DetectJob M1 (chains) with the asset's margins
   bool m2 = true;  ///< run DetectJob M2 (all spheres) with the asset's margins
   SessionNarrow narrow = SessionNarrow::kNone;
-  /// kEvery: the crease rule (Exclusions::kCrease, with depths) when the asset carries it; false, or an
-  /// older asset: the asset's excluded pairs (Exclusions::kAsset).
+  /// kEvery, kBehindM2: the crease rule (Exclusions::kCrease, with depths) when the asset carries it; false,
+  /// or an older asset: the asset's excluded pairs (Exclusions::kAsset).
   bool crease = true;
   /// kBehindM2: the broad phase's margin as a multiple of the asset's contact margin [Limit: finite, > 0].
   float narrow_behind_margin = 1.5f;
+  /// kBehindM2 with the crease rule: how much closer than at bind two excluded spheres' centres must come to
+  /// be a fold (runtime::FoldPairs' closing), as a multiple of the asset's contact margin [Limit: finite,
+  /// >= 0]. The default, 0.5 (0.2 % of the height with the default margin), was chosen on the reference
+  /// animations (docs/evaluation.md).
+  float fold_closing = 0.5f;
   /// Also build the reach regions' narrow-phase model and a workspace for it (reach_model(),
   /// reach_workspace()), for a consumer's own jobs behind the pairs (evaluate). kBehindM2 runs on such a
   /// model anyway (narrow_model()).
@@ -101,6 +109,7 @@ struct SessionFrame {
   runtime::NarrowPhaseStats narrow;                    ///< its counters (complete even when truncated)
   runtime::Status narrow_status = runtime::Status::kOk;  ///< kOk, or kOkTruncated (contacts beyond capacity)
   uint32_t behind_pairs = 0;  ///< kBehindM2: M2's pairs at the wider margin the narrow phase ran behind
+  uint32_t behind_folds = 0;  ///< kBehindM2 with the crease rule: the folds among them (runtime::FoldPairs)
   /// [Units: µs] the minimum over SessionOptions::repeat runs of each job; wall clock on the calling thread.
   double refit_us = 0, detect_m1_us = 0, detect_m2_us = 0, narrow_us = 0;
 };
@@ -111,6 +120,18 @@ struct SessionFrame {
 /// two sessions are independent. Cost: Init allocates (the models: NarrowPhaseModel::Init dominates, ~0.26 s
 /// for MakeHuman with the crease rule); a step skins the frame (O(Σ influences)) and runs the jobs, and
 /// allocates only when a buffer grows (grow_contacts, the first frame's positions).
+/// The sphere pairs the restricted skin contacts run behind (SessionNarrow::kBehindM2 with the crease rule,
+/// and evaluate's measure of it), for the asset `view` of `model`: DetectJob M2 over `workspace`'s current
+/// spheres at `margin` [Units: model]
+/// (one margin for every pair: an asset's fold margin set to it), then runtime::FoldPairs(`narrow`, the
+/// same spheres, `closing` [Units: model]) appended. `out` grows to DetectBound(M2) + narrow.fold_pair_count()
+/// when smaller (allocates once); *count = the records written (M2's first, *folds of them folds last).
+/// Returns the first failing job's status (DetectJob's, FoldPairs'), else kOk. Cost: one M2 detect and one
+/// distance per excluded pair.
+runtime::Status BehindPairs(const runtime::AssetView& view, const runtime::Model& model, runtime::Workspace& workspace,
+                            const runtime::NarrowPhaseModel& narrow, float margin, float closing,
+                            std::vector<runtime::Collision>* out, uint32_t* count, uint32_t* folds);
+
 class Session {
  public:
   Session() = default;
@@ -124,7 +145,7 @@ class Session {
   /// Errors (the session is left uninitialised): kConfig — the asset not loaded, the vertex counts differ,
   /// kJoints without centre joint weights in the asset or with another joint count than the mesh's skin,
   /// `spheres` false with a narrow phase other than kEvery, kBehindM2 with a narrow_behind_margin that is not
-  /// finite and > 0, a zero contact_capacity (the messages say which); kFormat — a narrow phase on an asset
+  /// finite and > 0 or a fold_closing that is not finite and >= 0, a zero contact_capacity (the messages say which); kFormat — a narrow phase on an asset
   /// baked before it ("narrow phase: kErrorMissingField (baked before the narrow phase existed: re-bake
   /// it)"); kInternal — a runtime Init failed ("runtime Model::Init: <status>", ...; runtime_status() holds
   /// the status). Cost: the runtime Inits (allocating), the DetectBound-sized pair buffers and
@@ -154,7 +175,7 @@ class Session {
   const runtime::AssetView& view() const { return view_; }        ///< the asset (borrowed)
   /// The runtime status of the last failure (kOk when none).
   runtime::Status runtime_status() const { return runtime_status_; }
-  /// The narrow phase's exclusions under kEvery (kCrease when the rule is on), else kAsset.
+  /// The narrow phase's exclusions under kEvery and kBehindM2 (kCrease when the rule is on), else kAsset.
   runtime::Exclusions exclusions() const { return exclusions_; }
 
   /// The character's Model and Workspace: the spheres' (refit, broad phase) and, with a narrow phase, the

@@ -47,13 +47,20 @@ enum class Exclusions : uint8_t {
   /// and are not near on the welded bind surface (within the crease, Asset.crease, or two triangle rings),
   /// whichever spheres own them — the same sphere, an excluded pair, or none (unassigned triangles: sphere
   /// 0xFFFF in the record). Needs an asset baked with the crease rule (Asset.bind_positions and crease;
-  /// else kErrorMissingField) and every sphere pair (sphere_pairs null; else kErrorInvalidJob). The
-  /// sphere pairs play no part: the model's patches of 16 triangles are swept against each other, and the
+  /// else kErrorMissingField). With sphere_pairs null (the exact answer) the sphere pairs play no part:
+  /// the model's patches of 16 triangles are swept against each other, and the
   /// rule is read from near bits NarrowPhaseModel::Init computed once (skin_contacts.cpp); a job with a
   /// crease wider than the asset's also asks the graph about each intersecting pair. Stats: candidate_pairs
   /// counts the pairs of patches looked at (boxes overlapping, not every pair near), box_tests the triangle
   /// boxes tested, crease_folds the intersecting pairs a wider job crease skipped. Optional penetration
-  /// depths (NarrowPhaseJob::depths).
+  /// depths (NarrowPhaseJob::depths). With sphere_pairs (the restricted path, behind the proxy): the same
+  /// rule, but only for the pairs of patches (16 triangles, grown over the bind surface) where one patch
+  /// holds a triangle behind sphere a and the other one behind sphere b of a listed pair (a, b) (the
+  /// model's regions: reach or surrounding), and the pairs of patches that both hold a contact of the bind
+  /// pose itself — a subset of the exact answer, each contact once, in the sweep's order. So a listed
+  /// pair finds at least every contact between a triangle behind a and one behind b, whichever spheres own
+  /// them; a contact within one sphere's region is found when a listed pair's two regions both reach it.
+  /// Pass the proxy's pairs and its folds (FoldPairs: the neighbours it never reports that came together).
   kCrease = 2,
 };
 
@@ -196,6 +203,8 @@ class NarrowPhaseModel {
   uint32_t joint_count() const { return cull_joint_count_; }
   /// How many such pairs the bind pose has (computed by Init with the crease rule).
   uint32_t bind_contact_count() const { return static_cast<uint32_t>(bind_contacts_.size()); }
+  /// Excluded sphere pairs FoldPairs examines (Asset.excluded_pairs; 0 without the crease rule).
+  uint32_t fold_pair_count() const { return static_cast<uint32_t>(fold_pairs_.size()); }
   /// Bytes of the model's arrays in their block (the whole block when the model owns it).
   size_t bytes() const { return bytes_; }
   /// Bytes a NarrowPhaseWorkspace for this model takes (its block: what NarrowPhaseWorkspace::Init
@@ -208,6 +217,8 @@ class NarrowPhaseModel {
   friend struct NarrowPhaseInternal;
   friend struct CreaseSweep;
   friend struct CreaseSweepAvx512;
+  friend Status FoldPairs(const NarrowPhaseModel& model, const SphereArrays& spheres, float closing, Collision* out,
+                          uint32_t capacity, uint32_t* count);
 
  private:
   uint64_t id_ = 0;
@@ -257,6 +268,15 @@ class NarrowPhaseModel {
   // bind radius. Per block of near rows: a lower bound on the bind distance of its pairs not near
   // (near_gap_), and when the two patches' references differ the pair (r_q, r_p) with its reach for q
   // (near_cross_, near_cross_reach_; kNone: same reference).
+  // The restricted path (kCrease with sphere_pairs): per sphere the patches holding a triangle of its
+  // region (CSR sphere_patch_offsets_ #S+1, sphere_patches_ ascending) and per patch those spheres as bits
+  // (patch_sphere_bits_: #C rows of ⌈#S/64⌉ words), the patches holding a contact of the bind pose
+  // (bind_patches_, ascending; always swept, and patch_bind_ per patch), and the excluded pairs with their
+  // bind centres' distance (fold_pairs_: a << 16 | b, fold_bind_distance_), what FoldPairs compares.
+  BlockVector<uint32_t> sphere_patch_offsets_, sphere_patches_, bind_patches_, fold_pairs_;
+  BlockVector<uint64_t> patch_sphere_bits_;
+  BlockVector<uint8_t> patch_bind_;
+  BlockVector<float> fold_bind_distance_;
   uint32_t cull_joint_count_ = 0;
   float cull_bind_extent_ = 0.0f;  // the bind pose's largest |coordinate|: a scale of the cull's rounding margin
   BlockVector<uint32_t> cull_pairs_, cl_ref_, cl_cull_offsets_, cl_cull_pair_, near_cross_;
@@ -387,6 +407,12 @@ class NarrowPhaseWorkspace {
   // they are built when a pair first needs them).
   BlockVector<float> cull_t_, cull_f_, cull_smin_, cull_e_;
   BlockVector<uint32_t> patch_tri_frame_;
+  // The restricted path: per patch / per sphere the stamp of the last job that swept it / listed it; per
+  // sphere its partners in the job's pairs as bits (sphere_partner_bits_, #S rows of ⌈#S/64⌉ words, cleared
+  // before Run returns) and per swept patch the union of its spheres' rows (patch_partner_bits_, #C rows).
+  BlockVector<uint32_t> patch_active_, sphere_active_;
+  BlockVector<uint64_t> sphere_partner_bits_, patch_partner_bits_;
+  uint32_t active_stamp_ = 0;
   uint32_t frame_ = 0, prepared_used_ = 0;
   CreaseScratch crease_scratch_;
 };
@@ -423,7 +449,8 @@ struct NarrowPhaseJob {
   /// [opt] restrict the candidates to these sphere pairs (e.g. a DetectJob's output — then only the
   /// contacts behind the proxy's pairs are searched); null = every sphere pair (the exact answer). List
   /// each pair once, as DetectJob does: a pair listed twice is searched twice and its contacts are
-  /// reported twice.
+  /// reported twice (kCrease: the patches behind the listed spheres are swept once, whatever the listing,
+  /// so each contact is reported once; see Exclusions::kCrease).
   const Collision* sphere_pairs = nullptr;
   uint32_t sphere_pair_count = 0;         ///< records in `sphere_pairs`
   TriangleContact* output = nullptr;      ///< [opt when capacity == 0] caller buffer of `capacity` records
@@ -458,8 +485,7 @@ struct NarrowPhaseJob {
   bool Validate() const { return Check() == Status::kOk; }
   /// kErrorNullArgument (model, workspace, count or positions.data null; output null with capacity > 0;
   /// sphere_pairs null with sphere_pair_count > 0), kErrorInvalidJob (model or workspace not
-  /// initialised, unknown exclusions; kCrease with sphere_pairs or a crease below the asset's or not
-  /// finite; a crease or joint_matrices with exclusions other than kCrease), kErrorMissingField (kCrease on an asset
+  /// initialised, unknown exclusions; kCrease with a crease below the asset's or not finite; a crease or joint_matrices with exclusions other than kCrease), kErrorMissingField (kCrease on an asset
   /// without the crease rule; joint_matrices on an asset without skin weights per vertex: re-bake),
   /// kErrorJointCount (joint_count != NarrowPhaseModel::joint_count()), kErrorAlignment (joint_matrices
   /// not 4-byte aligned), kErrorWorkspaceModel (the workspace was made for another model), kErrorAlignment (positions not 4-byte aligned), kErrorStride, kErrorVertexCount,
@@ -473,5 +499,21 @@ struct NarrowPhaseJob {
   /// stats complete.
   Status Run() const;
 };
+
+/// The proxy's folds: the sphere pairs the broad phase never reports (Asset.excluded_pairs, neighbours
+/// along the skeleton) whose centres are now closer than at bind pose (Asset.spheres) by more than
+/// `closing` — a joint bent so that the skin on either side may meet (the walking arm on the flank, the
+/// thigh on the belly). With a DetectJob's pairs they are the sphere pairs of the restricted skin
+/// contacts (NarrowPhaseJob, Exclusions::kCrease with sphere_pairs), measured against the skin's own
+/// contacts in docs/evaluation.md. `spheres`: the frame's refit spheres (\#S, model space, the asset's
+/// units); `closing` [Units: model; Limit: finite, >= 0]. Writes up to `capacity` records to `out` (a < b,
+/// ascending; depth rA + rB − ‖cA − cB‖ as DetectJob's, chains 0) and the number found to *count.
+/// Returns kErrorNullArgument (count null, out null with capacity > 0, a null sphere array),
+/// kErrorInvalidJob (model not initialised or without the crease rule, closing not finite or < 0),
+/// kErrorCountMismatch (spheres.count != \#S), kOk, or kOkTruncated (more than `capacity`: the first
+/// `capacity` written, *count the number found). A NaN centre compares false: its pairs are not reported.
+/// Cost: one distance per excluded pair (fold_pair_count()), no allocation. Thread safety: reads only.
+Status FoldPairs(const NarrowPhaseModel& model, const SphereArrays& spheres, float closing, Collision* out,
+                 uint32_t capacity, uint32_t* count);
 
 }  // namespace spherechain::runtime
