@@ -49,7 +49,7 @@
   }
 
   /// The restricted path: patches a and b hold triangles behind the two spheres of a listed pair, or both
-  /// hold a contact of the bind pose.
+  /// behind one listed sphere, or both hold a contact of the bind pose.
   static bool Listed(const NarrowPhaseModel& m, const NarrowPhaseWorkspace& w, uint32_t a, uint32_t b) {
     if (m.patch_bind_[a] & m.patch_bind_[b]) return true;
     const size_t words = SphereWords(m);
@@ -1020,7 +1020,8 @@
       }
       stamp = w.active_stamp_;
       const size_t words = SphereWords(m);
-      // Each patch behind a listed sphere: swept, its partner bits the union of its spheres' partners.
+      // Each patch behind a listed sphere: swept, its partner bits the union of its spheres' partners (a
+      // listed sphere is its own partner).
       auto patch = [&](uint32_t p, const uint64_t* partners) {
         uint64_t* bits = &w.patch_partner_bits_[p * words];
         if (w.patch_active_[p] != stamp) {
@@ -1035,6 +1036,8 @@
         const uint32_t a = job.sphere_pairs[i].a, b = job.sphere_pairs[i].b;
         w.sphere_partner_bits_[a * words + b / 64] |= uint64_t{1} << (b % 64);
         w.sphere_partner_bits_[b * words + a / 64] |= uint64_t{1} << (a % 64);
+        w.sphere_partner_bits_[a * words + a / 64] |= uint64_t{1} << (a % 64);  // a listed sphere with itself
+        w.sphere_partner_bits_[b * words + b / 64] |= uint64_t{1} << (b % 64);
       }
       for (uint32_t i = 0; i < job.sphere_pair_count; ++i)
         for (uint32_t s : {uint32_t{job.sphere_pairs[i].a}, uint32_t{job.sphere_pairs[i].b}}) {

@@ -55,12 +55,12 @@ enum class Exclusions : uint8_t {
   /// boxes tested, crease_folds the intersecting pairs a wider job crease skipped. Optional penetration
   /// depths (NarrowPhaseJob::depths). With sphere_pairs (the restricted path, behind the proxy): the same
   /// rule, but only for the pairs of patches (16 triangles, grown over the bind surface) where one patch
-  /// holds a triangle behind sphere a and the other one behind sphere b of a listed pair (a, b) (the
-  /// model's regions: reach or surrounding), and the pairs of patches that both hold a contact of the bind
-  /// pose itself — a subset of the exact answer, each contact once, in the sweep's order. So a listed
-  /// pair finds at least every contact between a triangle behind a and one behind b, whichever spheres own
-  /// them; a contact within one sphere's region is found when a listed pair's two regions both reach it.
-  /// Pass the proxy's pairs and its folds (FoldPairs: the neighbours it never reports that came together).
+  /// holds a triangle behind sphere a and the other one behind sphere b of a listed pair (a, b), or both
+  /// hold triangles behind one listed sphere (the model's regions: reach or surrounding), and the pairs of
+  /// patches that both hold a contact of the bind pose itself — a subset of the exact answer, each contact
+  /// once, in the sweep's order. So a listed pair finds at least every contact between a triangle behind a
+  /// and one behind b, or two behind the same one of them, whichever spheres own them. Pass the proxy's
+  /// pairs and its folds (FoldPairs: the neighbours it never reports that came together).
   kCrease = 2,
 };
 
