@@ -146,6 +146,40 @@ inline const char* RunNarrowPhaseSequence(const runtime::AssetView& view, const 
         if (Failed(job.Run())) return "NarrowPhaseJob kCrease with joint matrices failed on valid arguments";
         if (culled.contacts != stats.contacts) return "NarrowPhaseJob kCrease: the joint-matrix cull lost a bind contact";
       }
+      if (ex == Exclusions::kCrease && !heavy && s == Status::kOk) {
+        // The restricted path: behind the folds of the current spheres (the bind pose's after Init, at closing
+        // 0: the excluded pairs that are closer than their bind distance) and a few neighbouring index pairs:
+        // a subset of the contacts above, each once, the listing accepted as documented.
+        std::vector<Collision> pairs(size_t{np.fold_pair_count()} + 8);
+        uint32_t folds = 0;
+        if (FoldPairs(np, ws.spheres(), 0.0f, pairs.data(), np.fold_pair_count(), &folds) != Status::kOk)
+          return "FoldPairs failed on valid arguments";
+        if (folds > np.fold_pair_count()) return "FoldPairs found more folds than excluded pairs";
+        for (uint32_t i = 0; i < folds; ++i)
+          if (!(pairs[i].a < pairs[i].b) || !np.IsExcluded(pairs[i].a, pairs[i].b)) return "FoldPairs: a fold not an excluded a < b";
+        uint32_t listed = folds;
+        for (uint32_t a = 0; a + 1 < S && listed < pairs.size(); a += 1 + S / 8)
+          pairs[listed++] = Collision{static_cast<uint16_t>(a), static_cast<uint16_t>(a + 1), 0.0f, 0u};
+        job.sphere_pairs = pairs.data();
+        job.sphere_pair_count = listed;
+        uint32_t m = ~0u;
+        NarrowPhaseStats restricted;
+        job.count = &m;
+        job.stats = &restricted;
+        const Status rs = job.Run();
+        if (rs != Status::kOk && rs != Status::kOkTruncated) return "NarrowPhaseJob kCrease behind pairs failed on valid arguments";
+        if (restricted.contacts > stats.contacts) return "NarrowPhaseJob kCrease behind pairs found more than unrestricted";
+        std::set<std::pair<uint32_t, uint32_t>> once;
+        for (uint32_t i = 0; i < m; ++i) {
+          const std::pair<uint32_t, uint32_t> k{std::min(out[i].triangle_a, out[i].triangle_b), std::max(out[i].triangle_a, out[i].triangle_b)};
+          if (!seen.count(k)) return "NarrowPhaseJob kCrease behind pairs: a contact the unrestricted job did not report";
+          if (!once.insert(k).second) return "NarrowPhaseJob kCrease behind pairs: a triangle pair reported twice";
+        }
+        job.sphere_pairs = nullptr;
+        job.sphere_pair_count = 0;
+        job.count = &n;
+        job.stats = &stats;
+      }
       if (ex == Exclusions::kCrease && crease_ran) *crease_ran = true;
     }
   }
