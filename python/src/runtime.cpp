@@ -694,7 +694,7 @@ The proxy's folds (runtime FoldPairs): the sphere pairs detect() never reports (
 neighbours) whose centres are now closer than at bind pose by more than `closing` [source units, finite,
 >= 0], from the current spheres (the last refit). With detect()'s pairs they are what
 narrow_phase(exclusions="crease", pairs=...) searches behind, as `play --narrow-behind` does with closing
-0.5 x Model.contact_margin and detect("m2", margin=1.5 x it, fold_margin=the same). Returns a new numpy.ndarray of PAIR_DTYPE (a < b; depth rA + rB − |cA −
+2 x Model.contact_margin and detect("m2", margin=1.5 x it, fold_margin=the same). Returns a new numpy.ndarray of PAIR_DTYPE (a < b; depth rA + rB − |cA −
 cB|; chains 0). Raises ValueError (closing), StatusError (kErrorInvalidJob: an asset without the crease rule).
 Cost: one distance per excluded pair; builds the narrow phase's model on first use.
 )doc")

@@ -93,7 +93,7 @@ def test_narrow_phase_equals_play(creature):
     crease = ws.narrow_phase(positions)
     margin = ws.model.contact_margin
     wide = ws.detect("m2", margin=1.5 * margin, fold_margin=None if ws.model.fold_margin is None else 1.5 * margin)
-    folds = ws.fold_pairs(0.5 * margin)
+    folds = ws.fold_pairs(2 * margin)
     assert folds.dtype == spherechain.PAIR_DTYPE and (folds["a"] < folds["b"]).all()
     assert len(ws.fold_pairs(1e6)) == 0, "no pair closes by a kilometre"
     restricted = ws.narrow_phase(positions, exclusions="crease", pairs=np.concatenate([wide, folds]), regions="reach")

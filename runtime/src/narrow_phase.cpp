@@ -816,8 +816,7 @@ void NarrowPhaseWorkspace::ForEachArray(F&& f) {
     for (int k = 0; k < 3; ++k) f(l->lo[k]), f(l->hi[k]);
   }
   f(patch_box_), f(group_box_), f(sweep_), f(sweep_box_), f(sweep_hits_), f(patch_tri_box_), f(tri_prepared_), f(tri_frame_);
-  f(cull_t_), f(cull_f_), f(cull_smin_), f(cull_e_), f(patch_tri_frame_), f(patch_active_), f(sphere_active_);
-  f(sphere_partner_bits_), f(patch_partner_bits_);
+  f(cull_t_), f(cull_f_), f(cull_smin_), f(cull_e_), f(patch_tri_frame_), f(patch_active_), f(patch_partner_bits_);
   crease_scratch_.ForEachArray(f);
 }
 
@@ -975,6 +974,7 @@ Status NarrowPhaseJob::Run() const {
 
 Status FoldPairs(const NarrowPhaseModel& model, const SphereArrays& spheres, float closing, Collision* out,
                  uint32_t capacity, uint32_t* count) {
+  if (count) *count = 0;
   if (!count || (!out && capacity > 0) || !spheres.x || !spheres.y || !spheres.z || !spheres.r)
     return Status::kErrorNullArgument;
   if (!model.initialized() || !model.has_crease() || !std::isfinite(closing) || closing < 0.0f)

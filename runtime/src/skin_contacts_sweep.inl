@@ -987,8 +987,6 @@
     w.cull_e_.assign(m.cull_joint_count_ ? PatchCount(m) : 0, 0.0f);
     w.patch_tri_frame_.assign(PatchCount(m), 0u);
     w.patch_active_.assign(PatchCount(m), 0u);
-    w.sphere_active_.assign(m.sphere_count_, 0u);
-    w.sphere_partner_bits_.assign(size_t{m.sphere_count_} * SphereWords(m), 0u);
     w.patch_partner_bits_.assign(size_t{PatchCount(m)} * SphereWords(m), 0u);
     w.active_stamp_ = 0;
     return w.crease_scratch_.Init(m.crease_graph_, arena);
@@ -1015,38 +1013,33 @@
     if (job.sphere_pairs) {
       if (++w.active_stamp_ == 0) {  // stamps wrap: forget them all
         std::fill(w.patch_active_.begin(), w.patch_active_.end(), 0u);
-        std::fill(w.sphere_active_.begin(), w.sphere_active_.end(), 0u);
         w.active_stamp_ = 1;
       }
       stamp = w.active_stamp_;
       const size_t words = SphereWords(m);
-      // Each patch behind a listed sphere: swept, its partner bits the union of its spheres' partners (a
-      // listed sphere is its own partner).
-      auto patch = [&](uint32_t p, const uint64_t* partners) {
+      // Each patch behind a listed sphere: swept, its partner bits the spheres listed with one of its
+      // spheres, and those spheres themselves (a listed sphere is its own partner).
+      auto patch = [&](uint32_t p) -> uint64_t* {
         uint64_t* bits = &w.patch_partner_bits_[p * words];
         if (w.patch_active_[p] != stamp) {
           ++swept;
           w.patch_active_[p] = stamp;
           std::fill(bits, bits + words, uint64_t{0});
         }
-        if (partners)
-          for (size_t k = 0; k < words; ++k) bits[k] |= partners[k];
+        return bits;
       };
       for (uint32_t i = 0; i < job.sphere_pair_count; ++i) {
-        const uint32_t a = job.sphere_pairs[i].a, b = job.sphere_pairs[i].b;
-        w.sphere_partner_bits_[a * words + b / 64] |= uint64_t{1} << (b % 64);
-        w.sphere_partner_bits_[b * words + a / 64] |= uint64_t{1} << (a % 64);
-        w.sphere_partner_bits_[a * words + a / 64] |= uint64_t{1} << (a % 64);  // a listed sphere with itself
-        w.sphere_partner_bits_[b * words + b / 64] |= uint64_t{1} << (b % 64);
-      }
-      for (uint32_t i = 0; i < job.sphere_pair_count; ++i)
-        for (uint32_t s : {uint32_t{job.sphere_pairs[i].a}, uint32_t{job.sphere_pairs[i].b}}) {
-          if (w.sphere_active_[s] == stamp) continue;
-          w.sphere_active_[s] = stamp;
-          for (uint32_t k = m.sphere_patch_offsets_[s]; k < m.sphere_patch_offsets_[s + 1]; ++k)
-            patch(m.sphere_patches_[k], &w.sphere_partner_bits_[s * words]);
+        const uint32_t pair[2] = {job.sphere_pairs[i].a, job.sphere_pairs[i].b};
+        for (int side = 0; side < 2; ++side) {
+          const uint32_t s = pair[side], t = pair[1 - side];
+          for (uint32_t k = m.sphere_patch_offsets_[s]; k < m.sphere_patch_offsets_[s + 1]; ++k) {
+            uint64_t* bits = patch(m.sphere_patches_[k]);
+            bits[t / 64] |= uint64_t{1} << (t % 64);
+            bits[s / 64] |= uint64_t{1} << (s % 64);
+          }
         }
-      for (uint32_t p : m.bind_patches_) patch(p, nullptr);
+      }
+      for (uint32_t p : m.bind_patches_) patch(p);
       active = w.patch_active_.data();
     }
     const bool finite = (active && swept == 0) ||  // nothing to sweep: no vertex read, no contact
@@ -1067,12 +1060,6 @@
                                   }
                                   job.output[written++] = TriangleContact{t, u, sa, sb};
                                 });
-    if (job.sphere_pairs) {  // the partner bits, cleared for the next job
-      const size_t words = SphereWords(m);
-      for (uint32_t i = 0; i < job.sphere_pair_count; ++i)
-        for (uint32_t s : {uint32_t{job.sphere_pairs[i].a}, uint32_t{job.sphere_pairs[i].b}})
-          std::fill_n(&w.sphere_partner_bits_[s * words], words, uint64_t{0});
-    }
     if (!finite) return Status::kErrorNonFinitePositions;
     st.candidate_pairs = c.patch_pairs;
     st.box_tests = c.box_tests;

@@ -667,7 +667,7 @@ static void TestReal(const char* path) {
       CHECK(n_folds == 0);
       if (behind_pairs && every && behind) {
         memcpy(behind_pairs, m2, sizeof(sc_pair) * n_m2);
-        CHECK_STATUS(sc_fold_pairs(model, ws, 0.5f * info.contact_margin, behind_pairs + n_m2, 1024, &n_folds), SC_OK);
+        CHECK_STATUS(sc_fold_pairs(model, ws, 2.0f * info.contact_margin, behind_pairs + n_m2, 1024, &n_folds), SC_OK);
         for (k = 0; k < n_folds; ++k) CHECK(behind_pairs[n_m2 + k].a < behind_pairs[n_m2 + k].b);
         CHECK_STATUS(sc_narrow_phase(model, ws, deformed, vertex_count, 12, &crease, every, NULL, n_crease, &count),
                      SC_OK);

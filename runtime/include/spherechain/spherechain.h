@@ -334,7 +334,7 @@ SC_API sc_status sc_detect(const sc_model* model, sc_workspace* workspace, sc_de
 /// neighbours) whose centres are now closer than at bind pose by more than `closing` — a bent joint, where
 /// the skin on either side may meet. With sc_detect()'s pairs they are the `sphere_pairs` of a
 /// #SC_EXCLUSIONS_CREASE narrow phase behind the proxy (`spherechain play --narrow-behind` uses sc_detect's
-/// margin 1.5 × the contact margin and `closing` 0.5 × it).
+/// margin 1.5 × the contact margin and `closing` 2 × it).
 /// @param model      the asset's model, created with #SC_MODEL_NARROW_PHASE on an asset with the crease rule.
 /// @param workspace  the character, made for `model` (its current spheres read).
 /// @param closing    [Units: source] [Limit: finite, >= 0].
@@ -376,7 +376,8 @@ typedef struct sc_narrow_phase_options {
   /// #SC_ERROR_INVALID_JOB]
   float crease;
   /// [opt] restrict the search to these sphere pairs (e.g. sc_detect()'s output: only the contacts behind
-  /// the broad phase's pairs); NULL = every sphere pair (the exact answer). Not with #SC_EXCLUSIONS_CREASE.
+  /// the broad phase's pairs); NULL = every sphere pair (the exact answer). With #SC_EXCLUSIONS_CREASE, the
+  /// skin behind them (see #SC_EXCLUSIONS_CREASE; add sc_fold_pairs()' folds).
   /// Only a, b are read [Limit: a < b < \#S].
   const sc_pair* sphere_pairs;
   uint32_t sphere_pair_count;  ///< records in sphere_pairs
@@ -428,8 +429,7 @@ typedef struct sc_contact_depth {
 /// @return #SC_OK; #SC_OK_TRUNCATED (`*count` > capacity); #SC_ERROR_NULL_ARGUMENT (model, workspace,
 ///         positions or count null; contacts null with capacity > 0; sphere_pairs null with a count > 0);
 ///         #SC_ERROR_WORKSPACE_MODEL; #SC_ERROR_INVALID_JOB (model created without #SC_MODEL_NARROW_PHASE,
-///         unknown exclusions, #SC_EXCLUSIONS_CREASE with sphere_pairs or with a crease below the asset's
-///         or not finite; joint_matrices with other exclusions); #SC_ERROR_MISSING_FIELD
+///         unknown exclusions, #SC_EXCLUSIONS_CREASE with a crease below the asset's or not finite; joint_matrices with other exclusions); #SC_ERROR_MISSING_FIELD
 ///         (#SC_EXCLUSIONS_CREASE on an asset without the crease rule; joint_matrices on one without skin
 ///         weights); #SC_ERROR_JOINT_COUNT; #SC_ERROR_NON_FINITE_JOINTS (a matrix holds a NaN or an infinity);
 ///         #SC_ERROR_ALIGNMENT; #SC_ERROR_STRIDE; #SC_ERROR_VERTEX_COUNT; #SC_ERROR_INDEX_OUT_OF_RANGE

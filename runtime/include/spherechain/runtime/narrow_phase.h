@@ -314,7 +314,8 @@ class NarrowPhaseModel {
 /// runtime::Workspace's: ~110 B per region triangle (a prepared triangle 64 B, a box 32 B, indices) +
 /// ~90 B per sphere + ~150 B per triangle and 17 B per vertex of the largest region (≈ 2.9 MB for
 /// MakeHuman's 26,756 triangles by that count); with the crease rule also ~100 B per triangle and ~45 B
-/// per welded vertex (7.6 MB in all for MakeHuman). Move-only; moving leaves the source uninitialised.
+/// per welded vertex (7.6 MB in all for MakeHuman), and 8·⌈\#S/64⌉ + 4 B per patch of 16 triangles (the
+/// restricted path's bits). Move-only; moving leaves the source uninitialised.
 /// Thread safety: one job at a time per workspace; different workspaces are independent, also when they
 /// share a model.
 class NarrowPhaseWorkspace {
@@ -407,11 +408,11 @@ class NarrowPhaseWorkspace {
   // they are built when a pair first needs them).
   BlockVector<float> cull_t_, cull_f_, cull_smin_, cull_e_;
   BlockVector<uint32_t> patch_tri_frame_;
-  // The restricted path: per patch / per sphere the stamp of the last job that swept it / listed it; per
-  // sphere its partners in the job's pairs as bits (sphere_partner_bits_, #S rows of ⌈#S/64⌉ words, cleared
-  // before Run returns) and per swept patch the union of its spheres' rows (patch_partner_bits_, #C rows).
-  BlockVector<uint32_t> patch_active_, sphere_active_;
-  BlockVector<uint64_t> sphere_partner_bits_, patch_partner_bits_;
+  // The restricted path: per patch the stamp of the last job that swept it, and for a swept patch the
+  // spheres listed with one of its spheres, and those spheres, as bits (patch_partner_bits_, #C rows of
+  // ⌈#S/64⌉ words).
+  BlockVector<uint32_t> patch_active_;
+  BlockVector<uint64_t> patch_partner_bits_;
   uint32_t active_stamp_ = 0;
   uint32_t frame_ = 0, prepared_used_ = 0;
   CreaseScratch crease_scratch_;
@@ -492,7 +493,8 @@ struct NarrowPhaseJob {
   /// kErrorIndexOutOfRange (a sphere_pairs record with a >= b or b >= \#S), else kOk.
   Status Check() const;
   /// Returns Check()'s error (outputs untouched); kErrorNonFinitePositions when a vertex of a
-  /// surrounding region (kCrease: of any triangle that is not degenerate by its indices) is NaN/Inf
+  /// surrounding region (kCrease: of any triangle that is not degenerate by its indices; with sphere_pairs,
+  /// of a patch the job sweeps — the others are not read) is NaN/Inf
   /// (count 0, stats zero); kErrorNonFiniteJoints when a joint matrix holds
   /// a NaN or Inf (count 0, stats zero); kOk; or kOkTruncated when more contacts than
   /// `capacity` exist: output holds the first `capacity` in the documented order, *count == capacity,
