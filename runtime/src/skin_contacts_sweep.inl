@@ -534,8 +534,9 @@
   /// of 4 patches 6 rows of 4) and its 16 triangle boxes (patch_tri_box_: 6 rows of 16, inverted padding)
   /// from them (cl_local_), each group's box (group_box_: 6 rows of #G), and the box of them all (lo, hi).
   /// False when a vertex is NaN or a box not finite (nothing reported).
-  /// `active` (null: every patch): a patch p with active[p] != stamp is not read: its box inverted (it meets
-  /// nothing), no triangle boxes; `lo`, `hi` bound the patches read (at least one).
+  /// kRestricted: a patch p with active[p] != stamp is not read: its box inverted (it meets nothing), no
+  /// triangle boxes; `lo`, `hi` bound the patches read (at least one). Else every patch (active unread).
+  template <bool kRestricted>
   static bool Boxes(const NarrowPhaseModel& m, NarrowPhaseWorkspace& w, const char* base, size_t stride, float lo[3],
                     float hi[3], bool tri_boxes, const uint32_t* active, uint32_t stamp) {
     const uint32_t C = PatchCount(m), G = GroupCount(m);
@@ -552,8 +553,8 @@
       const uint32_t nv = m.cl_vert_offsets_[p + 1] - m.cl_vert_offsets_[p];
       const uint8_t* corner = &m.cl_local_[3 * kPatch * size_t{p}];
       float* tb = &w.patch_tri_box_[6 * kPatch * size_t{p}];
-      const bool skip = active && active[p] != stamp;
-      if (p + kAhead < C && (!active || active[p + kAhead] == stamp))  // the positions are the caller's: fetched
+      const bool skip = kRestricted && active[p] != stamp;
+      if (p + kAhead < C && (!kRestricted || active[p + kAhead] == stamp))  // the positions are the caller's: fetched
         for (uint32_t k = m.cl_vert_offsets_[p + kAhead]; k < m.cl_vert_offsets_[p + kAhead + 1]; ++k)  // ahead
           _mm_prefetch(base + stride * m.cl_vert_[k], _MM_HINT_T0);
       __m128 vl = _mm_set1_ps(kInfinity), vh = _mm_set1_ps(-kInfinity);
@@ -608,7 +609,7 @@
       float* tb = &w.patch_tri_box_[6 * kPatch * size_t{p}];
       float bl[3] = {kInfinity, kInfinity, kInfinity}, bh[3] = {-kInfinity, -kInfinity, -kInfinity};
       bool nan = false;  // std::min/max would drop a NaN
-      const bool skip = active && active[p] != stamp;
+      const bool skip = kRestricted && active[p] != stamp;
       for (uint32_t i = 0; i < (skip ? 0 : nv); ++i) {
         const float* q = reinterpret_cast<const float*>(base + stride * m.cl_vert_[first + i]);
         for (int k = 0; k < 3; ++k) bl[k] = std::min(bl[k], q[k]), bh[k] = std::max(bh[k], q[k]), nan |= q[k] != q[k];
@@ -794,7 +795,9 @@
   }
 
   /// One frame: patch boxes, the sweep, every pair. False (nothing reported) when a patch vertex is NaN/Inf.
-  template <class OnContact>
+  /// kRestricted: only the patches with active[p] == stamp, and of their pairs those Listed (the restricted
+  /// path); else every patch (active unread).
+  template <bool kRestricted, class OnContact>
   static bool Collide(const NarrowPhaseModel& m, NarrowPhaseWorkspace& w, const char* base, size_t stride,
                       float crease, const float* joints, const uint32_t* active, uint32_t stamp, Counters* c,
                       OnContact&& on_contact) {
@@ -809,8 +812,8 @@
     float lo[3], hi[3];
     const bool lazy = joints != nullptr;
     // Triangle boxes when a pair first needs them: with the joint-matrix cull, and on the restricted path.
-    const bool lazy_boxes = lazy || active;
-    if (!Boxes(m, w, base, stride, lo, hi, !lazy_boxes, active, stamp)) return false;
+    const bool lazy_boxes = lazy || kRestricted;
+    if (!Boxes<kRestricted>(m, w, base, stride, lo, hi, !lazy_boxes, active, stamp)) return false;
     float margin = 0.0f;
     if (lazy) {  // float skinning's rounding grows with every term it adds: frame, bind pose and translations
       margin = std::max(JointFrame(m, w, joints), m.cull_bind_extent_);
@@ -851,7 +854,7 @@
         const uint32_t bit = static_cast<uint32_t>(__builtin_ctz(overlap));
         const uint32_t a = kGroup * g + bit % kGroup, b = kGroup * h + bit / kGroup;
         const uint32_t block = NearBlock(m, a, b);
-        if ((active && !Listed(m, w, a, b)) || block == kAllNear) continue;
+        if ((kRestricted && !Listed(m, w, a, b)) || block == kAllNear) continue;
         if (block == kFarPair) {
           Pair(m, w, base, stride, a, b, kFar, m.cl_valid_[a] | m.cl_valid_[b] << 16, crease, lazy_boxes, c, on_contact);
         } else if (lazy && JointCulled(m, w, a, b, block, margin)) {
@@ -913,7 +916,7 @@
     NarrowPhaseWorkspace w;
     if (Status s = InitWorkspace(w, m, nullptr); s != Status::kOk) return s;
     Counters c;
-    Collide(m, w, reinterpret_cast<const char*>(bind->data()), 12, m.crease_graph_.crease(), nullptr, nullptr, 0, &c,
+    Collide<false>(m, w, reinterpret_cast<const char*>(bind->data()), 12, m.crease_graph_.crease(), nullptr, nullptr, 0, &c,
             [&](uint32_t t, uint32_t u) { m.bind_contacts_.push_back(uint64_t{std::min(t, u)} << 32 | std::max(t, u)); });
     std::sort(m.bind_contacts_.begin(), m.bind_contacts_.end());
     BuildRestricted(m, a);
@@ -1042,24 +1045,25 @@
       for (uint32_t p : m.bind_patches_) patch(p);
       active = w.patch_active_.data();
     }
-    const bool finite = (active && swept == 0) ||  // nothing to sweep: no vertex read, no contact
-                        Collide(m, w, base, stride, crease, job.joint_matrices, active, stamp,
-                                &c, [&](uint32_t t, uint32_t u) {
-                                  st.bind_contacts += m.IntersectsAtBind(t, u);
-                                  if (written >= job.capacity) return;
-                                  uint16_t sa = m.tri_sphere_[t], sb = m.tri_sphere_[u];
-                                  if (sa > sb || (sa == sb && t > u)) std::swap(sa, sb), std::swap(t, u);
-                                  if (job.depths) {
-                                    const float* pa[3];
-                                    const float* pb[3];
-                                    for (int j = 0; j < 3; ++j) {
-                                      pa[j] = reinterpret_cast<const float*>(base + stride * m.tri_v_[3 * size_t{t} + j]);
-                                      pb[j] = reinterpret_cast<const float*>(base + stride * m.tri_v_[3 * size_t{u} + j]);
-                                    }
-                                    ContactDepthOf(pa, pb, &job.depths[written]);
-                                  }
-                                  job.output[written++] = TriangleContact{t, u, sa, sb};
-                                });
+    auto on_contact = [&](uint32_t t, uint32_t u) {
+      st.bind_contacts += m.IntersectsAtBind(t, u);
+      if (written >= job.capacity) return;
+      uint16_t sa = m.tri_sphere_[t], sb = m.tri_sphere_[u];
+      if (sa > sb || (sa == sb && t > u)) std::swap(sa, sb), std::swap(t, u);
+      if (job.depths) {
+        const float* pa[3];
+        const float* pb[3];
+        for (int j = 0; j < 3; ++j) {
+          pa[j] = reinterpret_cast<const float*>(base + stride * m.tri_v_[3 * size_t{t} + j]);
+          pb[j] = reinterpret_cast<const float*>(base + stride * m.tri_v_[3 * size_t{u} + j]);
+        }
+        ContactDepthOf(pa, pb, &job.depths[written]);
+      }
+      job.output[written++] = TriangleContact{t, u, sa, sb};
+    };
+    const bool finite = active ? swept == 0 ||  // nothing to sweep: no vertex read, no contact
+                                     Collide<true>(m, w, base, stride, crease, job.joint_matrices, active, stamp, &c, on_contact)
+                               : Collide<false>(m, w, base, stride, crease, job.joint_matrices, nullptr, 0, &c, on_contact);
     if (!finite) return Status::kErrorNonFinitePositions;
     st.candidate_pairs = c.patch_pairs;
     st.box_tests = c.box_tests;
