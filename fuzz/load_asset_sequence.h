@@ -162,6 +162,8 @@ inline const char* RunNarrowPhaseSequence(const runtime::AssetView& view, const 
           pairs[listed++] = Collision{static_cast<uint16_t>(a), static_cast<uint16_t>(a + 1), 0.0f, 0u};
         job.sphere_pairs = pairs.data();
         job.sphere_pair_count = listed;
+        job.joint_matrices = nullptr;  // the cull's identity matrices above are gone with their block
+        job.joint_count = 0;
         uint32_t m = ~0u;
         NarrowPhaseStats restricted;
         job.count = &m;
