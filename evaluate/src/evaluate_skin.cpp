@@ -59,7 +59,7 @@ import::Status MeasureSkinContacts(Context& c, const playback::SessionFrame& fr,
   runtime::NarrowPhaseStats behind_stats;
   behind.stats = &behind_stats;
   const auto t1 = std::chrono::steady_clock::now();
-  runtime::Status bs = playback::BehindPairs(c.view, c.session.model(), c.session.workspace(), c.session.reach_model(),
+  runtime::Status bs = playback::BehindPairs(c.view, c.session.model(), c.session.workspace(), &c.session.reach_model(),
                                              defaults.narrow_behind_margin * margin, defaults.fold_closing * margin,
                                              &c.behind, &row->restricted_pairs, &row->restricted_folds);
   if (runtime::Succeeded(bs)) {

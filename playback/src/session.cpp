@@ -106,7 +106,7 @@ Status Session::Init(const runtime::AssetView& view, const Mesh& mesh, const Ses
   if (o.narrow != SessionNarrow::kNone) {
     if (behind)  // M2's pairs, then (the crease rule) the folds: BehindPairs
       out_behind_.resize(size_t{runtime::DetectBound(view, runtime::DetectMethod::kM2)} + narrow_model().fold_pair_count());
-    if (o.narrow != SessionNarrow::kNone && o.crease && narrow_model().has_crease())
+    if (o.crease && narrow_model().has_crease())
       exclusions_ = runtime::Exclusions::kCrease;
     contacts_.resize(o.contact_capacity);
     if (exclusions_ == runtime::Exclusions::kCrease) depths_.resize(o.contact_capacity);
@@ -253,35 +253,20 @@ Status Session::Narrow(const float* positions, const float* joint_matrices) {
   const bool crease = exclusions_ == runtime::Exclusions::kCrease;
   // Behind the spheres' pairs: M2 with the wider margin, then the narrow phase on those pairs (timed together).
   const bool behind = options_.narrow == SessionNarrow::kBehindM2;
-  runtime::DetectJob broad;
-  if (behind) {
-    broad.model = &model_;
-    broad.workspace = &workspace_;
-    broad.method = runtime::DetectMethod::kM2;
-    broad.output = out_behind_.data();
-    broad.capacity = static_cast<uint32_t>(out_behind_.size());
-    broad.count = &frame_.behind_pairs;
-    broad.margin = options_.narrow_behind_margin * model_.contact_margin();
-    // One margin for every pair: the fold margin only keeps the spheres alone from crying wolf at a folding
-    // joint, and the exact narrow phase behind them cannot cry wolf.
-    if (model_.fold_margin() >= 0.0f) broad.fold_margin = broad.margin;
-    job.sphere_pairs = out_behind_.data();
-    frame_.behind_folds = 0;
-  } else if (crease && joint_matrices && job.model->has_joint_cull()) {
+  if (!behind && crease && joint_matrices && job.model->has_joint_cull()) {
     // The frame was skinned by these matrices (Animation::Frame: linear blend of the mesh's own weights).
     job.joint_matrices = joint_matrices;
     job.joint_count = job.model->joint_count();
   }
   auto run = [&] {
-    if (behind && crease) {  // the skin's contacts behind M2's pairs and the proxy's folds
+    if (behind) {  // M2's pairs, and under the crease rule the proxy's folds
       const runtime::Status s =
-          BehindPairs(view_, model_, workspace_, *job.model, broad.margin, options_.fold_closing * model_.contact_margin(),
-                      &out_behind_, &frame_.behind_pairs, &frame_.behind_folds);
+          BehindPairs(view_, model_, workspace_, crease ? job.model : nullptr,
+                      options_.narrow_behind_margin * model_.contact_margin(),
+                      options_.fold_closing * model_.contact_margin(), &out_behind_, &frame_.behind_pairs,
+                      &frame_.behind_folds);
       if (runtime::Failed(s)) return s;
       job.sphere_pairs = out_behind_.data();
-      job.sphere_pair_count = frame_.behind_pairs;
-    } else if (behind) {
-      if (const runtime::Status s = broad.Run(); runtime::Failed(s)) return s;
       job.sphere_pair_count = frame_.behind_pairs;
     }
     return job.Run();
@@ -303,10 +288,11 @@ Status Session::Narrow(const float* positions, const float* joint_matrices) {
 }
 
 runtime::Status BehindPairs(const runtime::AssetView& view, const runtime::Model& model, runtime::Workspace& workspace,
-                            const runtime::NarrowPhaseModel& narrow, float margin, float closing,
+                            const runtime::NarrowPhaseModel* narrow, float margin, float closing,
                             std::vector<runtime::Collision>* out, uint32_t* count, uint32_t* folds) {
   *count = 0, *folds = 0;
-  const size_t need = size_t{runtime::DetectBound(view, runtime::DetectMethod::kM2)} + narrow.fold_pair_count();
+  const size_t need =
+      size_t{runtime::DetectBound(view, runtime::DetectMethod::kM2)} + (narrow ? narrow->fold_pair_count() : 0);
   if (out->size() < need) out->resize(need);
   runtime::DetectJob broad;
   broad.model = &model;
@@ -317,11 +303,15 @@ runtime::Status BehindPairs(const runtime::AssetView& view, const runtime::Model
   uint32_t pairs = 0;
   broad.count = &pairs;
   broad.margin = margin;
+  // One margin for every pair: the fold margin only keeps the spheres alone from crying wolf at a folding
+  // joint, and the exact narrow phase behind them cannot cry wolf.
   if (model.fold_margin() >= 0.0f) broad.fold_margin = margin;
   if (const runtime::Status s = broad.Run(); runtime::Failed(s)) return s;
-  const runtime::Status s = runtime::FoldPairs(narrow, workspace.spheres(), closing, out->data() + pairs,
-                                               static_cast<uint32_t>(out->size()) - pairs, folds);
-  if (runtime::Failed(s)) return s;
+  if (narrow) {
+    const runtime::Status s = runtime::FoldPairs(*narrow, workspace.spheres(), closing, out->data() + pairs,
+                                                 static_cast<uint32_t>(out->size()) - pairs, folds);
+    if (runtime::Failed(s)) return s;
+  }
   *count = pairs + *folds;
   return runtime::Status::kOk;
 }

@@ -114,24 +114,24 @@ struct SessionFrame {
   double refit_us = 0, detect_m1_us = 0, detect_m2_us = 0, narrow_us = 0;
 };
 
+/// The sphere pairs the narrow phase runs behind under SessionNarrow::kBehindM2 (and evaluate's measure of
+/// the restricted skin contacts), for the asset `view` of `model`: DetectJob M2 over `workspace`'s current
+/// spheres at `margin` [Units: model] (one margin for every pair: an asset's fold margin set to it), then,
+/// when `narrow` is given (the crease rule), runtime::FoldPairs(*narrow, the same spheres, `closing` [Units:
+/// model]) appended. `out` grows to DetectBound(M2) (+ narrow->fold_pair_count()) when smaller (allocates
+/// once); *count = the records written (M2's first, the *folds folds last; 0 without `narrow`). Returns the
+/// first failing job's status (DetectJob's, FoldPairs'), else kOk. Cost: one M2 detect and one distance per
+/// excluded pair.
+runtime::Status BehindPairs(const runtime::AssetView& view, const runtime::Model& model, runtime::Workspace& workspace,
+                            const runtime::NarrowPhaseModel* narrow, float margin, float closing,
+                            std::vector<runtime::Collision>* out, uint32_t* count, uint32_t* folds);
+
 /// The frame pipeline of one character, built once and stepped frame by frame (see the file comment).
 /// Ownership: owns its runtime models, workspaces and buffers; borrows the AssetView (its bytes) and the
 /// Mesh given to Init, which must outlive it and not move. Move-only. Thread safety: one call at a time;
 /// two sessions are independent. Cost: Init allocates (the models: NarrowPhaseModel::Init dominates, ~0.26 s
 /// for MakeHuman with the crease rule); a step skins the frame (O(Σ influences)) and runs the jobs, and
 /// allocates only when a buffer grows (grow_contacts, the first frame's positions).
-/// The sphere pairs the restricted skin contacts run behind (SessionNarrow::kBehindM2 with the crease rule,
-/// and evaluate's measure of it), for the asset `view` of `model`: DetectJob M2 over `workspace`'s current
-/// spheres at `margin` [Units: model]
-/// (one margin for every pair: an asset's fold margin set to it), then runtime::FoldPairs(`narrow`, the
-/// same spheres, `closing` [Units: model]) appended. `out` grows to DetectBound(M2) + narrow.fold_pair_count()
-/// when smaller (allocates once); *count = the records written (M2's first, *folds of them folds last).
-/// Returns the first failing job's status (DetectJob's, FoldPairs'), else kOk. Cost: one M2 detect and one
-/// distance per excluded pair.
-runtime::Status BehindPairs(const runtime::AssetView& view, const runtime::Model& model, runtime::Workspace& workspace,
-                            const runtime::NarrowPhaseModel& narrow, float margin, float closing,
-                            std::vector<runtime::Collision>* out, uint32_t* count, uint32_t* folds);
-
 class Session {
  public:
   Session() = default;
