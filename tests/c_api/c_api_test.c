@@ -458,6 +458,17 @@ static int SameContact(const sc_contact* x, const sc_contact* y) {
          x->sphere_b == y->sphere_b;
 }
 
+/* 1 when every one of some[0..n) is among all[0..n_all). */
+static int AllAmong(const sc_contact* some, uint32_t n, const sc_contact* all, uint32_t n_all) {
+  uint32_t i, j;
+  for (i = 0; i < n; ++i) {
+    int found = 0;
+    for (j = 0; j < n_all && !found; ++j) found = SameContact(some + i, all + j);
+    if (!found) return 0;
+  }
+  return 1;
+}
+
 static void TestReal(const char* path) {
   size_t size = 0;
   void* bytes = ReadFile(path, &size);
@@ -676,11 +687,7 @@ static void TestReal(const char* path) {
         CHECK_STATUS(sc_narrow_phase(model, ws, deformed, vertex_count, 12, &crease, behind, NULL, n_crease, &n_behind),
                      SC_OK);
         CHECK(n_behind > 0 && n_behind <= n_crease);
-        for (i = 0; i < n_behind; ++i) {
-          int found = 0;
-          for (j = 0; j < n_crease && !found; ++j) found = SameContact(behind + i, every + j);
-          CHECK(found);
-        }
+        CHECK(AllAmong(behind, n_behind, every, n_crease));
         printf("%s: behind the M2 pairs and %u folds, %u of the %u skin contacts\n", path, n_folds, n_behind, n_crease);
         crease.sphere_pairs = NULL;
         crease.sphere_pair_count = 0;
@@ -713,11 +720,7 @@ static void TestReal(const char* path) {
                                        &n_restricted),
                        SC_OK);
           CHECK(n_restricted > 0 && n_restricted <= n_asset);
-          for (i = 0; i < n_restricted; ++i) {
-            int found = 0;
-            for (j = 0; j < n_asset && !found; ++j) found = SameContact(contacts + i, all + j);
-            CHECK(found);
-          }
+          CHECK(AllAmong(contacts, n_restricted, all, n_asset));
         }
         /* Errors of the options: a NULL pair list with a count, a bad pair, unknown exclusions. */
         asset_pairs.sphere_pairs = NULL;
