@@ -4,17 +4,31 @@
 #   without the fuzz_ prefix). Builds the target (preset `fuzz`: clang, ASan + UBSan), then fuzzes for SECONDS
 #   on one core at low priority, from the seeds in fuzz/corpus/TARGET/ plus what earlier campaigns found in
 #   build/fuzz/work/TARGET/ (new inputs go there; crashes, timeouts, leaks and out-of-memory inputs to
-#   build/fuzz/artifacts/TARGET/). The limits (fuzz/README.md): 10 s per input, 2,048 MB RSS and per malloc,
-#   leaks checked (third-party leaks suppressed as in the asan suite: scripts/sanitizer/lsan.supp).
-#   Prints the campaign's line for fuzz/README.md: executions, exec/s, edges, time, crashes.
+#   build/fuzz/artifacts/TARGET/). A work folder that is missing or empty starts from the last saved campaign,
+#   fuzz/campaign/TARGET.tar.xz, when there is one. The limits (fuzz/README.md): 10 s per input, 2,048 MB RSS
+#   and per malloc, leaks checked (third-party leaks suppressed as in the asan suite:
+#   scripts/sanitizer/lsan.supp). The log's lines are prefixed by the seconds since the start.
+#   Prints the campaign's line for fuzz/README.md: executions, exec/s, edges, time, crashes, and the edges its
+#   last hour added (when it ran an hour or more).
+# Saving a campaign: scripts/fuzz.sh save TARGET
+#   merges build/fuzz/work/TARGET/ (libFuzzer -merge=1: the smallest set of its inputs with the same coverage)
+#   into fuzz/campaign/TARGET.tar.xz, so that the next campaign on any machine resumes from it.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if [ $# -lt 2 ]; then
-  echo "usage: scripts/fuzz.sh TARGET SECONDS [libFuzzer flags...]" >&2
+  echo "usage: scripts/fuzz.sh TARGET SECONDS [libFuzzer flags...] | scripts/fuzz.sh save TARGET" >&2
   exit 2
 fi
-name="${1#fuzz_}"
-seconds="$2"
+save=0
+if [ "$1" = save ]; then
+  save=1
+  name="${2#fuzz_}"
+  seconds=0
+else
+  name="${1#fuzz_}"
+  seconds="$2"
+  case "$seconds" in ''|*[!0-9]*) echo "scripts/fuzz.sh: SECONDS must be a whole number, not '$seconds'" >&2; exit 2 ;; esac
+fi
 shift 2
 case "$name" in
   load_asset) dict="" ;;
@@ -31,6 +45,7 @@ nice -n 19 cmake --build build/fuzz -j2 --target "fuzz_$name" >/dev/null
 
 work="build/fuzz/work/$name"
 artifacts="build/fuzz/artifacts/$name"
+saved="fuzz/campaign/$name.tar.xz"
 log="build/fuzz/logs/$name-$(date +%Y%m%d-%H%M%S).log"
 mkdir -p "$work" "$artifacts" "$(dirname "$log")"
 before=$(find "$artifacts" -type f | wc -l)
@@ -38,23 +53,51 @@ before=$(find "$artifacts" -type f | wc -l)
 export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:allocator_may_return_null=0}"
 export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
 export LSAN_OPTIONS="${LSAN_OPTIONS:-suppressions=$(pwd)/scripts/sanitizer/lsan.supp:print_suppressions=0}"
+
+if [ "$save" -eq 1 ]; then
+  if [ -z "$(ls -A "$work")" ]; then
+    echo "scripts/fuzz.sh save: $work is empty: no campaign to save" >&2
+    exit 1
+  fi
+  merged=$(mktemp -d)
+  trap 'rm -rf "$merged"' EXIT
+  # -merge=1 keeps, of the work folder and the seeds, the fewest inputs that reach every edge they reach.
+  nice -n 19 "build/fuzz/fuzz/fuzz_$name" -merge=1 -timeout=10 -rss_limit_mb=2048 -malloc_limit_mb=2048 \
+    "$merged" "$work" "fuzz/corpus/$name" >"$log" 2>&1 || { echo "scripts/fuzz.sh save: merge failed (log: $log)" >&2; exit 1; }
+  # The seeds are in the repository already: only what the campaign added is saved.
+  for f in fuzz/corpus/"$name"/*; do rm -f "$merged/$(sha1sum "$f" | cut -c1-40)"; done
+  mkdir -p fuzz/campaign
+  tar -C "$merged" -cJf "$saved.tmp" . && mv "$saved.tmp" "$saved"
+  echo "fuzz_$name: $(ls "$merged" | wc -l) inputs saved to $saved ($(du -k "$saved" | cut -f1) KB); log: $log"
+  exit 0
+fi
+if [ -z "$(ls -A "$work")" ] && [ -f "$saved" ]; then
+  tar -C "$work" -xJf "$saved"
+  echo "fuzz_$name: resuming from $saved ($(ls "$work" | wc -l) inputs)"
+fi
 flags=(-max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -malloc_limit_mb=2048 -detect_leaks=1
        -print_final_stats=1 -artifact_prefix="$artifacts/")
 [ -n "$dict" ] && flags+=(-dict="$dict")
 
 set +e
 start=$SECONDS
-nice -n 19 "build/fuzz/fuzz/fuzz_$name" "${flags[@]}" "$@" "$work" "fuzz/corpus/$name" >"$log" 2>&1
-rc=$?
+# Each line of the log prefixed by the seconds since the start (the edges of the last hour are read from them).
+nice -n 19 "build/fuzz/fuzz/fuzz_$name" "${flags[@]}" "$@" "$work" "fuzz/corpus/$name" 2>&1 |
+  while IFS= read -r line || [ -n "$line" ]; do printf '%d %s\n' "$((SECONDS - start))" "$line"; done >"$log"
+rc=${PIPESTATUS[0]}
 elapsed=$((SECONDS - start))
 set -e
 
 execs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | tail -1 | grep -o '[0-9]*$' || echo 0)
 rate=$(grep -o 'stat::average_exec_per_sec: *[0-9]*' "$log" | tail -1 | grep -o '[0-9]*$' || echo 0)
 edges=$(grep -o 'cov: [0-9]*' "$log" | tail -1 | grep -o '[0-9]*$' || echo 0)
-last_new=$(grep -E '#[0-9]+\s+(NEW|REDUCE)' "$log" | tail -1 | grep -o '^#[0-9]*' || echo "#0")
+last_new=$(grep -E '#[0-9]+\s+(NEW|REDUCE)' "$log" | tail -1 | grep -oE '#[0-9]+' | head -1 || echo "#0")
 found=$(( $(find "$artifacts" -type f | wc -l) - before ))
 echo "fuzz_$name: ${execs} executions, ${rate} exec/s, ${edges} edges, ${elapsed} s, ${found} new artifact(s) (exit $rc)"
 echo "  last new coverage or smaller input at execution ${last_new}; log: $log"
+if [ "$elapsed" -ge 3600 ]; then
+  hour_ago=$(awk -v t=$((elapsed - 3600)) '$1 <= t && match($0, /cov: [0-9]+/) { e = substr($0, RSTART + 5, RLENGTH - 5) } END { print e + 0 }' "$log")
+  echo "  edges in the last hour: ${hour_ago} -> ${edges} (+$((edges - hour_ago)))"
+fi
 [ "$found" -eq 0 ] || ls -1 "$artifacts"
 exit $rc
