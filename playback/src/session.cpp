@@ -53,6 +53,10 @@ const char* ToString(PlayRefit r) {
 
 Status Session::RuntimeFailure(const char* job, runtime::Status s) {
   runtime_status_ = s;
+  // A bind pose passing through itself beyond the narrow phase's budget is the asset's fault, not ours.
+  if (s == runtime::Status::kErrorBindPoseTangled)
+    return MakeError(Error::Code::kFormat, std::string(job) + ": " + runtime::ToString(s) +
+                                               " (re-bake it from a mesh that does not pass through itself)");
   return MakeError(Error::Code::kInternal, std::string(job) + ": " + runtime::ToString(s));
 }
 

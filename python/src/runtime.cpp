@@ -684,8 +684,9 @@ Raises TypeError (exclusions not a str, crease not a number), ValueError (a bad 
 crease not finite or <= 0, arrays of the wrong shape, dtype or alignment), StatusError (kErrorVertexCount,
 kErrorNonFinitePositions: a vertex of a surrounding region is NaN or inf; kErrorMissingField: "crease" on an
 asset without the rule, or matrices on one without skin weights; kErrorJointCount; kErrorNonFiniteJoints;
-kErrorInvalidJob: a crease or matrices with another exclusions, or a crease below the asset's; the message
-says which).
+kErrorInvalidJob: a crease or matrices with another exclusions, or a crease below the asset's;
+kErrorBindPoseTangled: the first call, on an asset whose bind pose passes through itself beyond the narrow
+phase's budget; the message says which).
 Cost: the runtime's narrow phase (docs/performance.md); the first call builds the narrow phase's model and
 scratch, and each call allocates the returned array.
 )doc")
@@ -695,7 +696,8 @@ neighbours) whose centres are now closer than at bind pose by more than `closing
 >= 0], from the current spheres (the last refit). With detect()'s pairs they are what
 narrow_phase(exclusions="crease", pairs=...) searches behind, as `play --narrow-behind` does with closing
 2 x Model.contact_margin and detect("m2", margin=1.5 x it, fold_margin=the same). Returns a new numpy.ndarray of PAIR_DTYPE (a < b; depth rA + rB − |cA −
-cB|; chains 0). Raises ValueError (closing), StatusError (kErrorInvalidJob: an asset without the crease rule).
+cB|; chains 0). Raises ValueError (closing), StatusError (kErrorInvalidJob: an asset without the crease rule;
+kErrorBindPoseTangled: its bind pose passes through itself beyond the narrow phase's budget).
 Cost: one distance per excluded pair; builds the narrow phase's model on first use.
 )doc")
       .def("reset", [](PyWorkspace& self) {

@@ -59,7 +59,8 @@ static_assert(Same(SC_ERROR_MISSING_FIELD, rt::Status::kErrorMissingField) &&
               Same(SC_ERROR_EXCLUDED_PAIRS, rt::Status::kErrorExcludedPairs) &&
               Same(SC_ERROR_CONTACT_MARGIN, rt::Status::kErrorContactMargin) &&
               Same(SC_ERROR_SKIN_WEIGHTS, rt::Status::kErrorSkinWeights) &&
-              Same(SC_ERROR_REGIONS, rt::Status::kErrorRegions));
+              Same(SC_ERROR_REGIONS, rt::Status::kErrorRegions) &&
+              Same(SC_ERROR_BIND_POSE_TANGLED, rt::Status::kErrorBindPoseTangled));
 
 // The C records are the runtime's, byte for byte: the jobs write into (and read from) the caller's arrays.
 static_assert(sizeof(sc_pair) == sizeof(rt::Collision) && offsetof(sc_pair, a) == offsetof(rt::Collision, a) &&
@@ -146,6 +147,8 @@ SC_API const char* sc_status_string(sc_status status) {
     case SC_ERROR_SKIN_WEIGHTS:
       return "SC_ERROR_SKIN_WEIGHTS: a sphere's joint weights are negative, not finite or do not sum to 1";
     case SC_ERROR_REGIONS: return "SC_ERROR_REGIONS: the asset's regions are malformed";
+    case SC_ERROR_BIND_POSE_TANGLED:
+      return "SC_ERROR_BIND_POSE_TANGLED: the bind pose passes through itself beyond the narrow phase's budget";
     default: return "unknown status";
   }
 }

@@ -6,6 +6,7 @@
 // NOLINT(build/header_guard): a fragment of a struct body, not a header.
   struct Counters {
     uint32_t patch_pairs = 0, box_tests = 0, tests = 0, degenerate = 0, folds = 0, contacts = 0, joint_culled = 0;
+    bool over_budget = false;  // Collide stopped at its budget (the bind pose's sweep in InitModel)
   };
 
   /// OverlapMask16 (file scope), in one AVX-512 compare per bound when this copy is built for it.
@@ -796,11 +797,13 @@
 
   /// One frame: patch boxes, the sweep, every pair. False (nothing reported) when a patch vertex is NaN/Inf.
   /// kRestricted: only the patches with active[p] == stamp, and of their pairs those Listed (the restricted
-  /// path); else every patch (active unread).
+  /// path); else every patch (active unread). `budget` (opt; InitModel's bind sweep): the sweep stops, with
+  /// c->over_budget set, once c's exact tests or pairs of patches pass budget's (checked per pair of groups:
+  /// at most 16 pairs of patches more).
   template <bool kRestricted, class OnContact>
   static bool Collide(const NarrowPhaseModel& m, NarrowPhaseWorkspace& w, const char* base, size_t stride,
-                      float crease, const float* joints, const uint32_t* active, uint32_t stamp, Counters* c,
-                      OnContact&& on_contact) {
+                      float crease, const float* joints, const uint32_t* active, uint32_t stamp, const Counters* budget,
+                      Counters* c, OnContact&& on_contact) {
     const uint32_t C = GroupCount(m);
     if (++w.frame_ >= 0x7fffffffu) {  // stamps wrap: forget them all
       std::fill(w.tri_frame_.begin(), w.tri_frame_.end(), uint64_t{0});
@@ -839,6 +842,10 @@
     // model marks all their patch pairs to skip, their patches' boxes 4 at a time, then each overlapping
     // pair of patches not skipped whole.
     auto groups = [&](uint32_t g, uint32_t h) {
+      if (budget && (c->tests > budget->tests || c->patch_pairs > budget->patch_pairs)) {
+        c->over_budget = true;
+        return;
+      }
       if (g > h) std::swap(g, h);
       const uint32_t skip = h - g < kGroupWindow ? m.group_near_[kGroupWindow * size_t{g} + (h - g)] : 0u;
       if (skip == 0xffffu) return;
@@ -896,6 +903,7 @@
           n += (sb[2 * pitch + j] <= h1) & (sb[3 * pitch + j] >= l1) & (sb[4 * pitch + j] <= h2) & (sb[5 * pitch + j] >= l2);
         }
       for (uint32_t k = 0; k < n; ++k) groups(p, static_cast<uint32_t>(w.sweep_[hits[k]]));
+      if (c->over_budget) return true;
     }
     return true;
   }
@@ -915,9 +923,18 @@
     BuildJointCull(m, a, bind->data());
     NarrowPhaseWorkspace w;
     if (Status s = InitWorkspace(w, m, nullptr); s != Status::kOk) return s;
-    Counters c;
-    Collide<false>(m, w, reinterpret_cast<const char*>(bind->data()), 12, m.crease_graph_.crease(), nullptr, nullptr, 0, &c,
-            [&](uint32_t t, uint32_t u) { m.bind_contacts_.push_back(uint64_t{std::min(t, u)} << 32 | std::max(t, u)); });
+    // The bind pose's own contacts, within the sweep's budget (NarrowPhaseModel::kBindSweepTestsPerTriangle).
+    Counters budget, c;
+    budget.tests = static_cast<uint32_t>(std::min<uint64_t>(
+        uint64_t{NarrowPhaseModel::kBindSweepTestsPerTriangle} * (m.tri_v_.size() / 3) + NarrowPhaseModel::kBindSweepSlack,
+        UINT32_MAX - 65536));
+    budget.patch_pairs = static_cast<uint32_t>(std::min<uint64_t>(
+        uint64_t{NarrowPhaseModel::kBindSweepPairsPerPatch} * PatchCount(m) + NarrowPhaseModel::kBindSweepSlack,
+        UINT32_MAX - 65536));
+    Collide<false>(m, w, reinterpret_cast<const char*>(bind->data()), 12, m.crease_graph_.crease(), nullptr, nullptr, 0,
+                   &budget, &c,
+                   [&](uint32_t t, uint32_t u) { m.bind_contacts_.push_back(uint64_t{std::min(t, u)} << 32 | std::max(t, u)); });
+    if (c.over_budget) return Status::kErrorBindPoseTangled;
     std::sort(m.bind_contacts_.begin(), m.bind_contacts_.end());
     BuildRestricted(m, a);
     return Status::kOk;
@@ -1062,8 +1079,9 @@
       job.output[written++] = TriangleContact{t, u, sa, sb};
     };
     const bool finite = active ? swept == 0 ||  // nothing to sweep: no vertex read, no contact
-                                     Collide<true>(m, w, base, stride, crease, job.joint_matrices, active, stamp, &c, on_contact)
-                               : Collide<false>(m, w, base, stride, crease, job.joint_matrices, nullptr, 0, &c, on_contact);
+                                     Collide<true>(m, w, base, stride, crease, job.joint_matrices, active, stamp, nullptr, &c,
+                                                   on_contact)
+                               : Collide<false>(m, w, base, stride, crease, job.joint_matrices, nullptr, 0, nullptr, &c, on_contact);
     if (!finite) return Status::kErrorNonFinitePositions;
     st.candidate_pairs = c.patch_pairs;
     st.box_tests = c.box_tests;

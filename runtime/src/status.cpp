@@ -34,6 +34,8 @@ const char* ToString(Status s) {
     case Status::kErrorContactMargin: return "kErrorContactMargin: Asset.contact_margin is negative";
     case Status::kErrorSkinWeights:
       return "kErrorSkinWeights: a sphere's joint weights are negative, not finite, nonzero after a zero or do not sum to 1, or a vertex's skin weights do not sum to 1";
+    case Status::kErrorBindPoseTangled:
+      return "kErrorBindPoseTangled: the bind pose passes through itself beyond the narrow phase's budget (a broken mesh)";
     case Status::kErrorRegions:
       return "kErrorRegions: Asset.regions malformed (count, one trunk last, or a region value past them)";
     case Status::kErrorJointCount:

@@ -367,6 +367,7 @@ TEST_CASE("ToString names every status and Succeeded/Failed split them") {
       {Status::kErrorContactMargin, "kErrorContactMargin"},
       {Status::kErrorSkinWeights, "kErrorSkinWeights"},
       {Status::kErrorRegions, "kErrorRegions"},
+      {Status::kErrorBindPoseTangled, "kErrorBindPoseTangled"},
   };
   for (const auto& entry : all) {
     const Status status = entry.first;

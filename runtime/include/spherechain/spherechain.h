@@ -105,6 +105,8 @@ typedef uint32_t sc_status;
 #define SC_ERROR_SKIN_WEIGHTS ((sc_status)0x8000020Eu)     ///< A sphere's joint weights negative, not finite,
                                                            ///< one after a 0, or not summing to 1.
 #define SC_ERROR_REGIONS ((sc_status)0x8000020Fu)          ///< The asset's regions malformed.
+#define SC_ERROR_BIND_POSE_TANGLED ((sc_status)0x80000210u)  ///< The narrow phase's model: the bind pose passes
+                                                            ///< through itself beyond its budget (a broken mesh).
 
 /// Static, NUL-terminated English text of `status`, starting with its constant's name (e.g.
 /// "SC_ERROR_VERSION_TOO_NEW: asset schema_version is newer than this SDK"); "unknown status" for a value
@@ -166,7 +168,8 @@ typedef struct sc_workspace sc_workspace;
 ///         #SC_ERROR_ALIGNMENT, #SC_ERROR_ASSET_TOO_SMALL, #SC_ERROR_ASSET_TOO_LARGE, #SC_ERROR_IDENTIFIER,
 ///         #SC_ERROR_VERSION_TOO_OLD, #SC_ERROR_VERSION_TOO_NEW, #SC_ERROR_CORRUPT, and #SC_ERROR_MISSING_FIELD ..
 ///         #SC_ERROR_REGIONS (semantic checks; with #SC_MODEL_NARROW_PHASE also #SC_ERROR_MISSING_FIELD for an
-///         asset baked without `triangles` / `weld_ids`); #SC_ERROR_OUT_OF_MEMORY.
+///         asset baked without `triangles` / `weld_ids`, and #SC_ERROR_BIND_POSE_TANGLED for a bind pose that
+///         passes through itself beyond the narrow phase's budget); #SC_ERROR_OUT_OF_MEMORY.
 /// Cost: O(size) verification + O(\#S²) model build (+ the narrow phase's, see #SC_MODEL_NARROW_PHASE);
 /// allocates (the only allocating call besides sc_workspace_create()). Thread-safe (no shared state).
 SC_API sc_status sc_model_create(const void* bytes, size_t size, uint32_t flags, sc_model** out);
