@@ -21,6 +21,7 @@ if [ $# -lt 2 ]; then
 fi
 save=0
 if [ "$1" = save ]; then
+  [ $# -eq 2 ] || { echo "usage: scripts/fuzz.sh save TARGET" >&2; exit 2; }
   save=1
   name="${2#fuzz_}"
   seconds=0
@@ -63,11 +64,23 @@ if [ "$save" -eq 1 ]; then
   trap 'rm -rf "$merged"' EXIT
   # -merge=1 keeps, of the work folder and the seeds, the fewest inputs that reach every edge they reach.
   nice -n 19 "build/fuzz/fuzz/fuzz_$name" -merge=1 -timeout=10 -rss_limit_mb=2048 -malloc_limit_mb=2048 \
-    "$merged" "$work" "fuzz/corpus/$name" >"$log" 2>&1 || { echo "scripts/fuzz.sh save: merge failed (log: $log)" >&2; exit 1; }
+    -artifact_prefix="$artifacts/" "$merged" "$work" "fuzz/corpus/$name" >"$log" 2>&1 || { echo "scripts/fuzz.sh save: merge failed (log: $log)" >&2; exit 1; }
   # The seeds are in the repository already: only what the campaign added is saved.
-  for f in fuzz/corpus/"$name"/*; do rm -f "$merged/$(sha1sum "$f" | cut -c1-40)"; done
+  for f in fuzz/corpus/"$name"/*; do
+    [ -f "$f" ] || continue
+    rm -f "$merged/$(sha1sum "$f" | cut -c1-40)"
+  done
   mkdir -p fuzz/campaign
-  tar -C "$merged" -cJf "$saved.tmp" . && mv "$saved.tmp" "$saved"
+  # Reproducible: names sorted, no owners or times (the same corpus gives the same bytes).
+  (cd "$merged" && find . -type f -printf '%P\n' | LC_ALL=C sort) >"$merged.list"
+  if ! tar -C "$merged" --owner=0 --group=0 --numeric-owner --mtime=@0 --mode=u=rw,go=r -cJf "$saved.tmp" \
+       -T "$merged.list"; then
+    rm -f "$saved.tmp" "$merged.list"
+    echo "scripts/fuzz.sh save: could not write $saved" >&2
+    exit 1
+  fi
+  rm -f "$merged.list"
+  mv "$saved.tmp" "$saved"
   echo "fuzz_$name: $(ls "$merged" | wc -l) inputs saved to $saved ($(du -k "$saved" | cut -f1) KB); log: $log"
   exit 0
 fi

@@ -685,8 +685,8 @@ crease not finite or <= 0, arrays of the wrong shape, dtype or alignment), Statu
 kErrorNonFinitePositions: a vertex of a surrounding region is NaN or inf; kErrorMissingField: "crease" on an
 asset without the rule, or matrices on one without skin weights; kErrorJointCount; kErrorNonFiniteJoints;
 kErrorInvalidJob: a crease or matrices with another exclusions, or a crease below the asset's;
-kErrorBindPoseTangled: the first call, on an asset whose bind pose passes through itself beyond the narrow
-phase's budget; the message says which).
+kErrorBindPoseTangled: an asset whose bind pose passes through itself beyond the narrow phase's budget,
+every call; the message says which).
 Cost: the runtime's narrow phase (docs/performance.md); the first call builds the narrow phase's model and
 scratch, and each call allocates the returned array.
 )doc")

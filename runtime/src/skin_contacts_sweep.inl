@@ -798,8 +798,8 @@
   /// One frame: patch boxes, the sweep, every pair. False (nothing reported) when a patch vertex is NaN/Inf.
   /// kRestricted: only the patches with active[p] == stamp, and of their pairs those Listed (the restricted
   /// path); else every patch (active unread). `budget` (opt; InitModel's bind sweep): the sweep stops, with
-  /// c->over_budget set, once c's exact tests or pairs of patches pass budget's (checked per pair of groups:
-  /// at most 16 pairs of patches more).
+  /// c->over_budget set, once c's exact tests or pairs of patches pass budget's (checked before each pair of
+  /// groups: at most 16 pairs of patches and 4,096 tests more; the caller checks the counts after).
   template <bool kRestricted, class OnContact>
   static bool Collide(const NarrowPhaseModel& m, NarrowPhaseWorkspace& w, const char* base, size_t stride,
                       float crease, const float* joints, const uint32_t* active, uint32_t stamp, const Counters* budget,
@@ -934,7 +934,7 @@
     Collide<false>(m, w, reinterpret_cast<const char*>(bind->data()), 12, m.crease_graph_.crease(), nullptr, nullptr, 0,
                    &budget, &c,
                    [&](uint32_t t, uint32_t u) { m.bind_contacts_.push_back(uint64_t{std::min(t, u)} << 32 | std::max(t, u)); });
-    if (c.over_budget) return Status::kErrorBindPoseTangled;
+    if (c.over_budget || c.tests > budget.tests || c.patch_pairs > budget.patch_pairs) return Status::kErrorBindPoseTangled;
     std::sort(m.bind_contacts_.begin(), m.bind_contacts_.end());
     BuildRestricted(m, a);
     return Status::kOk;

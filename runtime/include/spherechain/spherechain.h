@@ -105,7 +105,7 @@ typedef uint32_t sc_status;
 #define SC_ERROR_SKIN_WEIGHTS ((sc_status)0x8000020Eu)     ///< A sphere's joint weights negative, not finite,
                                                            ///< one after a 0, or not summing to 1.
 #define SC_ERROR_REGIONS ((sc_status)0x8000020Fu)          ///< The asset's regions malformed.
-#define SC_ERROR_BIND_POSE_TANGLED ((sc_status)0x80000210u)  ///< The narrow phase's model: the bind pose passes
+#define SC_ERROR_BIND_POSE_TANGLED ((sc_status)0x80000301u)  ///< The narrow phase's model: the bind pose passes
                                                             ///< through itself beyond its budget (a broken mesh).
 
 /// Static, NUL-terminated English text of `status`, starting with its constant's name (e.g.

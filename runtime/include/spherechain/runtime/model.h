@@ -123,7 +123,8 @@ class Model {
   static size_t RequiredBytes(const AssetView& view);
   /// The same for a model built with `options`. With options.narrow_phase it builds the narrow phase on
   /// the heap to measure it (NarrowPhaseModel::Init's cost: ~0.26 s for MakeHuman), so it allocates and
-  /// may return 0 also when that build fails (the asset lacks its fields, out of memory): InitInPlace with
+  /// may return 0 also when that build fails (the asset lacks its fields, its bind pose passes through itself
+  /// beyond the narrow phase's budget, out of memory): InitInPlace with
   /// the same options then returns that failure's status, whatever the buffer. Thread-safe.
   static size_t RequiredBytes(const AssetView& view, const ModelOptions& options);
 
@@ -139,7 +140,7 @@ class Model {
   /// The same with `options`: with options.narrow_phase also the narrow phase (narrow_phase()), built on
   /// the heap and moved into the model's one block (4.9 MB more for MakeHuman with the crease rule). Also
   /// returns what NarrowPhaseModel::Init returns (kErrorMissingField, kErrorInvalidJob for unknown
-  /// regions); the model is empty after a failure.
+  /// regions, kErrorBindPoseTangled); the model is empty after a failure.
   Status Init(const AssetView& view, const ModelOptions& options);
 
   /// The same in caller memory (meshoptimizer-style): `memory` [Limit: 16-byte aligned, else

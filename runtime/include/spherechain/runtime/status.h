@@ -75,7 +75,9 @@ enum class [[nodiscard]] Status : uint32_t {
                                          ///< kMaxRegions regions, a Trunk that is not exactly the last one,
                                          ///< or a sphere_regions / triangle_regions value past them
                                          ///< (past the paper's five without Asset.regions).
-  kErrorBindPoseTangled = 0x8000'0210u,  ///< NarrowPhaseModel::Init (and a Model with its narrow phase): the
+
+  // ---- what a loaded asset cannot build (Model / NarrowPhaseModel::Init) -------------------------
+  kErrorBindPoseTangled = 0x8000'0301u,  ///< NarrowPhaseModel::Init (and a Model with its narrow phase): the
                                          ///< bind pose (Asset.bind_positions) passes through itself so much
                                          ///< that its sweep ran past NarrowPhaseModel::kBindSweepTests… (a
                                          ///< broken or mutated mesh; real characters use a fraction of it).
