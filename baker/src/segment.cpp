@@ -79,7 +79,9 @@ WeldedGraph BuildWeldedGraph(const Mesh& mesh) {
   // Cells of 64 eps, sorted (no hash map of lists): the eps box around a vertex almost always lies in
   // its own cell, so a vertex looks at one run of the sorted order, rarely at up to 8.
   const double cell = 64.0 * eps;
-  auto key_of = [&](double x) { return static_cast<int64_t>(std::floor(x / cell)); };
+  // Keys from the box's low corner: at most (hi - lo) / cell = 15,625 cells a side (a mesh far from the
+  // origin, or of wildly mixed magnitudes, would give x / cell past int64: undefined, found by fuzzing).
+  auto key_of = [&](double x, int axis) { return static_cast<int64_t>(std::floor((x - lo[axis]) / cell)); };
   struct Entry {
     std::array<int64_t, 3> key;
     std::array<float, 3> p;
@@ -88,7 +90,7 @@ WeldedGraph BuildWeldedGraph(const Mesh& mesh) {
   std::vector<Entry> sorted(nv);
   for (uint32_t v = 0; v < nv; ++v) {
     const float* q = &mesh.positions[3 * size_t(v)];
-    sorted[v] = {{key_of(q[0]), key_of(q[1]), key_of(q[2])}, {q[0], q[1], q[2]}, v};
+    sorted[v] = {{key_of(q[0], 0), key_of(q[1], 1), key_of(q[2], 2)}, {q[0], q[1], q[2]}, v};
   }
   // Within a cell equal positions are adjacent (then by index): each run of one position is welded at
   // once, and only its first entry is compared with other positions.
@@ -121,7 +123,7 @@ WeldedGraph BuildWeldedGraph(const Mesh& mesh) {
   for (size_t i : distinct) {
     const Entry& e = sorted[i];
     int64_t lo_key[3], hi_key[3];
-    for (int a = 0; a < 3; ++a) lo_key[a] = key_of(double(e.p[a]) - eps), hi_key[a] = key_of(double(e.p[a]) + eps);
+    for (int a = 0; a < 3; ++a) lo_key[a] = key_of(double(e.p[a]) - eps, a), hi_key[a] = key_of(double(e.p[a]) + eps, a);
     for (int64_t kx = lo_key[0]; kx <= hi_key[0]; ++kx)
       for (int64_t ky = lo_key[1]; ky <= hi_key[1]; ++ky)
         for (int64_t kz = lo_key[2]; kz <= hi_key[2]; ++kz) {
