@@ -6,7 +6,6 @@
 // NOLINT(build/header_guard): a fragment of a struct body, not a header.
   struct Counters {
     uint32_t patch_pairs = 0, box_tests = 0, tests = 0, degenerate = 0, folds = 0, contacts = 0, joint_culled = 0;
-    bool over_budget = false;  // Collide stopped at its budget (the bind pose's sweep in InitModel)
   };
 
   /// OverlapMask16 (file scope), in one AVX-512 compare per bound when this copy is built for it.
@@ -797,9 +796,9 @@
 
   /// One frame: patch boxes, the sweep, every pair. False (nothing reported) when a patch vertex is NaN/Inf.
   /// kRestricted: only the patches with active[p] == stamp, and of their pairs those Listed (the restricted
-  /// path); else every patch (active unread). `budget` (opt; InitModel's bind sweep): the sweep stops, with
-  /// c->over_budget set, once c's exact tests or pairs of patches pass budget's (checked before each pair of
-  /// groups: at most 16 pairs of patches and 4,096 tests more; the caller checks the counts after).
+  /// path); else every patch (active unread). `budget` (opt; InitModel's bind sweep): the sweep stops once c's
+  /// exact tests or pairs of patches pass budget's (checked before each pair of groups: at most 16 pairs of
+  /// patches and 4,096 tests more; the caller compares the counts after).
   template <bool kRestricted, class OnContact>
   static bool Collide(const NarrowPhaseModel& m, NarrowPhaseWorkspace& w, const char* base, size_t stride,
                       float crease, const float* joints, const uint32_t* active, uint32_t stamp, const Counters* budget,
@@ -841,11 +840,9 @@
     // Groups g and h (g == h: each pair of its patches once, a patch with itself included): unless the
     // model marks all their patch pairs to skip, their patches' boxes 4 at a time, then each overlapping
     // pair of patches not skipped whole.
+    auto over_budget = [&] { return budget && (c->tests > budget->tests || c->patch_pairs > budget->patch_pairs); };
     auto groups = [&](uint32_t g, uint32_t h) {
-      if (budget && (c->tests > budget->tests || c->patch_pairs > budget->patch_pairs)) {
-        c->over_budget = true;
-        return;
-      }
+      if (over_budget()) return;
       if (g > h) std::swap(g, h);
       const uint32_t skip = h - g < kGroupWindow ? m.group_near_[kGroupWindow * size_t{g} + (h - g)] : 0u;
       if (skip == 0xffffu) return;
@@ -903,7 +900,7 @@
           n += (sb[2 * pitch + j] <= h1) & (sb[3 * pitch + j] >= l1) & (sb[4 * pitch + j] <= h2) & (sb[5 * pitch + j] >= l2);
         }
       for (uint32_t k = 0; k < n; ++k) groups(p, static_cast<uint32_t>(w.sweep_[hits[k]]));
-      if (c->over_budget) return true;
+      if (over_budget()) return true;
     }
     return true;
   }
@@ -934,7 +931,7 @@
     Collide<false>(m, w, reinterpret_cast<const char*>(bind->data()), 12, m.crease_graph_.crease(), nullptr, nullptr, 0,
                    &budget, &c,
                    [&](uint32_t t, uint32_t u) { m.bind_contacts_.push_back(uint64_t{std::min(t, u)} << 32 | std::max(t, u)); });
-    if (c.over_budget || c.tests > budget.tests || c.patch_pairs > budget.patch_pairs) return Status::kErrorBindPoseTangled;
+    if (c.tests > budget.tests || c.patch_pairs > budget.patch_pairs) return Status::kErrorBindPoseTangled;
     std::sort(m.bind_contacts_.begin(), m.bind_contacts_.end());
     BuildRestricted(m, a);
     return Status::kOk;
