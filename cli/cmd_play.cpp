@@ -259,7 +259,8 @@ int RunPlay(const PlayArgs& a) {
     };
   }
   auto played = playback::Play(mesh, view, anim, opts);
-  if (!played.ok()) return Fail(played.error());
+  if (!played.ok())  // the session's errors name the runtime job; the asset is named here
+    return Fail(import::Error{played.error().code, "'" + a.asset + "': " + played.error().message});
   const playback::PlayReport& report = played.value();
 
   PrintReport(a, view, anim, opts, report);

@@ -300,7 +300,8 @@ import::Result<CheckReport> CheckClips(const runtime::AssetView& view, const imp
   so.narrow = playback::SessionNarrow::kEvery;
   so.grow_contacts = true;  // every contact of a frame, however many: a truncated frame could hide an event
   playback::Session session;
-  if (auto s = session.Init(view, mesh, so); !s.ok()) return s.error();
+  if (auto s = session.Init(view, mesh, so); !s.ok())
+    return Fail(s.error().code, "'" + o.asset_name + "': " + s.error().message);
   const runtime::NarrowPhaseModel& model = session.narrow_model();
   if (!model.has_crease())
     return Fail(Code::kConfig, "the asset has no crease rule (baked before skin contacts existed): re-bake it");

@@ -100,8 +100,16 @@ expect_exit1(far_weld_keys "segmentation: segment \\(geometry\\): not a standing
              bake ${FAR_WELD} -o ${WORK}/out.sphc)
 # fuzz_load_asset: the creature with a bind pose mutated to pass through itself in 91,382 pairs. The narrow
 # phase's model refuses it within its budget (it swept the bind pose for 0.4 s, 6 s in the fuzz build).
-expect_exit1(tangled_bind_pose "format: runtime Model::Init: kErrorBindPoseTangled: the bind pose passes through itself"
+expect_exit1(tangled_bind_pose "format: '[^']*found_c7efeae7.sphc': runtime Model::Init: kErrorBindPoseTangled: the bind pose passes through itself"
              play ${TANGLED} --mesh ${CREATURE} --narrow-phase --frames 2 --json ${WORK}/out.sphc)
+# The same asset given to `check` (exit 2: its bad input), named in the message, no report written.
+execute_process(COMMAND ${CLI} check ${CREATURE} --asset ${TANGLED} --json ${WORK}/out.sphc
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 2 OR NOT "${err}" MATCHES "'[^']*found_c7efeae7.sphc': runtime Model::Init: kErrorBindPoseTangled"
+   OR EXISTS ${WORK}/out.sphc)
+  message(FATAL_ERROR "check of a tangled asset: expected exit 2, the asset named and no report; got exit ${rc}:\n${out}${err}")
+endif()
+message(STATUS "check of a tangled asset: exit 2: ${err}")
 
 find_program(PYTHON NAMES python3 PATHS /usr/bin NO_DEFAULT_PATH)
 if(NOT PYTHON)
