@@ -57,6 +57,8 @@ Status Session::RuntimeFailure(const char* job, runtime::Status s) {
   if (s == runtime::Status::kErrorBindPoseTangled)
     return MakeError(Error::Code::kFormat, std::string(job) + ": " + runtime::ToString(s) +
                                                " (re-bake it from a mesh that does not pass through itself)");
+  if (s == runtime::Status::kErrorFrameTangled)  // the frame's positions: the animation or its skinning
+    return MakeError(Error::Code::kFormat, std::string(job) + " (frame '" + frame_.label + "'): " + runtime::ToString(s));
   return MakeError(Error::Code::kInternal, std::string(job) + ": " + runtime::ToString(s));
 }
 

@@ -686,7 +686,8 @@ kErrorNonFinitePositions: a vertex of a surrounding region is NaN or inf; kError
 asset without the rule, or matrices on one without skin weights; kErrorJointCount; kErrorNonFiniteJoints;
 kErrorInvalidJob: a crease or matrices with another exclusions, or a crease below the asset's;
 kErrorBindPoseTangled: an asset whose bind pose passes through itself beyond the narrow phase's budget,
-every call; the message says which).
+every call; kErrorFrameTangled: positions that pass through themselves beyond the narrow phase's budget, no
+pose of the character — uninitialised, collapsed or scrambled; the message says which).
 Cost: the runtime's narrow phase (docs/performance.md); the first call builds the narrow phase's model and
 scratch, and each call allocates the returned array.
 )doc")

@@ -259,7 +259,9 @@ def test_old_assets(asset):
         try:
             ws.narrow_phase(zeros)  # the asset's exclusions when it has triangles
         except StatusError as e:
-            assert e.status == "kErrorMissingField", e  # baked before the narrow phase
+            # baked before the narrow phase; or, with its triangles, every one collapsed onto the origin: each
+            # box overlaps every other, past the job's budget (no pose of the character)
+            assert e.status in ("kErrorMissingField", "kErrorFrameTangled"), e
         with pytest.raises(StatusError) as e:
             ws.narrow_phase(zeros, exclusions="crease")
         assert status_of(e) == "kErrorMissingField"

@@ -38,7 +38,8 @@ static_assert(Same(SC_ERROR_NULL_ARGUMENT, rt::Status::kErrorNullArgument) &&
               Same(SC_ERROR_JOINT_COUNT, rt::Status::kErrorJointCount) &&
               Same(SC_ERROR_NON_FINITE_JOINTS, rt::Status::kErrorNonFiniteJoints) &&
               Same(SC_ERROR_WORKSPACE_MODEL, rt::Status::kErrorWorkspaceModel) &&
-              Same(SC_ERROR_BUFFER_TOO_SMALL, rt::Status::kErrorBufferTooSmall));
+              Same(SC_ERROR_BUFFER_TOO_SMALL, rt::Status::kErrorBufferTooSmall) &&
+              Same(SC_ERROR_FRAME_TANGLED, rt::Status::kErrorFrameTangled));
 static_assert(Same(SC_ERROR_ASSET_TOO_SMALL, rt::Status::kErrorAssetTooSmall) &&
               Same(SC_ERROR_ASSET_TOO_LARGE, rt::Status::kErrorAssetTooLarge) &&
               Same(SC_ERROR_IDENTIFIER, rt::Status::kErrorIdentifier) &&
@@ -120,6 +121,8 @@ SC_API const char* sc_status_string(sc_status status) {
     case SC_ERROR_WORKSPACE_MODEL:
       return "SC_ERROR_WORKSPACE_MODEL: the workspace was made for another model (nothing written)";
     case SC_ERROR_BUFFER_TOO_SMALL: return "SC_ERROR_BUFFER_TOO_SMALL: caller memory too small";
+    case SC_ERROR_FRAME_TANGLED:
+      return "SC_ERROR_FRAME_TANGLED: the frame's skin passes through itself beyond the narrow phase's budget";
     case SC_ERROR_ASSET_TOO_SMALL:
       return "SC_ERROR_ASSET_TOO_SMALL: asset truncated (smaller than a FlatBuffer header)";
     case SC_ERROR_ASSET_TOO_LARGE: return "SC_ERROR_ASSET_TOO_LARGE: asset larger than 1 GiB";

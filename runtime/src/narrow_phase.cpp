@@ -140,7 +140,11 @@ struct NarrowPhaseInternal {
   struct Frame {
     const NarrowPhaseModel& m;
     NarrowPhaseWorkspace& w;
+    uint32_t test_budget = UINT32_MAX, box_budget = UINT32_MAX;  // Run's (NarrowPhaseModel::kSweepTests…)
   };
+  static bool OverBudget(const Frame& c, const NarrowPhaseStats& st) {
+    return st.triangle_tests > c.test_budget || st.box_tests > c.box_budget;
+  }
 
   /// The word of NarrowPhaseWorkspace::listed_ holding candidate (a, b)'s bit, a < b (reach models).
   static uint64_t& ListedWord(const Frame& c, uint32_t a, uint32_t b) {
@@ -598,7 +602,7 @@ struct NarrowPhaseInternal {
       n_records = 0;
     };
     uint32_t i = 0, j = 0;  // next of a, of b
-    while (i < na && j < nb) {
+    while (i < na && j < nb && !OverBudget(c, st)) {
       const uint32_t side = key_a[i] <= key_b[j] ? 0 : 1;  // same order as the minima (ties: rank, then a)
       const View& x = view[side];
       const View& o = view[side ^ 1];
@@ -928,6 +932,14 @@ Status NarrowPhaseJob::Run() const {
   if (Status s = Check(); s != Status::kOk) return s;
   if (exclusions == Exclusions::kCrease) return RunCrease(*this);
   NarrowPhaseInternal::Frame c{*model, *workspace};
+  {  // the budget (NarrowPhaseModel::kSweepTestsPerTriangle): the crease rule's tests, and its box tests at its
+     // pairs of patches' budget (16 x 16 a pair, 16 triangles a patch)
+    const uint64_t T = model->triangle_count();
+    c.test_budget = static_cast<uint32_t>(std::min<uint64_t>(
+        NarrowPhaseModel::kSweepTestsPerTriangle * T + NarrowPhaseModel::kSweepSlack, UINT32_MAX - 65536));
+    c.box_budget = static_cast<uint32_t>(std::min<uint64_t>(
+        uint64_t{NarrowPhaseModel::kSweepPairsPerPatch} * 16 * T + NarrowPhaseModel::kSweepSlack, UINT32_MAX - 65536));
+  }
   NarrowPhaseStats st;
   *count = 0;
   if (stats) *stats = st;
@@ -951,6 +963,7 @@ Status NarrowPhaseJob::Run() const {
   });
   // Pass 2: the same candidates, in output order.
   auto pair = [&](uint32_t a, uint32_t b) {
+    if (NarrowPhaseInternal::OverBudget(c, st)) return;  // positions that are no pose: the rest skipped
     ++st.candidate_pairs;
     NarrowPhaseInternal::Pair(c, a, b, base, stride, *this, &st);
   };
@@ -967,8 +980,9 @@ Status NarrowPhaseJob::Run() const {
       NarrowPhaseInternal::ForEachCandidate(c, *this, clear);
     }
   }
-  *count = std::min(st.contacts, capacity);
   if (stats) *stats = st;
+  if (NarrowPhaseInternal::OverBudget(c, st)) return Status::kErrorFrameTangled;  // count 0
+  *count = std::min(st.contacts, capacity);
   return st.contacts > capacity ? Status::kOkTruncated : Status::kOk;
 }
 

@@ -794,9 +794,23 @@
     }
   }
 
+  /// The sweep's budget (NarrowPhaseModel::kSweepTestsPerTriangle): InitModel's bind sweep and each job.
+  static Counters SweepBudget(const NarrowPhaseModel& m) {
+    Counters b;
+    b.tests = static_cast<uint32_t>(std::min<uint64_t>(
+        uint64_t{NarrowPhaseModel::kSweepTestsPerTriangle} * (m.tri_v_.size() / 3) + NarrowPhaseModel::kSweepSlack,
+        UINT32_MAX - 65536));
+    b.patch_pairs = static_cast<uint32_t>(std::min<uint64_t>(
+        uint64_t{NarrowPhaseModel::kSweepPairsPerPatch} * PatchCount(m) + NarrowPhaseModel::kSweepSlack, UINT32_MAX - 65536));
+    return b;
+  }
+  static bool OverBudget(const Counters& c, const Counters& budget) {
+    return c.tests > budget.tests || c.patch_pairs > budget.patch_pairs;
+  }
+
   /// One frame: patch boxes, the sweep, every pair. False (nothing reported) when a patch vertex is NaN/Inf.
   /// kRestricted: only the patches with active[p] == stamp, and of their pairs those Listed (the restricted
-  /// path); else every patch (active unread). `budget` (opt; InitModel's bind sweep): the sweep stops once c's
+  /// path); else every patch (active unread). `budget` (opt; SweepBudget): the sweep stops once c's
   /// exact tests or pairs of patches pass budget's (checked before each pair of groups: at most 16 pairs of
   /// patches and 4,096 tests more; the caller compares the counts after).
   template <bool kRestricted, class OnContact>
@@ -840,7 +854,7 @@
     // Groups g and h (g == h: each pair of its patches once, a patch with itself included): unless the
     // model marks all their patch pairs to skip, their patches' boxes 4 at a time, then each overlapping
     // pair of patches not skipped whole.
-    auto over_budget = [&] { return budget && (c->tests > budget->tests || c->patch_pairs > budget->patch_pairs); };
+    auto over_budget = [&] { return budget && OverBudget(*c, *budget); };
     auto groups = [&](uint32_t g, uint32_t h) {
       if (over_budget()) return;
       if (g > h) std::swap(g, h);
@@ -920,18 +934,13 @@
     BuildJointCull(m, a, bind->data());
     NarrowPhaseWorkspace w;
     if (Status s = InitWorkspace(w, m, nullptr); s != Status::kOk) return s;
-    // The bind pose's own contacts, within the sweep's budget (NarrowPhaseModel::kBindSweepTestsPerTriangle).
-    Counters budget, c;
-    budget.tests = static_cast<uint32_t>(std::min<uint64_t>(
-        uint64_t{NarrowPhaseModel::kBindSweepTestsPerTriangle} * (m.tri_v_.size() / 3) + NarrowPhaseModel::kBindSweepSlack,
-        UINT32_MAX - 65536));
-    budget.patch_pairs = static_cast<uint32_t>(std::min<uint64_t>(
-        uint64_t{NarrowPhaseModel::kBindSweepPairsPerPatch} * PatchCount(m) + NarrowPhaseModel::kBindSweepSlack,
-        UINT32_MAX - 65536));
+    // The bind pose's own contacts, within the sweep's budget.
+    const Counters budget = SweepBudget(m);
+    Counters c;
     Collide<false>(m, w, reinterpret_cast<const char*>(bind->data()), 12, m.crease_graph_.crease(), nullptr, nullptr, 0,
                    &budget, &c,
                    [&](uint32_t t, uint32_t u) { m.bind_contacts_.push_back(uint64_t{std::min(t, u)} << 32 | std::max(t, u)); });
-    if (c.tests > budget.tests || c.patch_pairs > budget.patch_pairs) return Status::kErrorBindPoseTangled;
+    if (OverBudget(c, budget)) return Status::kErrorBindPoseTangled;
     std::sort(m.bind_contacts_.begin(), m.bind_contacts_.end());
     BuildRestricted(m, a);
     return Status::kOk;
@@ -1075,10 +1084,11 @@
       }
       job.output[written++] = TriangleContact{t, u, sa, sb};
     };
+    const Counters budget = SweepBudget(m);
     const bool finite = active ? swept == 0 ||  // nothing to sweep: no vertex read, no contact
-                                     Collide<true>(m, w, base, stride, crease, job.joint_matrices, active, stamp, nullptr, &c,
+                                     Collide<true>(m, w, base, stride, crease, job.joint_matrices, active, stamp, &budget, &c,
                                                    on_contact)
-                               : Collide<false>(m, w, base, stride, crease, job.joint_matrices, nullptr, 0, nullptr, &c, on_contact);
+                               : Collide<false>(m, w, base, stride, crease, job.joint_matrices, nullptr, 0, &budget, &c, on_contact);
     if (!finite) return Status::kErrorNonFinitePositions;
     st.candidate_pairs = c.patch_pairs;
     st.box_tests = c.box_tests;
@@ -1087,6 +1097,10 @@
     st.crease_folds = c.folds;
     st.contacts = c.contacts;
     st.joint_culled = c.joint_culled;
+    if (OverBudget(c, budget)) {  // positions that are no pose: stopped, nothing reported
+      if (job.stats) *job.stats = st;
+      return Status::kErrorFrameTangled;
+    }
     *job.count = written;
     if (job.stats) *job.stats = st;
     return st.contacts > job.capacity ? Status::kOkTruncated : Status::kOk;

@@ -44,6 +44,9 @@ const char* ToString(Status s) {
     case Status::kErrorWorkspaceModel:
       return "kErrorWorkspaceModel: the workspace was made for another model (nothing written)";
     case Status::kErrorBufferTooSmall: return "kErrorBufferTooSmall: caller memory smaller than RequiredBytes()";
+    case Status::kErrorFrameTangled:
+      return "kErrorFrameTangled: the frame's skin passes through itself beyond the narrow phase's budget (positions "
+             "that are no pose of this character: uninitialised, collapsed or scrambled)";
     case Status::kErrorExcludedPairs: return "kErrorExcludedPairs: excluded pairs not a < b or not strictly ascending";
   }
   return "unknown status";

@@ -346,6 +346,7 @@ TEST_CASE("ToString names every status and Succeeded/Failed split them") {
       {Status::kErrorNonFiniteJoints, "kErrorNonFiniteJoints"},
       {Status::kErrorWorkspaceModel, "kErrorWorkspaceModel"},
       {Status::kErrorBufferTooSmall, "kErrorBufferTooSmall"},
+      {Status::kErrorFrameTangled, "kErrorFrameTangled"},
       {Status::kErrorAssetTooSmall, "kErrorAssetTooSmall"},
       {Status::kErrorAssetTooLarge, "kErrorAssetTooLarge"},
       {Status::kErrorIdentifier, "kErrorIdentifier"},

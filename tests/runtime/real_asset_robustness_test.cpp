@@ -104,3 +104,88 @@ TEST_CASE("Real asset: a bind pose passing through itself everywhere is refused 
     CHECK(model.Init(view, options) == (tangled ? Status::kErrorBindPoseTangled : Status::kOk));
   }
 }
+
+TEST_CASE("Real asset: a frame that is no pose (collapsed, scrambled) is refused within the sweep's budget") {
+  // The creature (1,504 triangles) under its crease rule: positions scrambled within a millimetre of the
+  // origin intersect themselves in ~300,000 pairs (quadratic: MakeHuman's 26,756 triangles so took 36 s and
+  // gave 95 million contacts): refused with kErrorFrameTangled within NarrowPhaseModel's budget, count 0,
+  // unrestricted and restricted. Positions all at the origin collapse every patch onto one point: every pair
+  // of patches overlaps, no triangle has an area (MakeHuman's pairs pass the budget; the creature's 100 patches
+  // fit in its slack, and the frame has no contact);
+  // the bind pose scaled by 2 (exact in floats), its own contacts, runs as before.
+  const std::vector<uint8_t> bytes = ReadCorpusAsset("creature_crease.sphc");
+  std::unique_ptr<uint64_t[]> aligned(new uint64_t[bytes.size() / 8 + 1]);
+  std::memcpy(aligned.get(), bytes.data(), bytes.size());
+  AssetView view;
+  REQUIRE(LoadAsset(aligned.get(), bytes.size(), &view) == Status::kOk);
+  NarrowPhaseModel np;
+  REQUIRE(np.Init(view) == Status::kOk);
+  NarrowPhaseWorkspace ws;
+  REQUIRE(ws.Init(np) == Status::kOk);
+  const uint32_t V = view.vertex_count, T = view.triangle_count;
+  const uint64_t test_budget = uint64_t{NarrowPhaseModel::kSweepTestsPerTriangle} * T + NarrowPhaseModel::kSweepSlack;
+  const uint64_t pair_budget =
+      uint64_t{NarrowPhaseModel::kSweepPairsPerPatch} * np.crease_patch_count() + NarrowPhaseModel::kSweepSlack;
+  const flatbuffers::Vector<float>* bind = view.asset->bind_positions();
+  REQUIRE(bind);
+  std::vector<float> scrambled(3 * size_t{V}), collapsed(3 * size_t{V}, 0.0f), moved(bind->begin(), bind->end());
+  std::mt19937 rng(7);
+  std::normal_distribution<float> mm(0.0f, 1e-3f);
+  for (float& x : scrambled) x = mm(rng);
+  for (float& x : moved) x *= 2.0f;  // exact in floats: the same intersections
+  std::vector<Collision> every_pair;  // the restricted path behind every sphere pair
+  for (uint32_t a = 0; a < view.sphere_count; ++a)
+    for (uint32_t b = a + 1; b < view.sphere_count; ++b)
+      every_pair.push_back(Collision{static_cast<uint16_t>(a), static_cast<uint16_t>(b), 0.0f, 0u});
+  std::vector<TriangleContact> out(4096);
+  std::vector<ContactDepth> depths(out.size());
+  const uint64_t box_budget = uint64_t{NarrowPhaseModel::kSweepPairsPerPatch} * 16 * T + NarrowPhaseModel::kSweepSlack;
+  for (const Exclusions ex : {Exclusions::kCrease, Exclusions::kAsset, Exclusions::kNone}) {
+    for (const bool restricted : {false, true}) {
+      for (const std::vector<float>* pos : {&scrambled, &collapsed, &moved}) {
+        const bool crease = ex == Exclusions::kCrease;
+        CAPTURE(static_cast<int>(ex));
+        CAPTURE(restricted);
+        const std::string which = pos == &scrambled ? "scrambled" : pos == &collapsed ? "collapsed" : "bind pose × 2";
+        CAPTURE(which);
+        uint32_t n = ~0u;
+        NarrowPhaseStats stats;
+        NarrowPhaseJob job;
+        job.model = &np;
+        job.workspace = &ws;
+        job.positions = {pos->data(), V, 12};
+        job.exclusions = ex;
+        job.output = out.data();
+        job.depths = depths.data();
+        job.capacity = static_cast<uint32_t>(out.size());
+        job.count = &n;
+        job.stats = &stats;
+        if (restricted)
+          job.sphere_pairs = every_pair.data(), job.sphere_pair_count = static_cast<uint32_t>(every_pair.size());
+        const Status s = job.Run();
+        if (crease) {  // checked before each pair of groups: at most 16 pairs of patches of 16 x 16 more
+          CHECK(stats.triangle_tests <= test_budget + 16 * 16 * 16);
+          CHECK(stats.candidate_pairs <= pair_budget + 16);
+        } else {  // checked before each triangle's sweep step: at most a region's boxes and 64 records' tests more
+          CHECK(stats.triangle_tests <= test_budget + 256);
+          CHECK(stats.box_tests <= box_budget + T);
+        }
+        const bool over = stats.triangle_tests > test_budget ||
+                          (crease ? stats.candidate_pairs > pair_budget : stats.box_tests > box_budget);
+        if (pos == &moved) {
+          CHECK(s == Status::kOk);
+          if (crease) CHECK(n == np.bind_contact_count());
+          if (crease) CHECK(stats.bind_contacts == n);
+        } else if (pos == &collapsed && s == Status::kOk) {  // every triangle degenerate: none tested, no contact
+          CHECK(n == 0);
+          CHECK(stats.triangle_tests == 0);
+          CHECK(!over);
+        } else {
+          CHECK(s == Status::kErrorFrameTangled);
+          CHECK(n == 0);
+          CHECK(over);
+        }
+      }
+    }
+  }
+}

@@ -80,6 +80,9 @@ typedef uint32_t sc_status;
 #define SC_ERROR_WORKSPACE_MODEL ((sc_status)0x8000000Au)    ///< The workspace was made for another model.
 #define SC_ERROR_BUFFER_TOO_SMALL ((sc_status)0x8000000Bu)   ///< Caller memory too small (runtime InitInPlace;
                                                              ///< no C function returns it).
+#define SC_ERROR_FRAME_TANGLED ((sc_status)0x8000000Cu)      ///< sc_narrow_phase: the frame's skin
+                                                             ///< passes through itself beyond the budget (positions
+                                                             ///< that are no pose of the character); count 0.
 #define SC_ERROR_ASSET_TOO_SMALL ((sc_status)0x80000101u)  ///< Fewer bytes than a FlatBuffer header (8): truncated.
 #define SC_ERROR_ASSET_TOO_LARGE ((sc_status)0x80000102u)  ///< More than 1 GiB.
 #define SC_ERROR_IDENTIFIER ((sc_status)0x80000103u)       ///< Not a .sphc asset (file_identifier is not "SPHC").
@@ -437,7 +440,10 @@ typedef struct sc_contact_depth {
 ///         weights); #SC_ERROR_JOINT_COUNT; #SC_ERROR_NON_FINITE_JOINTS (a matrix holds a NaN or an infinity);
 ///         #SC_ERROR_ALIGNMENT; #SC_ERROR_STRIDE; #SC_ERROR_VERTEX_COUNT; #SC_ERROR_INDEX_OUT_OF_RANGE
 ///         (a sphere pair with a >= b or b >= \#S); #SC_ERROR_NON_FINITE_POSITIONS (a tested vertex is NaN or
-///         infinite). Nothing written to contacts / depths on failure.
+///         infinite); #SC_ERROR_FRAME_TANGLED (the frame's skin passes through itself
+///         beyond the budget of the runtime's NarrowPhaseModel::kSweepTestsPerTriangle — positions that are no
+///         pose of the character; it stops there: `*count` 0, contacts / depths hold unspecified records).
+///         Otherwise nothing written to contacts / depths on failure.
 /// Cost: O(\#V) region boxes, then only the triangles near other regions (box culls, sort and sweep);
 /// #SC_EXCLUSIONS_CREASE on MakeHuman (26,756 triangles): ~1.4 ms a frame, one core; no allocation.
 SC_API sc_status sc_narrow_phase(const sc_model* model, sc_workspace* workspace, const float* positions,

@@ -164,7 +164,9 @@ class Session {
   /// The pipeline on the caller's positions (\#V×3 packed floats, borrowed for the call and viewed by
   /// frame().positions until the next step) and, under kJoints, joint matrices (\#J×12). Errors: kInternal
   /// "<job>: <status>" when a runtime job fails (job: refit, joint refit, detect, narrow phase;
-  /// runtime_status() holds the status), kConfig for missing joint matrices under kJoints.
+  /// runtime_status() holds the status); kFormat "narrow phase (frame '<label>'): kErrorFrameTangled: …"
+  /// when the positions pass through themselves beyond the narrow phase's budget (no pose of the character);
+  /// kConfig for missing joint matrices under kJoints.
   Status Run(const float* positions, const float* joint_matrices, uint32_t frame, std::string label);
   /// Every frame of `animation` in order: Step, then `consume` (a returned error stops with it).
   Status Play(const Animation& animation, const std::function<Status(const SessionFrame&)>& consume);

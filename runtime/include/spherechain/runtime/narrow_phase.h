@@ -147,7 +147,7 @@ class NarrowPhaseModel {
   /// Returns kOk; kErrorNullArgument when `!view.valid()`; kErrorMissingField when the asset has no
   /// `triangles` or `weld_ids` (baked before the narrow phase existed: re-bake); kErrorOutOfMemory;
   /// kErrorInvalidJob for an unknown `regions`; with the crease rule, kErrorBindPoseTangled when the sweep of
-  /// the bind pose for its own contacts passes its budget (kBindSweepTestsPerTriangle). The model is empty
+  /// the bind pose for its own contacts passes its budget (kSweepTestsPerTriangle). The model is empty
   /// (not initialised) after a failure.
   /// Cost: O(\#T + \#V + \#S log) time; memory ~40 B per region triangle + 4 B per vertex + 4 B per
   /// (sphere, region vertex) + ~20 B per sphere; kReach also 2 B per (triangle, sphere it stands behind).
@@ -158,14 +158,19 @@ class NarrowPhaseModel {
   /// joints, per block of near rows a gap from 16×16 bind boxes (~20 ms more for MakeHuman).
   /// Not thread-safe on one object (nothing may use the model meanwhile).
   Status Init(const AssetView& view, NarrowPhaseRegions regions = NarrowPhaseRegions::kSurrounding);
-  /// The budget of Init's sweep of the bind pose (the bind contacts, under the crease rule): at most
-  /// kBindSweepTestsPerTriangle × \#T + kBindSweepSlack exact triangle tests and kBindSweepPairsPerPatch ×
-  /// \#patches + kBindSweepSlack pairs of patches, else kErrorBindPoseTangled. It bounds Init's time and
-  /// memory on an asset whose bind pose passes through itself everywhere (an asset of 1,504 triangles
-  /// intersecting itself in 91,382 pairs took 453,738 tests, 0.41 s), where the sweep is quadratic. The real
-  /// characters use a fraction of it: MakeHuman 28 tests and 3,118 pairs (1,722 patches), CesiumMan 24 and
-  /// 1,369 (300), BCN_Epileptic, whose clothes pass through its body, 1,402 and 1,401 (337).
-  static constexpr uint32_t kBindSweepTestsPerTriangle = 16, kBindSweepPairsPerPatch = 64, kBindSweepSlack = 4096;
+  /// The budget of the crease rule's sweep, at Init (the bind pose's own contacts) and in each
+  /// NarrowPhaseJob under Exclusions::kCrease: at most kSweepTestsPerTriangle × \#T + kSweepSlack exact
+  /// triangle tests and kSweepPairsPerPatch × \#patches + kSweepSlack pairs of patches, else Init returns
+  /// kErrorBindPoseTangled and the job kErrorFrameTangled. A job under the other exclusions gets the same
+  /// test budget and kSweepPairsPerPatch × 16 × \#T + kSweepSlack box tests (the crease rule's at its budget
+  /// of pairs of patches). Where a surface passes through itself everywhere
+  /// the sweep is quadratic; the budget bounds the time and memory such positions take (a bind pose of 1,504
+  /// triangles intersecting itself in 91,382 pairs took 453,738 tests, 0.41 s, at Init; MakeHuman's 26,756
+  /// triangles scrambled within a millimetre took 36 s and gave 95 million contacts in one job). The real
+  /// characters use a fraction of it. At Init: MakeHuman 28 tests and 3,118 pairs of patches (1,722 patches),
+  /// CesiumMan 24 and 1,369 (300), BCN_Epileptic, whose clothes pass through its body, 1,402 and 1,401 (337);
+  /// their frames' largest counts are in docs/runtime.md ("Frames that are no pose").
+  static constexpr uint32_t kSweepTestsPerTriangle = 16, kSweepPairsPerPatch = 64, kSweepSlack = 4096;
   /// kReach when built from reach regions, else kSurrounding.
   NarrowPhaseRegions regions() const { return reach_ ? NarrowPhaseRegions::kReach : NarrowPhaseRegions::kSurrounding; }
 
@@ -506,7 +511,10 @@ struct NarrowPhaseJob {
   /// surrounding region (kCrease: of any triangle that is not degenerate by its indices; with sphere_pairs,
   /// of a patch the job sweeps — the others are not read) is NaN/Inf
   /// (count 0, stats zero); kErrorNonFiniteJoints when a joint matrix holds
-  /// a NaN or Inf (count 0, stats zero); kOk; or kOkTruncated when more contacts than
+  /// a NaN or Inf (count 0, stats zero); kErrorFrameTangled when the frame's skin passes
+  /// through itself beyond the sweep's budget (NarrowPhaseModel::kSweepTestsPerTriangle: positions that are
+  /// no pose of this character; the job stops there: count 0, output and depths hold unspecified records,
+  /// stats the counts so far); kOk; or kOkTruncated when more contacts than
   /// `capacity` exist: output holds the first `capacity` in the documented order, *count == capacity,
   /// stats complete.
   Status Run() const;

@@ -35,6 +35,11 @@ enum class [[nodiscard]] Status : uint32_t {
                                          ///< NarrowPhaseModel::id()): the job wrote nothing.
   kErrorBufferTooSmall = 0x8000'000Bu,   ///< Caller memory smaller than RequiredBytes() (Model /
                                          ///< Workspace::InitInPlace): nothing built.
+  kErrorFrameTangled = 0x8000'000Cu,     ///< NarrowPhaseJob: the frame's skin passes through
+                                         ///< itself so much that the job ran past its budget
+                                         ///< (NarrowPhaseModel::kSweepTestsPerTriangle …): positions that are
+                                         ///< no pose of this character (uninitialised, collapsed, scrambled).
+                                         ///< Count 0, stats as far as it got; real frames use a fraction.
 
   // ---- asset envelope (LoadAsset) ---------------------------------------------------------------
   kErrorAssetTooSmall = 0x8000'0101u,   ///< Fewer bytes than a FlatBuffer header (8) — truncated file.
@@ -79,7 +84,7 @@ enum class [[nodiscard]] Status : uint32_t {
   // ---- what a loaded asset cannot build (Model / NarrowPhaseModel::Init) -------------------------
   kErrorBindPoseTangled = 0x8000'0301u,  ///< NarrowPhaseModel::Init (and a Model with its narrow phase): the
                                          ///< bind pose (Asset.bind_positions) passes through itself so much
-                                         ///< that its sweep ran past NarrowPhaseModel::kBindSweepTests… (a
+                                         ///< that its sweep ran past NarrowPhaseModel::kSweepTests… (a
                                          ///< broken or mutated mesh; real characters use a fraction of it).
 };
 
