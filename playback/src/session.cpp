@@ -278,7 +278,7 @@ Status Session::Narrow(const float* positions, const float* joint_matrices) {
     return job.Run();
   };
   runtime::Status s;
-  for (;;) {  // grow_contacts: no useful bound exists, so the buffer grows until every contact fits
+  for (;;) {  // grow_contacts: the only bound is the job's budget, so the buffer grows until every contact fits
     job.output = contacts_.data();
     job.capacity = static_cast<uint32_t>(contacts_.size());
     if (crease) depths_.resize(contacts_.size()), job.depths = depths_.data();

@@ -565,6 +565,11 @@
         _mm_store_ps(local + 4 * i, v);
         vl = _mm_min_ps(vl, v), vh = _mm_max_ps(vh, v), nan = _mm_or_ps(nan, _mm_cmpunord_ps(v, v));
       }
+      all_lo = _mm_min_ps(all_lo, vl), all_hi = _mm_max_ps(all_hi, vh);  // every vertex read: checked below
+      // A patch collapsed onto a point or a line (no extent on two axes: a part of the mesh scaled to zero to
+      // hide it) has no triangle with an area, so no contact: its box is left empty and out of its group's.
+      if (__builtin_popcount(static_cast<unsigned>(_mm_movemask_ps(_mm_cmpeq_ps(vl, vh))) & 7u) >= 2)
+        vl = _mm_set1_ps(kInfinity), vh = _mm_set1_ps(-kInfinity);
       alignas(16) float tl[4], th[4];
       _mm_store_ps(tl, vl), _mm_store_ps(th, vh);
       float* pb = box + 6 * kGroup * size_t{p / kGroup} + p % kGroup;
@@ -573,7 +578,6 @@
       if (p % kGroup == kGroup - 1 || p + 1 == C) {
         _mm_store_ps(tl, group_lo), _mm_store_ps(th, group_hi);
         for (int k = 0; k < 3; ++k) group[k * size_t{G} + p / kGroup] = tl[k], group[(3 + k) * size_t{G} + p / kGroup] = th[k];
-        all_lo = _mm_min_ps(all_lo, group_lo), all_hi = _mm_max_ps(all_hi, group_hi);
         group_lo = _mm_set1_ps(kInfinity), group_hi = _mm_set1_ps(-kInfinity);
       }
       if (!tri_boxes || skip) continue;  // the joint-matrix cull: built when a pair needs them (EnsureTriBoxes)
@@ -617,12 +621,15 @@
       if (nan) return false;
       float* pb = box + 6 * kGroup * size_t{p / kGroup} + p % kGroup;
       float* gb = group + p / kGroup;
+      // A patch collapsed onto a point or a line: no triangle with an area, no contact (the SSE2 path's comment).
+      const bool collapsed = (bl[0] == bh[0]) + (bl[1] == bh[1]) + (bl[2] == bh[2]) >= 2;
       for (int k = 0; k < 3; ++k) {
         if (!skip && (!std::isfinite(bl[k]) || !std::isfinite(bh[k]))) return false;
+        lo[k] = std::min(lo[k], bl[k]), hi[k] = std::max(hi[k], bh[k]);
+        if (collapsed) bl[k] = kInfinity, bh[k] = -kInfinity;
         pb[kGroup * k] = bl[k], pb[kGroup * (3 + k)] = bh[k];
         if (p % kGroup == 0) gb[k * size_t{G}] = kInfinity, gb[(3 + k) * size_t{G}] = -kInfinity;
         gb[k * size_t{G}] = std::min(gb[k * size_t{G}], bl[k]), gb[(3 + k) * size_t{G}] = std::max(gb[(3 + k) * size_t{G}], bh[k]);
-        lo[k] = std::min(lo[k], bl[k]), hi[k] = std::max(hi[k], bh[k]);
       }
       if (tri_boxes && !skip) TriBoxes(m, base, stride, p, tb);
     }

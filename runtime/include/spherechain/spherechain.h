@@ -428,8 +428,9 @@ typedef struct sc_contact_depth {
 /// @param contacts      [opt when capacity == 0] caller buffer of `capacity` records.
 /// @param depths        [opt] #SC_EXCLUSIONS_CREASE only (ignored otherwise): caller buffer of `capacity`
 ///                      records, depths[i] for contacts[i]; NULL: not computed.
-/// @param capacity      records `contacts` (and `depths`) hold. No useful bound exists: size it for the worst
-///                      frame you expect, and grow it (outside the frame) when `*count` exceeds it.
+/// @param capacity      records `contacts` (and `depths`) hold. The only bound is the job's budget (16 a
+///                      triangle plus 4,096), far more than a frame finds: size it for the worst frame you
+///                      expect, and grow it (outside the frame) when `*count` exceeds it.
 /// @param count         out: the number of contacts found — also when more than `capacity` (then only the
 ///                      first `capacity` were written); 0 on failure.
 /// @return #SC_OK; #SC_OK_TRUNCATED (`*count` > capacity); #SC_ERROR_NULL_ARGUMENT (model, workspace,

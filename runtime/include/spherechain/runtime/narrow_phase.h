@@ -470,8 +470,10 @@ struct NarrowPhaseJob {
   const Collision* sphere_pairs = nullptr;
   uint32_t sphere_pair_count = 0;         ///< records in `sphere_pairs`
   TriangleContact* output = nullptr;      ///< [opt when capacity == 0] caller buffer of `capacity` records
-  uint32_t capacity = 0;                  ///< records `output` holds (no useful upper bound exists:
-                                          ///< size it for the worst frame you expect; stats stay complete)
+  uint32_t capacity = 0;                  ///< records `output` holds (a job that succeeds finds at most its
+                                          ///< budget's tests, NarrowPhaseModel::kSweepTestsPerTriangle × \#T
+                                          ///< + kSweepSlack, too many to allocate: size it for the worst frame
+                                          ///< you expect; stats stay complete)
   /// [opt] kCrease only (ignored otherwise): caller buffer of `capacity` records; depths[i] is output[i]'s
   /// penetration (ContactDepth). Null: not computed (~15 ns a contact saved).
   ContactDepth* depths = nullptr;
