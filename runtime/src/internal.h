@@ -5,10 +5,20 @@
 #include <cstddef>
 #include <cstdint>
 
+#include <algorithm>
+
 #include "spherechain/runtime/detect.h"
+#include "spherechain/runtime/narrow_phase.h"
 #include "spherechain/runtime/refit.h"
 
 namespace spherechain::runtime {
+
+/// One limit of the narrow phase's budget (NarrowPhaseModel::kSweepTestsPerTriangle): `per` × `units` +
+/// kSweepSlack, kept 65,536 under UINT32_MAX so the uint32 counters it bounds stop before they could wrap.
+/// Used by the crease rule's sweep (Init's bind sweep, each job) and the other exclusions' jobs.
+inline uint32_t SweepLimit(uint64_t per, uint64_t units) {
+  return static_cast<uint32_t>(std::min<uint64_t>(per * units + NarrowPhaseModel::kSweepSlack, UINT32_MAX - 65536));
+}
 
 struct Model::Internal {
   static void Refit(const RefitJob& job, uint32_t begin, uint32_t end);

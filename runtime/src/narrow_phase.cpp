@@ -10,6 +10,7 @@
 #include <new>
 
 #include "alloc_guard.h"
+#include "internal.h"
 #include "spherechain/runtime/triangle_intersect.h"
 
 #if defined(__GNUC__) && defined(__x86_64__)
@@ -935,10 +936,8 @@ Status NarrowPhaseJob::Run() const {
   {  // the budget (NarrowPhaseModel::kSweepTestsPerTriangle): the crease rule's tests, and its box tests at its
      // pairs of patches' budget (16 x 16 a pair, 16 triangles a patch)
     const uint64_t T = model->triangle_count();
-    c.test_budget = static_cast<uint32_t>(std::min<uint64_t>(
-        NarrowPhaseModel::kSweepTestsPerTriangle * T + NarrowPhaseModel::kSweepSlack, UINT32_MAX - 65536));
-    c.box_budget = static_cast<uint32_t>(std::min<uint64_t>(
-        uint64_t{NarrowPhaseModel::kSweepPairsPerPatch} * 16 * T + NarrowPhaseModel::kSweepSlack, UINT32_MAX - 65536));
+    c.test_budget = SweepLimit(NarrowPhaseModel::kSweepTestsPerTriangle, T);
+    c.box_budget = SweepLimit(uint64_t{NarrowPhaseModel::kSweepPairsPerPatch} * 16, T);
   }
   NarrowPhaseStats st;
   *count = 0;

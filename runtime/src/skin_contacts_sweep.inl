@@ -804,11 +804,8 @@
   /// The sweep's budget (NarrowPhaseModel::kSweepTestsPerTriangle): InitModel's bind sweep and each job.
   static Counters SweepBudget(const NarrowPhaseModel& m) {
     Counters b;
-    b.tests = static_cast<uint32_t>(std::min<uint64_t>(
-        uint64_t{NarrowPhaseModel::kSweepTestsPerTriangle} * (m.tri_v_.size() / 3) + NarrowPhaseModel::kSweepSlack,
-        UINT32_MAX - 65536));
-    b.patch_pairs = static_cast<uint32_t>(std::min<uint64_t>(
-        uint64_t{NarrowPhaseModel::kSweepPairsPerPatch} * PatchCount(m) + NarrowPhaseModel::kSweepSlack, UINT32_MAX - 65536));
+    b.tests = SweepLimit(NarrowPhaseModel::kSweepTestsPerTriangle, m.tri_v_.size() / 3);
+    b.patch_pairs = SweepLimit(NarrowPhaseModel::kSweepPairsPerPatch, PatchCount(m));
     return b;
   }
   static bool OverBudget(const Counters& c, const Counters& budget) {
@@ -1104,11 +1101,8 @@
     st.crease_folds = c.folds;
     st.contacts = c.contacts;
     st.joint_culled = c.joint_culled;
-    if (OverBudget(c, budget)) {  // positions that are no pose: stopped, nothing reported
-      if (job.stats) *job.stats = st;
-      return Status::kErrorFrameTangled;
-    }
-    *job.count = written;
     if (job.stats) *job.stats = st;
+    if (OverBudget(c, budget)) return Status::kErrorFrameTangled;  // no pose: stopped, count 0
+    *job.count = written;
     return st.contacts > job.capacity ? Status::kOkTruncated : Status::kOk;
   }
