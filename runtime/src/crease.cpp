@@ -145,11 +145,12 @@ void CreaseScratch::Search(const CreaseGraph& g, const uint32_t t[3], float crea
     }
     for (uint32_t s : src) dist_[s] = 0.0f;
     const size_t ring_nodes = touched_.size();
-    if (!Buckets(g, crease)) {
-      // The bucket queue's entries ran out (a mesh with many edges far shorter than its crease): the same
-      // search again on a binary heap, whose entries never run out. Every node but the sources is forgotten,
-      // including those reached at distance 0 (edges of length 0 between nodes not welded): kept at 0 they
-      // would never be expanded again, and those past the ring would stay at 0 for later searches.
+    if (heap_only_ || !Buckets(g, crease)) {
+      // The bucket queue's entries ran out (a mesh with many edges far shorter than its crease), now or in an
+      // earlier search since Reset: the search on a binary heap, whose entries never run out. Every node but
+      // the sources is forgotten, including those reached at distance 0 (edges of length 0 between nodes not
+      // welded): kept at 0 they would never be expanded again, and those past the ring would stay at 0 for
+      // later searches.
       for (size_t i = 0; i < touched_.size(); ++i) {
         const uint32_t n = touched_[i];
         if (n != src[0] && n != src[1] && n != src[2]) dist_[n] = kInf;
@@ -160,6 +161,7 @@ void CreaseScratch::Search(const CreaseGraph& g, const uint32_t t[3], float crea
       std::sort(heap_.begin(), heap_.end());
       heap_.erase(std::unique(heap_.begin(), heap_.end()), heap_.end());
       Heap(g, crease);
+      heap_only_ = true;
     }
     for (int k = 0; k < 3; ++k) source_[k] = src[k];
     source_crease_ = crease;

@@ -195,6 +195,10 @@
     std::vector<uint16_t> rows;
     std::vector<uint64_t> node_entries;  // this corner node's patches q >= p: (entry << 16 | mask)
     std::vector<uint64_t> corners;  // per patch: (node << 32 | vertex << 4 | slot) of each triangle's corners
+    // The searches' budget (NarrowPhaseModel::kReachPerNode): a bind pose collapsed onto a few points reaches
+    // most of its surface from every node, a search and a near row per node quadratic in them.
+    const uint32_t reach_budget = SweepLimit(NarrowPhaseModel::kReachPerNode, N);
+    uint64_t reached = 0;
     std::vector<uint64_t> pairs;  // (p << 32 | q), p <= q, for every pair of patches with a near pair
     std::vector<uint32_t> block;  // per pair in `pairs`: its rows' block in near_rows_, or kAllNear
     m.near_rows_.clear();
@@ -226,7 +230,9 @@
         if (kept.empty()) {  // a node is near its own triangles: empty means not searched yet
           const uint32_t source[3] = {v, v, v};
           fresh.clear();
-          for (uint32_t n : scratch.Reach(g, source, g.crease()))
+          const BlockVector<uint32_t>& reach = scratch.Reach(g, source, g.crease());
+          if ((reached += reach.size()) > reach_budget) return Status::kErrorBindPoseTangled;
+          for (uint32_t n : reach)
             for (uint32_t k = nt_off[n]; k < nt_off[n + 1]; ++k) {
               const uint32_t u = nt_tri[k], q = patch_of[u];
               if (fresh_of[q] == kNone) fresh_of[q] = static_cast<uint32_t>(fresh.size()), fresh.push_back(uint64_t{q} << 16);

@@ -109,7 +109,8 @@ typedef uint32_t sc_status;
                                                            ///< one after a 0, or not summing to 1.
 #define SC_ERROR_REGIONS ((sc_status)0x8000020Fu)          ///< The asset's regions malformed.
 #define SC_ERROR_BIND_POSE_TANGLED ((sc_status)0x80000301u)  ///< The narrow phase's model: the bind pose passes
-                                                            ///< through itself beyond its budget (a broken mesh).
+                                                            ///< through itself, or is collapsed onto a few
+                                                            ///< points, beyond its budget (a broken mesh).
 
 /// Static, NUL-terminated English text of `status`, starting with its constant's name (e.g.
 /// "SC_ERROR_VERSION_TOO_NEW: asset schema_version is newer than this SDK"); "unknown status" for a value

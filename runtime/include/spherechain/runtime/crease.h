@@ -102,8 +102,8 @@ class CreaseScratch {
   /// (file comment) for a fold distance `crease` [Limit: 0 < crease; the graph's own crease or any other].
   /// [Limit: made_for(graph); a scratch used with several graphs of one node count must be Reset between them]
   /// Searches from t's corners out to `crease` (bounded Dijkstra, once per distinct (t, crease) in a row; on a
-  /// bucket queue of 256 buckets of crease / 256, Dial 1969, or a binary heap should its entries run out:
-  /// the same distances either way).
+  /// bucket queue of 256 buckets of crease / 256, Dial 1969, or a binary heap should its entries run out —
+  /// and on the heap alone for the scratch's later searches, until Reset: the same distances either way).
   /// Cost: O(k log k) for the k edges within the crease of t on a new source, O(1) after. No allocation.
   bool Near(const CreaseGraph& graph, const uint32_t t[3], const uint32_t u[3], float crease);
   /// The nodes near the triangle with corners `t` (vertex indices < \#V) for `crease`: its corners, their
@@ -111,8 +111,8 @@ class CreaseScratch {
   /// near t (Near) exactly when one of u's corners' nodes (CreaseGraph::node) is in this list. The span
   /// is the scratch's own and valid until the next Near, Reach or Reset. Same search and cost as Near.
   const BlockVector<uint32_t>& Reach(const CreaseGraph& graph, const uint32_t t[3], float crease);
-  /// Forgets the last source (the next Near searches again). O(1).
-  void Reset() { source_crease_ = -1.0f; }
+  /// Forgets the last source (the next Near searches again), and goes back to the bucket queue. O(1).
+  void Reset() { source_crease_ = -1.0f, heap_only_ = false; }
 
   /// Calls f(array) on each of its arrays (BlockVector).
   template <class F>
@@ -133,6 +133,10 @@ class CreaseScratch {
 
   uint32_t source_[3] = {~0u, ~0u, ~0u};
   float source_crease_ = -1.0f;
+  // Set once the bucket queue's entries ran out: the surface has many edges far shorter than its crease (a
+  // bind pose collapsed onto a few points), where every search would fill the buckets and then start again on
+  // the heap. Later searches go to the heap directly, until Reset or Init (the same distances either way).
+  bool heap_only_ = false;
   BlockVector<float> dist_;          // per node: distance from the source's corners, +inf when unreached
   BlockVector<uint8_t> ring_;        // per node: 1 when a corner of the source or joined to one by an edge
   BlockVector<uint32_t> touched_;    // nodes whose dist_ / ring_ were set (reset on the next source)

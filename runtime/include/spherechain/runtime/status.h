@@ -84,8 +84,10 @@ enum class [[nodiscard]] Status : uint32_t {
   // ---- what a loaded asset cannot build (Model / NarrowPhaseModel::Init) -------------------------
   kErrorBindPoseTangled = 0x8000'0301u,  ///< NarrowPhaseModel::Init (and a Model with its narrow phase): the
                                          ///< bind pose (Asset.bind_positions) passes through itself so much
-                                         ///< that its sweep ran past NarrowPhaseModel::kSweepTests… (a
-                                         ///< broken or mutated mesh; real characters use a fraction of it).
+                                         ///< that its sweep ran past NarrowPhaseModel::kSweepTests…, or is
+                                         ///< so collapsed that the searches of its surface ran past
+                                         ///< kReachPerNode (a broken or mutated mesh; real characters use a
+                                         ///< fraction of either).
 };
 
 /// True for kOk and every success-with-detail (kOkTruncated). Cost: one compare.
