@@ -57,6 +57,10 @@ Status Session::RuntimeFailure(const char* job, runtime::Status s) {
   if (s == runtime::Status::kErrorBindPoseTangled)
     return MakeError(Error::Code::kFormat, std::string(job) + ": " + runtime::ToString(s) +
                                                " (re-bake it from a mesh that does not pass through itself)");
+  if (s == runtime::Status::kErrorCreaseTooWide)  // the asset's crease against its mesh: a bake's choice
+    return MakeError(Error::Code::kFormat, std::string(job) + ": " + runtime::ToString(s) +
+                                               " (re-bake it with a smaller crease_rel, or from a mesh whose bind pose "
+                                               "is not collapsed)");
   if (s == runtime::Status::kErrorFrameTangled)  // the frame's positions: the animation or its skinning
     return MakeError(Error::Code::kFormat, std::string(job) + " (frame '" + frame_.label + "'): " + runtime::ToString(s));
   return MakeError(Error::Code::kInternal, std::string(job) + ": " + runtime::ToString(s));

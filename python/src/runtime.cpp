@@ -686,7 +686,7 @@ kErrorNonFinitePositions: a vertex of a surrounding region is NaN or inf; kError
 asset without the rule, or matrices on one without skin weights; kErrorJointCount; kErrorNonFiniteJoints;
 kErrorInvalidJob: a crease or matrices with another exclusions, or a crease below the asset's;
 kErrorBindPoseTangled: an asset whose bind pose passes through itself beyond the narrow phase's budget,
-every call; kErrorFrameTangled: positions that pass through themselves beyond the narrow phase's budget, no
+every call; kErrorCreaseTooWide: an asset whose crease reaches too much of its bind surface, every call; kErrorFrameTangled: positions that pass through themselves beyond the narrow phase's budget, no
 pose of the character — uninitialised, collapsed or scrambled; the message says which).
 Cost: the runtime's narrow phase (docs/performance.md); the first call builds the narrow phase's model and
 scratch, and each call allocates the returned array.
@@ -698,7 +698,8 @@ neighbours) whose centres are now closer than at bind pose by more than `closing
 narrow_phase(exclusions="crease", pairs=...) searches behind, as `play --narrow-behind` does with closing
 2 x Model.contact_margin and detect("m2", margin=1.5 x it, fold_margin=the same). Returns a new numpy.ndarray of PAIR_DTYPE (a < b; depth rA + rB − |cA −
 cB|; chains 0). Raises ValueError (closing), StatusError (kErrorInvalidJob: an asset without the crease rule;
-kErrorBindPoseTangled: its bind pose passes through itself beyond the narrow phase's budget).
+kErrorBindPoseTangled: its bind pose passes through itself beyond the narrow phase's budget;
+kErrorCreaseTooWide: its crease reaches too much of its bind surface).
 Cost: one distance per excluded pair; builds the narrow phase's model on first use.
 )doc")
       .def("reset", [](PyWorkspace& self) {

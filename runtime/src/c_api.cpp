@@ -61,7 +61,8 @@ static_assert(Same(SC_ERROR_MISSING_FIELD, rt::Status::kErrorMissingField) &&
               Same(SC_ERROR_CONTACT_MARGIN, rt::Status::kErrorContactMargin) &&
               Same(SC_ERROR_SKIN_WEIGHTS, rt::Status::kErrorSkinWeights) &&
               Same(SC_ERROR_REGIONS, rt::Status::kErrorRegions) &&
-              Same(SC_ERROR_BIND_POSE_TANGLED, rt::Status::kErrorBindPoseTangled));
+              Same(SC_ERROR_BIND_POSE_TANGLED, rt::Status::kErrorBindPoseTangled) &&
+              Same(SC_ERROR_CREASE_TOO_WIDE, rt::Status::kErrorCreaseTooWide));
 
 // The C records are the runtime's, byte for byte: the jobs write into (and read from) the caller's arrays.
 static_assert(sizeof(sc_pair) == sizeof(rt::Collision) && offsetof(sc_pair, a) == offsetof(rt::Collision, a) &&
@@ -152,6 +153,9 @@ SC_API const char* sc_status_string(sc_status status) {
     case SC_ERROR_REGIONS: return "SC_ERROR_REGIONS: the asset's regions are malformed";
     case SC_ERROR_BIND_POSE_TANGLED:
       return "SC_ERROR_BIND_POSE_TANGLED: the bind pose passes through itself beyond the narrow phase's budget";
+    case SC_ERROR_CREASE_TOO_WIDE:
+      return "SC_ERROR_CREASE_TOO_WIDE: the crease reaches too much of the bind surface from each vertex (a collapsed "
+             "bind pose, or a mesh far denser than its crease)";
     default: return "unknown status";
   }
 }

@@ -196,7 +196,8 @@
     std::vector<uint64_t> node_entries;  // this corner node's patches q >= p: (entry << 16 | mask)
     std::vector<uint64_t> corners;  // per patch: (node << 32 | vertex << 4 | slot) of each triangle's corners
     // The searches' budget (NarrowPhaseModel::kReachPerNode): a bind pose collapsed onto a few points reaches
-    // most of its surface from every node, a search and a near row per node quadratic in them.
+    // most of its surface from every node, a search and a near row per node quadratic in them; a mesh far
+    // denser than its crease comes near that.
     const uint32_t reach_budget = SweepLimit(NarrowPhaseModel::kReachPerNode, N);
     uint64_t reached = 0;
     std::vector<uint64_t> pairs;  // (p << 32 | q), p <= q, for every pair of patches with a near pair
@@ -231,7 +232,7 @@
           const uint32_t source[3] = {v, v, v};
           fresh.clear();
           const BlockVector<uint32_t>& reach = scratch.Reach(g, source, g.crease());
-          if ((reached += reach.size()) > reach_budget) return Status::kErrorBindPoseTangled;
+          if ((reached += reach.size()) > reach_budget) return Status::kErrorCreaseTooWide;
           for (uint32_t n : reach)
             for (uint32_t k = nt_off[n]; k < nt_off[n + 1]; ++k) {
               const uint32_t u = nt_tri[k], q = patch_of[u];

@@ -36,6 +36,9 @@ const char* ToString(Status s) {
       return "kErrorSkinWeights: a sphere's joint weights are negative, not finite, nonzero after a zero or do not sum to 1, or a vertex's skin weights do not sum to 1";
     case Status::kErrorBindPoseTangled:
       return "kErrorBindPoseTangled: the bind pose passes through itself beyond the narrow phase's budget (a broken mesh)";
+    case Status::kErrorCreaseTooWide:
+      return "kErrorCreaseTooWide: the crease reaches too much of the bind surface from each vertex (a bind pose "
+             "collapsed onto a few points, or a mesh far denser than its crease)";
     case Status::kErrorRegions:
       return "kErrorRegions: Asset.regions malformed (count, one trunk last, or a region value past them)";
     case Status::kErrorJointCount:

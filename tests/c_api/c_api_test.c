@@ -112,6 +112,7 @@ static void TestStatusStrings(void) {
       {SC_ERROR_SKIN_WEIGHTS, "SC_ERROR_SKIN_WEIGHTS"},
       {SC_ERROR_REGIONS, "SC_ERROR_REGIONS"},
       {SC_ERROR_BIND_POSE_TANGLED, "SC_ERROR_BIND_POSE_TANGLED"},
+      {SC_ERROR_CREASE_TOO_WIDE, "SC_ERROR_CREASE_TOO_WIDE"},
   };
   size_t i;
   for (i = 0; i < sizeof(all) / sizeof(all[0]); ++i) {

@@ -1,6 +1,7 @@
-// The pictures of an asset that LoadAsset accepts without its optional region arrays (Asset.sphere_regions,
-// triangle_regions: absent in a hand-made or older asset): the debug glTF and the SVG views are written, the
-// character drawn grey, instead of reading through a null array.
+// Hand-made assets (tests/runtime/asset_builder.h tubes) through playback. The pictures of an asset that
+// LoadAsset accepts without its optional region arrays (Asset.sphere_regions, triangle_regions: absent in a
+// hand-made or older asset): the debug glTF and the SVG views are written, the character drawn grey, instead
+// of reading through a null array. A session on an asset whose narrow phase the runtime refuses.
 #include <doctest/doctest.h>
 
 #include <filesystem>
@@ -8,6 +9,7 @@
 
 #include "runtime/asset_builder.h"
 #include "spherechain/playback/debug_export.h"
+#include "spherechain/playback/session.h"
 
 namespace sc = spherechain;
 namespace st = spherechain::test;
@@ -32,4 +34,37 @@ TEST_CASE("debug pictures of an asset without sphere_regions and triangle_region
   CHECK(s.ok());
   CHECK(std::filesystem::file_size(out) > 0);
   std::filesystem::remove(out);
+}
+
+TEST_CASE("a session's narrow phase on an asset whose crease reaches the whole bind surface: a format error") {
+  // A tube of 2,400 nodes whose bind pose is shrunk 1,000 times under a crease of 3: every node reaches all
+  // of them, past NarrowPhaseModel::kReachPerNode. The runtime refuses the model (kErrorCreaseTooWide); a
+  // Session with the narrow phase reports it as the asset's fault (kFormat), with what to do about it, and the
+  // same asset without the narrow phase still plays.
+  st::Mesh tube_mesh;
+  st::Tube tube;
+  tube.rings = 150;
+  tube.sides = 16;
+  tube.spacing = 0.6f;
+  st::AssetData d = st::MakeTubes({tube}, {}, &tube_mesh);
+  d.bind_positions = tube_mesh.positions;
+  for (float& x : d.bind_positions) x *= 1e-3f;
+  d.crease = 3.0f;
+  const st::AlignedBytes bytes = st::Serialize(d);
+  sc::runtime::AssetView view;
+  REQUIRE(sc::runtime::LoadAsset(bytes.data(), bytes.size, &view) == sc::runtime::Status::kOk);
+  sc::import::Mesh mesh;
+  mesh.positions = tube_mesh.positions;
+  mesh.indices = tube_mesh.triangles;
+  sc::playback::SessionOptions options;
+  options.narrow = sc::playback::SessionNarrow::kEvery;
+  sc::playback::Session session;
+  const auto e = session.Init(view, mesh, options);
+  REQUIRE(!e.ok());
+  CHECK(e.error().code == sc::import::Error::Code::kFormat);
+  CHECK(e.error().message.find("kErrorCreaseTooWide") != std::string::npos);
+  CHECK(e.error().message.find("smaller crease_rel") != std::string::npos);
+  CHECK(session.runtime_status() == sc::runtime::Status::kErrorCreaseTooWide);
+  options.narrow = sc::playback::SessionNarrow::kNone;
+  CHECK(session.Init(view, mesh, options).ok());
 }

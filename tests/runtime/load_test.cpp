@@ -369,6 +369,7 @@ TEST_CASE("ToString names every status and Succeeded/Failed split them") {
       {Status::kErrorSkinWeights, "kErrorSkinWeights"},
       {Status::kErrorRegions, "kErrorRegions"},
       {Status::kErrorBindPoseTangled, "kErrorBindPoseTangled"},
+      {Status::kErrorCreaseTooWide, "kErrorCreaseTooWide"},
   };
   for (const auto& entry : all) {
     const Status status = entry.first;

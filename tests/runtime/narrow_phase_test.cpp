@@ -623,21 +623,21 @@ TEST_CASE("narrow phase, crease rule: a mesh whose every triangle is degenerate 
 }
 
 TEST_CASE("narrow phase, crease rule: a bind pose collapsed onto a few points is refused within the searches' budget") {
-  // A tube of 100 rings of 16 sides (1,600 nodes, 3,168 triangles), crease 3. Straight, a node's search out to
+  // A tube of 150 rings of 16 sides (2,400 nodes, 4,768 triangles), crease 3. Straight, a node's search out to
   // the crease reaches its ring and the rings within 3 along the tube: the model builds. Its bind pose shrunk
-  // 1,000 times (the whole tube within 0.06 of its middle), every node reaches all 1,600: 2.56 million nodes
-  // in all, past the budget of kReachPerNode (1,024) × 1,600 + kSweepSlack, so Init refuses it
-  // (kErrorBindPoseTangled) instead of building near rows between every pair of patches; so does a Model
+  // 1,000 times (the whole tube within 0.09 of its middle), every node reaches all 2,400: 5.76 million nodes
+  // in all, past the budget of kReachPerNode (2,048) × 2,400 + kSweepSlack, so Init refuses it
+  // (kErrorCreaseTooWide) instead of building near rows between every pair of patches; so does a Model
   // with its narrow phase.
   st::Mesh mesh;
   st::Tube tube;
-  tube.rings = 100;
+  tube.rings = 150;
   tube.sides = 16;
   tube.spacing = 0.6f;
   st::AssetData d = st::MakeTubes({tube}, {}, &mesh);
   d.bind_positions = mesh.positions;
   d.crease = 3.0f;
-  REQUIRE(d.vertex_count == 1600);
+  REQUIRE(d.vertex_count == 2400);
   {
     Loaded l = Load(d);
     Narrow ctx;
@@ -647,13 +647,13 @@ TEST_CASE("narrow phase, crease rule: a bind pose collapsed onto a few points is
   for (float& x : d.bind_positions) x *= 1e-3f;
   Loaded l = Load(d);
   rt::NarrowPhaseModel model;
-  CHECK(model.Init(l.view) == rt::Status::kErrorBindPoseTangled);
+  CHECK(model.Init(l.view) == rt::Status::kErrorCreaseTooWide);
   CHECK(!model.initialized());
   rt::Model whole;
   rt::ModelOptions options;
   options.narrow_phase = true;
-  CHECK(whole.Init(l.view, options) == rt::Status::kErrorBindPoseTangled);
-  CHECK(size_t{rt::NarrowPhaseModel::kReachPerNode} * 1600 + rt::NarrowPhaseModel::kSweepSlack < size_t{1600} * 1600);
+  CHECK(whole.Init(l.view, options) == rt::Status::kErrorCreaseTooWide);
+  CHECK(size_t{rt::NarrowPhaseModel::kReachPerNode} * 2400 + rt::NarrowPhaseModel::kSweepSlack < size_t{2400} * 2400);
 }
 
 TEST_CASE("narrow phase, crease rule: the joint-matrix cull counts a joint listed twice in a row at its whole weight") {

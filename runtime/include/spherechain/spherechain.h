@@ -109,8 +109,11 @@ typedef uint32_t sc_status;
                                                            ///< one after a 0, or not summing to 1.
 #define SC_ERROR_REGIONS ((sc_status)0x8000020Fu)          ///< The asset's regions malformed.
 #define SC_ERROR_BIND_POSE_TANGLED ((sc_status)0x80000301u)  ///< The narrow phase's model: the bind pose passes
-                                                            ///< through itself, or is collapsed onto a few
-                                                            ///< points, beyond its budget (a broken mesh).
+                                                            ///< through itself beyond its budget (a broken mesh).
+#define SC_ERROR_CREASE_TOO_WIDE ((sc_status)0x80000302u)    ///< The narrow phase's model: the crease reaches too
+                                                            ///< much of the bind surface from each vertex (a
+                                                            ///< collapsed bind pose, or a mesh far denser than
+                                                            ///< its crease: re-bake with a smaller crease_rel).
 
 /// Static, NUL-terminated English text of `status`, starting with its constant's name (e.g.
 /// "SC_ERROR_VERSION_TOO_NEW: asset schema_version is newer than this SDK"); "unknown status" for a value
@@ -172,8 +175,9 @@ typedef struct sc_workspace sc_workspace;
 ///         #SC_ERROR_ALIGNMENT, #SC_ERROR_ASSET_TOO_SMALL, #SC_ERROR_ASSET_TOO_LARGE, #SC_ERROR_IDENTIFIER,
 ///         #SC_ERROR_VERSION_TOO_OLD, #SC_ERROR_VERSION_TOO_NEW, #SC_ERROR_CORRUPT, and #SC_ERROR_MISSING_FIELD ..
 ///         #SC_ERROR_REGIONS (semantic checks; with #SC_MODEL_NARROW_PHASE also #SC_ERROR_MISSING_FIELD for an
-///         asset baked without `triangles` / `weld_ids`, and #SC_ERROR_BIND_POSE_TANGLED for a bind pose that
-///         passes through itself beyond the narrow phase's budget); #SC_ERROR_OUT_OF_MEMORY.
+///         asset baked without `triangles` / `weld_ids`, #SC_ERROR_BIND_POSE_TANGLED for a bind pose that
+///         passes through itself beyond the narrow phase's budget, and #SC_ERROR_CREASE_TOO_WIDE for a crease
+///         that reaches too much of the bind surface); #SC_ERROR_OUT_OF_MEMORY.
 /// Cost: O(size) verification + O(\#S²) model build (+ the narrow phase's, see #SC_MODEL_NARROW_PHASE);
 /// allocates (the only allocating call besides sc_workspace_create()). Thread-safe (no shared state).
 SC_API sc_status sc_model_create(const void* bytes, size_t size, uint32_t flags, sc_model** out);

@@ -148,7 +148,8 @@ class Session {
   /// finite and > 0 or a fold_closing that is not finite and >= 0, a zero contact_capacity (the messages say which); kFormat — a narrow phase on an asset
   /// baked before it ("narrow phase: kErrorMissingField (baked before the narrow phase existed: re-bake
   /// it)"), or on an asset whose bind pose passes through itself beyond the narrow phase's budget
-  /// ("runtime Model::Init: kErrorBindPoseTangled: …", runtime_status() holds it); kInternal — another
+  /// ("runtime Model::Init: kErrorBindPoseTangled: …", runtime_status() holds it), or whose crease reaches too
+  /// much of its bind surface ("runtime Model::Init: kErrorCreaseTooWide: …"); kInternal — another
   /// runtime Init failure ("runtime Model::Init: <status>", ...; runtime_status() holds
   /// the status). Cost: the runtime Inits (allocating), the DetectBound-sized pair buffers and
   /// contact_capacity contacts (12 B each, + 16 B with depths).

@@ -140,7 +140,7 @@ class Model {
   /// The same with `options`: with options.narrow_phase also the narrow phase (narrow_phase()), built on
   /// the heap and moved into the model's one block (4.9 MB more for MakeHuman with the crease rule). Also
   /// returns what NarrowPhaseModel::Init returns (kErrorMissingField, kErrorInvalidJob for unknown
-  /// regions, kErrorBindPoseTangled); the model is empty after a failure.
+  /// regions, kErrorBindPoseTangled, kErrorCreaseTooWide); the model is empty after a failure.
   Status Init(const AssetView& view, const ModelOptions& options);
 
   /// The same in caller memory (meshoptimizer-style): `memory` [Limit: 16-byte aligned, else

@@ -147,9 +147,9 @@ class NarrowPhaseModel {
   /// Returns kOk; kErrorNullArgument when `!view.valid()`; kErrorMissingField when the asset has no
   /// `triangles` or `weld_ids` (baked before the narrow phase existed: re-bake); kErrorOutOfMemory;
   /// kErrorInvalidJob for an unknown `regions`; with the crease rule, kErrorBindPoseTangled when the sweep of
-  /// the bind pose for its own contacts passes its budget (kSweepTestsPerTriangle), or the searches of the
-  /// bind surface pass theirs (kReachPerNode: a bind pose collapsed onto a few points). The model is empty
-  /// (not initialised) after a failure.
+  /// the bind pose for its own contacts passes its budget (kSweepTestsPerTriangle), and kErrorCreaseTooWide
+  /// when the searches of the bind surface pass theirs (kReachPerNode). The model is empty (not initialised)
+  /// after a failure.
   /// Cost: O(\#T + \#V + \#S log) time; memory ~40 B per region triangle + 4 B per vertex + 4 B per
   /// (sphere, region vertex) + ~20 B per sphere; kReach also 2 B per (triangle, sphere it stands behind).
   /// An asset with the crease rule adds the rule's patches and near bits: one bounded Dijkstra per welded
@@ -174,11 +174,13 @@ class NarrowPhaseModel {
   static constexpr uint32_t kSweepTestsPerTriangle = 16, kSweepPairsPerPatch = 64, kSweepSlack = 4096;
   /// The budget of Init's searches of the welded bind surface (one bounded Dijkstra per welded node, out to the
   /// crease): at most kReachPerNode × \#nodes + kSweepSlack nodes reached in all, else Init returns
-  /// kErrorBindPoseTangled. A bind pose collapsed onto a few points (every node within the crease of most
-  /// others) makes those searches, and the near rows they fill, quadratic in the nodes. The real characters
-  /// reach 262 nodes a node on average (MakeHuman: 13,380 nodes, the most 955), CesiumMan 17.6,
-  /// BCN_Epileptic 37.5, the repository's creature 7.
-  static constexpr uint32_t kReachPerNode = 1024;
+  /// kErrorCreaseTooWide. A bind pose collapsed onto a few points (every node within the crease of most
+  /// others) makes those searches, and the near rows they fill, quadratic in the nodes; a mesh far denser than
+  /// its crease makes them as long (a crease disc of thousands of vertices: re-bake with a smaller crease).
+  /// The real characters reach 262 nodes a node on average (MakeHuman: 13,380 nodes, the most 955; a mesh of
+  /// its shape about 8 times as dense, some 200,000 triangles, would reach the budget at a 3 % crease),
+  /// CesiumMan 17.6, BCN_Epileptic 37.5, the repository's creature 7.
+  static constexpr uint32_t kReachPerNode = 2048;
   /// kReach when built from reach regions, else kSurrounding.
   NarrowPhaseRegions regions() const { return reach_ ? NarrowPhaseRegions::kReach : NarrowPhaseRegions::kSurrounding; }
 

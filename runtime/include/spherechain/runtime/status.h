@@ -84,10 +84,14 @@ enum class [[nodiscard]] Status : uint32_t {
   // ---- what a loaded asset cannot build (Model / NarrowPhaseModel::Init) -------------------------
   kErrorBindPoseTangled = 0x8000'0301u,  ///< NarrowPhaseModel::Init (and a Model with its narrow phase): the
                                          ///< bind pose (Asset.bind_positions) passes through itself so much
-                                         ///< that its sweep ran past NarrowPhaseModel::kSweepTests…, or is
-                                         ///< so collapsed that the searches of its surface ran past
-                                         ///< kReachPerNode (a broken or mutated mesh; real characters use a
-                                         ///< fraction of either).
+                                         ///< that its sweep ran past NarrowPhaseModel::kSweepTests… (a
+                                         ///< broken or mutated mesh; real characters use a fraction of it).
+  kErrorCreaseTooWide = 0x8000'0302u,    ///< NarrowPhaseModel::Init (and a Model with its narrow phase): the
+                                         ///< crease (Asset.crease) reaches so many welded vertices of the bind
+                                         ///< surface from each that its searches ran past
+                                         ///< NarrowPhaseModel::kReachPerNode: a bind pose collapsed onto a few
+                                         ///< points, or a mesh far denser than its crease (MakeHuman uses an
+                                         ///< eighth of it; re-bake with a smaller crease_rel).
 };
 
 /// True for kOk and every success-with-detail (kOkTruncated). Cost: one compare.
