@@ -37,19 +37,12 @@ TEST_CASE("debug pictures of an asset without sphere_regions and triangle_region
 }
 
 TEST_CASE("a session's narrow phase on an asset whose crease reaches the whole bind surface: a format error") {
-  // A tube of 2,400 nodes whose bind pose is shrunk 1,000 times under a crease of 3: every node reaches all
-  // of them, past NarrowPhaseModel::kReachPerNode. The runtime refuses the model (kErrorCreaseTooWide); a
+  // st::CreaseTube collapsed 1,000 times: every node of its 2,400 reaches all of them, past
+  // NarrowPhaseModel::kReachPerNode. The runtime refuses the model (kErrorCreaseTooWide); a
   // Session with the narrow phase reports it as the asset's fault (kFormat), with what to do about it, and the
   // same asset without the narrow phase still plays.
   st::Mesh tube_mesh;
-  st::Tube tube;
-  tube.rings = 150;
-  tube.sides = 16;
-  tube.spacing = 0.6f;
-  st::AssetData d = st::MakeTubes({tube}, {}, &tube_mesh);
-  d.bind_positions = tube_mesh.positions;
-  for (float& x : d.bind_positions) x *= 1e-3f;
-  d.crease = 3.0f;
+  const st::AssetData d = st::CreaseTube(1e-3f, &tube_mesh);
   const st::AlignedBytes bytes = st::Serialize(d);
   sc::runtime::AssetView view;
   REQUIRE(sc::runtime::LoadAsset(bytes.data(), bytes.size, &view) == sc::runtime::Status::kOk);

@@ -325,6 +325,23 @@ inline AssetData TwoTubes(bool crossing, Mesh* mesh) {
   return MakeTubes({a, bt}, {{0, 1}, {0}, {1}}, mesh);
 }
 
+/// One tube of 150 rings of 16 sides (2,400 nodes, 4,768 triangles, rings 0.6 apart) with bind positions
+/// (Asset.bind_positions) equal to its mesh scaled by `bind_scale` about the origin, under a crease of 3.
+/// At 1 (straight) a node's search out to the crease reaches its ring and the rings within 3 along the tube;
+/// at 1e-3 (collapsed within 0.09 of the middle) every node reaches all 2,400, 5.76 million in all: past
+/// NarrowPhaseModel::kReachPerNode (2,048) × 2,400 + kSweepSlack, so the narrow phase is refused.
+inline AssetData CreaseTube(float bind_scale, Mesh* mesh) {
+  Tube tube;
+  tube.rings = 150;
+  tube.sides = 16;
+  tube.spacing = 0.6f;
+  AssetData d = MakeTubes({tube}, {}, mesh);
+  d.bind_positions = mesh->positions;
+  for (float& x : d.bind_positions) x *= bind_scale;
+  d.crease = 3.0f;
+  return d;
+}
+
 /// Vertex i of `positions` transformed by rotation matrix R (row-major) and translation t.
 inline std::vector<float> Transform(const std::vector<float>& positions, const float R[9], const float t[3]) {
   std::vector<float> out(positions.size());

@@ -623,20 +623,11 @@ TEST_CASE("narrow phase, crease rule: a mesh whose every triangle is degenerate 
 }
 
 TEST_CASE("narrow phase, crease rule: a bind pose collapsed onto a few points is refused within the searches' budget") {
-  // A tube of 150 rings of 16 sides (2,400 nodes, 4,768 triangles), crease 3. Straight, a node's search out to
-  // the crease reaches its ring and the rings within 3 along the tube: the model builds. Its bind pose shrunk
-  // 1,000 times (the whole tube within 0.09 of its middle), every node reaches all 2,400: 5.76 million nodes
-  // in all, past the budget of kReachPerNode (2,048) × 2,400 + kSweepSlack, so Init refuses it
-  // (kErrorCreaseTooWide) instead of building near rows between every pair of patches; so does a Model
-  // with its narrow phase.
+  // st::CreaseTube: straight, the model builds; its bind pose shrunk 1,000 times, every node reaches all 2,400,
+  // past the budget, so Init refuses it (kErrorCreaseTooWide) instead of building near rows between every pair
+  // of patches; so does a Model with its narrow phase.
   st::Mesh mesh;
-  st::Tube tube;
-  tube.rings = 150;
-  tube.sides = 16;
-  tube.spacing = 0.6f;
-  st::AssetData d = st::MakeTubes({tube}, {}, &mesh);
-  d.bind_positions = mesh.positions;
-  d.crease = 3.0f;
+  st::AssetData d = st::CreaseTube(1.0f, &mesh);
   REQUIRE(d.vertex_count == 2400);
   {
     Loaded l = Load(d);
@@ -644,7 +635,7 @@ TEST_CASE("narrow phase, crease rule: a bind pose collapsed onto a few points is
     CHECK(ctx.Init(l.view) == rt::Status::kOk);
     CHECK(ctx.model.has_crease());
   }
-  for (float& x : d.bind_positions) x *= 1e-3f;
+  for (float& x : d.bind_positions) x *= 1e-3f;  // = st::CreaseTube(1e-3f, ...)
   Loaded l = Load(d);
   rt::NarrowPhaseModel model;
   CHECK(model.Init(l.view) == rt::Status::kErrorCreaseTooWide);
