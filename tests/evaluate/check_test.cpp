@@ -129,14 +129,15 @@ void CheckAgainstTruth(const std::string& path, uint32_t max_frames_checked, boo
 
 }  // namespace
 
-TEST_CASE("check: the creature's events are the exact truth's, frame by frame, with its depths") {
+// "heavy": the exact truth of every frame (the ASan half of CI skips them; they run once, in the normal suite).
+TEST_CASE("check (heavy): the creature's events are the exact truth's, frame by frame, with its depths") {
   const std::string path = spherechain::test::SourceFile("tests/data/creature/creature.gltf");
   REQUIRE(std::filesystem::exists(path));
   CheckAgainstTruth(path, 1000);
   CheckAgainstTruth(path, 1000, /*key_times=*/true);
 }
 
-TEST_CASE("check: CesiumMan's walk, events against the exact truth") {
+TEST_CASE("check (heavy): CesiumMan's walk, events against the exact truth") {
   const std::string path = spherechain::test::SharedData("gltf/CesiumMan.gltf");
   if (!spherechain::test::Require(path)) return;
   CheckAgainstTruth(path, 1000);
