@@ -11,7 +11,7 @@
 // ASan's quarantine (freed memory held back to catch a use after free) at 16 MB instead of 256: assimp runs in
 // a child process forked from the fuzzer for every input (ImportOptions::isolate_assimp, as in the product), and
 // the kernel's copy and teardown of the fuzzer's page tables took 64 % of the target's time at a resident size
-// of 440 MB; at 120 MB it takes 21 %, and the target runs about twice the executions a second
+// of 440 MB; at 120–150 MB it takes 21 %, and the target runs 1.5 to 2 times the executions a second
 // (fuzz/README.md, "Limits"). ASAN_OPTIONS in the environment still overrides it.
 extern "C" const char* __asan_default_options() { return "quarantine_size_mb=16"; }
 
