@@ -55,11 +55,11 @@ inline std::string WriteScratch(const std::string& name, const uint8_t* data, si
 
 /// The fit a fuzzed bake runs: the cover fit with small budgets, so that one run on a body of the corpora
 /// stays far under the fuzzers' timeout (a configuration asking for a big fit is slow by request, not a finding).
-/// Interior voxels: at most 625 for a creature and FitParams::kBipedVoxelFactor times that (2,500) for a biped, so
-/// a body whose voxels come out small (one lying down, measured by its thickness) is voxelised coarser. A quarter of
-/// the assimp target's corpus (and 99 of the 218 inputs one run added) became mutations of such a body (an
-/// STL), fitted in 2–3 s each at a biped's former 10,000 voxels (fuzz build), 0.7–1.2 s at 2,500. The seeds
-/// reach the same stages either way.
+/// Interior voxels: at most 625 for a creature and FitParams::kBipedVoxelFactor times that (2,500) for a
+/// biped, so a body whose voxels come out small (one lying down, measured by its thickness) is voxelised
+/// coarser. A quarter of the assimp target's corpus (and 99 of the 218 inputs one run added) became mutations
+/// of such a body (an STL), each run taking 1.4–3.0 s at a biped's former 10,000 voxels (fuzz build), 0.6–1.5 s
+/// at 2,500. The seeds reach the same stages either way.
 inline baker::FitParams SmallFit(baker::FitParams p = {}) {
   p.max_spheres = std::min(p.max_spheres, 64);
   p.skin_spheres = p.skin_spheres < 0 ? 4 : std::min(p.skin_spheres, p.max_spheres - 5);
