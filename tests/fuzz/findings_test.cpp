@@ -235,6 +235,40 @@ TEST_CASE("Fuzz findings: a region map's deep entry is named briefly (kConfig), 
   CHECK(seg.error().message.find("triangle_regions[0] = an array of 1 is not a region") != std::string::npos);
 }
 
+TEST_CASE("Fuzz findings: GLBs that broke segmentation are refused with both segmentations' reasons (kSegmentation)") {
+  // fuzz_import_gltf, each file as the fuzzer kept it (fuzz/corpus/import_gltf/): each imports, and the automatic
+  // segmentation refuses it with the geometry's reason and then the skeleton's.
+  struct Case {
+    const char* file;
+    const char* geometry;  // the geometric segmentation's reason
+    const char* skeleton;  // the any-skeleton path's reason
+  };
+  const Case cases[] = {
+      // The creature with its mesh's node among the joints and the bone tree's root left out: the trunk's top bone
+      // is a root, and the surface of "the tree above the trunk" was read at index -1 (ASan, UBSan).
+      {"crash_segment_skeleton_two_trees.glb", "the bottom of the mesh does not split into two legs",
+       "no recognisable limbs: the trunk's bones (node0) dominate no triangle"},
+      // 8·10^9 times wider than tall: the T-pose search converted its slab count to int (UBSan).
+      {"crash_segment_geometry_slab_overflow.glb", "two arms were not found",
+       "no recognisable limbs: the skin uses 2 bones (node0, node8)"},
+      // Positions far from the origin against the mesh's size: the weld's cell keys overflowed int64 (UBSan).
+      {"crash_weld_key_overflow.glb", "the bottom of the mesh does not split into two legs", ""},
+  };
+  for (const Case& c : cases) {
+    CAPTURE(c.file);
+    auto mesh = ImportMesh((fs::path(SPHERECHAIN_SOURCE_DIR) / "fuzz/corpus/import_gltf" / c.file).string());
+    REQUIRE_MESSAGE(mesh.ok(), (mesh.ok() ? "" : mesh.error().message));
+    auto seg = spherechain::baker::Segment(mesh.value(), spherechain::baker::SegmentMethod::kAuto);
+    REQUIRE_FALSE(seg.ok());
+    const std::string& m = seg.error().message;
+    CAPTURE(m);
+    CHECK(seg.error().code == Error::Code::kSegmentation);
+    CHECK(m.rfind("segment (geometry): not a standing body: ", 0) == 0);
+    CHECK(m.find(c.geometry) != std::string::npos);
+    CHECK(m.find(std::string("segment (skeleton): ") + c.skeleton) != std::string::npos);
+  }
+}
+
 TEST_CASE("Fuzz findings: a PLY on which assimp never returns is stopped in its child process (kFormat)") {
   // fuzz_import_assimp: an ASCII PLY header followed by binary FBX bytes; assimp's PLY reader ran for minutes.
   const std::string file = AssimpCorpusFile("timeout_assimp_ply_loop.ply");
