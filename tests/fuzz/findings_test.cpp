@@ -233,6 +233,21 @@ TEST_CASE("Fuzz findings: a region map's deep entry is named briefly (kConfig), 
   REQUIRE_FALSE(seg.ok());
   CHECK(seg.error().code == Error::Code::kConfig);
   CHECK(seg.error().message.find("triangle_regions[0] = an array of 1 is not a region") != std::string::npos);
+  // The configuration fuzzer's own input (fuzz/corpus/bake_config/: the configuration, a NUL, the region map of
+  // the fixed body, fuzz/data/body.obj), whose map nests under vertex_regions.
+  auto body = ImportMesh((fs::path(SPHERECHAIN_SOURCE_DIR) / "fuzz/data/body.obj").string());
+  REQUIRE(body.ok());
+  std::ifstream in(fs::path(SPHERECHAIN_SOURCE_DIR) / "fuzz/corpus/bake_config/crash_dump_deep_region_map.json",
+                   std::ios::binary);
+  const std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  const size_t nul = bytes.find('\0');
+  REQUIRE(nul != std::string::npos);
+  auto found = spherechain::baker::SegmentByMap(body.value(), d.Write("found.json", bytes.substr(nul + 1)));
+  REQUIRE_FALSE(found.ok());
+  CHECK(found.error().code == Error::Code::kConfig);
+  CAPTURE(found.error().message);
+  CHECK(found.error().message.find("vertex_regions[0] = an array of 1 is not a region") != std::string::npos);
+  CHECK(found.error().message.size() < 400);
 }
 
 TEST_CASE("Fuzz findings: GLBs that broke segmentation are refused with both segmentations' reasons (kSegmentation)") {
