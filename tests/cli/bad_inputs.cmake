@@ -130,18 +130,18 @@ endif()
 # A 228-triangle STL the assimp fuzzer found: a body lying down, segmented as a biped whose trunk is horizontal.
 # Refused in a moment by the plausibility checks (exit 1, nothing written); with --force its fit ran for 6 minutes
 # on 3.1 million interior voxels until bipeds got a voxel budget (tests/fuzz/findings_test.cpp).
-execute_process(COMMAND ${PYTHON} -c "import sys; open(sys.argv[2], 'wb').write(open(sys.argv[1], 'rb').read()[1:])"
-                        ${LYING} ${WORK}/lying.stl RESULT_VARIABLE rc)  # the fuzzer's first byte picks the format
-if(NOT rc EQUAL 0)
-  message(FATAL_ERROR "could not write lying.stl from ${LYING}")
-endif()
+# An assimp corpus file as the file it stands for: the fuzzer's first byte, which picks the format, dropped.
+function(write_assimp_corpus_file src dst)
+  execute_process(COMMAND ${PYTHON} -c "import sys; open(sys.argv[2], 'wb').write(open(sys.argv[1], 'rb').read()[1:])"
+                          ${src} ${dst} RESULT_VARIABLE rc)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "could not write ${dst} from ${src}")
+  endif()
+endfunction()
+write_assimp_corpus_file(${LYING} ${WORK}/lying.stl)
 # fuzz_import_assimp: a 135-byte PLY with a mangled property line; assimp's PLY reader dereferences null. It runs
 # in a child process, whose death is the file's format error.
-execute_process(COMMAND ${PYTHON} -c "import sys; open(sys.argv[2], 'wb').write(open(sys.argv[1], 'rb').read()[1:])"
-                        ${PLY_SEGV} ${WORK}/segv.ply RESULT_VARIABLE rc)
-if(NOT rc EQUAL 0)
-  message(FATAL_ERROR "could not write segv.ply from ${PLY_SEGV}")
-endif()
+write_assimp_corpus_file(${PLY_SEGV} ${WORK}/segv.ply)
 expect_exit1(assimp_child_crash "format: .*segv.ply: the assimp importer's process died reading it \\(signal 11"
              bake ${WORK}/segv.ply -o ${WORK}/out.sphc)
 expect_exit1(lying_body "implausible: .*lying.stl: the bake looks wrong, refused .nothing written.: .*PLAUS-TRUNK-AXIS: the torso's principal axis is 88 degrees from the up axis"

@@ -46,11 +46,16 @@ struct Dir {
 
 std::string Nested(size_t depth) { return std::string(depth, '[') + std::string(depth, ']'); }
 
+/// The bytes of a fuzzer's corpus file, fuzz/corpus/TARGET/NAME.
+std::string CorpusFile(const std::string& target, const std::string& name) {
+  std::ifstream in(fs::path(SPHERECHAIN_SOURCE_DIR) / "fuzz/corpus" / target / name, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
 /// A file of the assimp fuzzer's corpus (fuzz/corpus/import_assimp/NAME) as the file it stands for: its first
 /// byte, which picks the fuzzer's format, dropped.
 std::string AssimpCorpusFile(const std::string& name) {
-  std::ifstream in(fs::path(SPHERECHAIN_SOURCE_DIR) / "fuzz/corpus/import_assimp" / name, std::ios::binary);
-  const std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  const std::string bytes = CorpusFile("import_assimp", name);
   REQUIRE_MESSAGE(bytes.size() > 1, name);
   return bytes.substr(1);
 }
@@ -237,9 +242,7 @@ TEST_CASE("Fuzz findings: a region map's deep entry is named briefly (kConfig), 
   // the fixed body, fuzz/data/body.obj), whose map nests under vertex_regions.
   auto body = ImportMesh((fs::path(SPHERECHAIN_SOURCE_DIR) / "fuzz/data/body.obj").string());
   REQUIRE(body.ok());
-  std::ifstream in(fs::path(SPHERECHAIN_SOURCE_DIR) / "fuzz/corpus/bake_config/crash_dump_deep_region_map.json",
-                   std::ios::binary);
-  const std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  const std::string bytes = CorpusFile("bake_config", "crash_dump_deep_region_map.json");
   const size_t nul = bytes.find('\0');
   REQUIRE(nul != std::string::npos);
   auto found = spherechain::baker::SegmentByMap(body.value(), d.Write("found.json", bytes.substr(nul + 1)));
