@@ -19,6 +19,8 @@
 #include "spherechain/baker/segment.h"
 #include "spherechain/import/import.h"
 
+#include "../../fuzz/bake_sequence.h"
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -239,8 +241,8 @@ TEST_CASE("Fuzz findings: a region map's deep entry is named briefly (kConfig), 
   CHECK(seg.error().code == Error::Code::kConfig);
   CHECK(seg.error().message.find("triangle_regions[0] = an array of 1 is not a region") != std::string::npos);
   // The configuration fuzzer's own input (fuzz/corpus/bake_config/: the configuration, a NUL, the region map of
-  // the fixed body, fuzz/data/body.obj), whose map nests under vertex_regions.
-  auto body = ImportMesh((fs::path(SPHERECHAIN_SOURCE_DIR) / "fuzz/data/body.obj").string());
+  // the fixed body, FixedBodyPath()), whose map nests under vertex_regions.
+  auto body = ImportMesh(spherechain::fuzz::FixedBodyPath());
   REQUIRE(body.ok());
   const std::string bytes = CorpusFile("bake_config", "crash_dump_deep_region_map.json");
   const size_t nul = bytes.find('\0');
