@@ -180,7 +180,7 @@ void RegisterBake(CLI::App& app, Commands* commands) {
   auto args = std::make_shared<BakeArgs>();
   CLI::App* sub = app.add_subcommand("bake", "Bake a character into a .sphc sphere-chain asset (paper §3-§5.1)");
   sub->add_option("input", args->inputs,
-                  "Character file(s): .gltf/.glb (tinygltf); .obj .fbx .dae .x .blend ... (assimp). Several: with --out-dir")
+                  "Character file(s): .gltf/.glb (tinygltf); .obj (own reader); .fbx .dae .x .blend ... (assimp). Several: with --out-dir")
       ->required();
   sub->add_option("-o,--output", args->output, "Asset to write (.sphc); written atomically");
   sub->add_option("--out-dir", args->out_dir,
