@@ -74,7 +74,7 @@ struct Writer {
   template <class T>
   void Vec(const std::vector<T>& v) {
     Pod(uint64_t{v.size()});
-    out.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
+    if (!v.empty()) out.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
   }
 };
 
@@ -102,7 +102,7 @@ struct Reader {
     const uint64_t n = Pod<uint64_t>();
     if (!ok || (in.size() - at) / sizeof(T) < n) return ok = false, std::vector<T>();
     std::vector<T> v(n);
-    std::memcpy(v.data(), in.data() + at, n * sizeof(T));
+    if (n != 0) std::memcpy(v.data(), in.data() + at, n * sizeof(T));  // an empty vector's data() may be null
     at += n * sizeof(T);
     return v;
   }

@@ -169,6 +169,11 @@ write_assimp_corpus_file(${LYING} ${WORK}/lying.stl)
 write_assimp_corpus_file(${PLY_SEGV} ${WORK}/segv.ply)
 expect_exit(assimp_child_crash 1 "format: .*segv.ply: the assimp importer's process died reading it \\(signal 11"
              bake ${WORK}/segv.ply -o ${WORK}/out.sphc)
+# fuzz_import_assimp: an 83-byte SMD whose skin has no weights; decoding the child's answer passed a null pointer
+# to memcpy (UBSan). Now it crosses whole, and the bake refuses the mesh, which has no area.
+write_assimp_corpus_file(${EMPTY_WEIGHTS} ${WORK}/empty_weights.smd)
+expect_exit(smd_no_weights 1 "segmentation: segment \\(geometry\\): not a standing body: the mesh has no area; segment \\(skeleton\\): no recognisable limbs: no bone carries skin weight"
+            bake ${WORK}/empty_weights.smd -o ${WORK}/out.sphc)
 expect_exit(lying_body 1 "implausible: .*lying.stl: the bake looks wrong, refused .nothing written.: .*PLAUS-TRUNK-AXIS: the torso's principal axis is 88 degrees from the up axis"
              bake ${WORK}/lying.stl -o ${WORK}/out.sphc)
 
