@@ -31,15 +31,17 @@ void AddAnimationOptions(CLI::App* sub, std::string* asset, std::string* rig, An
   sub->add_option("--mesh", anim->mesh, "The character file the asset was baked from (checked by fingerprint)")
       ->required()
       ->check(CLI::ExistingFile);
-  sub->add_option("--clip", anim->clip, "Clip to play (default: the first clip; none: the morph)");
+  CLI::Option* clip = sub->add_option("--clip", anim->clip, "Clip to play (default: the first clip; none: the morph)");
   anim->morph_option = sub->add_option("--morph", anim->morph,
                                        "Morph through key poses: pose files (.json), pose names in the poses folder, "
                                        "or folders; bare --morph: the character's default poses (even when it has clips)")
-                           ->expected(0, CLI::detail::expected_max_vector_size);
+                           ->expected(0, CLI::detail::expected_max_vector_size)
+                           ->excludes(clip);
   sub->add_option("--poses-dir", anim->poses_dir,
                   "Folder of default key poses (default: poses/<character> in the installed share/spherechain/, "
                   "else the source tree's data/, else data/poses/<character> upward from the current directory)");
-  sub->add_option("--frames", anim->frames, "Frames: the morph's length, or uniform samples of the clip (default 40)");
+  sub->add_option("--frames", anim->frames, "Frames: the morph's length, or uniform samples of the clip (default 40)")
+      ->check(WithinRange(1));
   sub->add_option("--rig", *rig, "MakeHuman rig (.mhskel) for an OBJ; default: default.mhskel beside the OBJ");
 }
 

@@ -1,7 +1,6 @@
 // spherechain bake INPUT -o OUT.sphc [--report R.json] [--config C.json] [--depfile OUT.d] ...
 // spherechain bake INPUT... --out-dir DIR [-j N]   (several inputs: bake_batch.cpp)
 #include <cstdio>
-#include <filesystem>
 
 #include <spdlog/spdlog.h>
 
@@ -132,38 +131,26 @@ int RunBake(const BakeArgs& a) {
     depfile = std::move(d).value();
   }
 
-  // Everything is in memory; write each output atomically (a failure leaves no partial file). The PNG
-  // first (it needs an outside tool, rsvg-convert), the asset after the files about it, the depfile last.
-  // All or nothing: when a write fails, the outputs this run already wrote are removed (the files about an
-  // asset that was not written; an asset whose depfile was not), so a build system runs the bake again
-  // instead of taking a mix of new and old files as up to date.
-  std::vector<const std::string*> written;
-  auto fail_removing = [&](const import::Error& e) {
-    std::error_code ec;
-    for (const std::string* path : written) std::filesystem::remove(*path, ec);
-    return Fail(e);
-  };
-  if (!a.png.empty()) {
+  // Everything is in memory. All or nothing: every output is written whole to a temporary beside its path,
+  // then all are renamed into place, the asset after the files about it and the depfile last (it names an
+  // asset that is there). When one cannot be written, none is renamed and an earlier run's outputs stay as
+  // they were, a consistent set that a build system sees as out of date (the command failed).
+  import::OutputFiles outputs;
+  if (!a.png.empty()) {  // first: it needs an outside tool, rsvg-convert
     runtime::AssetView view;
     if (runtime::Failed(runtime::LoadAsset(r.asset.data(), r.asset.size(), &view)))
       return Fail("internal: the baked asset does not load");
-    if (auto s = playback::RenderDebugPng(r.mesh, view, a.png); !s.ok()) return Fail(s.error());
-    written.push_back(&a.png);
+    if (auto s = playback::RenderDebugPng(r.mesh, view, outputs.Stage(a.png, ".png")); !s.ok()) return Fail(s.error());
   }
-  if (!a.report.empty()) {
-    const std::string text = JsonText(baker::MakeBakeReport(r, config, ctx)) + "\n";
-    if (auto s = import::WriteFileAtomic(a.report, text); !s.ok()) return fail_removing(s.error());
-    written.push_back(&a.report);
-  }
-  if (!a.ray_csv.empty()) {
-    if (auto s = import::WriteFileAtomic(a.ray_csv, baker::TorsoRayCsv(r)); !s.ok()) return fail_removing(s.error());
-    written.push_back(&a.ray_csv);
-  }
-  if (auto s = import::WriteFileAtomic(a.output, r.asset.data(), r.asset.size()); !s.ok()) return fail_removing(s.error());
-  written.push_back(&a.output);
-  // Last: a depfile names an asset that is there (a build system reads it once the command succeeded).
+  if (!a.report.empty())
+    if (auto s = outputs.Write(a.report, JsonText(baker::MakeBakeReport(r, config, ctx)) + "\n"); !s.ok())
+      return Fail(s.error());
+  if (!a.ray_csv.empty())
+    if (auto s = outputs.Write(a.ray_csv, baker::TorsoRayCsv(r)); !s.ok()) return Fail(s.error());
+  if (auto s = outputs.Write(a.output, r.asset.data(), r.asset.size()); !s.ok()) return Fail(s.error());
   if (!a.depfile.empty())
-    if (auto s = import::WriteFileAtomic(a.depfile, depfile); !s.ok()) return fail_removing(s.error());
+    if (auto s = outputs.Write(a.depfile, depfile); !s.ok()) return Fail(s.error());
+  if (auto s = outputs.Commit(); !s.ok()) return Fail(s.error());
   PrintSummary(r, ctx);
   Out("\nwrote %s (%zu bytes)", a.output.c_str(), r.asset.size());
   if (!a.report.empty()) Out(", %s", a.report.c_str());

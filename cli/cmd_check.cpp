@@ -226,7 +226,7 @@ int RunCheck(const CheckArgs& a) {
   }
   Out("threshold %s by default; %s\n", DepthText(r.max_depth, r).c_str(), r.failed() ? "FAIL" : "PASS");
 
-  // ---- the reports: all made first, then each written whole, atomically; on a failure none is left ----
+  // ---- the reports: all made first, then written all or nothing (an earlier run's stay as they were) ----
   std::vector<std::pair<const std::string*, std::string>> reports;
   if (!a.json.empty()) reports.emplace_back(&a.json, JsonText(evaluate::CheckReportJson(r)) + "\n");
   if (!a.junit.empty()) reports.emplace_back(&a.junit, evaluate::CheckReportJUnit(r));
@@ -238,13 +238,12 @@ int RunCheck(const CheckArgs& a) {
                       "; no report written)");
     reports.emplace_back(&a.html, std::move(html));
   }
-  for (size_t i = 0; i < reports.size(); ++i) {
-    if (auto s = import::WriteFileAtomic(*reports[i].first, reports[i].second); !s.ok()) {
-      std::error_code ec;
-      for (size_t k = 0; k < i; ++k) fs::remove(*reports[k].first, ec);
+  import::OutputFiles outputs;  // all or nothing: renamed into place once every report is written
+  for (const auto& [path, text] : reports)
+    if (auto s = outputs.Write(*path, text); !s.ok())
       return UsageError(s.error().message + " (the check itself: " + (r.failed() ? "FAIL" : "PASS") + "; no report written)");
-    }
-  }
+  if (auto s = outputs.Commit(); !s.ok())
+    return UsageError(s.error().message + " (the check itself: " + (r.failed() ? "FAIL" : "PASS") + ")");
   for (const auto& [path, text] : reports) Out("wrote %s\n", path->c_str());
   return r.failed() ? kExitFailed : 0;
 }
@@ -274,7 +273,7 @@ void RegisterCheck(CLI::App& app, Commands* commands) {
                                        "character's default poses. How a mesh without clips is checked")
                            ->expected(0, CLI::detail::expected_max_vector_size);
   sub->add_option("--morph-frames", args->morph_frames, "Frames of the morph (default 40)")
-      ->check(CLI::PositiveNumber)
+      ->check(WithinRange(1))
       ->needs(args->poses_option);
   CLI::Option* fps = sub->add_option("--fps", args->fps, "Frames per second a clip is sampled at (default 30)");
   sub->add_flag("--key-times", args->key_times,

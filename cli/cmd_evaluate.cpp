@@ -63,7 +63,9 @@ int RunEvaluate(const EvaluateArgs& a) {
   options.refit = a.refit;
   options.paper_regions = a.regions == "paper";
   options.coverage = a.coverage;
-  options.png_path = a.png;
+  // The picture and the JSON written all or nothing: both renamed into place once both are written.
+  import::OutputFiles outputs;
+  if (!a.png.empty()) options.png_path = outputs.Stage(a.png, ".png");
   const bool tty = isatty(2);
   if (!Quiet()) options.progress = [tty](uint32_t done, uint32_t frames, double elapsed) {
     if (tty) {
@@ -78,13 +80,9 @@ int RunEvaluate(const EvaluateArgs& a) {
   if (!result.ok()) return Fail(result.error());
   const evaluate::Evaluation& e = result.value();
   if (!Quiet()) std::fputs(e.text.c_str(), stdout);
-  if (!a.json.empty()) {
-    if (auto s = import::WriteFileAtomic(a.json, JsonText(e.report) + "\n"); !s.ok()) {
-      std::error_code ec;
-      if (e.png_frame >= 0) std::filesystem::remove(a.png, ec);  // no output of a failed run is left
-      return Fail(s.error());
-    }
-  }
+  if (!a.json.empty())
+    if (auto s = outputs.Write(a.json, JsonText(e.report) + "\n"); !s.ok()) return Fail(s.error());
+  if (auto s = outputs.Commit(); !s.ok()) return Fail(s.error());
   if (e.png_frame >= 0) Out("wrote %s (frame %d)\n", a.png.c_str(), e.png_frame);
   if (!a.json.empty()) Out("wrote %s\n", a.json.c_str());
   if (!std::isnan(a.min_recall)) {
@@ -115,7 +113,7 @@ void RegisterEvaluate(CLI::App& app, Commands* commands) {
                   "The asset-independent truth counts intersecting triangles whose bind-pose centroids lie at least "
                   "this far apart, as a fraction of the body height (default 0.03; nearer pairs are skin folding at "
                   "a joint); printed and in the JSON as contacts_by_bind_distance")
-      ->check(CLI::Range(0.0, 1.0));
+      ->check(WithinRange(0.0, 1.0));
   sub->add_option("--refit", args->refit,
                   "Refit: paper, frame (default; both from the deformed vertices) or joints (JointRefitJob: the centres "
                   "skinned by the frame's joint matrices, what a GPU-skinned game runs; needs a rigged input)")

@@ -39,30 +39,30 @@ int RunExport(const ExportArgs& a) {
   for (const std::string* out : std::initializer_list<const std::string*>{&a.output, &png}) {
     if (const std::string why = OutputPathProblem(*out); !why.empty()) return Fail(why);
   }
-  // The PNG first: it needs an outside tool (rsvg-convert), so when it fails no glTF is left behind; when
-  // the glTF then fails, the PNG is removed.
-  if (auto s = playback::RenderDebugPng(mesh, asset.view, png); !s.ok()) return Fail(s.error());
-  const auto fail_after_png = [&](const auto& why) {
-    std::error_code ec;
-    std::filesystem::remove(png, ec);
-    return Fail(why);
-  };
+  // All or nothing: the PNG and the glTF are written to temporaries and renamed into place once both are
+  // written, so a failure leaves an earlier run's files as they were. The PNG first: it needs an outside
+  // tool (rsvg-convert). The glTF's temporary keeps its extension (.glb: binary).
+  import::OutputFiles outputs;
+  if (auto s = playback::RenderDebugPng(mesh, asset.view, outputs.Stage(png, ".png")); !s.ok()) return Fail(s.error());
+  const std::string gltf = outputs.Stage(a.output, std::filesystem::path(a.output).extension().string());
   if (animated) {
     playback::AnimatedGltfStats stats;
     const runtime::RefitMode mode = a.refit == "paper" ? runtime::RefitMode::kPaper : runtime::RefitMode::kPivotFrame;
     import::Status s = import::Ok{};
-    try {  // out of memory (a huge --frames) or a writer's exception: no PNG of this run left either
-      s = playback::ExportAnimatedGltf(mesh, asset.view, anim, a.output, mode, &stats);
+    try {  // out of memory (a huge --frames) or a writer's exception: nothing of this run written
+      s = playback::ExportAnimatedGltf(mesh, asset.view, anim, gltf, mode, &stats);
     } catch (const std::exception& e) {
-      return fail_after_png(std::string("export-debug: the animated glTF of '") + a.output + "': " + e.what());
+      return Fail(std::string("export-debug: the animated glTF of '") + a.output + "': " + e.what());
     }
-    if (!s.ok()) return fail_after_png(s.error());
+    if (!s.ok()) return Fail(s.error());
+    if (auto c = outputs.Commit(); !c.ok()) return Fail(c.error());
     Out("wrote %s (animated glTF: %s, %u frames; skinned mesh coloured by region, %u joints' nodes, %u "
                 "spheres as animated nodes; %u channels, %.1f MB)\n",
                 a.output.c_str(), anim.Describe().c_str(), stats.frames, stats.skeleton_nodes, stats.spheres,
                 stats.channels, double(stats.bytes) / 1e6);
   } else {
-    if (auto s = playback::ExportDebugGltf(mesh, asset.view, a.output); !s.ok()) return fail_after_png(s.error());
+    if (auto s = playback::ExportDebugGltf(mesh, asset.view, gltf); !s.ok()) return Fail(s.error());
+    if (auto c = outputs.Commit(); !c.ok()) return Fail(c.error());
   }
   if (animated)
     Out("wrote %s (front and side views, bind pose)\n", png.c_str());

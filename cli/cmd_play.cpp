@@ -9,6 +9,9 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <set>
+#include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -203,6 +206,26 @@ nlohmann::json PlayJson(const PlayArgs& a, const runtime::AssetView& view, const
   return j;
 }
 
+/// Removes the files of `dir` named like a dumped frame (frame_ + digits + .f32 or .joints) that are not in
+/// `kept` (this run's): a later benchmark reads every frame file of the folder. Returns how many it removed.
+size_t RemoveOtherFrames(const std::string& dir, const std::vector<std::string>& kept) {
+  const std::set<std::string> keep(kept.begin(), kept.end());
+  std::vector<fs::path> stale;
+  std::error_code ec;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    const size_t dot = name.rfind('.');
+    if (name.rfind("frame_", 0) != 0 || dot == std::string::npos || dot == 6 || keep.count(name)) continue;
+    const std::string ext = name.substr(dot);
+    if ((ext == ".f32" || ext == ".joints") &&
+        std::all_of(name.begin() + 6, name.begin() + static_cast<std::ptrdiff_t>(dot), [](char c) { return c >= '0' && c <= '9'; }))
+      stale.push_back(it->path());
+  }
+  size_t removed = 0;
+  for (const fs::path& p : stale) removed += fs::remove(p, ec);
+  return removed;
+}
+
 int RunPlay(const PlayArgs& a) {
   if (int clash = OutputsClash({{"--json", &a.json}}, {{"ASSET", &a.asset}, {"--mesh", &a.anim.mesh}, {"--rig", &a.rig}},
                                PoseInputs(a.anim)))
@@ -239,21 +262,27 @@ int RunPlay(const PlayArgs& a) {
   if (joints && view.asset->joint_count() != mesh.skin->joints.size())
     return Fail("'" + a.asset + "' was baked for " + std::to_string(view.asset->joint_count()) + " joints, '" + a.anim.mesh +
                 "' has " + std::to_string(mesh.skin->joints.size()));
+  // Every output written all or nothing: the frames and the JSON to temporaries, renamed into place once the
+  // run succeeded (a failed run leaves the folder and the JSON as they were).
+  import::OutputFiles outputs;
+  std::vector<std::string> frame_files;  // the names this run writes in --dump-frames
   if (!a.dump_frames.empty()) {
     // One raw frame per file: #V×3 little-endian float32, for bench/runtime_bench and the CUDA bench; and
     // its joint matrices (frame_NNNN.joints: #J × 12 float32, JointRefitJob's layout) when the asset can
     // refit from them.
-    opts.on_frame = [&a](uint32_t f, const std::vector<float>& positions, const std::vector<float>* joint_matrices) {
+    opts.on_frame = [&](uint32_t f, const std::vector<float>& positions, const std::vector<float>* joint_matrices) {
       char name[32];
       std::snprintf(name, sizeof name, "frame_%04u.f32", f);
-      if (auto s = import::WriteFileAtomic((fs::path(a.dump_frames) / name).string(), positions.data(),
-                                          positions.size() * sizeof(float));
+      frame_files.emplace_back(name);
+      if (auto s = outputs.Write((fs::path(a.dump_frames) / name).string(), positions.data(),
+                                 positions.size() * sizeof(float));
           !s.ok())
         return s;
       if (joint_matrices) {
         std::snprintf(name, sizeof name, "frame_%04u.joints", f);
-        return import::WriteFileAtomic((fs::path(a.dump_frames) / name).string(), joint_matrices->data(),
-                                      joint_matrices->size() * sizeof(float));
+        frame_files.emplace_back(name);
+        return outputs.Write((fs::path(a.dump_frames) / name).string(), joint_matrices->data(),
+                             joint_matrices->size() * sizeof(float));
       }
       return import::Status(import::Ok{});
     };
@@ -264,12 +293,17 @@ int RunPlay(const PlayArgs& a) {
   const playback::PlayReport& report = played.value();
 
   PrintReport(a, view, anim, opts, report);
-  if (!a.json.empty()) {
-    const nlohmann::json j = PlayJson(a, view, anim, opts, report);
-    const std::string text = JsonText(j) + "\n";
-    if (auto s = import::WriteFileAtomic(a.json, text); !s.ok()) return Fail(s.error());
-    Out("wrote %s\n", a.json.c_str());
+  if (!a.json.empty())
+    if (auto s = outputs.Write(a.json, JsonText(PlayJson(a, view, anim, opts, report)) + "\n"); !s.ok())
+      return Fail(s.error());
+  if (auto s = outputs.Commit(); !s.ok()) return Fail(s.error());
+  if (!a.dump_frames.empty()) {  // the folder holds this run's frames only: an earlier run's others go
+    const size_t removed = RemoveOtherFrames(a.dump_frames, frame_files);
+    Out("wrote %zu files to %s", frame_files.size(), a.dump_frames.c_str());
+    if (removed) Out(" (removed %zu frame files of an earlier run)", removed);
+    Out("\n");
   }
+  if (!a.json.empty()) Out("wrote %s\n", a.json.c_str());
   return 0;
 }
 
@@ -306,7 +340,7 @@ void RegisterPlay(CLI::App& app, Commands* commands) {
                   "and, under the crease rule, the proxy's folds (excluded neighbours that came together): the "
                   "spheres as a game's broad phase, on the reach regions; at 1.5 it finds 99-100 % of the skin's "
                   "contacts on the reference animations; implies --narrow-phase; its time includes that M2 run")
-      ->check(CLI::Range(0.0f, 100.0f))
+      ->check(WithinRange(0.0, 100.0, /*lo_open=*/true))
       ->type_name("SCALE");
   commands->handlers.emplace_back(sub, [args] { return RunPlay(*args); });
 }

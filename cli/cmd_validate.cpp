@@ -19,6 +19,10 @@ struct ValidateArgs {
 int RunValidate(const ValidateArgs& a) {
   if (int clash = OutputsClash({{"--json", &a.json}}, {{"ASSET", &a.asset}, {"--mesh", &a.mesh}, {"--rig", &a.rig}}))
     return clash;
+  // Where the JSON goes, checked before the asset is read: a run that cannot write it is a usage error
+  // (exit 2), never mistaken for an invalid asset (exit 1).
+  if (!a.json.empty())
+    if (const std::string why = OutputPathProblem(a.json); !why.empty()) return UsageError(why);
   import::Context log = MakeLoggingContext();
   const import::VertexContract vertices = a.vertices == "joined"   ? import::VertexContract::kJoined
                                         : a.vertices == "source" ? import::VertexContract::kSource

@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
+#include <cmath>
 #include <cstdarg>
 #include <cstdio>
 #include <filesystem>
@@ -70,6 +71,20 @@ int Fail(const std::string& message) {
 int UsageError(const std::string& message) {
   spdlog::error("{}", message);
   return 2;
+}
+
+CLI::Validator WithinRange(double lo, double hi, bool lo_open) {
+  const std::string l = CLI::detail::to_string(lo), h = CLI::detail::to_string(hi);
+  const std::string range = std::isinf(hi) ? (lo_open ? "> " : ">= ") + l : (lo_open ? "(" : "[") + l + " - " + h + "]";
+  return CLI::Validator(
+      [lo, hi, lo_open, range](std::string& text) -> std::string {
+        double value = 0.0;
+        if (!CLI::detail::lexical_cast(text, value)) return "Value " + text + " could not be converted";
+        if (!((lo_open ? value > lo : value >= lo) && value <= hi))
+          return "Value " + text + (std::isinf(hi) ? " is not " : " not in range ") + range;
+        return {};
+      },
+      std::isinf(hi) ? "NUMBER " + range : "FLOAT in " + range);
 }
 
 int OutputsClash(std::initializer_list<PathArg> outputs, std::initializer_list<PathArg> inputs,

@@ -1,6 +1,7 @@
 // spherechain CLI — subcommand registration and handlers (one file per subcommand).
 #pragma once
 
+#include <cmath>
 #include <functional>
 #include <initializer_list>
 #include <string>
@@ -46,6 +47,11 @@ int Fail(const std::string& message);
 /// A usage error found after parsing (a value out of range, an output that cannot be written, options that do
 /// not go together): logs "error: <message>" and returns exit code 2, as CLI11's own usage errors.
 int UsageError(const std::string& message);
+
+/// CLI::Range(lo, hi) that also refuses NaN, which CLI::Range and CLI::PositiveNumber let through (their
+/// comparisons are false): "Value nan not in range [lo - hi]" (hi = infinity: "Value 0 is not >= 1"), a usage
+/// error (exit 2) found while parsing. `lo_open`: lo itself refused too ("(lo - hi]").
+CLI::Validator WithinRange(double lo, double hi = HUGE_VAL, bool lo_open = false);
 
 using import::OutputPathProblem;  // "cannot write 'p': ..." before the work (import/file_io.h)
 using import::PathArg;

@@ -51,30 +51,80 @@ std::vector<uint32_t> ComputeWeldIds(const std::vector<float>& positions) {
   return weld;
 }
 
-Status WriteFileAtomic(const std::string& path, const void* bytes, size_t size) {
+namespace {
+
+// The folder `path` is written in, or an error naming it when it does not exist.
+Status OutputFolderExists(const std::string& path) {
   namespace fs = std::filesystem;
   std::error_code ec;
   const fs::path target(path);
   const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
   if (!fs::is_directory(dir, ec))
     return MakeError(Error::Code::kIo, "cannot write '" + path + "': folder '" + dir.string() + "' does not exist");
-  const fs::path tmp = TemporaryPathFor(path);
-  {
-    std::FILE* f = std::fopen(tmp.c_str(), "wb");
-    if (!f) return MakeError(Error::Code::kIo, "cannot create '" + tmp.string() + "': " + std::strerror(errno));
-    const bool ok = std::fwrite(bytes, 1, size, f) == size && std::fflush(f) == 0 && ::fsync(::fileno(f)) == 0;
-    const bool closed = std::fclose(f) == 0;
-    if (!ok || !closed) {
-      fs::remove(tmp, ec);
-      return MakeError(Error::Code::kIo, "cannot write '" + tmp.string() + "' (disk full?)");
-    }
+  return Ok{};
+}
+
+// `bytes` written whole to the file `tmp` (created or truncated), flushed to the disk; on failure removed.
+Status WriteWhole(const std::string& tmp, const void* bytes, size_t size) {
+  std::FILE* f = std::fopen(tmp.c_str(), "wb");
+  if (!f) return MakeError(Error::Code::kIo, "cannot create '" + tmp + "': " + std::strerror(errno));
+  const bool ok = std::fwrite(bytes, 1, size, f) == size && std::fflush(f) == 0 && ::fsync(::fileno(f)) == 0;
+  const bool closed = std::fclose(f) == 0;
+  if (!ok || !closed) {
+    std::error_code ec;
+    std::filesystem::remove(tmp, ec);
+    return MakeError(Error::Code::kIo, "cannot write '" + tmp + "' (disk full?)");
   }
-  fs::rename(tmp, target, ec);
+  return Ok{};
+}
+
+}  // namespace
+
+Status WriteFileAtomic(const std::string& path, const void* bytes, size_t size) {
+  namespace fs = std::filesystem;
+  if (auto s = OutputFolderExists(path); !s.ok()) return s;
+  const std::string tmp = TemporaryPathFor(path);
+  if (auto s = WriteWhole(tmp, bytes, size); !s.ok()) return s;
+  std::error_code ec;
+  fs::rename(tmp, path, ec);
   if (ec) {
     const std::string why = ec.message();  // before the removal below reuses `ec`
     fs::remove(tmp, ec);
     return MakeError(Error::Code::kIo, "cannot rename the temporary file onto '" + path + "': " + why);
   }
+  return Ok{};
+}
+
+OutputFiles::~OutputFiles() {
+  std::error_code ec;
+  for (const auto& [tmp, path] : files_) std::filesystem::remove(tmp, ec);  // none left once committed
+}
+
+std::string OutputFiles::Stage(const std::string& path, const std::string& suffix) {
+  files_.emplace_back(TemporaryPathFor(path, suffix), path);
+  return files_.back().first;
+}
+
+Status OutputFiles::Write(const std::string& path, const void* bytes, size_t size) {
+  if (auto s = OutputFolderExists(path); !s.ok()) return s;
+  return WriteWhole(Stage(path), bytes, size);
+}
+
+Status OutputFiles::Commit() {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  size_t i = 0;
+  for (; i < files_.size(); ++i) {
+    const auto& [tmp, path] = files_[i];
+    if (!fs::exists(tmp, ec)) continue;  // staged for a writer that wrote nothing: the path stays as it was
+    fs::rename(tmp, path, ec);
+    if (ec) {
+      const std::string why = ec.message(), failed = path;
+      files_.erase(files_.begin(), files_.begin() + static_cast<std::ptrdiff_t>(i));  // renamed: nothing to remove
+      return MakeError(Error::Code::kIo, "cannot rename the temporary file onto '" + failed + "': " + why);
+    }
+  }
+  files_.clear();
   return Ok{};
 }
 

@@ -1,6 +1,7 @@
 #include "spherechain/playback/debug_export.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -270,7 +271,7 @@ Status ExportDebugGltf(const Mesh& mesh, const runtime::AssetView& a, const std:
   if (!fs::is_directory(dir, ec)) return MakeError(Error::Code::kIo, "folder '" + dir.string() + "' does not exist");
   std::ostringstream text;
   tinygltf::TinyGLTF writer;
-  if (!writer.WriteGltfSceneToStream(&model, text, /*prettyPrint=*/false, /*writeBinary=*/false))
+  if (!writer.WriteGltfSceneToStream(&model, text, /*prettyPrint=*/false, GltfBinary(out_path)))
     return MakeError(Error::Code::kIo, "tinygltf could not serialise the debug scene");
   return import::WriteFileAtomic(out_path, text.str());
 }
@@ -518,6 +519,12 @@ std::string ValidUtf8(const std::string& s) {
 }
 
 }  // namespace detail
+
+bool GltfBinary(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext == ".glb";
+}
 
 std::string XmlEscape(const std::string& s) {
   std::string o;

@@ -367,7 +367,7 @@ Status ExportAnimatedGltf(const Mesh& mesh, const runtime::AssetView& asset, con
   if (!fs::is_directory(dir, ec)) return MakeError(Error::Code::kIo, "folder '" + dir.string() + "' does not exist");
   std::ostringstream text;
   tinygltf::TinyGLTF writer;
-  if (!writer.WriteGltfSceneToStream(&m, text, /*prettyPrint=*/false, /*writeBinary=*/false))
+  if (!writer.WriteGltfSceneToStream(&m, text, /*prettyPrint=*/false, GltfBinary(out_path)))
     return Fail(Error::Code::kIo, "tinygltf could not serialise the scene");
   const std::string bytes = text.str();
   if (auto s = import::WriteFileAtomic(out_path, bytes); !s.ok()) return s;

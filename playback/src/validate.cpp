@@ -158,8 +158,9 @@ void CheckMesh(const runtime::AssetView& view, const import::Mesh& mesh, const V
     out->push_back(Make("FP-INDICES", Severity::kError, At(names.mesh, -1, -1, "fingerprint.indices_hash"),
                         "triangle indices differ from the baked mesh (re-bake the asset)"));
   if (fp.positions_hash != f->positions_hash())
-    out->push_back(Make("FP-POSITIONS", Severity::kWarning, At(names.mesh, -1, -1, "fingerprint.positions_hash"),
-                        "bind positions differ from the baked mesh (moved vertices?)"));
+    out->push_back(Make("FP-POSITIONS", Severity::kError, At(names.mesh, -1, -1, "fingerprint.positions_hash"),
+                        "bind positions differ from the baked mesh (moved vertices? re-bake the asset; play, evaluate, "
+                        "view and check refuse this pair)"));
   // The bind pose must report no self-collision: the frame pipeline (Session) on the bind positions, M2 alone.
   SessionOptions so;
   so.m1 = false;

@@ -173,8 +173,8 @@ TEST_CASE("validate: mesh mismatches give FP-COUNTS, FP-INDICES, FP-POSITIONS") 
     const auto all = Validate(d, &moved);
     const auto f = WithCode(all, "FP-POSITIONS");
     REQUIRE(f.size() == 1);
-    CHECK(f[0].severity == Severity::kWarning);
-    CHECK(sc::playback::CountErrors(all) == 0);
+    CHECK(f[0].severity == Severity::kError);  // every other command refuses the pair (character.cpp)
+    CHECK(sc::playback::CountErrors(all) == 1);
   }
 }
 

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "spherechain/import/types.h"
@@ -42,6 +43,34 @@ std::string TemporaryPathFor(const std::string& path, const std::string& suffix 
 inline Status WriteFileAtomic(const std::string& path, const std::string& text) {
   return WriteFileAtomic(path, text.data(), text.size());
 }
+
+/// A command's output files written all or nothing (an asset with its report and pictures, a folder of
+/// frames): each is first written whole to a hidden temporary beside its path (TemporaryPathFor), and
+/// Commit() renames them onto their paths, in the order they were staged, once every one is written. Until
+/// then every path keeps what it held (an earlier run's file stays as it was); the destructor removes the
+/// temporaries not committed. Not thread-safe; one set per command.
+class OutputFiles {
+ public:
+  OutputFiles() = default;
+  OutputFiles(const OutputFiles&) = delete;
+  OutputFiles& operator=(const OutputFiles&) = delete;
+  ~OutputFiles();
+  /// Writes `bytes` whole to `path`'s temporary (flushed to the disk). Errors: kIo when path's folder does not
+  /// exist or the temporary cannot be created or written (it is removed).
+  Status Write(const std::string& path, const void* bytes, size_t size);
+  Status Write(const std::string& path, const std::string& text) { return Write(path, text.data(), text.size()); }
+  /// A temporary path for `path` (TemporaryPathFor(path, suffix)) that a writer of its own fills: a PNG by
+  /// rsvg-convert, a glTF by its exporter. Commit() renames it onto `path` when the writer made it, and skips it
+  /// (the path unchanged) when it did not. Reads and writes nothing.
+  std::string Stage(const std::string& path, const std::string& suffix = {});
+  /// Renames every staged temporary onto its path. Errors: kIo when a rename fails: the files before it are
+  /// in place, the rest keep what they held (their temporaries removed). A rename within one folder needs
+  /// no space, so this is the folder changed under the command, not a full disk. Call once.
+  Status Commit();
+
+ private:
+  std::vector<std::pair<std::string, std::string>> files_;  // (temporary, path), in staging order
+};
 
 /// Why output file `path` cannot be written, found before the work that would write it: "cannot write 'p':
 /// folder 'd' does not exist" or "cannot write 'p': it is a folder"; empty when it can be tried (the write

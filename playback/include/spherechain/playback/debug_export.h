@@ -22,7 +22,11 @@ std::array<float, 3> RegionColor(const runtime::AssetView& a, uint32_t region);
 /// "R0 left arm (orange)  R1 right arm (blue) …" — the legend of RegionColor(a, ·), names from the asset.
 std::string RegionLegend(const runtime::AssetView& a);
 
-/// Writes `out_path` (.gltf, buffers embedded): node "mesh" = the character coloured by region
+/// True when `path` ends in ".glb" (any case): the debug exporters then write binary glTF (GLB, the buffer
+/// in its BIN chunk), else glTF JSON with the buffers embedded as data URIs.
+bool GltfBinary(const std::string& path);
+
+/// Writes `out_path` (.gltf with buffers embedded, or .glb: GltfBinary): node "mesh" = the character coloured by region
 /// (COLOR_0 per vertex, from the asset's triangle_regions), node "spheres" = one UV sphere per asset
 /// sphere (bind pose, region colour, 35 % opaque). `mesh` must match the asset's fingerprint counts.
 /// Written atomically. Errors: kConfig (counts differ), kIo.

@@ -41,7 +41,7 @@ struct AnimatedGltfStats {
   std::vector<float> first_frame_spheres;  ///< frame 0's refit spheres, \#S×4 (x, y, z, r), source units
 };
 
-/// Writes the animated debug glTF above to `out_path`, atomically (nothing is left there on failure).
+/// Writes the animated debug glTF above to `out_path` (.glb: binary, GltfBinary), atomically (nothing is left there on failure).
 /// `mesh`: the character the asset was baked from [Limit: vertex/triangle counts equal the asset's,
 /// mesh.skin present]; `asset`: a loaded view; `animation`: from OpenAnimation on this mesh;
 /// `refit`: the runtime refit mode for the spheres (kPivotFrame is play's default).
