@@ -161,6 +161,11 @@ int RunCheck(const CheckArgs& a) {
   import::Mesh mesh;
   std::string asset_name, error;
   if (!OpenOrBake(a, &asset, &mesh, &asset_name, &error)) return UsageError(error);
+  if (!a.baseline.empty()) {  // another character's baseline, or not a report: refused before any clip is played
+    evaluate::CheckReport none;  // no clip: only the baseline's form and fingerprint are checked
+    none.positions_hash = import::ComputeFingerprint(mesh).positions_hash;
+    if (auto s = evaluate::ApplyBaseline(baseline, &none); !s.ok()) return UsageError("--baseline: " + s.error().message);
+  }
 
   evaluate::CheckOptions options;
   options.mesh_name = a.character;

@@ -15,7 +15,10 @@ PAIR_DTYPE: np.dtype[np.void]
 #: (source units); direction float32 (3,) (unit push). 28 bytes.
 CONTACT_DTYPE: np.dtype[np.void]
 
+#: A path argument of save(), bake() and evaluate(): bytes are the file system's bytes (os.fsencode).
 _Path = Union[str, bytes, os.PathLike[str], os.PathLike[bytes]]
+#: load()'s source: a path, but never bytes (bytes-like objects are the file's contents).
+_LoadPath = Union[str, os.PathLike[str], os.PathLike[bytes]]
 _Float32Array = npt.NDArray[np.float32]
 _Records = npt.NDArray[np.void]
 
@@ -41,7 +44,7 @@ class EvaluateError(OfflineError):
 class Asset:
     """A verified .sphc asset in memory (bake() or load())."""
     def save(self, path: _Path) -> None:
-        """Writes the bytes atomically; `path` becomes the asset's path."""
+        """Writes the bytes atomically to `path` (str, bytes or os.PathLike); `path` becomes the asset's path."""
     def info(self) -> dict[str, Any]:
         """What `spherechain inspect --json` prints."""
     def to_bytes(self) -> bytes:
@@ -117,7 +120,7 @@ class Workspace:
     def refit(self, positions: _Float32Array, mode: Literal["frame", "paper"] = "frame") -> None:
         """Refits the spheres to float32 (#V, 3) positions (strides[1] == 4, any row stride), read in place."""
     def refit_joints(self, matrices: _Float32Array) -> None:
-        """Refits the spheres from float32 (#J, 3, 4) C-contiguous skinning matrices."""
+        """Refits the spheres from float32 (#J, 3, 4) C-contiguous, 4-byte aligned skinning matrices."""
     @overload
     def detect(
         self,
@@ -157,8 +160,9 @@ class Workspace:
     @property
     def model(self) -> Model: ...
 
-def load(source: _Path | bytes | bytearray | memoryview | npt.NDArray[np.uint8]) -> Asset:
-    """Loads and verifies a .sphc asset from a path or its bytes."""
+def load(source: _LoadPath | bytes | bytearray | memoryview | npt.NDArray[np.uint8]) -> Asset:
+    """Loads and verifies a .sphc asset from a path (str, os.PathLike) or the file's contents (bytes-like: a bytes
+    object is always the contents, never a path)."""
 
 def bake(
     path: _Path,

@@ -285,7 +285,7 @@ source units of the character the asset was baked from, in its model space (bind
              }
              self.path = p;
            }, py::arg("path"), R"doc(
-Writes the asset's bytes to `path` (str or os.PathLike) atomically: a temporary file in the same folder,
+Writes the asset's bytes to `path` (str, bytes — the file system's bytes — or os.PathLike) atomically: a temporary file in the same folder,
 renamed over `path`, so a failure leaves no partial file. Afterwards `path` is the asset's `path`.
 Raises OSError (folder missing, not writable); StatusError kErrorNullArgument on a closed asset.
 )doc")
@@ -375,8 +375,10 @@ before the crease rule.
 Loads a .sphc asset and verifies it with the runtime loader (runtime LoadAsset: identifier, version, every
 offset, count and index).
 
-source: a path (str or os.PathLike), or the file's bytes (bytes, bytearray, memoryview, a C-contiguous numpy
-array, read as its raw bytes: copied once into aligned memory).
+source: a path (str or os.PathLike), or the file's contents (bytes, bytearray, memoryview, a C-contiguous
+numpy array, read as its raw bytes: copied once into aligned memory). A bytes object is always the contents,
+never a path (unlike save(), bake() and evaluate(), whose paths may be bytes): pass a bytes path as
+os.fsdecode(path) or a pathlib.Path.
 Raises StatusError with the loader's status (kErrorIdentifier, kErrorVersionTooOld, kErrorCorrupt, ...) when
 the bytes are not a loadable asset; FileNotFoundError / OSError when the file cannot be read.
 )doc");
@@ -389,7 +391,8 @@ Bakes a character file into an Asset: what `spherechain bake PATH -o OUT.sphc` w
 the same input, configuration and options (the same library calls). Releases the GIL; the libraries' log
 lines go to the logging module's "spherechain" logger.
 
-path: the character (.gltf/.glb, .obj, .fbx, .dae, .x, .blend, ...), str or os.PathLike.
+path: the character (.gltf/.glb, .obj, .fbx, .dae, .x, .blend, ...): str, bytes or os.PathLike (as every path
+argument of bake() and evaluate(): bytes are the file system's bytes).
 config: None (defaults), a dict of configuration keys (as a `--config` JSON file: "regions", "max_spheres",
     "fit", "chains", ... — docs/guide.md; numpy scalars are taken as the numbers they hold), or the path of
     such a JSON file.
@@ -410,7 +413,7 @@ Measures the asset against the exact contacts of the deformed mesh, frame by fra
 Releases the GIL; slow (the exact truth: ~0.1 s a frame on 27k triangles, more with coverage).
 
 asset: an Asset (its path names it in the report); mesh: the character it was baked from (checked by
-fingerprint), str or os.PathLike.
+fingerprint), str, bytes or os.PathLike (every path here: bytes are the file system's bytes).
 clip: the clip to play (None: the first, or the morph through the default key poses when there is none);
 frames: frames to play (> 0). morph: True (the default key poses), a pose file / name / folder, or a list of them;
 poses_dir: the folder of key poses; rig: a MakeHuman .mhskel.

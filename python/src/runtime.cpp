@@ -64,6 +64,10 @@ struct PyWorkspace {
   ModelPtr model;
   runtime::Workspace ws;
   std::vector<runtime::Collision> pairs;  // detect()'s records: up to 4,096 at first, grown to a frame's count
+  // narrow_phase()'s copy of the caller's `pairs` (never fewer than 1 record, so an empty list is not null):
+  // the job checks the pairs' indices and then reads them again while the GIL is released, so it must read
+  // memory no other Python thread can change in between.
+  std::vector<runtime::Collision> narrow_pairs;
   runtime::NarrowPhaseWorkspace narrow[2];
   std::vector<runtime::TriangleContact> contacts;
   std::vector<runtime::ContactDepth> depths;
@@ -148,23 +152,45 @@ bool SpheresFinite(const runtime::SphereArrays& s) {
   return finite;
 }
 
-// A 1-D, C-contiguous, aligned array of exactly `dtype` (its records written or read in place).
+// A 1-D, C-contiguous array of `dtype` or an equivalent one (same fields at the same offsets), its data at the
+// runtime struct's alignment (its records written or read in place as those structs).
 PyArrayObject* RecordArrayOf(PyObject* object, PyArray_Descr* dtype, bool writable, const char* what) {
-  if (PyArray_CheckExact(object)) {  // the usual case first: an array of this very dtype object
+  if (PyArray_CheckExact(object)) {  // the usual case first: an array of this very dtype object (align=True:
+                                     // NumPy's aligned flag is then the struct's alignment)
     auto* a = reinterpret_cast<PyArrayObject*>(object);
     if (PyArray_DESCR(a) == dtype && PyArray_NDIM(a) == 1 && PyArray_IS_C_CONTIGUOUS(a) && PyArray_ISALIGNED(a) &&
         (!writable || PyArray_ISWRITEABLE(a)))
       return a;
   }
-  if (!PyArray_Check(object) || !PyArray_EquivTypes(PyArray_DESCR(reinterpret_cast<PyArrayObject*>(object)), dtype) ||
-      PyArray_NDIM(reinterpret_cast<PyArrayObject*>(object)) != 1 ||
-      !PyArray_IS_C_CONTIGUOUS(reinterpret_cast<PyArrayObject*>(object)) ||
-      !PyArray_ISALIGNED(reinterpret_cast<PyArrayObject*>(object)) ||
-      (writable && !PyArray_ISWRITEABLE(reinterpret_cast<PyArrayObject*>(object))))
+  const char* name = dtype == PairDtype() ? "PAIR_DTYPE" : "CONTACT_DTYPE";
+  auto* a = reinterpret_cast<PyArrayObject*>(object);
+  if (!PyArray_Check(object) || !PyArray_EquivTypes(PyArray_DESCR(a), dtype) || PyArray_NDIM(a) != 1 ||
+      !PyArray_IS_C_CONTIGUOUS(a) || (writable && !PyArray_ISWRITEABLE(a)))
     ThrowValue(std::string(what) + ": expected a one-dimensional, C-contiguous" + (writable ? ", writable" : "") +
-               " numpy.ndarray of dtype spherechain." + (dtype == PairDtype() ? "PAIR_DTYPE" : "CONTACT_DTYPE") +
-               "; got " + DescribeArray(object));
-  return reinterpret_cast<PyArrayObject*>(object);
+               " numpy.ndarray of dtype spherechain." + name + "; got " + DescribeArray(object));
+  // An equivalent dtype may be packed (align=False: NumPy then calls any address aligned), so the address
+  // itself is checked against the struct's alignment.
+  const size_t alignment = dtype == PairDtype() ? alignof(runtime::Collision) : alignof(runtime::TriangleContact);
+  if (reinterpret_cast<uintptr_t>(PyArray_DATA(a)) % alignment != 0)
+    ThrowValue(std::string(what) + ": the records' data must be aligned to " + std::to_string(alignment) +
+               " bytes (spherechain." + name + "'s alignment; the runtime reads and writes them in place), got an "
+               "address " + std::to_string(reinterpret_cast<uintptr_t>(PyArray_DATA(a)) % alignment) +
+               " bytes past it (numpy.frombuffer with an offset?): copy it, numpy.array(" + what + ", dtype=spherechain." +
+               name + ")");
+  return a;
+}
+
+// The (#J, 3, 4) float32 joint matrices (refit_joints(), narrow_phase(matrices=)): C-contiguous and aligned,
+// else ValueError naming the layout. `count`: the matrices given (0 past uint32: the runtime's kErrorJointCount).
+const float* JointMatricesOf(PyObject* object, uint32_t joints, uint32_t* count) {
+  auto* a = reinterpret_cast<PyArrayObject*>(object);
+  if (!PyArray_Check(object) || PyArray_TYPE(a) != NPY_FLOAT32 || !PyArray_ISNOTSWAPPED(a) || PyArray_NDIM(a) != 3 ||
+      PyArray_DIM(a, 1) != 3 || PyArray_DIM(a, 2) != 4 || !PyArray_IS_C_CONTIGUOUS(a) || !PyArray_ISALIGNED(a))
+    ThrowValue("matrices: expected an aligned, C-contiguous numpy.ndarray of float32, shape (" + std::to_string(joints) +
+               ", 3, 4) (per joint the top three rows of its skinning matrix, row-major); got " + DescribeArray(object) +
+               (PyArray_Check(object) && !PyArray_ISALIGNED(a) ? " at an address not aligned to 4 bytes" : ""));
+  *count = PyArray_DIM(a, 0) > npy_intp(std::numeric_limits<uint32_t>::max()) ? 0 : uint32_t(PyArray_DIM(a, 0));
+  return static_cast<const float*>(PyArray_DATA(a));
 }
 
 // A new array of `count` records of `dtype` (uninitialised).
@@ -175,12 +201,18 @@ PyArrayObject* NewRecords(PyArray_Descr* dtype, npy_intp count) {
   return reinterpret_cast<PyArrayObject*>(a);
 }
 
+// A length the runtime takes as a float32: finite there and >= 0 (NaN, inf and a double past FLT_MAX, which
+// would become inf, are ValueError naming `what`: never a runtime status that blames something else).
+float LengthOf(double v, const char* what, const char* alternative) {
+  if (!(v >= 0.0 && v <= double(std::numeric_limits<float>::max())))
+    ThrowValue(std::string(what) + ": " + py::repr(py::float_(v)).cast<std::string>() +
+               " must be a finite number >= 0 (source units, float32: at most 3.4e38)" + alternative);
+  return static_cast<float>(v);
+}
+
 float MarginOf(PyObject* value, const char* what) {
   if (!value || value == Py_None) return -1.0f;  // the asset's
-  const double v = RealArg(value, what);
-  if (v < 0.0)
-    ThrowValue(std::string(what) + ": " + std::to_string(v) + " must be >= 0 (source units), or None for the asset's");
-  return static_cast<float>(v);  // NaN and inf: the runtime's kErrorInvalidJob
+  return LengthOf(RealArg(value, what), what, ", or None for the asset's");
 }
 
 // ---- the per-frame methods' calling convention ----------------------------------------------------------
@@ -270,26 +302,30 @@ void Refit(PyWorkspace& self, py::handle positions, PyObject* mode) {
     finite = runtime::Succeeded(s) && SpheresFinite(self.ws.spheres());
   }
   if (runtime::Failed(s)) ThrowJob(s, "refit", positions.ptr(), self.model->model.vertex_count());
-  if (!finite)
+  if (!finite) {  // the rare failure: which cause, from the positions (a scan of them, only here)
+    bool positions_finite = true;
+    const auto* row = static_cast<const unsigned char*>(job.positions.data);
+    for (uint32_t v = 0; v < job.positions.count && positions_finite; ++v, row += job.positions.stride_bytes) {
+      float p[3];
+      std::memcpy(p, row, sizeof p);
+      positions_finite = std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]);
+    }
     ThrowStatus(Status::kErrorNonFinitePositions,
-                "refit: a position the refit reads (a corner of a sphere's pivot triangles) is NaN or infinite; the "
-                "workspace's spheres are not finite until the next refit");
+                positions_finite
+                    ? "refit: every position is finite, but so large that a sphere overflowed float32 (its centre or "
+                      "radius is infinite or NaN); the workspace's spheres are not finite until the next refit"
+                    : "refit: a position the refit reads (a corner of a sphere's pivot triangles) is NaN or infinite; "
+                      "the workspace's spheres are not finite until the next refit");
+  }
 }
 
 void RefitJoints(PyWorkspace& self, py::handle matrices) {
   Exclusive exclusive(self);
-  PyObject* object = matrices.ptr();
   const uint32_t joints = self.model->model.joint_count();
-  auto* a = reinterpret_cast<PyArrayObject*>(object);
-  if (!PyArray_Check(object) || PyArray_TYPE(a) != NPY_FLOAT32 || !PyArray_ISNOTSWAPPED(a) || PyArray_NDIM(a) != 3 ||
-      PyArray_DIM(a, 1) != 3 || PyArray_DIM(a, 2) != 4 || !PyArray_IS_C_CONTIGUOUS(a))
-    ThrowValue("matrices: expected a C-contiguous numpy.ndarray of float32, shape (" + std::to_string(joints) +
-               ", 3, 4) (per joint the top three rows of its skinning matrix, row-major); got " + DescribeArray(object));
   runtime::JointRefitJob job;
   job.model = &self.model->model;
   job.workspace = &self.ws;
-  job.joint_matrices = static_cast<const float*>(PyArray_DATA(a));
-  job.joint_count = PyArray_DIM(a, 0) > npy_intp(std::numeric_limits<uint32_t>::max()) ? 0 : uint32_t(PyArray_DIM(a, 0));
+  job.joint_matrices = JointMatricesOf(matrices.ptr(), joints, &job.joint_count);
   Status s;
   {
     NoGil release;
@@ -298,7 +334,8 @@ void RefitJoints(PyWorkspace& self, py::handle matrices) {
   if (runtime::Failed(s)) {
     std::string context = "refit_joints";
     if (s == Status::kErrorJointCount)
-      context += ": " + std::to_string(PyArray_DIM(a, 0)) + " matrices, the asset " + std::to_string(joints) + " joints";
+      context += ": " + std::to_string(PyArray_DIM(reinterpret_cast<PyArrayObject*>(matrices.ptr()), 0)) +
+                 " matrices, the asset " + std::to_string(joints) + " joints";
     ThrowStatus(s, context);
   }
 }
@@ -344,9 +381,9 @@ PyObject* Detect(PyWorkspace& self, PyObject* method, PyObject* margin, PyObject
   return reinterpret_cast<PyObject*>(result);
 }
 
-py::object FoldPairsOf(PyWorkspace& self, double closing) {
+py::object FoldPairsOf(PyWorkspace& self, double closing_arg) {
   Exclusive exclusive(self);
-  if (!std::isfinite(closing) || closing < 0.0) ThrowValue("closing: expected a finite distance >= 0, got " + std::to_string(closing));
+  const float closing = LengthOf(closing_arg, "closing", "");
   const runtime::NarrowPhaseModel* model = nullptr;
   Status s;
   uint32_t count = 0;
@@ -356,11 +393,14 @@ py::object FoldPairsOf(PyWorkspace& self, double closing) {
     s = self.model->Narrow(0, &model);
     if (runtime::Succeeded(s)) {
       out.resize(model->fold_pair_count());
-      s = runtime::FoldPairs(*model, self.ws.spheres(), float(closing), out.data(), uint32_t(out.size()), &count);
+      s = runtime::FoldPairs(*model, self.ws.spheres(), closing, out.data(), uint32_t(out.size()), &count);
     }
   }
   if (runtime::Failed(s))
-    ThrowStatus(s, s == Status::kErrorInvalidJob ? "fold_pairs: the asset has no crease rule (bake it again)" : "fold_pairs");
+    ThrowStatus(s, s == Status::kErrorInvalidJob ? "fold_pairs: the asset has no crease rule (bake it again)"
+                   : s == Status::kErrorMissingField
+                       ? "fold_pairs: the asset has no triangles or weld ids (baked before the narrow phase)"
+                       : "fold_pairs");
   PyArrayObject* result = NewRecords(PairDtype(), count);
   if (count) std::memcpy(PyArray_DATA(result), out.data(), size_t(count) * sizeof(runtime::Collision));
   return py::reinterpret_steal<py::object>(reinterpret_cast<PyObject*>(result));
@@ -375,9 +415,14 @@ py::object NarrowPhase(PyWorkspace& self, py::handle positions, const py::object
   runtime::NarrowPhaseJob job;
   job.positions = PositionsOf(positions.ptr(), self.model->model.vertex_count());
   if (!pairs.is_none()) {
+    // Copied, with the GIL held: the job checks the indices and reads them again without the GIL, and another
+    // Python thread may change the caller's array in between (an index past #S then reads out of bounds).
     PyArrayObject* p = RecordArrayOf(pairs.ptr(), PairDtype(), false, "pairs");
-    job.sphere_pairs = static_cast<const runtime::Collision*>(PyArray_DATA(p));
-    job.sphere_pair_count = uint32_t(std::min<npy_intp>(PyArray_DIM(p, 0), std::numeric_limits<uint32_t>::max()));
+    const size_t n = size_t(std::min<npy_intp>(PyArray_DIM(p, 0), std::numeric_limits<uint32_t>::max()));
+    self.narrow_pairs.resize(std::max<size_t>(n, 1));  // at least one: an empty list is not "no list"
+    if (n) std::memcpy(self.narrow_pairs.data(), PyArray_DATA(p), n * sizeof(runtime::Collision));
+    job.sphere_pairs = self.narrow_pairs.data();
+    job.sphere_pair_count = uint32_t(n);
   }
   std::string exclusion = exclusions.is_none() ? "" : StrArg(exclusions, "exclusions");
   if (!exclusion.empty() && exclusion != "crease" && exclusion != "asset" && exclusion != "none")
@@ -388,16 +433,8 @@ py::object NarrowPhase(PyWorkspace& self, py::handle positions, const py::object
       ThrowValue("crease: " + std::to_string(c) + " must be a finite number > 0 (source units), or None for the asset's");
     job.crease = static_cast<float>(c);
   }
-  if (!matrices.is_none()) {  // the joint-matrix cull: refit_joints()'s layout
-    PyObject* object = matrices.ptr();
-    auto* a = reinterpret_cast<PyArrayObject*>(object);
-    if (!PyArray_Check(object) || PyArray_TYPE(a) != NPY_FLOAT32 || !PyArray_ISNOTSWAPPED(a) || PyArray_NDIM(a) != 3 ||
-        PyArray_DIM(a, 1) != 3 || PyArray_DIM(a, 2) != 4 || !PyArray_IS_C_CONTIGUOUS(a) || !PyArray_ISALIGNED(a))
-      ThrowValue("matrices: expected an aligned, C-contiguous numpy.ndarray of float32, shape (#J, 3, 4) (refit_joints()'s); got " +
-                 DescribeArray(object));
-    job.joint_matrices = static_cast<const float*>(PyArray_DATA(a));
-    job.joint_count = PyArray_DIM(a, 0) > npy_intp(std::numeric_limits<uint32_t>::max()) ? 0 : uint32_t(PyArray_DIM(a, 0));
-  }
+  if (!matrices.is_none())  // the joint-matrix cull: refit_joints()'s layout
+    job.joint_matrices = JointMatricesOf(matrices.ptr(), self.model->model.joint_count(), &job.joint_count);
 
   runtime::NarrowPhaseStats stats;
   uint32_t count = 0;
@@ -407,7 +444,10 @@ py::object NarrowPhase(PyWorkspace& self, py::handle positions, const py::object
     py::gil_scoped_release release;
     const runtime::NarrowPhaseModel* model = nullptr;
     s = self.model->Narrow(kind, &model);
-    if (runtime::Failed(s)) where = "narrow_phase: the narrow phase's model (NarrowPhaseModel::Init)";
+    if (runtime::Failed(s))
+      where = s == Status::kErrorMissingField
+                  ? "narrow_phase: the asset has no triangles or weld ids (baked before the narrow phase)"
+                  : "narrow_phase: the narrow phase's model (NarrowPhaseModel::Init)";
     if (runtime::Succeeded(s) && !self.narrow[kind].made_for(*model)) {
       s = self.narrow[kind].Init(*model);
       if (runtime::Failed(s)) where = "narrow_phase: NarrowPhaseWorkspace::Init";
@@ -505,17 +545,22 @@ std::unique_ptr<PyWorkspace> MakeWorkspace(const PyModel& model) {
 py::dict TimeJobs(PyWorkspace& self, const py::list& frames, const py::object& joint_frames, int reps) {
   Exclusive exclusive(self);
   self.pairs.resize(std::max<size_t>(1, std::max(self.model->bound[0], self.model->bound[1])));  // never truncated
+  // The arrays are read without the GIL: a reference to each is held meanwhile, so another thread emptying the
+  // caller's lists cannot free one.
+  std::vector<py::object> keep;
   std::vector<runtime::PositionsView> views;
-  for (const py::handle& f : frames) views.push_back(PositionsOf(f.ptr(), self.model->model.vertex_count()));
+  for (const py::handle& f : frames) {
+    views.push_back(PositionsOf(f.ptr(), self.model->model.vertex_count()));
+    keep.push_back(py::reinterpret_borrow<py::object>(f));
+  }
   std::vector<const float*> joints;
   if (!joint_frames.is_none())
     for (const py::handle& f : joint_frames) {
-      PyObject* o = f.ptr();
-      if (!PyArray_Check(o) || PyArray_TYPE(reinterpret_cast<PyArrayObject*>(o)) != NPY_FLOAT32 ||
-          !PyArray_IS_C_CONTIGUOUS(reinterpret_cast<PyArrayObject*>(o)) ||
-          PyArray_SIZE(reinterpret_cast<PyArrayObject*>(o)) != npy_intp(12) * self.model->model.joint_count())
-        ThrowValue("joint_frames: float32 (#J, 3, 4) C-contiguous arrays; got " + DescribeArray(o));
-      joints.push_back(static_cast<const float*>(PyArray_DATA(reinterpret_cast<PyArrayObject*>(o))));
+      uint32_t count = 0;
+      joints.push_back(JointMatricesOf(f.ptr(), self.model->model.joint_count(), &count));
+      if (count != self.model->model.joint_count()) ThrowValue("joint_frames: " + std::to_string(count) + " matrices, the asset " +
+                                                              std::to_string(self.model->model.joint_count()) + " joints");
+      keep.push_back(py::reinterpret_borrow<py::object>(f));
     }
   if (views.empty() || reps <= 0) ThrowValue("frames: at least one; reps > 0");
   runtime::RefitJob refit;
@@ -671,7 +716,9 @@ exclusions: "crease" (the skin's own definition: every intersecting pair not nea
     "none" (any two spheres); None: "crease" when the asset has the rule and `pairs` is None, else "asset".
 pairs: None (search every pair: the exact answer) or PAIR_DTYPE records to search behind: detect()'s, and
     with "crease" also fold_pairs()' (the restricted skin contacts: the pairs of 16-triangle patches whose
-    triangles stand behind the two spheres of a listed pair, and the bind pose's own contacts).
+    triangles stand behind the two spheres of a listed pair, and the bind pose's own contacts). A 1-D,
+    C-contiguous array of PAIR_DTYPE (or an equivalent dtype), its data 4-byte aligned; copied once per call
+    (into the workspace's buffer: another thread may change the array meanwhile).
 regions: "surrounding" or "reach" (the triangles behind a sphere; "reach" finds more behind `pairs`).
 crease: the fold distance [source units] of a "crease" search (only there); None: the asset's.
 matrices: None, or the skinning matrices that deformed `positions` (as refit_joints() takes them) for a
@@ -681,25 +728,31 @@ Returns a new numpy.ndarray of dtype CONTACT_DTYPE: triangle_a, triangle_b (uint
 sphere_a, sphere_b (uint16 owners, 0xFFFF for an unassigned triangle), depth (float32, source units) and
 direction (3 float32, unit) of the separating-axis push — NaN unless exclusions is "crease".
 Raises TypeError (exclusions not a str, crease not a number), ValueError (a bad exclusions or regions word, a
-crease not finite or <= 0, arrays of the wrong shape, dtype or alignment), StatusError (kErrorVertexCount,
-kErrorNonFinitePositions: a vertex of a surrounding region is NaN or inf; kErrorMissingField: "crease" on an
-asset without the rule, or matrices on one without skin weights; kErrorJointCount; kErrorNonFiniteJoints;
+crease not finite as a float32 or <= 0; positions not a float32 (#V, 3) array with strides[1] == 4 and a row
+stride >= 0; pairs not a 1-D, C-contiguous PAIR_DTYPE array or not 4-byte aligned; matrices not an aligned,
+C-contiguous float32 (#J, 3, 4) array), StatusError (kErrorVertexCount; kErrorAlignment: positions not 4-byte
+aligned; kErrorStride: a row stride < 12 or not a multiple of 4; kErrorIndexOutOfRange: a pair with a >= b or
+b >= #S; kErrorNonFinitePositions: a vertex of a surrounding region is NaN or inf; kErrorMissingField: an asset
+without triangles or weld ids (baked before the narrow phase), "crease" on an asset without the rule, or
+matrices on one without skin weights; kErrorJointCount; kErrorNonFiniteJoints;
 kErrorInvalidJob: a crease or matrices with another exclusions, or a crease below the asset's;
 kErrorBindPoseTangled: an asset whose bind pose passes through itself beyond the narrow phase's budget,
 every call; kErrorCreaseTooWide: an asset whose crease reaches too much of its bind surface, every call; kErrorFrameTangled: positions that pass through themselves beyond the narrow phase's budget, no
-pose of the character — uninitialised, collapsed or scrambled; the message says which).
+pose of the character — uninitialised, collapsed or scrambled; the message says which; kErrorOutOfMemory).
 Cost: the runtime's narrow phase (docs/performance.md); the first call builds the narrow phase's model and
 scratch, and each call allocates the returned array.
 )doc")
       .def("fold_pairs", &FoldPairsOf, py::arg("closing"), R"doc(
 The proxy's folds (runtime FoldPairs): the sphere pairs detect() never reports (the asset's excluded
-neighbours) whose centres are now closer than at bind pose by more than `closing` [source units, finite,
->= 0], from the current spheres (the last refit). With detect()'s pairs they are what
+neighbours) whose centres are now closer than at bind pose by more than `closing` [source units, >= 0,
+finite as a float32: at most 3.4e38], from the current spheres (the last refit). With detect()'s pairs they are what
 narrow_phase(exclusions="crease", pairs=...) searches behind, as `play --narrow-behind` does with closing
 2 x Model.contact_margin and detect("m2", margin=1.5 x it, fold_margin=the same). Returns a new numpy.ndarray of PAIR_DTYPE (a < b; depth rA + rB − |cA −
-cB|; chains 0). Raises ValueError (closing), StatusError (kErrorInvalidJob: an asset without the crease rule;
-kErrorBindPoseTangled: its bind pose passes through itself beyond the narrow phase's budget;
-kErrorCreaseTooWide: its crease reaches too much of its bind surface).
+cB|; chains 0). Raises TypeError (closing not a number), ValueError (closing negative, NaN or not finite as a
+float32), StatusError (kErrorInvalidJob: an asset without the crease rule; kErrorMissingField: an asset
+without triangles or weld ids, baked before the narrow phase; kErrorBindPoseTangled: its bind pose passes
+through itself beyond the narrow phase's budget; kErrorCreaseTooWide: its crease reaches too much of its bind
+surface; kErrorOutOfMemory).
 Cost: one distance per excluded pair; builds the narrow phase's model on first use.
 )doc")
       .def("reset", [](PyWorkspace& self) {
@@ -722,33 +775,36 @@ positions: numpy.ndarray float32, shape (#V, 3) [source units, the asset's model
     a column slice of an interleaved vertex buffer (e.g. buffer[:, 0:3] of a (#V, 8) float32 array). No copy.
 mode: "frame" (default: the pivot frame, exact under rigid motion) or "paper" (the paper's translation).
 Raises ValueError (not such an array: dtype, shape and strides named), StatusError kErrorVertexCount (#V
-wrong), kErrorAlignment, kErrorStride, kErrorNonFinitePositions (a position the refit reads is NaN or
-infinite: the spheres are then not finite).
+wrong), kErrorAlignment (data not 4-byte aligned), kErrorStride (a row stride < 12 or not a multiple of 4),
+kErrorNonFinitePositions (a position the refit reads is NaN or infinite, or finite positions so large that a
+sphere overflows float32 — the message says which: the spheres are then not finite).
 Cost: the runtime's refit and a finiteness check of the spheres; no allocation (docs/performance.md#python).
 )doc";
   static const std::string refit_joints_doc = std::string("refit_joints($self, /, matrices)\n--\n") + R"doc(
 Refits the spheres from the joint skinning matrices (runtime JointRefitJob): each centre skinned like a
 vertex by its four joint weights, radii as baked.
 
-matrices: numpy.ndarray float32, shape (#J, 3, 4), C-contiguous: per joint the top three rows of its
-    skinning matrix (joint's model transform × inverse bind), row-major, in the skin's joint order.
-Raises ValueError (not such an array), StatusError kErrorJointCount (#J wrong), kErrorMissingField (no joint
-weights in the asset), kErrorNonFiniteJoints (a matrix holds NaN or inf: spheres untouched).
+matrices: numpy.ndarray float32, shape (#J, 3, 4), C-contiguous, 4-byte aligned: per joint the top three rows
+    of its skinning matrix (joint's model transform × inverse bind), row-major, in the skin's joint order.
+    Read in place.
+Raises ValueError (not such an array: dtype, shape, order or alignment), StatusError kErrorJointCount (#J
+wrong), kErrorMissingField (no joint weights in the asset), kErrorNonFiniteJoints (a matrix holds NaN or inf:
+spheres untouched).
 )doc";
   static const std::string detect_doc = std::string("detect($self, /, method='m1', margin=None, fold_margin=None, out=None)\n--\n") + R"doc(
 The overlapping, non-adjacent sphere pairs of the current spheres (runtime DetectJob, paper §5.2).
 
 method: "m1" (pairs within each chain) or "m2" (every pair).
-margin, fold_margin: contact margins [source units, >= 0]; None: the asset's (Model.contact_margin,
-    Model.fold_margin).
+margin, fold_margin: contact margins [source units, >= 0, finite as a float32: at most 3.4e38]; None: the
+    asset's (Model.contact_margin, Model.fold_margin).
 out: None — returns a new numpy.ndarray of dtype PAIR_DTYPE (a uint16, b uint16, depth float32 [source
     units: rA + rB − |cA − cB|], chains uint32 bitmask), one record per pair (allocates it; a frame with
     more pairs than the workspace has held, past 4,096, also grows the workspace's buffer and runs twice);
-    or a writable 1-D array of PAIR_DTYPE — the pairs are written into it and the call returns their total
+    or a writable, C-contiguous, 4-byte aligned 1-D array of PAIR_DTYPE (or an equivalent dtype) — the pairs are written into it and the call returns their total
     count n (an int; out[:min(n, len(out))] hold them; n > len(out) means truncated: size it with
     Model.detect_bound(method)). Order: runtime's (M1 by chain, M2 by (a, b)).
-Raises ValueError (unknown method, negative margin, bad out), StatusError kErrorInvalidJob (NaN margin, a
-fold margin on an asset without one).
+Raises TypeError (a margin not a number), ValueError (unknown method; a margin negative, NaN or not finite
+as a float32; out not such an array), StatusError kErrorInvalidJob (a fold margin on an asset without one).
 )doc";
   static PyMethodDef methods[] = {
       {"refit", reinterpret_cast<PyCFunction>(reinterpret_cast<void (*)()>(RawRefit)), METH_FASTCALL | METH_KEYWORDS,

@@ -6,6 +6,7 @@ import json
 import random
 import struct
 import threading
+import time
 
 import numpy as np
 import pytest
@@ -113,9 +114,17 @@ def test_bad_call_arguments(asset, ws):
         ws.detect(margin=-1.0)
     with pytest.raises(TypeError):
         ws.detect(margin="wide")
-    with pytest.raises(StatusError) as e:
-        ws.detect(margin=float("nan"))
-    assert status_of(e) == "kErrorInvalidJob"
+    # Not finite as a float32 (NaN, inf, a double past 3.4e38 that would round to inf): ValueError naming it.
+    for bad in (float("nan"), float("inf"), 1e39):
+        for name in ("margin", "fold_margin"):
+            with pytest.raises(ValueError, match=f"{name}: .* must be a finite number >= 0") as e:
+                ws.detect(**{name: bad})
+            assert not isinstance(e.value, StatusError)
+        with pytest.raises(ValueError, match="closing: .* must be a finite number >= 0") as e:
+            ws.fold_pairs(bad)  # 1e39 was inf in the runtime: "the asset has no crease rule", untrue here
+        assert not isinstance(e.value, StatusError)
+    assert ws.detect(margin=3e38).dtype == PAIR_DTYPE  # the largest float32s are lengths still
+    assert ws.fold_pairs(3e38).dtype == PAIR_DTYPE
     with pytest.raises(StatusError) as e:
         ws.detect(fold_margin=0.01)  # the creature has no fold margin
     assert status_of(e) == "kErrorInvalidJob"
@@ -213,6 +222,103 @@ def test_bad_out_and_pairs(asset, ws):
         ws.detect(out=misaligned)
     with pytest.raises(ValueError, match="PAIR_DTYPE"):
         ws.narrow_phase(good, pairs=misaligned)
+    # A packed (align=False) equivalent dtype: NumPy calls any address aligned, the runtime's structs need 4.
+    packed = np.dtype(PAIR_DTYPE.descr)
+    assert packed.alignment == 1 and packed.itemsize == PAIR_DTYPE.itemsize
+    for offset in (1, 2, 3):
+        odd = np.frombuffer(bytearray(12 * 20 + 4), packed, count=20, offset=offset)
+        assert odd.flags.aligned and odd.ctypes.data % 4 != 0
+        with pytest.raises(ValueError, match="out: the records' data must be aligned to 4 bytes"):
+            ws.detect(out=odd)
+        with pytest.raises(ValueError, match="pairs: the records' data must be aligned to 4 bytes"):
+            ws.narrow_phase(good, pairs=odd)
+    at_four = np.frombuffer(bytearray(12 * 20 + 4), packed, count=20, offset=4)  # packed but at 4: accepted
+    assert ws.detect(out=at_four) == len(ws.detect())
+    ws.narrow_phase(good, exclusions="asset", pairs=at_four[:0])
+
+
+def test_narrow_phase_statuses(asset, ws):
+    """What narrow_phase's docstring lists beside the arguments' errors: pair indices, the positions' alignment and
+    stride (the runtime's, as refit()), and an asset without triangles."""
+    V, S = asset.vertex_count, asset.sphere_count
+    good = np.asarray(asset.bind_positions)
+    for a, b in ((0, S), (3, 0xFFFF), (2, 2), (7, 1)):
+        pairs = np.zeros(2, PAIR_DTYPE)
+        pairs[0] = (0, 1, 0.0, 0)
+        pairs[1] = (a, b, 0.0, 0)
+        for exclusions in ("asset", "none", "crease"):
+            with pytest.raises(StatusError) as e:
+                ws.narrow_phase(good, exclusions=exclusions, pairs=pairs)
+            assert status_of(e) == "kErrorIndexOutOfRange"
+    buffer = np.zeros(V * 12 + 4, np.uint8)
+    misaligned = np.frombuffer(buffer.data, dtype=np.float32, count=V * 3, offset=1).reshape(V, 3)
+    with pytest.raises(StatusError) as e:
+        ws.narrow_phase(misaligned)
+    assert status_of(e) == "kErrorAlignment"
+    raw = np.zeros(V * 14 + 16, np.uint8)
+    odd = np.lib.stride_tricks.as_strided(raw.view(np.float32)[:1], shape=(V, 3), strides=(14, 4))
+    with pytest.raises(StatusError) as e:
+        ws.narrow_phase(odd)
+    assert status_of(e) == "kErrorStride"
+    old = spherechain.Model(spherechain.load(GOLDEN / "v1" / "cesium_man.sphc")).workspace()
+    zeros = np.zeros((old.model.vertex_count, 3), np.float32)
+    for call in (lambda: old.narrow_phase(zeros, exclusions="asset"), lambda: old.fold_pairs(0.0)):
+        with pytest.raises(StatusError) as e:
+            call()
+        assert status_of(e) == "kErrorMissingField" and "triangles" in str(e.value)
+
+
+def test_pairs_are_the_callers_until_the_call_then_copied(asset, ws):
+    """narrow_phase copies `pairs` before it releases the GIL: the job checks the indices and reads them again, so
+    another thread writing the caller's array in between must not reach the runtime (an index past #S read and
+    written out of bounds). Each call sees one state of the array: it returns, or raises kErrorIndexOutOfRange."""
+    good = np.asarray(asset.bind_positions)
+    pairs = np.zeros(20000, PAIR_DTYPE)
+    pairs["a"], pairs["b"] = 0, 1
+    ws.narrow_phase(good, exclusions="asset", pairs=pairs)
+    pairs["b"] = 0xFFFF  # the same array changed after a call: the next call checks it again
+    with pytest.raises(StatusError) as e:
+        ws.narrow_phase(good, exclusions="asset", pairs=pairs)
+    assert status_of(e) == "kErrorIndexOutOfRange"
+    pairs["b"] = 1
+
+    stop = threading.Event()
+    def flip():
+        b = pairs["b"]
+        while not stop.is_set():
+            b[:] = 0xFFFF
+            b[:] = 1
+    flipper = threading.Thread(target=flip)
+    flipper.start()
+    outcomes = set()
+    try:
+        end = time.monotonic() + 1.5
+        while time.monotonic() < end:
+            try:
+                ws.narrow_phase(good, exclusions="asset", pairs=pairs)
+                outcomes.add("ok")
+            except StatusError as e:
+                assert e.status == "kErrorIndexOutOfRange", e
+                outcomes.add(e.status)
+    finally:
+        stop.set()
+        flipper.join()
+    assert outcomes, "no call ran"
+
+
+def test_refit_of_finite_positions_that_overflow(asset, ws):
+    good = np.asarray(asset.bind_positions, dtype=np.float64)
+    huge = (good * 1e37).clip(-3e38, 3e38).astype(np.float32)
+    assert np.isfinite(huge).all()
+    with pytest.raises(StatusError) as e:
+        ws.refit(huge)
+    assert status_of(e) == "kErrorNonFinitePositions"
+    assert "every position is finite" in str(e.value) and "NaN or infinite;" not in str(e.value)
+    nan = np.array(asset.bind_positions)
+    nan[:] = np.nan
+    with pytest.raises(StatusError) as e:
+        ws.refit(nan)
+    assert "is NaN or infinite" in str(e.value)
 
 
 def test_joint_matrices(asset, ws):
@@ -241,8 +347,11 @@ def test_joint_matrices(asset, ws):
     # The narrow phase's matrices: the same shape, and aligned (an unaligned view is not a positions problem).
     misaligned = np.frombuffer(bytearray(identity.nbytes + 1), np.float32, count=J * 12, offset=1).reshape(J, 3, 4)
     assert not misaligned.flags.aligned
-    with pytest.raises(ValueError, match="matrices: expected an aligned"):
-        ws.narrow_phase(np.asarray(asset.bind_positions), exclusions="crease", matrices=misaligned)
+    for call in (lambda: ws.narrow_phase(np.asarray(asset.bind_positions), exclusions="crease", matrices=misaligned),
+                 lambda: ws.refit_joints(misaligned)):  # the same check before either job: ValueError, not a status
+        with pytest.raises(ValueError, match=rf"matrices: expected an aligned, .*\({J}, 3, 4\).* not aligned") as e:
+            call()
+        assert not isinstance(e.value, StatusError)
     old = spherechain.Model(spherechain.load(GOLDEN / "v2" / "cesium_man.sphc")).workspace()
     with pytest.raises(StatusError) as e:
         old.refit_joints(np.zeros((0, 3, 4), np.float32))
@@ -445,14 +554,16 @@ def test_evaluate_errors_are_the_cli_errors(asset, tmp_path):
         ((loaded, CREATURE), {"clip": "nope"}, ["--mesh", CREATURE, "--clip", "nope"], "config"),
         ((loaded, CREATURE), {"sweep_margin": "x"}, ["--mesh", CREATURE, "--sweep-margin", "x"], "config"),
         ((loaded, CREATURE), {"margin": 2.0}, ["--mesh", CREATURE, "--margin", "2"], "config"),
-        ((loaded, CREATURE), {"refit": "paper", "frames": 0}, ["--mesh", CREATURE, "--refit", "paper", "--frames", "0"],
-         "config"),
     ]
     for args, kwargs, cli_args, code in cases:
         with pytest.raises(EvaluateError) as e:
             spherechain.evaluate(*args, **kwargs)
         assert e.value.code == code, str(e.value)
         assert str(e.value) == cli_error("evaluate", path, *cli_args), kwargs
+    # The CLI refuses --frames 0 while parsing (a usage error, exit 2); the function says it as a config error.
+    with pytest.raises(EvaluateError) as e:
+        spherechain.evaluate(loaded, CREATURE, refit="paper", frames=0)
+    assert e.value.code == "config" and "frames must be > 0" in str(e.value), str(e.value)
     with pytest.raises(EvaluateError, match="regions"):
         spherechain.evaluate(loaded, CREATURE, regions="limbs")
     with pytest.raises(EvaluateError) as e:

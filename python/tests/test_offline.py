@@ -3,6 +3,7 @@ bytes for the same input, configuration and options; info() is `inspect --json`;
 the arrays view what info() counts; the bake report and the log lines."""
 import json
 import logging
+import os
 
 import numpy as np
 import pytest
@@ -89,6 +90,24 @@ def test_save_and_load_round_trip(baked, tmp_path):
     asset.save(bytes(as_bytes))
     assert as_bytes.read_bytes() == asset.to_bytes() and asset.path == str(as_bytes)
     assert spherechain.bake(bytes(CREATURE), FAST).to_bytes() == asset.to_bytes()
+
+
+def test_load_takes_bytes_as_contents_never_as_a_path(baked, tmp_path):
+    """load(): a bytes object is the file's contents (documented: load's path is str or os.PathLike, and the stub's
+    load takes no bytes path); a bytes path goes through os.fsdecode or a PathLike, which may return bytes."""
+    _, asset = baked
+    path = tmp_path / "contents.sphc"
+    asset.save(os.fsencode(path))  # save(): a bytes path is a path
+    with pytest.raises(spherechain.StatusError):  # load(): the same bytes are taken as a (far too short) asset
+        spherechain.load(os.fsencode(path))
+    assert spherechain.load(os.fsdecode(os.fsencode(path))).path == str(path)
+
+    class BytesPath:
+        def __fspath__(self):
+            return os.fsencode(path)
+
+    loaded = spherechain.load(BytesPath())
+    assert loaded.path == str(path) and loaded.to_bytes() == asset.to_bytes()
 
 
 def test_config_dict_takes_numpy_scalars(baked):

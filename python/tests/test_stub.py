@@ -110,3 +110,19 @@ def test_docstrings():
         doc = getattr(spherechain.Workspace, method).__doc__
         assert shape in doc and "float32" in doc, method
     assert "source units" in spherechain.Workspace.refit.__doc__
+
+
+def test_load_takes_no_bytes_path():
+    """load(source): bytes are the file's contents (its docstring and docs/python.md), so the stub's path part of
+    `source` must not be _Path (which holds bytes: a bytes path for save(), bake(), evaluate())."""
+    aliases = {n.targets[0].id: ast.unparse(n.value) for n in STUB.body
+               if isinstance(n, ast.Assign) and isinstance(n.targets[0], ast.Name)}
+    assert "bytes" in aliases["_Path"]
+    load = next(n for n in STUB.body if isinstance(n, ast.FunctionDef) and n.name == "load")
+    annotation = ast.unparse(load.args.args[0].annotation)
+    path_aliases = [part.strip() for part in annotation.split("|") if part.strip() in aliases]
+    assert path_aliases == ["_LoadPath"], annotation
+    assert "bytes" not in aliases["_LoadPath"].replace("os.PathLike[bytes]", ""), aliases["_LoadPath"]
+    assert "contents" in spherechain.load.__doc__ and "never a path" in spherechain.load.__doc__
+    for fn in (spherechain.Asset.save, spherechain.bake, spherechain.evaluate):
+        assert "bytes" in fn.__doc__, fn
