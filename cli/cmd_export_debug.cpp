@@ -81,11 +81,17 @@ void RegisterExportDebug(CLI::App& app, Commands* commands) {
       "Write a glTF (regions + spheres) and PNG views of a bake; with --clip NAME or --morph the glTF is animated: "
       "the skinned character and the refit spheres as animated nodes (one glTF animation), for any glTF viewer");
   AddAnimationOptions(sub, &args->asset, &args->rig, &args->anim);
-  sub->add_option("-o,--output", args->output, "glTF to write (.gltf, buffers embedded)")->required();
+  sub->add_option("-o,--output", args->output, "glTF to write (.gltf: buffers embedded; .glb: binary glTF)")->required();
   sub->add_option("--png", args->png, "PNG to write (default: OUTPUT with .png)");
   sub->add_option("--refit", args->refit, "Sphere refit of an animated export: paper or frame (pivot frame, default, as play)")
       ->check(CLI::IsMember({"paper", "frame"}));
-  commands->handlers.emplace_back(sub, [args] { return RunExport(*args); });
+  commands->handlers.emplace_back(sub, [args, sub] {
+    // A static export is the bind pose: an animation's options without an animation are a mistake, not ignored.
+    if (args->anim.clip.empty() && !args->anim.morph_requested())
+      for (const char* option : {"--frames", "--refit", "--poses-dir"})
+        if (sub->count(option)) return UsageError(std::string(option) + " needs --clip or --morph (without them export-debug writes the bind pose)");
+    return RunExport(*args);
+  });
 }
 
 }  // namespace spherechain::cli

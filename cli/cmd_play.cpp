@@ -325,7 +325,8 @@ void RegisterPlay(CLI::App& app, Commands* commands) {
   sub->add_option("--repeat", args->repeat, "Runs per job per frame; timings are the minimum (default 5)");
   sub->add_option("--dump-frames", args->dump_frames,
                   "Folder to write each frame's deformed positions to (frame_NNNN.f32: #V×3 float32), for bench/; "
-                  "with a v3 asset also its joint matrices (frame_NNNN.joints: #J×12 float32, JointRefitJob's layout)")
+                  "with a v3 asset also its joint matrices (frame_NNNN.joints: #J×12 float32, JointRefitJob's layout); "
+                  "afterwards the folder holds this run's frames only (an earlier run's other frame files removed)")
       ->check(CLI::ExistingDirectory);
   sub->add_option("--json", args->json, "Write the per-frame table and summary as JSON");
   sub->add_flag("--narrow-phase", args->narrow_phase,

@@ -90,6 +90,12 @@ foreach(case "evaluate;--frames;0" "evaluate;--crease;nan" "play;--narrow-behind
   endif()
 endforeach()
 
+# export-debug without an animation: its options are refused, not ignored.
+run(2 export_static_frames export-debug ${A} --mesh ${GLTF} -o ${WORK}/s.gltf --frames 5)
+if(NOT last_err MATCHES "--frames needs --clip or --morph" OR EXISTS ${WORK}/s.gltf)
+  message(FATAL_ERROR "export-debug --frames without an animation:\n${last_err}")
+endif()
+
 # export-debug -o X.glb: binary glTF (magic "glTF", version 2).
 run(0 export_glb export-debug ${A} --mesh ${GLTF} -o ${WORK}/d.glb)
 file(READ ${WORK}/d.glb head LIMIT 8 HEX)
