@@ -140,7 +140,8 @@ int RunBake(const BakeArgs& a) {
     runtime::AssetView view;
     if (runtime::Failed(runtime::LoadAsset(r.asset.data(), r.asset.size(), &view)))
       return Fail("internal: the baked asset does not load");
-    if (auto s = playback::RenderDebugPng(r.mesh, view, outputs.Stage(a.png, ".png")); !s.ok()) return Fail(s.error());
+    if (auto s = playback::RenderDebugPng(r.mesh, view, outputs.Stage(a.png, ".png")); !s.ok())
+      return Fail(outputs.Explain(s.error()));
   }
   if (!a.report.empty())
     if (auto s = outputs.Write(a.report, JsonText(baker::MakeBakeReport(r, config, ctx)) + "\n"); !s.ok())

@@ -77,7 +77,7 @@ int RunEvaluate(const EvaluateArgs& a) {
   };
   import::Context log = MakeLoggingContext();
   auto result = evaluate::Evaluate(asset.view, mesh, anim, options, &log);
-  if (!result.ok()) return Fail(result.error());
+  if (!result.ok()) return Fail(outputs.Explain(result.error()));
   const evaluate::Evaluation& e = result.value();
   if (!Quiet()) std::fputs(e.text.c_str(), stdout);
   if (!a.json.empty())

@@ -43,7 +43,8 @@ int RunExport(const ExportArgs& a) {
   // written, so a failure leaves an earlier run's files as they were. The PNG first: it needs an outside
   // tool (rsvg-convert). The glTF's temporary keeps its extension (.glb: binary).
   import::OutputFiles outputs;
-  if (auto s = playback::RenderDebugPng(mesh, asset.view, outputs.Stage(png, ".png")); !s.ok()) return Fail(s.error());
+  if (auto s = playback::RenderDebugPng(mesh, asset.view, outputs.Stage(png, ".png")); !s.ok())
+    return Fail(outputs.Explain(s.error()));
   const std::string gltf = outputs.Stage(a.output, std::filesystem::path(a.output).extension().string());
   if (animated) {
     playback::AnimatedGltfStats stats;
@@ -54,14 +55,14 @@ int RunExport(const ExportArgs& a) {
     } catch (const std::exception& e) {
       return Fail(std::string("export-debug: the animated glTF of '") + a.output + "': " + e.what());
     }
-    if (!s.ok()) return Fail(s.error());
+    if (!s.ok()) return Fail(outputs.Explain(s.error()));
     if (auto c = outputs.Commit(); !c.ok()) return Fail(c.error());
     Out("wrote %s (animated glTF: %s, %u frames; skinned mesh coloured by region, %u joints' nodes, %u "
                 "spheres as animated nodes; %u channels, %.1f MB)\n",
                 a.output.c_str(), anim.Describe().c_str(), stats.frames, stats.skeleton_nodes, stats.spheres,
                 stats.channels, double(stats.bytes) / 1e6);
   } else {
-    if (auto s = playback::ExportDebugGltf(mesh, asset.view, gltf); !s.ok()) return Fail(s.error());
+    if (auto s = playback::ExportDebugGltf(mesh, asset.view, gltf); !s.ok()) return Fail(outputs.Explain(s.error()));
     if (auto c = outputs.Commit(); !c.ok()) return Fail(c.error());
   }
   if (animated)

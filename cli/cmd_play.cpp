@@ -206,8 +206,9 @@ nlohmann::json PlayJson(const PlayArgs& a, const runtime::AssetView& view, const
   return j;
 }
 
-/// Removes the files of `dir` named like a dumped frame (frame_ + digits + .f32 or .joints) that are not in
-/// `kept` (this run's): a later benchmark reads every frame file of the folder. Returns how many it removed.
+/// Removes the regular files of `dir` named as this command names a dumped frame (frame_ + at least 4 digits +
+/// .f32 or .joints) that are not in `kept` (this run's): a later benchmark reads every frame file of the folder.
+/// Returns how many it removed.
 size_t RemoveOtherFrames(const std::string& dir, const std::vector<std::string>& kept) {
   const std::set<std::string> keep(kept.begin(), kept.end());
   std::vector<fs::path> stale;
@@ -215,10 +216,11 @@ size_t RemoveOtherFrames(const std::string& dir, const std::vector<std::string>&
   for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
     const std::string name = it->path().filename().string();
     const size_t dot = name.rfind('.');
-    if (name.rfind("frame_", 0) != 0 || dot == std::string::npos || dot == 6 || keep.count(name)) continue;
+    if (name.rfind("frame_", 0) != 0 || dot == std::string::npos || dot < 10 || keep.count(name)) continue;
     const std::string ext = name.substr(dot);
-    if ((ext == ".f32" || ext == ".joints") &&
-        std::all_of(name.begin() + 6, name.begin() + static_cast<std::ptrdiff_t>(dot), [](char c) { return c >= '0' && c <= '9'; }))
+    const bool digits =
+        std::all_of(name.begin() + 6, name.begin() + static_cast<std::ptrdiff_t>(dot), [](char c) { return c >= '0' && c <= '9'; });
+    if ((ext == ".f32" || ext == ".joints") && digits && fs::symlink_status(it->path(), ec).type() == fs::file_type::regular)
       stale.push_back(it->path());
   }
   size_t removed = 0;
@@ -341,7 +343,7 @@ void RegisterPlay(CLI::App& app, Commands* commands) {
                   "and, under the crease rule, the proxy's folds (excluded neighbours that came together): the "
                   "spheres as a game's broad phase, on the reach regions; at 1.5 it finds 99-100 % of the skin's "
                   "contacts on the reference animations; implies --narrow-phase; its time includes that M2 run")
-      ->check(WithinRange(0.0, 100.0, /*lo_open=*/true))
+      ->check(WithinRange(0.0, 100.0, /*lo_open=*/true, /*as_float=*/true))
       ->type_name("SCALE");
   commands->handlers.emplace_back(sub, [args] { return RunPlay(*args); });
 }

@@ -73,15 +73,17 @@ int UsageError(const std::string& message) {
   return 2;
 }
 
-CLI::Validator WithinRange(double lo, double hi, bool lo_open) {
+CLI::Validator WithinRange(double lo, double hi, bool lo_open, bool as_float) {
   const std::string l = CLI::detail::to_string(lo), h = CLI::detail::to_string(hi);
   const std::string range = std::isinf(hi) ? (lo_open ? "> " : ">= ") + l : (lo_open ? "(" : "[") + l + " - " + h + "]";
   return CLI::Validator(
-      [lo, hi, lo_open, range](std::string& text) -> std::string {
+      [lo, hi, lo_open, as_float, range](std::string& text) -> std::string {
         double value = 0.0;
         if (!CLI::detail::lexical_cast(text, value)) return "Value " + text + " could not be converted";
+        if (as_float) value = static_cast<double>(static_cast<float>(value));  // what the option will hold
         if (!((lo_open ? value > lo : value >= lo) && value <= hi))
-          return "Value " + text + (std::isinf(hi) ? " is not " : " not in range ") + range;
+          return "Value " + text + (std::isinf(hi) ? " is not " : " not in range ") + range +
+                 (as_float ? " as a float32" : "");
         return {};
       },
       std::isinf(hi) ? "NUMBER " + range : "FLOAT in " + range);

@@ -50,8 +50,9 @@ int UsageError(const std::string& message);
 
 /// CLI::Range(lo, hi) that also refuses NaN, which CLI::Range and CLI::PositiveNumber let through (their
 /// comparisons are false): "Value nan not in range [lo - hi]" (hi = infinity: "Value 0 is not >= 1"), a usage
-/// error (exit 2) found while parsing. `lo_open`: lo itself refused too ("(lo - hi]").
-CLI::Validator WithinRange(double lo, double hi = HUGE_VAL, bool lo_open = false);
+/// error (exit 2) found while parsing. `lo_open`: lo itself refused too ("(lo - hi]"). `as_float`: the value
+/// checked as the float32 an option of type float holds (1e-50 is 0 there).
+CLI::Validator WithinRange(double lo, double hi = HUGE_VAL, bool lo_open = false, bool as_float = false);
 
 using import::OutputPathProblem;  // "cannot write 'p': ..." before the work (import/file_io.h)
 using import::PathArg;

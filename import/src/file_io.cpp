@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <cctype>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -107,7 +108,25 @@ std::string OutputFiles::Stage(const std::string& path, const std::string& suffi
 
 Status OutputFiles::Write(const std::string& path, const void* bytes, size_t size) {
   if (auto s = OutputFolderExists(path); !s.ok()) return s;
-  return WriteWhole(Stage(path), bytes, size);
+  if (auto s = WriteWhole(Stage(path), bytes, size); !s.ok()) return Explain(s.error());
+  return Ok{};
+}
+
+Error OutputFiles::Explain(Error error) const {
+  std::string& m = error.message;
+  for (const auto& [tmp, path] : files_) {
+    // A writer's own temporary of the staged one (TemporaryPathFor(tmp, suffix): DIR/.NAME.tmpPID.N[suffix]) up
+    // to the end of its name, then the staged temporary itself.
+    const std::filesystem::path t(tmp);
+    const std::string nested = (t.parent_path() / ("." + t.filename().string() + ".tmp")).string();
+    for (size_t at = m.find(nested); at != std::string::npos; at = m.find(nested, at + path.size())) {
+      size_t end = at + nested.size();
+      while (end < m.size() && (std::isalnum(static_cast<unsigned char>(m[end])) || m[end] == '.')) ++end;
+      m.replace(at, end - at, path);
+    }
+    for (size_t at = m.find(tmp); at != std::string::npos; at = m.find(tmp, at + path.size())) m.replace(at, tmp.size(), path);
+  }
+  return error;
 }
 
 Status OutputFiles::Commit() {
@@ -116,7 +135,13 @@ Status OutputFiles::Commit() {
   size_t i = 0;
   for (; i < files_.size(); ++i) {
     const auto& [tmp, path] = files_[i];
-    if (!fs::exists(tmp, ec)) continue;  // staged for a writer that wrote nothing: the path stays as it was
+    const bool made = fs::exists(tmp, ec);
+    if (ec) {
+      const std::string why = ec.message(), failed = path;
+      files_.erase(files_.begin(), files_.begin() + static_cast<std::ptrdiff_t>(i));
+      return MakeError(Error::Code::kIo, "cannot read the temporary file of '" + failed + "': " + why);
+    }
+    if (!made) continue;  // staged for a writer that wrote nothing: the path stays as it was
     fs::rename(tmp, path, ec);
     if (ec) {
       const std::string why = ec.message(), failed = path;

@@ -63,10 +63,14 @@ class OutputFiles {
   /// rsvg-convert, a glTF by its exporter. Commit() renames it onto `path` when the writer made it, and skips it
   /// (the path unchanged) when it did not. Reads and writes nothing.
   std::string Stage(const std::string& path, const std::string& suffix = {});
-  /// Renames every staged temporary onto its path. Errors: kIo when a rename fails: the files before it are
-  /// in place, the rest keep what they held (their temporaries removed). A rename within one folder needs
-  /// no space, so this is the folder changed under the command, not a full disk. Call once.
+  /// Renames every staged temporary onto its path. Errors: kIo when a temporary cannot be looked at or a rename
+  /// fails: the files before it are in place, the rest keep what they held (their temporaries removed). A
+  /// rename within one folder needs no space, so this is a folder changed under the command (or a file there
+  /// the user may not replace), not a full disk. Call once.
   Status Commit();
+  /// `error` with every staged temporary's name, and a writer's own temporary of it, replaced by the path it
+  /// stands for: what a message of a writer given Stage()'s path tells the user. Allocates.
+  Error Explain(Error error) const;
 
  private:
   std::vector<std::pair<std::string, std::string>> files_;  // (temporary, path), in staging order
