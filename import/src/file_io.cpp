@@ -82,18 +82,9 @@ Status WriteWhole(const std::string& tmp, const void* bytes, size_t size) {
 }  // namespace
 
 Status WriteFileAtomic(const std::string& path, const void* bytes, size_t size) {
-  namespace fs = std::filesystem;
-  if (auto s = OutputFolderExists(path); !s.ok()) return s;
-  const std::string tmp = TemporaryPathFor(path);
-  if (auto s = WriteWhole(tmp, bytes, size); !s.ok()) return s;
-  std::error_code ec;
-  fs::rename(tmp, path, ec);
-  if (ec) {
-    const std::string why = ec.message();  // before the removal below reuses `ec`
-    fs::remove(tmp, ec);
-    return MakeError(Error::Code::kIo, "cannot rename the temporary file onto '" + path + "': " + why);
-  }
-  return Ok{};
+  OutputFiles one;  // a set of one file: written to its temporary, then renamed
+  if (auto s = one.Write(path, bytes, size); !s.ok()) return s;
+  return one.Commit();
 }
 
 OutputFiles::~OutputFiles() {
