@@ -1,4 +1,5 @@
 // spherechain — the command-line tool: bake, inspect, export-debug, play, validate, evaluate, view, check.
+#include <csignal>
 #include <exception>
 
 #include <CLI/CLI.hpp>
@@ -6,6 +7,29 @@
 #include <spdlog/spdlog.h>
 
 #include "commands.h"
+#include "spherechain/import/file_io.h"
+
+namespace {
+// An interrupted command (Ctrl-C, a build system's timeout, a closed terminal) removes the hidden temporaries of
+// the outputs it had not yet renamed into place, then ends by the same signal: the shell and a build system see
+// the interruption (exit 128 + N), and every output path keeps what it held.
+extern "C" void EndOnSignal(int sig) {
+  spherechain::import::RemoveTemporariesOnSignal();
+  std::raise(sig);  // SA_RESETHAND: the default action, taken once this handler returns
+}
+
+void RemoveOutputsOnInterrupt() {
+  struct sigaction action = {};
+  action.sa_handler = EndOnSignal;
+  sigemptyset(&action.sa_mask);
+  action.sa_flags = SA_RESETHAND;
+  for (const int sig : {SIGINT, SIGTERM, SIGHUP, SIGQUIT}) {
+    struct sigaction old = {};
+    // A signal the caller set to be ignored (nohup's SIGHUP, a background job's SIGINT) stays ignored.
+    if (sigaction(sig, nullptr, &old) == 0 && old.sa_handler != SIG_IGN) sigaction(sig, &action, nullptr);
+  }
+}
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"spherechain — sphere-chain self-collision assets for animated characters\n"
@@ -29,6 +53,7 @@ int main(int argc, char** argv) {
   spdlog::set_pattern("%^%l%$: %v");
   spdlog::set_level(verbose ? spdlog::level::debug : quiet ? spdlog::level::warn : spdlog::level::info);
   spherechain::cli::SetQuiet(quiet);
+  RemoveOutputsOnInterrupt();
   // A library call that throws (std::filesystem on a folder it may not read, an allocation) ends the
   // command with its message and exit 1, not with std::terminate; outputs are written atomically, so
   // none is left half-written.

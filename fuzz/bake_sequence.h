@@ -13,11 +13,14 @@
 
 #include <spherechain/baker/bake.h>
 
+#include <signal.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -34,11 +37,31 @@ inline constexpr uint32_t kHarnessMaxTriangles = uint32_t{1} << 18;
 inline constexpr uint32_t kHarnessMaxFitTriangles = uint32_t{1} << 15;
 
 /// A folder of this process's own for the files the harness writes (/tmp/spherechain-fuzz-PID, or under
-/// $TMPDIR). Created on first use; never removed (libFuzzer ends the process with _exit).
+/// $TMPDIR). Created on first use; removed at a normal exit. libFuzzer ends its processes with _exit, which removes
+/// nothing, so the first use also removes the folders of processes that have ended (a campaign's merge starts one
+/// process after another).
 inline const std::filesystem::path& ScratchDir() {
-  static const std::filesystem::path dir = [] {
-    std::filesystem::path d = std::filesystem::temp_directory_path() / ("spherechain-fuzz-" + std::to_string(::getpid()));
-    std::filesystem::create_directories(d);
+  // Never destroyed: the exit handler below runs after the destructors of statics made before it was registered.
+  static const std::filesystem::path& dir = *[] {
+    namespace fs = std::filesystem;
+    const fs::path tmp = fs::temp_directory_path();
+    const std::string prefix = "spherechain-fuzz-";
+    std::error_code ec;
+    for (fs::directory_iterator it(tmp, ec), end; !ec && it != end; it.increment(ec)) {
+      const std::string name = it->path().filename().string();
+      if (name.rfind(prefix, 0) != 0 || name.size() == prefix.size() || name.size() > prefix.size() + 9 ||
+          name.find_first_not_of("0123456789", prefix.size()) != std::string::npos)
+        continue;
+      const pid_t pid = static_cast<pid_t>(std::stol(name.substr(prefix.size())));
+      std::error_code ignored;
+      if (pid > 0 && ::kill(pid, 0) != 0 && errno == ESRCH) fs::remove_all(it->path(), ignored);
+    }
+    auto* d = new fs::path(tmp / (prefix + std::to_string(::getpid())));
+    fs::create_directories(*d);
+    std::atexit([] {  // a normal exit (the corpus tests) removes it at once
+      std::error_code ignored;
+      fs::remove_all(ScratchDir(), ignored);
+    });
     return d;
   }();
   return dir;

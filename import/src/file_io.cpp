@@ -12,8 +12,12 @@
 #include <numeric>
 #include <cerrno>
 #include <cstring>
+#include <string_view>
 #include <system_error>
+#include <unordered_set>
 
+#include <pthread.h>
+#include <signal.h>
 #include <unistd.h>
 
 #include <xxhash.h>
@@ -79,7 +83,60 @@ Status WriteWhole(const std::string& tmp, const void* bytes, size_t size) {
   return Ok{};
 }
 
+// Every OutputFiles temporary of the process not yet renamed or removed, for RemoveTemporariesOnSignal. A thread
+// changes the list with the ending signals blocked (so the handler never runs in the thread that holds the lock)
+// and under a spin lock, which the handler takes for good: the process is ending. Allocated once, never freed
+// (a handler may run while static destructors do).
+std::atomic<int> g_live_lock{0};  // 0 free, 1 held by a change, 2 taken by the handler
+std::vector<std::string>* g_live = nullptr;
+
+class LiveLock {
+ public:
+  LiveLock() {
+    sigset_t ending;
+    sigemptyset(&ending);
+    for (const int sig : kEndingSignals) sigaddset(&ending, sig);
+    ::pthread_sigmask(SIG_BLOCK, &ending, &old_);
+    for (int free = 0; !g_live_lock.compare_exchange_weak(free, 1, std::memory_order_acquire); free = 0) {
+    }
+    if (!g_live) g_live = new std::vector<std::string>;
+  }
+  ~LiveLock() {
+    g_live_lock.store(0, std::memory_order_release);
+    ::pthread_sigmask(SIG_SETMASK, &old_, nullptr);
+  }
+  LiveLock(const LiveLock&) = delete;
+  LiveLock& operator=(const LiveLock&) = delete;
+  static constexpr int kEndingSignals[] = {SIGINT, SIGTERM, SIGHUP, SIGQUIT};
+
+ private:
+  sigset_t old_;
+};
+
+void Track(const std::string& tmp) {
+  LiveLock lock;
+  g_live->push_back(tmp);
+}
+
+// Forgets the temporaries of files [first, last): one pass over the list, whatever their number (a folder of
+// frames stages thousands).
+using Staged = std::vector<std::pair<std::string, std::string>>;  // (temporary, path)
+void Untrack(Staged::const_iterator first, Staged::const_iterator last) {
+  if (first == last) return;
+  std::unordered_set<std::string_view> gone;
+  for (auto it = first; it != last; ++it) gone.insert(it->first);
+  LiveLock lock;
+  std::erase_if(*g_live, [&gone](const std::string& tmp) { return gone.count(tmp) != 0; });
+}
+
 }  // namespace
+
+void RemoveTemporariesOnSignal() noexcept {
+  for (int free = 0; !g_live_lock.compare_exchange_weak(free, 2, std::memory_order_acquire); free = 0) {
+  }
+  if (g_live)
+    for (const std::string& tmp : *g_live) ::unlink(tmp.c_str());  // async-signal-safe; a missing file is fine
+}
 
 Status WriteFileAtomic(const std::string& path, const void* bytes, size_t size) {
   OutputFiles one;  // a set of one file: written to its temporary, then renamed
@@ -90,10 +147,13 @@ Status WriteFileAtomic(const std::string& path, const void* bytes, size_t size) 
 OutputFiles::~OutputFiles() {
   std::error_code ec;
   for (const auto& [tmp, path] : files_) std::filesystem::remove(tmp, ec);  // none left once committed
+  Untrack(files_.begin(), files_.end());
 }
 
 std::string OutputFiles::Stage(const std::string& path, const std::string& suffix) {
-  files_.emplace_back(TemporaryPathFor(path, suffix), path);
+  std::string tmp = TemporaryPathFor(path, suffix);
+  Track(tmp);  // before the file can exist
+  files_.emplace_back(std::move(tmp), path);
   return files_.back().first;
 }
 
@@ -122,25 +182,30 @@ Error OutputFiles::Explain(Error error) const {
 
 Status OutputFiles::Commit() {
   namespace fs = std::filesystem;
+  // The first n files are in place (or were never made): forgotten, nothing left to remove.
+  auto forget = [this](size_t n) {
+    const auto end = files_.begin() + static_cast<std::ptrdiff_t>(n);
+    Untrack(files_.begin(), end);
+    files_.erase(files_.begin(), end);
+  };
   std::error_code ec;
-  size_t i = 0;
-  for (; i < files_.size(); ++i) {
+  for (size_t i = 0; i < files_.size(); ++i) {
     const auto& [tmp, path] = files_[i];
     const bool made = fs::exists(tmp, ec);
     if (ec) {
       const std::string why = ec.message(), failed = path;
-      files_.erase(files_.begin(), files_.begin() + static_cast<std::ptrdiff_t>(i));
+      forget(i);
       return MakeError(Error::Code::kIo, "cannot read the temporary file of '" + failed + "': " + why);
     }
     if (!made) continue;  // staged for a writer that wrote nothing: the path stays as it was
     fs::rename(tmp, path, ec);
     if (ec) {
       const std::string why = ec.message(), failed = path;
-      files_.erase(files_.begin(), files_.begin() + static_cast<std::ptrdiff_t>(i));  // renamed: nothing to remove
+      forget(i);
       return MakeError(Error::Code::kIo, "cannot rename the temporary file onto '" + failed + "': " + why);
     }
   }
-  files_.clear();
+  forget(files_.size());
   return Ok{};
 }
 

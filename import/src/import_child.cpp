@@ -218,6 +218,10 @@ bool Decode(const std::string& bytes, Context* ctx, Result<Mesh>* out) {
   // reporter, a sanitizer's or libFuzzer's report and artifact), must not run for it. The parent names the
   // signal or the exit status.
   for (const int sig : {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT, SIGTRAP, SIGSYS}) ::signal(sig, SIG_DFL);
+  // So is an ending signal the host handles (a Ctrl-C reaches the whole process group; the CLI's handler removes
+  // its output temporaries, in the parent only). One the host ignores stays ignored.
+  for (const int sig : {SIGINT, SIGTERM, SIGHUP, SIGQUIT})
+    if (::signal(sig, SIG_DFL) == SIG_IGN) ::signal(sig, SIG_IGN);
 #ifdef SPHERECHAIN_ASAN
   __sanitizer_set_death_callback(nullptr);  // ASan's own reports (an interceptor's) end the child with exit 1
 #endif

@@ -31,10 +31,21 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// A folder of this process's own (ctest runs each test case as a process, in parallel), removed at its end.
+const fs::path& TempDir() {
+  static const struct Folder {
+    fs::path dir = fs::temp_directory_path() / ("sc_vertex_contract_" + std::to_string(::getpid()));
+    Folder() { fs::create_directories(dir); }
+    ~Folder() {
+      std::error_code ec;
+      fs::remove_all(dir, ec);
+    }
+  } folder;
+  return folder.dir;
+}
+
 std::string TempFile(const std::string& name, const std::string& text) {
-  const fs::path dir = fs::temp_directory_path() / ("sc_vertex_contract_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  const fs::path p = dir / name;
+  const fs::path p = TempDir() / name;
   std::ofstream(p) << text;
   return p.string();
 }

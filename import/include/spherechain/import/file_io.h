@@ -76,6 +76,14 @@ class OutputFiles {
   std::vector<std::pair<std::string, std::string>> files_;  // (temporary, path), in staging order
 };
 
+/// Removes the temporaries of every OutputFiles of the process that are neither committed nor removed yet
+/// (those staged, written or being written; a file a writer of its own has not made yet is skipped): what a
+/// command's handler of SIGINT, SIGTERM, SIGHUP or SIGQUIT calls before the process ends, so that an interrupted
+/// command leaves no hidden file behind and every path keeps what it held. Async-signal-safe (unlink(2) over the
+/// process's list, which its changes make with those four signals blocked). A one-way door: afterwards any
+/// OutputFiles use in the process waits forever, so call it only on the way out (then re-raise the signal).
+void RemoveTemporariesOnSignal() noexcept;
+
 /// Why output file `path` cannot be written, found before the work that would write it: "cannot write 'p':
 /// folder 'd' does not exist" or "cannot write 'p': it is a folder"; empty when it can be tried (the write
 /// may still fail). Two stats; reads no file.
