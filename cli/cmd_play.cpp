@@ -336,13 +336,13 @@ void RegisterPlay(CLI::App& app, Commands* commands) {
                 "(the crease rule, Exclusions::kCrease) on an asset baked with it, else those between surrounding "
                 "regions of spheres the asset does not exclude; contacts per frame in the table and the JSON");
   sub->add_flag("--asset-exclusions", args->asset_exclusions,
-                "With --narrow-phase: the asset's excluded sphere pairs define a contact (Exclusions::kAsset), as "
-                "before the crease rule");
+                "With --narrow-phase: the asset's excluded sphere pairs define a contact (Exclusions::kAsset), the "
+                "asset's own definition");
   sub->add_option("--narrow-behind", args->narrow_behind,
                   "The narrow phase only behind M2's sphere pairs found with SCALE times the asset's contact margin "
                   "and, under the crease rule, the proxy's folds (excluded neighbours that came together): the "
-                  "spheres as a game's broad phase, on the reach regions; at 1.5 it finds 99-100 % of the skin's "
-                  "contacts on the reference animations; implies --narrow-phase; its time includes that M2 run")
+                  "spheres as a game's broad phase, on the reach regions (what it finds: docs/evaluation.md, skin contacts); "
+                  "implies --narrow-phase; its time includes that M2 run")
       ->check(WithinRange(0.0, 100.0, /*lo_open=*/true, /*as_float=*/true))
       ->type_name("SCALE");
   commands->handlers.emplace_back(sub, [args] { return RunPlay(*args); });
