@@ -95,7 +95,6 @@ bool MakeCheckHtml(const CheckPage& a, const runtime::AssetView& view, const imp
   }
   page += "</table>\n";
   std::vector<float> positions;
-  const fs::path png = fs::temp_directory_path() / ("spherechain-check-" + std::to_string(getpid()) + ".png");
   for (const evaluate::CheckClip& c : r.clips) {
     if (!c.failed()) continue;
     page += "<h2>" + playback::XmlEscape(c.name) + "</h2>\n<p>Viewer of this clip: <code>" + playback::XmlEscape(ViewCommand(a, c, options.poses)) +
@@ -109,15 +108,12 @@ bool MakeCheckHtml(const CheckPage& a, const runtime::AssetView& view, const imp
       const std::string caption = c.name + " frame " + std::to_string(e.deepest_frame) + " (" +
                                   Seconds(e.deepest_time) + " s): " + e.name + ", depth " + DepthText(e.depth, r);
       const std::string svg = playback::RenderFrameSvg(mesh, view, positions.data(), {}, marks, caption, 1200);
-      if (auto s = playback::SvgToPng(svg, png.string()); !s.ok())
+      auto png = playback::SvgToPngBytes(svg);
+      if (!png.ok())
         return *error = "the picture of " + c.name + ": " + e.name + " at frame " + std::to_string(e.deepest_frame) +
-                        ": " + s.error().message,
+                        ": " + png.error().message,
                false;
-      std::string bytes;
-      const bool read = ReadText(png, &bytes);
-      std::error_code ec;
-      fs::remove(png, ec);
-      if (!read) return *error = "cannot read the picture " + png.string(), false;
+      const std::string& bytes = png.value();
       const std::string line = "frames " + std::to_string(e.first_frame) + "–" + std::to_string(e.last_frame) + " (" +
                                Seconds(e.first_time) + "–" + Seconds(e.last_time) + " s), deepest at frame " +
                                std::to_string(e.deepest_frame) + "; triangles " + std::to_string(e.triangles[0]) + " / " +

@@ -126,13 +126,9 @@ bool OpenOrBake(const CheckArgs& a, LoadedAsset* asset, import::Mesh* mesh, std:
       spdlog::warn("cannot cache the bake: {}", s.error().message);
     }
   }
-  // Not cached: a temporary file read back into aligned memory the same way.
-  const fs::path tmp = fs::temp_directory_path() / ("spherechain-check-" + std::to_string(getpid()) + ".sphc");
-  if (auto s = import::WriteFileAtomic(tmp.string(), bytes.data(), bytes.size()); !s.ok())
-    return *error = s.error().message, false;
-  auto s = import::LoadAssetFile(tmp.string(), asset);
-  fs::remove(tmp, ec);
-  if (!s.ok()) return *error = "the baked asset does not load: " + s.error().message, false;
+  // Not cached: loaded from memory (copied into aligned storage and verified, as a file is).
+  if (auto s = import::LoadAssetBytes(bytes.data(), bytes.size(), "the baked asset", asset); !s.ok())
+    return *error = "the baked asset does not load: " + s.error().message, false;
   *asset_name = a.character + " (baked)";
   return true;
 }

@@ -21,7 +21,8 @@ extern "C" void EndOnSignal(int sig) {
 void RemoveOutputsOnInterrupt() {
   struct sigaction action = {};
   action.sa_handler = EndOnSignal;
-  sigemptyset(&action.sa_mask);
+  sigemptyset(&action.sa_mask);  // the others wait while one is handled: a Ctrl-C then a Ctrl-\ run it once
+  for (const int sig : {SIGINT, SIGTERM, SIGHUP, SIGQUIT}) sigaddset(&action.sa_mask, sig);
   action.sa_flags = SA_RESETHAND;
   for (const int sig : {SIGINT, SIGTERM, SIGHUP, SIGQUIT}) {
     struct sigaction old = {};

@@ -8,16 +8,16 @@
 #include <cctype>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <fstream>
 #include <numeric>
 #include <cerrno>
 #include <cstring>
-#include <string_view>
 #include <system_error>
-#include <unordered_set>
 
 #include <pthread.h>
 #include <signal.h>
+#include <fcntl.h>
 #include <unistd.h>
 
 #include <xxhash.h>
@@ -69,12 +69,20 @@ Status OutputFolderExists(const std::string& path) {
   return Ok{};
 }
 
-// `bytes` written whole to the file `tmp` (created or truncated), flushed to the disk; on failure removed.
-Status WriteWhole(const std::string& tmp, const void* bytes, size_t size) {
-  std::FILE* f = std::fopen(tmp.c_str(), "wb");
-  if (!f) return MakeError(Error::Code::kIo, "cannot create '" + tmp + "': " + std::strerror(errno));
-  const bool ok = std::fwrite(bytes, 1, size, f) == size && std::fflush(f) == 0 && ::fsync(::fileno(f)) == 0;
-  const bool closed = std::fclose(f) == 0;
+// `bytes` written whole through `fd` (the file `tmp`, just created), flushed to the disk and closed; on failure the
+// file is removed.
+Status WriteWhole(int fd, const std::string& tmp, const void* bytes, size_t size) {
+  const char* at = static_cast<const char*>(bytes);
+  size_t left = size;
+  bool ok = true;
+  while (ok && left > 0) {
+    const ssize_t n = ::write(fd, at, left);
+    if (n < 0 && errno == EINTR) continue;
+    ok = n > 0;
+    if (ok) at += n, left -= static_cast<size_t>(n);
+  }
+  ok = ok && ::fsync(fd) == 0;
+  const bool closed = ::close(fd) == 0;
   if (!ok || !closed) {
     std::error_code ec;
     std::filesystem::remove(tmp, ec);
@@ -83,59 +91,98 @@ Status WriteWhole(const std::string& tmp, const void* bytes, size_t size) {
   return Ok{};
 }
 
-// Every OutputFiles temporary of the process not yet renamed or removed, for RemoveTemporariesOnSignal. A thread
-// changes the list with the ending signals blocked (so the handler never runs in the thread that holds the lock)
-// and under a spin lock, which the handler takes for good: the process is ending. Allocated once, never freed
-// (a handler may run while static destructors do).
-std::atomic<int> g_live_lock{0};  // 0 free, 1 held by a change, 2 taken by the handler
-std::vector<std::string>* g_live = nullptr;
+}  // namespace
 
-class LiveLock {
+namespace detail {
+struct LiveTemporary {
+  std::string path;
+  LiveTemporary* prev = nullptr;
+  LiveTemporary* next = nullptr;
+};
+}  // namespace detail
+
+namespace {
+
+// Every OutputFiles temporary of the process not yet renamed or removed, newest first, for
+// RemoveTemporariesOnSignal. A thread changes the list with the ending signals blocked (so a handler never runs in
+// the thread that holds the lock) and under a spin lock, which the handler takes for good: the process is ending.
+// Nothing under the lock allocates (the nodes are made and freed outside it), so a handler that interrupted malloc
+// in another thread cannot wait on a holder that waits on malloc.
+std::atomic<int> g_live_lock{0};  // 0 free, 1 held by a change, 2 taken by the handler
+detail::LiveTemporary* g_live_head = nullptr;
+
+constexpr int kEndingSignals[] = {SIGINT, SIGTERM, SIGHUP, SIGQUIT};
+
+sigset_t EndingSignals() {
+  sigset_t set;
+  sigemptyset(&set);
+  for (const int sig : kEndingSignals) sigaddset(&set, sig);
+  return set;
+}
+
+// The ending signals blocked in this thread for the object's life (nests: each restores what it found).
+class BlockEndingSignals {
  public:
-  LiveLock() {
-    sigset_t ending;
-    sigemptyset(&ending);
-    for (const int sig : kEndingSignals) sigaddset(&ending, sig);
+  BlockEndingSignals() {
+    const sigset_t ending = EndingSignals();
     ::pthread_sigmask(SIG_BLOCK, &ending, &old_);
-    for (int free = 0; !g_live_lock.compare_exchange_weak(free, 1, std::memory_order_acquire); free = 0) {
-    }
-    if (!g_live) g_live = new std::vector<std::string>;
   }
-  ~LiveLock() {
-    g_live_lock.store(0, std::memory_order_release);
-    ::pthread_sigmask(SIG_SETMASK, &old_, nullptr);
-  }
-  LiveLock(const LiveLock&) = delete;
-  LiveLock& operator=(const LiveLock&) = delete;
-  static constexpr int kEndingSignals[] = {SIGINT, SIGTERM, SIGHUP, SIGQUIT};
+  ~BlockEndingSignals() { ::pthread_sigmask(SIG_SETMASK, &old_, nullptr); }
+  BlockEndingSignals(const BlockEndingSignals&) = delete;
+  BlockEndingSignals& operator=(const BlockEndingSignals&) = delete;
 
  private:
   sigset_t old_;
 };
 
-void Track(const std::string& tmp) {
+class LiveLock {
+ public:
+  LiveLock() {
+    for (int free = 0; !g_live_lock.compare_exchange_weak(free, 1, std::memory_order_acquire); free = 0) {
+    }
+  }
+  ~LiveLock() { g_live_lock.store(0, std::memory_order_release); }
+  LiveLock(const LiveLock&) = delete;
+  LiveLock& operator=(const LiveLock&) = delete;
+
+ private:
+  BlockEndingSignals blocked_;  // first in, last out
+};
+
+// Links `node` at the head of the list. With `create`, also creates its file (truncated, mode 0666 less the
+// umask) before the lock is released, so that no handler can run between the two and miss it: the file
+// descriptor, or -1 with errno set.
+int Track(detail::LiveTemporary* node, bool create) {
   LiveLock lock;
-  g_live->push_back(tmp);
+  node->next = g_live_head;
+  if (g_live_head) g_live_head->prev = node;
+  g_live_head = node;
+  return create ? ::open(node->path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666) : -1;
 }
 
-// Forgets the temporaries of files [first, last): one pass over the list, whatever their number (a folder of
-// frames stages thousands).
-using Staged = std::vector<std::pair<std::string, std::string>>;  // (temporary, path)
-void Untrack(Staged::const_iterator first, Staged::const_iterator last) {
+// Unlinks the nodes of `files` from the list (one lock, whatever their number: a folder of frames stages
+// thousands), then frees them.
+template <typename It>
+void Untrack(It first, It last) {
   if (first == last) return;
-  std::unordered_set<std::string_view> gone;
-  for (auto it = first; it != last; ++it) gone.insert(it->first);
-  LiveLock lock;
-  std::erase_if(*g_live, [&gone](const std::string& tmp) { return gone.count(tmp) != 0; });
+  {
+    LiveLock lock;
+    for (It it = first; it != last; ++it) {
+      detail::LiveTemporary* n = it->live;
+      (n->prev ? n->prev->next : g_live_head) = n->next;
+      if (n->next) n->next->prev = n->prev;
+    }
+  }
+  for (It it = first; it != last; ++it) delete it->live;
 }
-
 }  // namespace
 
 void RemoveTemporariesOnSignal() noexcept {
   for (int free = 0; !g_live_lock.compare_exchange_weak(free, 2, std::memory_order_acquire); free = 0) {
   }
-  if (g_live)
-    for (const std::string& tmp : *g_live) ::unlink(tmp.c_str());  // async-signal-safe; a missing file is fine
+  // Newest first: a writer's own temporary (a glTF's, renamed onto a staged path) goes before the staged path,
+  // so that another thread's rename cannot bring the staged one back afterwards.
+  for (const detail::LiveTemporary* n = g_live_head; n; n = n->next) ::unlink(n->path.c_str());  // async-signal-safe
 }
 
 Status WriteFileAtomic(const std::string& path, const void* bytes, size_t size) {
@@ -146,26 +193,37 @@ Status WriteFileAtomic(const std::string& path, const void* bytes, size_t size) 
 
 OutputFiles::~OutputFiles() {
   std::error_code ec;
-  for (const auto& [tmp, path] : files_) std::filesystem::remove(tmp, ec);  // none left once committed
+  for (const File& f : files_) std::filesystem::remove(f.temporary, ec);  // none left once committed
   Untrack(files_.begin(), files_.end());
 }
 
+OutputFiles::File& OutputFiles::Add(const std::string& path, const std::string& suffix) {
+  auto node = std::make_unique<detail::LiveTemporary>();
+  node->path = TemporaryPathFor(path, suffix);
+  files_.push_back({node->path, path, node.get()});
+  node.release();  // files_ owns it now: freed by Untrack
+  return files_.back();
+}
+
 std::string OutputFiles::Stage(const std::string& path, const std::string& suffix) {
-  std::string tmp = TemporaryPathFor(path, suffix);
-  Track(tmp);  // before the file can exist
-  files_.emplace_back(std::move(tmp), path);
-  return files_.back().first;
+  File& f = Add(path, suffix);
+  Track(f.live, /*create=*/false);  // before the writer can make the file
+  return f.temporary;
 }
 
 Status OutputFiles::Write(const std::string& path, const void* bytes, size_t size) {
   if (auto s = OutputFolderExists(path); !s.ok()) return s;
-  if (auto s = WriteWhole(Stage(path), bytes, size); !s.ok()) return Explain(s.error());
+  File& f = Add(path, {});
+  const int fd = Track(f.live, /*create=*/true);
+  if (fd < 0) return Explain(MakeError(Error::Code::kIo, "cannot create '" + f.temporary + "': " + std::strerror(errno)));
+  if (auto s = WriteWhole(fd, f.temporary, bytes, size); !s.ok()) return Explain(s.error());
   return Ok{};
 }
 
 Error OutputFiles::Explain(Error error) const {
   std::string& m = error.message;
-  for (const auto& [tmp, path] : files_) {
+  for (const File& f : files_) {
+    const std::string &tmp = f.temporary, &path = f.path;
     // A writer's own temporary of the staged one (TemporaryPathFor(tmp, suffix): DIR/.NAME.tmpPID.N[suffix]) up
     // to the end of its name, then the staged temporary itself.
     const std::filesystem::path t(tmp);
@@ -182,6 +240,9 @@ Error OutputFiles::Explain(Error error) const {
 
 Status OutputFiles::Commit() {
   namespace fs = std::filesystem;
+  // No ending signal between two renames (one that comes is handled after the last): the set is renamed whole,
+  // or, interrupted before, not at all.
+  BlockEndingSignals blocked;
   // The first n files are in place (or were never made): forgotten, nothing left to remove.
   auto forget = [this](size_t n) {
     const auto end = files_.begin() + static_cast<std::ptrdiff_t>(n);
@@ -190,7 +251,7 @@ Status OutputFiles::Commit() {
   };
   std::error_code ec;
   for (size_t i = 0; i < files_.size(); ++i) {
-    const auto& [tmp, path] = files_[i];
+    const std::string &tmp = files_[i].temporary, &path = files_[i].path;
     const bool made = fs::exists(tmp, ec);
     if (ec) {
       const std::string why = ec.message(), failed = path;

@@ -11,6 +11,7 @@
 #if defined(__linux__)  // fork, pipe2 and poll; elsewhere assimp runs in the caller's process (below)
 #include <fcntl.h>
 #include <poll.h>
+#include <pthread.h>
 #include <signal.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -41,6 +42,9 @@
 
 namespace spherechain::import::detail {
 namespace {
+
+// The signals that end a process by request (CLI: main.cpp removes its output temporaries on them).
+constexpr int kEndingSignals[] = {SIGINT, SIGTERM, SIGHUP, SIGQUIT};
 
 // The child's end of the pipe, for ChildPhase (-1 in the parent and in-process).
 int g_child_fd = -1;
@@ -212,16 +216,21 @@ bool Decode(const std::string& bytes, Context* ctx, Result<Mesh>* out) {
   return true;
 }
 
-[[noreturn]] void RunChild(int fd, const std::string& path, const ImportOptions& options, ChildImporter import) {
+[[noreturn]] void RunChild(int fd, const std::string& path, const ImportOptions& options, ChildImporter import,
+                           const sigset_t& mask_before_fork) {
   g_child_fd = fd;
   // A crash in the child is its death and nothing more: the host's handlers, inherited through fork (a crash
   // reporter, a sanitizer's or libFuzzer's report and artifact), must not run for it. The parent names the
   // signal or the exit status.
   for (const int sig : {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT, SIGTRAP, SIGSYS}) ::signal(sig, SIG_DFL);
   // So is an ending signal the host handles (a Ctrl-C reaches the whole process group; the CLI's handler removes
-  // its output temporaries, in the parent only). One the host ignores stays ignored.
-  for (const int sig : {SIGINT, SIGTERM, SIGHUP, SIGQUIT})
-    if (::signal(sig, SIG_DFL) == SIG_IGN) ::signal(sig, SIG_IGN);
+  // its output temporaries, in the parent only): blocked across the fork (ImportInChild), its handler replaced
+  // before it is unblocked, so the host's handler never runs here. One the host ignores stays ignored.
+  for (const int sig : kEndingSignals) {
+    struct sigaction old = {};
+    if (::sigaction(sig, nullptr, &old) == 0 && old.sa_handler != SIG_IGN) ::signal(sig, SIG_DFL);
+  }
+  ::pthread_sigmask(SIG_SETMASK, &mask_before_fork, nullptr);
 #ifdef SPHERECHAIN_ASAN
   __sanitizer_set_death_callback(nullptr);  // ASan's own reports (an interceptor's) end the child with exit 1
 #endif
@@ -276,7 +285,12 @@ Result<Mesh> ImportInChild(const std::string& path, const ImportOptions& options
     if (::pipe2(fds, O_CLOEXEC) != 0)
       return FileError(Error::Code::kInternal, path, std::string("cannot start the parser's process: pipe: ") + std::strerror(errno));
     std::fflush(nullptr);
+    sigset_t ending, mask;
+    sigemptyset(&ending);
+    for (const int sig : kEndingSignals) sigaddset(&ending, sig);
+    ::pthread_sigmask(SIG_BLOCK, &ending, &mask);
     pid = ::fork();
+    if (pid != 0) ::pthread_sigmask(SIG_SETMASK, &mask, nullptr);
     if (pid < 0) {
       ::close(fds[0]);
       ::close(fds[1]);
@@ -284,7 +298,7 @@ Result<Mesh> ImportInChild(const std::string& path, const ImportOptions& options
     }
     if (pid == 0) {
       ::close(fds[0]);
-      RunChild(fds[1], path, options, import);
+      RunChild(fds[1], path, options, import, mask);
     }
     ::close(fds[1]);
   }

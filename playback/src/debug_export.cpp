@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -11,9 +12,12 @@
 #include <numeric>
 #include <sstream>
 
+#include <fcntl.h>
+#include <poll.h>
 #include <spawn.h>
-#include <unistd.h>
+#include <sys/socket.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
@@ -420,41 +424,76 @@ std::string RenderFrameSvg(const Mesh& mesh, const runtime::AssetView& a, const 
   return RenderSvg(mesh, a, pic, width_px);
 }
 
-Status SvgToPng(const std::string& svg, const std::string& png_path, bool keep_svg) {
-  namespace fs = std::filesystem;
-  // The SVG beside the PNG when it is kept (an output), else under a temporary name of its own, as the PNG
-  // is until its rename: a file of the user's named like either is never touched.
-  const std::string svg_path = keep_svg ? png_path + ".svg" : import::TemporaryPathFor(png_path, ".svg");
-  if (Status s = import::WriteFileAtomic(svg_path, svg); !s.ok()) return s;
-  const std::string tmp_png = import::TemporaryPathFor(png_path, ".png");
-  // rsvg-convert -f png -o TMP SVG, without a shell (paths are passed as they are).
-  std::vector<std::string> args = {"rsvg-convert", "-f", "png", "-o", tmp_png, svg_path};
-  std::vector<char*> argv;
-  for (std::string& s : args) argv.push_back(s.data());
-  argv.push_back(nullptr);
+Result<std::string> SvgToPngBytes(const std::string& svg, const std::string& for_path) {
+  // rsvg-convert -f png, without a shell: the SVG on its standard input (a socket, so that a write to it after it
+  // ended is an error, not a SIGPIPE), the PNG read from its standard output.
+  const std::string what = for_path.empty() ? std::string("a picture") : "'" + for_path + "'";
+  int in[2], out[2];
+  if (::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, in) != 0)
+    return MakeError(Error::Code::kIo, "cannot start rsvg-convert for " + what + ": " + std::strerror(errno));
+  if (::pipe2(out, O_CLOEXEC) != 0) {
+    const int e = errno;
+    ::close(in[0]), ::close(in[1]);
+    return MakeError(Error::Code::kIo, "cannot start rsvg-convert for " + what + ": " + std::strerror(e));
+  }
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_adddup2(&actions, in[1], 0);  // dup2 clears close-on-exec on 0 and 1 only
+  posix_spawn_file_actions_adddup2(&actions, out[1], 1);
+  std::string a0 = "rsvg-convert", a1 = "-f", a2 = "png";
+  char* argv[] = {a0.data(), a1.data(), a2.data(), nullptr};
   pid_t pid = 0;
-  const int spawned = posix_spawnp(&pid, "rsvg-convert", nullptr, nullptr, argv.data(), environ);
+  const int spawned = posix_spawnp(&pid, "rsvg-convert", &actions, nullptr, argv, environ);
+  posix_spawn_file_actions_destroy(&actions);
+  ::close(in[1]);
+  ::close(out[1]);
+  std::string png;
+  if (spawned == 0) {
+    size_t sent = 0;
+    bool writing = true, reading = true;
+    if (svg.empty()) ::shutdown(in[0], SHUT_WR), writing = false;
+    while (reading) {
+      pollfd p[2] = {{out[0], POLLIN, 0}, {writing ? in[0] : -1, POLLOUT, 0}};
+      if (::poll(p, 2, -1) < 0) {
+        if (errno == EINTR) continue;
+        break;
+      }
+      if (writing && p[1].revents) {
+        const ssize_t n = ::send(in[0], svg.data() + sent, svg.size() - sent, MSG_NOSIGNAL | MSG_DONTWAIT);
+        if (n > 0) sent += static_cast<size_t>(n);
+        if (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) writing = false;  // it stopped reading
+        if (sent == svg.size()) ::shutdown(in[0], SHUT_WR), writing = false;
+      }
+      if (p[0].revents) {
+        char buf[1 << 16];
+        const ssize_t n = ::read(out[0], buf, sizeof buf);
+        if (n > 0) png.append(buf, static_cast<size_t>(n));
+        else if (n == 0 || errno != EINTR) reading = false;
+      }
+    }
+  }
+  ::close(in[0]);
+  ::close(out[0]);
   int status = 0;
-  const bool rendered = spawned == 0 && waitpid(pid, &status, 0) == pid && WIFEXITED(status) && WEXITSTATUS(status) == 0;
-  std::error_code ec;
-  if (!keep_svg) fs::remove(svg_path, ec);
-  if (!rendered) {
-    fs::remove(tmp_png, ec);
-    if (spawned != 0)
-      return MakeError(Error::Code::kIo, "rsvg-convert is not installed (Debian librsvg2-bin), needed to write '" +
-                                             png_path + "': " + std::strerror(spawned));
-    return MakeError(Error::Code::kIo, "rsvg-convert could not render the picture for '" + png_path + "' (" +
+  if (spawned != 0)
+    return MakeError(Error::Code::kIo, "rsvg-convert is not installed (Debian librsvg2-bin), needed to write " + what +
+                                           ": " + std::strerror(spawned));
+  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0 || png.empty())
+    return MakeError(Error::Code::kIo, "rsvg-convert could not render the picture for " + what + " (" +
                                            (WIFEXITED(status) ? "exit " + std::to_string(WEXITSTATUS(status))
                                                               : "signal " + std::to_string(WTERMSIG(status))) +
                                            "; its message is above)");
-  }
-  fs::rename(tmp_png, png_path, ec);
-  if (ec) {
-    const std::string why = ec.message();
-    fs::remove(tmp_png, ec);
-    return MakeError(Error::Code::kIo, "cannot move the PNG onto '" + png_path + "': " + why);
-  }
-  return Ok{};
+  return png;
+}
+
+Status SvgToPng(const std::string& svg, const std::string& png_path, bool keep_svg) {
+  auto png = SvgToPngBytes(svg, png_path);
+  if (!png.ok()) return png.error();
+  if (keep_svg)  // an output beside the PNG
+    if (Status s = import::WriteFileAtomic(png_path + ".svg", svg); !s.ok()) return s;
+  return import::WriteFileAtomic(png_path, png.value());
 }
 
 Status RenderDebugPng(const Mesh& mesh, const runtime::AssetView& a, const std::string& png_path, bool keep_svg) {

@@ -4,7 +4,7 @@
 interrupt.py CLI GLTF WORK
 
 Bakes GLTF, runs `play --dump-frames` of 4 frames with --json (the earlier run), then for each of SIGINT,
-SIGTERM and SIGHUP starts a run of 100,000 frames into the same folder and JSON, waits until its first frame's
+SIGTERM, SIGHUP, and SIGINT with SIGTERM right behind it, starts a run of 100,000 frames into the same folder and JSON, waits until its first frame's
 hidden temporary exists, sends the signal, and checks: the process ended by that signal, the folder holds the
 earlier run's frames byte for byte and nothing else, the JSON is the earlier one, no hidden file is left beside it.
 Exit 0 when all hold ("SKIPPED" when GLTF is missing); 1 with what failed.
@@ -52,12 +52,18 @@ def main():
     if len(earlier) != 8:  # frame_0000..0003, .f32 and .joints
         fail("the earlier run wrote %d files, expected 8: %s" % (len(earlier), list(earlier)))
 
-    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
-        name = signal.Signals(sig).name
+    # The last case sends SIGINT and SIGTERM back to back: the second waits while the first is handled.
+    for sig, then in ((signal.SIGINT, None), (signal.SIGTERM, None), (signal.SIGHUP, None),
+                      (signal.SIGINT, signal.SIGTERM)):
+        name = signal.Signals(sig).name + ("+" + signal.Signals(then).name if then else "")
         # The signal's default action in the child, whatever this test's parent set (a background job ignores
         # SIGINT, nohup SIGHUP): the CLI keeps a signal its caller ignores.
-        run = subprocess.Popen(play + ["--frames", "100000"], stdout=subprocess.DEVNULL,
-                               preexec_fn=lambda s=sig: signal.signal(s, signal.SIG_DFL))
+        def defaults(signals=(sig, then)):
+            for s in signals:
+                if s:
+                    signal.signal(s, signal.SIG_DFL)
+
+        run = subprocess.Popen(play + ["--frames", "100000"], stdout=subprocess.DEVNULL, preexec_fn=defaults)
         deadline = time.monotonic() + 120
         while not hidden(frames):
             if run.poll() is not None:
@@ -68,12 +74,14 @@ def main():
             time.sleep(0.01)
         staged = len(hidden(frames))
         run.send_signal(sig)
+        if then:
+            run.send_signal(then)
         try:
             code = run.wait(timeout=60)
         except subprocess.TimeoutExpired:
             run.kill()
-            fail("%s: play still running 60 s after the signal" % name)
-        if code != -sig:
+            fail("%s: play still running 60 s after the signal" % name)  # a handler waiting on itself
+        if code not in (-sig, -(then or sig)):
             fail("%s: play ended with %s, expected death by the signal (%d)" % (name, code, -sig))
         left = hidden(frames) + hidden(work)
         if left:

@@ -44,6 +44,10 @@ inline Status WriteFileAtomic(const std::string& path, const std::string& text) 
   return WriteFileAtomic(path, text.data(), text.size());
 }
 
+namespace detail {
+struct LiveTemporary;
+}  // namespace detail
+
 /// A command's output files written all or nothing (an asset with its report and pictures, a folder of
 /// frames): each is first written whole to a hidden temporary beside its path (TemporaryPathFor), and
 /// Commit() renames them onto their paths, in the order they were staged, once every one is written. Until
@@ -73,7 +77,12 @@ class OutputFiles {
   Error Explain(Error error) const;
 
  private:
-  std::vector<std::pair<std::string, std::string>> files_;  // (temporary, path), in staging order
+  struct File {
+    std::string temporary, path;
+    detail::LiveTemporary* live;  // its entry in the process's list of temporaries (RemoveTemporariesOnSignal)
+  };
+  File& Add(const std::string& path, const std::string& suffix);
+  std::vector<File> files_;  // in staging order
 };
 
 /// Removes the temporaries of every OutputFiles of the process that are neither committed nor removed yet

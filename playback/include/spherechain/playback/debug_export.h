@@ -53,9 +53,14 @@ std::string RenderFrameSvg(const Mesh& mesh, const runtime::AssetView& asset, co
                            const std::vector<FrameSphere>& spheres, const std::vector<uint8_t>& triangle_marks,
                            const std::string& caption, int width_px = 1600);
 
-/// Writes `svg` to PNG with `rsvg-convert` (Debian librsvg2-bin), atomically (nothing is left at
-/// `png_path` on failure). Errors: kIo "rsvg-convert is not installed …" when it cannot be started, "rsvg-convert
-/// could not render the picture …" when it fails (its own message is on stderr).
+/// `svg` rendered to PNG bytes by `rsvg-convert` (Debian librsvg2-bin), through its standard input and output:
+/// no file is written (an interrupted caller leaves none, and the tool ends with it). `for_path` names the
+/// picture in messages (may be empty). Errors: kIo "rsvg-convert is not installed …" when it cannot be started,
+/// "rsvg-convert could not render the picture …" when it fails or writes nothing (its own message is on stderr).
+Result<std::string> SvgToPngBytes(const std::string& svg, const std::string& for_path = {});
+
+/// Writes `svg` to PNG (SvgToPngBytes), atomically (nothing is left at `png_path` on failure; with `keep_svg` the
+/// SVG too, at `png_path` + ".svg"). Errors: SvgToPngBytes's, and kIo when a file cannot be written.
 Status SvgToPng(const std::string& svg, const std::string& png_path, bool keep_svg = false);
 
 /// Renders RenderDebugSvg to PNG with `rsvg-convert` (Debian librsvg2-bin). Errors: kIo when the tool
