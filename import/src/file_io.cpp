@@ -153,11 +153,16 @@ class LiveLock {
 // umask) before the lock is released, so that no handler can run between the two and miss it: the file
 // descriptor, or -1 with errno set.
 int Track(detail::LiveTemporary* node, bool create) {
-  LiveLock lock;
-  node->next = g_live_head;
-  if (g_live_head) g_live_head->prev = node;
-  g_live_head = node;
-  return create ? ::open(node->path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666) : -1;
+  int fd = -1, error = 0;
+  {
+    LiveLock lock;
+    node->next = g_live_head;
+    if (g_live_head) g_live_head->prev = node;
+    g_live_head = node;
+    if (create) fd = ::open(node->path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666), error = errno;
+  }
+  errno = error;  // as open left it, whatever the unlock did
+  return fd;
 }
 
 // Unlinks the nodes of `files` from the list (one lock, whatever their number: a folder of frames stages
