@@ -375,8 +375,12 @@ std::string RenderSvg(const Mesh& mesh, const runtime::AssetView& a, const Pictu
               << "' stroke-width='" << (S.opacity > 0.5f ? 2 : 1) << "'/>\n";
         }
       }
-      svg << "<text x='" << ox + 10 << "' y='16' font-family='sans-serif' font-size='14'>" << XmlEscape(V.name) << ": "
-          << XmlEscape(pass == 0 ? pic.left_name : pic.right_name) << "</text>\n";
+      // A title fits its panel: 14 px, smaller when it is long for the panel (sans-serif glyphs average about
+      // 0.56 em; a creature's end-on title beside a narrow panel of a 1,200 px picture overran the next one).
+      const std::string title = std::string(V.name) + ": " + (pass == 0 ? pic.left_name : pic.right_name);
+      const float title_px = std::min(14.0f, float(panel - 14) / (0.56f * float(std::max<size_t>(1, title.size()))));
+      svg << "<text x='" << ox + 10 << "' y='16' font-family='sans-serif' font-size='" << title_px << "'>"
+          << XmlEscape(title) << "</text>\n";
     }
   }
   svg << "<text x='10' y='" << height + 32 << "' font-family='sans-serif' font-size='13'>" << XmlEscape(pic.caption)
