@@ -19,12 +19,13 @@ extern "C" void EndOnSignal(int sig) {
 }
 
 void RemoveOutputsOnInterrupt() {
+  constexpr int kEnding[] = {SIGINT, SIGTERM, SIGHUP, SIGQUIT};  // RemoveTemporariesOnSignal's (file_io.h)
   struct sigaction action = {};
   action.sa_handler = EndOnSignal;
   sigemptyset(&action.sa_mask);  // the others wait while one is handled: a Ctrl-C then a Ctrl-\ run it once
-  for (const int sig : {SIGINT, SIGTERM, SIGHUP, SIGQUIT}) sigaddset(&action.sa_mask, sig);
+  for (const int sig : kEnding) sigaddset(&action.sa_mask, sig);
   action.sa_flags = SA_RESETHAND;
-  for (const int sig : {SIGINT, SIGTERM, SIGHUP, SIGQUIT}) {
+  for (const int sig : kEnding) {
     struct sigaction old = {};
     // A signal the caller set to be ignored (nohup's SIGHUP, a background job's SIGINT) stays ignored.
     if (sigaction(sig, nullptr, &old) == 0 && old.sa_handler != SIG_IGN) sigaction(sig, &action, nullptr);

@@ -2,6 +2,8 @@
 // asset records, weld ids, XXH3 hashes, and reading a .sphc into aligned memory.
 #include "spherechain/import/file_io.h"
 
+#include "import_internal.h"
+
 #include <algorithm>
 #include <array>
 #include <atomic>
@@ -94,6 +96,13 @@ Status WriteWhole(int fd, const std::string& tmp, const void* bytes, size_t size
 }  // namespace
 
 namespace detail {
+sigset_t EndingSignalSet() {
+  sigset_t set;
+  sigemptyset(&set);
+  for (const int sig : kEndingSignals) sigaddset(&set, sig);
+  return set;
+}
+
 struct LiveTemporary {
   std::string path;
   LiveTemporary* prev = nullptr;
@@ -111,20 +120,11 @@ namespace {
 std::atomic<int> g_live_lock{0};  // 0 free, 1 held by a change, 2 taken by the handler
 detail::LiveTemporary* g_live_head = nullptr;
 
-constexpr int kEndingSignals[] = {SIGINT, SIGTERM, SIGHUP, SIGQUIT};
-
-sigset_t EndingSignals() {
-  sigset_t set;
-  sigemptyset(&set);
-  for (const int sig : kEndingSignals) sigaddset(&set, sig);
-  return set;
-}
-
 // The ending signals blocked in this thread for the object's life (nests: each restores what it found).
 class BlockEndingSignals {
  public:
   BlockEndingSignals() {
-    const sigset_t ending = EndingSignals();
+    const sigset_t ending = detail::EndingSignalSet();
     ::pthread_sigmask(SIG_BLOCK, &ending, &old_);
   }
   ~BlockEndingSignals() { ::pthread_sigmask(SIG_SETMASK, &old_, nullptr); }

@@ -43,8 +43,6 @@
 namespace spherechain::import::detail {
 namespace {
 
-// The signals that end a process by request (CLI: main.cpp removes its output temporaries on them).
-constexpr int kEndingSignals[] = {SIGINT, SIGTERM, SIGHUP, SIGQUIT};
 
 // The child's end of the pipe, for ChildPhase (-1 in the parent and in-process).
 int g_child_fd = -1;
@@ -285,9 +283,8 @@ Result<Mesh> ImportInChild(const std::string& path, const ImportOptions& options
     if (::pipe2(fds, O_CLOEXEC) != 0)
       return FileError(Error::Code::kInternal, path, std::string("cannot start the parser's process: pipe: ") + std::strerror(errno));
     std::fflush(nullptr);
-    sigset_t ending, mask;
-    sigemptyset(&ending);
-    for (const int sig : kEndingSignals) sigaddset(&ending, sig);
+    const sigset_t ending = EndingSignalSet();
+    sigset_t mask;
     ::pthread_sigmask(SIG_BLOCK, &ending, &mask);
     pid = ::fork();
     if (pid != 0) ::pthread_sigmask(SIG_SETMASK, &mask, nullptr);

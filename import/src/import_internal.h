@@ -5,6 +5,8 @@
 
 #include <Eigen/Geometry>
 
+#include <signal.h>
+
 #include <array>
 #include <cstdint>
 #include <string>
@@ -15,6 +17,13 @@
 #include "spherechain/import/types.h"
 
 namespace spherechain::import::detail {
+
+/// The signals that end a process by request (Ctrl-C, a kill, a closed terminal, Ctrl-\): the CLI removes its
+/// output temporaries on them (RemoveTemporariesOnSignal), OutputFiles blocks them while it changes its list, and
+/// the assimp child is forked with them blocked.
+inline constexpr int kEndingSignals[] = {SIGINT, SIGTERM, SIGHUP, SIGQUIT};
+/// kEndingSignals as a signal set.
+sigset_t EndingSignalSet();
 
 /// glTF / GLB through tinygltf. `path` exists and is a regular file (checked by ImportMesh).
 /// Errors: kIo (unreadable), kFormat (not glTF, broken accessors, ...), kInvalidMesh (no triangles).
