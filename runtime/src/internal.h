@@ -20,6 +20,21 @@ inline uint32_t SweepLimit(uint64_t per, uint64_t units) {
   return static_cast<uint32_t>(std::min<uint64_t>(per * units + NarrowPhaseModel::kSweepSlack, UINT32_MAX - 65536));
 }
 
+#if defined(__GNUC__) && defined(__x86_64__)
+/// The float filter of PrepareTriangle and TrianglesIntersect(const PreparedTriangle&, const PreparedTriangle&)
+/// on 16 triangles by lane (triangle_intersect.cpp section 7): the same values by the same operations, so the
+/// same decisions. AVX-512F and DQ: call only where kernels::Best() is kAvx512 (the crease rule's AVX-512 sweep).
+/// `f`: 16 rows of 16 floats. Rows 0–8 hold the corners on input (p x, y, z, q x, y, z, r x, y, z; the
+/// triangle's own vertex order), rows 9–15 are written: the float plane (n x, y, z, δ) and the error terms
+/// G, A, M. Returns the lanes of `lanes` that PrepareTriangle accepts with a certified area (finite, in the
+/// filter's range, not a sliver); the others must go through PrepareTriangle. ~25 ns; no allocation.
+uint32_t PrepareFilter16(float* f, uint32_t lanes);
+/// The lanes of `u` (rows of PrepareFilter16) whose pair with lane `i` (< 16) of `t` the float filter
+/// rejects: all three vertices of one triangle certified strictly on one side of the other's plane, either
+/// way. Meaningful for certified lanes only. ~10 ns; no allocation.
+uint32_t FilterRejects16(const float* t, uint32_t i, const float* u);
+#endif
+
 struct Model::Internal {
   static void Refit(const RefitJob& job, uint32_t begin, uint32_t end);
   static Status Detect(const DetectJob& job);

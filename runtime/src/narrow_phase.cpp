@@ -821,6 +821,7 @@ void NarrowPhaseWorkspace::ForEachArray(F&& f) {
     for (int k = 0; k < 3; ++k) f(l->lo[k]), f(l->hi[k]);
   }
   f(patch_box_), f(group_box_), f(sweep_), f(sweep_box_), f(sweep_hits_), f(patch_tri_box_), f(tri_prepared_), f(tri_frame_);
+  f(filter_pool_), f(filter_mask_), f(patch_filter_);
   f(cull_t_), f(cull_f_), f(cull_smin_), f(cull_e_), f(patch_tri_frame_), f(patch_active_), f(patch_partner_bits_);
   crease_scratch_.ForEachArray(f);
 }

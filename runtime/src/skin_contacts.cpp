@@ -23,7 +23,11 @@
 // The code is skin_contacts_sweep.inl, compiled twice below: CreaseSweep (baseline x86-64, or scalar) and,
 // on x86-64, CreaseSweepAvx512 (AVX-512 function target: the 16-lane box tests in one compare per bound).
 // RunCrease picks per job as the other kernels do (kernels::Best(), capped by SPHERECHAIN_ISA); the two give
-// the same contacts, depths and order (comparisons and min/max only; no FMA: -ffp-contract=off).
+// the same contacts, depths and order (comparisons and min/max only; no FMA: -ffp-contract=off). The AVX-512
+// copy also runs the exact tests' float filter a row at a time: a patch's 16 triangles prepared by lane once a
+// frame (PrepareFilter16, the values PrepareTriangle writes), and each kept triangle against the other patch's
+// 16 in one pass (FilterRejects16); the pairs it rejects are counted as tests, the others are tested as in the
+// baseline copy (a certified lane is copied out as its PreparedTriangle), so the decisions are the same.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -50,6 +54,7 @@ namespace spherechain::runtime {
 namespace {
 constexpr float kInfinity = std::numeric_limits<float>::infinity();
 constexpr uint32_t kPatch = 16;     // triangles per patch (one uint16_t of near bits per row)
+constexpr uint32_t kFilterFloats = 16 * kPatch;  // a patch in the float filter's lanes: 16 rows of 16 (PrepareFilter16)
 constexpr uint32_t kGroup = 4;      // patches per group (consecutive in Morton order): what the sweep sorts
 constexpr uint32_t kGroupWindow = 16;  // pairs of groups fewer than this apart: skip masks in group_near_
 constexpr uint32_t kNone = ~0u;

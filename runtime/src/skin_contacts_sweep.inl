@@ -537,6 +537,37 @@
     return static_cast<uint32_t>(state);
   }
 
+#if SPHERECHAIN_SKIN_AVX512
+  /// Patch p's 16 triangles prepared by lane for the float filter this frame (PrepareFilter16: a slot of the
+  /// frame's pool, filled in the order the pairs meet the patches), and in `*certified` its certified lanes.
+  static const float* Filter(const NarrowPhaseModel& m, NarrowPhaseWorkspace& w, const char* base, size_t stride,
+                             uint32_t p, uint32_t* certified) {
+    uint64_t& state = w.patch_filter_[p];
+    if (state >> 32 != w.frame_) {
+      const uint32_t slot = w.filters_used_++;
+      float* f = &w.filter_pool_[kFilterFloats * size_t{slot}];
+      const uint32_t first = m.cl_vert_offsets_[p], n = m.cl_count_[p];
+      const uint8_t* corner = &m.cl_local_[3 * kPatch * size_t{p}];
+      for (uint32_t t = 0; t < kPatch; ++t)
+        for (int j = 0; j < 3; ++j) {
+          const float* q = reinterpret_cast<const float*>(base + stride * m.cl_vert_[first + corner[3 * t + j]]);
+          for (int k = 0; k < 3; ++k) f[kPatch * (3 * j + k) + t] = t < n ? q[k] : 0.0f;
+        }
+      w.filter_mask_[slot] = static_cast<uint16_t>(PrepareFilter16(f, (1u << n) - 1));
+      state = uint64_t{w.frame_} << 32 | slot;
+    }
+    const uint32_t slot = static_cast<uint32_t>(state);
+    *certified = w.filter_mask_[slot];
+    return &w.filter_pool_[kFilterFloats * size_t{slot}];
+  }
+  /// Lane `i` of a Filter block as the PreparedTriangle PrepareTriangle writes (x, y, z with G, A, M; the
+  /// plane): one gather.
+  static void LaneToPrepared(const float* f, uint32_t i, PreparedTriangle* out) {
+    const __m512i rows = _mm512_setr_epi32(0, 48, 96, 208, 16, 64, 112, 224, 32, 80, 128, 240, 144, 160, 176, 192);
+    _mm512_store_ps(out, _mm512_i32gather_ps(_mm512_add_epi32(rows, _mm512_set1_epi32(static_cast<int>(i))), f, 4));
+  }
+#endif
+
   /// Pass 1 of a frame: each patch's distinct vertices read once (cl_vert_), its box (patch_box_: per group
   /// of 4 patches 6 rows of 4) and its 16 triangle boxes (patch_tri_box_: 6 rows of 16, inverted padding)
   /// from them (cl_local_), each group's box (group_box_: 6 rows of #G), and the box of them all (lo, hi).
@@ -779,6 +810,11 @@
     const uint32_t cols = Overlap16(bb, alo, ahi) & far >> 16;
     if (!cols) return;
     const bool wider = crease > m.crease_graph_.crease();
+#if SPHERECHAIN_SKIN_AVX512
+    const float* fa = nullptr;
+    const float* fb = nullptr;
+    uint32_t certified_a = 0, certified_b = 0;
+#endif
     for (; live; live &= live - 1) {
       const uint32_t i = static_cast<uint32_t>(__builtin_ctz(live));
       uint32_t want = cols & ~uint32_t{rows[i]};
@@ -788,16 +824,50 @@
       uint32_t overlap = Overlap16(bb, lo, hi) & want;
       c->box_tests += kPatch;
       if (!overlap) continue;
+#if SPHERECHAIN_SKIN_AVX512
+      // The float filter for the whole row at once: the pairs it rejects are tests the scalar path would
+      // reject in the same filter (counted as tests); the others go on as there.
+      if (!fa) fa = Filter(m, w, base, stride, a, &certified_a), fb = Filter(m, w, base, stride, b, &certified_b);
+      if (certified_a >> i & 1) {
+        if (const uint32_t rejected = FilterRejects16(fa, i, fb) & overlap & certified_b) {
+          c->tests += static_cast<uint32_t>(__builtin_popcount(rejected));
+          overlap &= ~rejected;
+          if (!overlap) continue;
+        }
+      }
+#endif
       const uint32_t t = m.cl_tri_[kPatch * size_t{a} + i];
-      const uint32_t ts = Prepared(m, w, base, stride, t, c);
-      if (ts == kNone) continue;  // t degenerate: in no contact
+      const PreparedTriangle* pt;
+#if SPHERECHAIN_SKIN_AVX512
+      PreparedTriangle lane_t, lane_u;  // a certified lane is what PrepareTriangle would write
+      if (certified_a >> i & 1) {
+        LaneToPrepared(fa, i, &lane_t);
+        pt = &lane_t;
+      } else
+#endif
+      {
+        const uint32_t ts = Prepared(m, w, base, stride, t, c);
+        if (ts == kNone) continue;  // t degenerate: in no contact
+        pt = &w.tri_prepared_[ts];
+      }
       const uint32_t* tv = &m.tri_v_[3 * size_t{t}];
       for (; overlap; overlap &= overlap - 1) {
-        const uint32_t u = m.cl_tri_[kPatch * size_t{b} + static_cast<uint32_t>(__builtin_ctz(overlap))];
-        const uint32_t us = Prepared(m, w, base, stride, u, c);
-        if (us == kNone) continue;
+        const uint32_t j = static_cast<uint32_t>(__builtin_ctz(overlap));
+        const uint32_t u = m.cl_tri_[kPatch * size_t{b} + j];
+        const PreparedTriangle* pu;
+#if SPHERECHAIN_SKIN_AVX512
+        if (certified_b >> j & 1) {
+          LaneToPrepared(fb, j, &lane_u);
+          pu = &lane_u;
+        } else
+#endif
+        {
+          const uint32_t us = Prepared(m, w, base, stride, u, c);
+          if (us == kNone) continue;
+          pu = &w.tri_prepared_[us];
+        }
         ++c->tests;
-        if (!TrianglesIntersect(w.tri_prepared_[ts], w.tri_prepared_[us])) continue;
+        if (!TrianglesIntersect(*pt, *pu)) continue;
         if (wider && w.crease_scratch_.Near(m.crease_graph_, tv, &m.tri_v_[3 * size_t{u}], crease)) {
           ++c->folds;
           continue;
@@ -832,9 +902,11 @@
     if (++w.frame_ >= 0x7fffffffu) {  // stamps wrap: forget them all
       std::fill(w.tri_frame_.begin(), w.tri_frame_.end(), uint64_t{0});
       std::fill(w.patch_tri_frame_.begin(), w.patch_tri_frame_.end(), 0u);
+      std::fill(w.patch_filter_.begin(), w.patch_filter_.end(), uint64_t{0});
       w.frame_ = 1;
     }
     w.prepared_used_ = 0;
+    w.filters_used_ = 0;
     if (C == 0) return true;  // no patch (every triangle degenerate by weld ids): no vertex to read, no contact
     float lo[3], hi[3];
     const bool lazy = joints != nullptr;
@@ -1017,6 +1089,12 @@
     w.patch_tri_box_.assign(96 * size_t{PatchCount(m)}, 0.0f);
     w.tri_prepared_.assign(T, PreparedTriangle{});
     w.tri_frame_.assign(T, 0);
+    // The AVX-512 copy's 16-lane float filter (Filter): sized only where that copy runs (kernels::Best() is
+    // fixed for the process), at most one slot a patch a frame.
+    const size_t filter_patches = kernels::Best() == kernels::Isa::kAvx512 ? PatchCount(m) : 0;
+    w.filter_pool_.assign(kFilterFloats * filter_patches, 0.0f);
+    w.filter_mask_.assign(filter_patches, 0);
+    w.patch_filter_.assign(filter_patches, 0);
     w.frame_ = 0;
     w.cull_t_.assign(m.cull_pairs_.size(), 0.0f);
     w.cull_f_.assign(m.cull_pairs_.size(), 0.0f);

@@ -35,6 +35,12 @@
 #include <emmintrin.h>
 #endif
 
+#if defined(__GNUC__) && defined(__x86_64__)
+#include <immintrin.h>  // section 7 (AVX-512 function targets)
+
+#include "internal.h"
+#endif
+
 #if defined(__FAST_MATH__)
 #error "triangle_intersect.cpp must not be compiled with -ffast-math: its exact arithmetic relies on IEEE rounding"
 #endif
@@ -820,6 +826,117 @@ bool PrepareTriangle(const float p[3], const float q[3], const float r[3], Prepa
 }
 
 bool TrianglesIntersect(const PreparedTriangle& a, const PreparedTriangle& b) { return IntersectPrepared(a, b, nullptr); }
+
+// ---------------------------------------------------------------------------------------------------
+// (7) The float filter on 16 triangles at once (AVX-512, by lane; the crease rule's AVX-512 sweep). Every
+// value is PrepareTriangle's (SSE2 path) and FloatSides' for the same triangle, by the same float and double
+// operations in the same order (no contraction: the runtime builds with -ffp-contract=off), so a lane
+// certified here is a triangle PrepareTriangle accepts, and a pair rejected here is a pair
+// IntersectPrepared rejects in its float filter: the answers and counts of the scalar path, unchanged.
+#if defined(__GNUC__) && defined(__x86_64__)
+#ifdef __clang__
+#pragma clang attribute push(__attribute__((target("avx512f,avx512dq"))), apply_to = function)
+#else
+// GCC 12's AVX-512 headers pass _mm512_undefined_ps() as the merge source of unmasked intrinsics, which
+// -Wuninitialized reports at every inlined use (GCC bug 105593; kernels.cpp does the same).
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wuninitialized"
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#pragma GCC diagnostic ignored "-Wpsabi"
+#pragma GCC push_options
+#pragma GCC target("avx512f,avx512dq")
+#endif
+#define SPHERECHAIN_FILTER16_TARGET
+
+SPHERECHAIN_FILTER16_TARGET uint32_t PrepareFilter16(float* f, uint32_t lanes) {
+  const __m512 sign = _mm512_set1_ps(-0.0f), zero = _mm512_setzero_ps();
+  auto row = [&](int r) { return _mm512_loadu_ps(f + 16 * r); };
+  auto abs = [&](__m512 v) { return _mm512_andnot_ps(sign, v); };
+  const __m512 px = row(0), py = row(1), pz = row(2), qx = row(3), qy = row(4), qz = row(5), rx = row(6), ry = row(7),
+               rz = row(8);
+  const __m512 ux = _mm512_sub_ps(qx, px), uy = _mm512_sub_ps(qy, py), uz = _mm512_sub_ps(qz, pz);
+  const __m512 vx = _mm512_sub_ps(rx, px), vy = _mm512_sub_ps(ry, py), vz = _mm512_sub_ps(rz, pz);
+  // A_i = u_j v_k, B_i = u_k v_j ((i, j, k) = (x, y, z) rotated), as PrepareTriangle.
+  const __m512 ax = _mm512_mul_ps(uy, vz), bx = _mm512_mul_ps(uz, vy);
+  const __m512 ay = _mm512_mul_ps(uz, vx), by = _mm512_mul_ps(ux, vz);
+  const __m512 az = _mm512_mul_ps(ux, vy), bz = _mm512_mul_ps(uy, vx);
+  const __m512 nx = _mm512_sub_ps(ax, bx), ny = _mm512_sub_ps(ay, by), nz = _mm512_sub_ps(az, bz);
+  const __m512 permx = _mm512_add_ps(abs(ax), abs(bx)), permy = _mm512_add_ps(abs(ay), abs(by)),
+               permz = _mm512_add_ps(abs(az), abs(bz));
+  const __m512 delta =
+      _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(nx, px), _mm512_mul_ps(ny, py)), _mm512_mul_ps(nz, pz));
+  const __m512 m_p = _mm512_max_ps(abs(px), _mm512_max_ps(abs(py), abs(pz)));
+  const __m512 m = _mm512_max_ps(
+      m_p, _mm512_max_ps(_mm512_max_ps(_mm512_max_ps(abs(qx), abs(qy)), abs(qz)),
+                         _mm512_max_ps(_mm512_max_ps(abs(rx), abs(ry)), abs(rz))));
+  __mmask16 ok = static_cast<__mmask16>(lanes);
+  for (const __m512 c : {px, py, pz, qx, qy, qz, rx, ry, rz})  // x − x is 0 for finite x
+    ok = _mm512_mask_cmp_ps_mask(ok, _mm512_sub_ps(c, c), zero, _CMP_EQ_OQ);
+  ok = _mm512_mask_cmp_ps_mask(ok, m, _mm512_set1_ps(kFilterMaxCoordinate), _CMP_LE_OQ);  // live
+  // A normal component beyond its error bound certifies a non-zero area (PrepareTriangle's kEta test);
+  // the other lanes (slivers, padding) are left to PrepareTriangle.
+  const __m512 eta = _mm512_set1_ps(4.02f * float(kFloatUnit)), tiny = _mm512_set1_ps(0x1p-124f);
+  const __mmask16 area = _mm512_cmp_ps_mask(abs(nx), _mm512_add_ps(_mm512_mul_ps(eta, permx), tiny), _CMP_GT_OQ) |
+                         _mm512_cmp_ps_mask(abs(ny), _mm512_add_ps(_mm512_mul_ps(eta, permy), tiny), _CMP_GT_OQ) |
+                         _mm512_cmp_ps_mask(abs(nz), _mm512_add_ps(_mm512_mul_ps(eta, permz), tiny), _CMP_GT_OQ);
+  ok &= area;
+  // G and A in double, eight lanes at a time, rounded up into float as RoundUp.
+  __m256 g[2], a[2];
+  for (int h = 0; h < 2; ++h) {
+    auto half = [&](__m512 v) {
+      return _mm512_cvtps_pd(h ? _mm512_extractf32x8_ps(v, 1) : _mm512_castps512_ps256(v));
+    };
+    const __m512d sum = _mm512_add_pd(_mm512_add_pd(half(permx), half(permy)), half(permz));
+    const __m512d up = _mm512_set1_pd(1.0 + 0x1p-20);
+    const __m512d gv = _mm512_add_pd(_mm512_mul_pd(_mm512_set1_pd(8.25 * kFloatUnit), sum), _mm512_set1_pd(0x1p-122));
+    g[h] = _mm512_cvtpd_ps(_mm512_mul_pd(gv, up));
+    const __m512d av = _mm512_add_pd(_mm512_mul_pd(_mm512_set1_pd(11.25 * kFloatUnit), sum), _mm512_set1_pd(0x1p-122));
+    a[h] = _mm512_cvtpd_ps(_mm512_mul_pd(_mm512_add_pd(_mm512_mul_pd(av, half(m_p)), _mm512_set1_pd(0x1p-120)), up));
+  }
+  _mm512_storeu_ps(f + 16 * 9, nx), _mm512_storeu_ps(f + 16 * 10, ny), _mm512_storeu_ps(f + 16 * 11, nz);
+  _mm512_storeu_ps(f + 16 * 12, delta);
+  _mm512_storeu_ps(f + 16 * 13, _mm512_insertf32x8(_mm512_castps256_ps512(g[0]), g[1], 1));
+  _mm512_storeu_ps(f + 16 * 14, _mm512_insertf32x8(_mm512_castps256_ps512(a[0]), a[1], 1));
+  _mm512_storeu_ps(f + 16 * 15, m);
+  return ok;
+}
+
+SPHERECHAIN_FILTER16_TARGET uint32_t FilterRejects16(const float* t, uint32_t i, const float* u) {
+  auto lane = [&](int r) { return _mm512_set1_ps(t[16 * r + i]); };
+  auto row = [&](int r) { return _mm512_loadu_ps(u + 16 * r); };
+  const __m512 zero = _mm512_setzero_ps();
+  // One direction of FloatSides: `corners` (x, y, z of three vertices) against `plane` (n, δ), beyond
+  // ±bound; all three strictly on one side rejects.
+  auto one_side = [&](const __m512* corners, const __m512* plane, __m512 bound) {
+    const __m512 below = _mm512_sub_ps(zero, bound);
+    __mmask16 above_all = 0xffff, below_all = 0xffff;
+    for (int k = 0; k < 3; ++k) {
+      __m512 e = _mm512_mul_ps(plane[0], corners[3 * k]);
+      e = _mm512_add_ps(e, _mm512_mul_ps(plane[1], corners[3 * k + 1]));
+      e = _mm512_add_ps(e, _mm512_mul_ps(plane[2], corners[3 * k + 2]));
+      e = _mm512_sub_ps(e, plane[3]);
+      above_all &= _mm512_cmp_ps_mask(e, bound, _CMP_GT_OQ);
+      below_all &= _mm512_cmp_ps_mask(e, below, _CMP_LT_OQ);
+    }
+    return static_cast<uint32_t>(above_all | below_all);
+  };
+  // t's vertices against each u's plane: bound G_u · M_t + A_u (FloatSides(t, u)).
+  const __m512 t_corners[9] = {lane(0), lane(1), lane(2), lane(3), lane(4), lane(5), lane(6), lane(7), lane(8)};
+  const __m512 u_plane[4] = {row(9), row(10), row(11), row(12)};
+  const uint32_t first = one_side(t_corners, u_plane, _mm512_add_ps(_mm512_mul_ps(row(13), lane(15)), row(14)));
+  // Each u's vertices against t's plane: bound G_t · M_u + A_t (FloatSides(u, t)).
+  const __m512 u_corners[9] = {row(0), row(1), row(2), row(3), row(4), row(5), row(6), row(7), row(8)};
+  const __m512 t_plane[4] = {lane(9), lane(10), lane(11), lane(12)};
+  return first | one_side(u_corners, t_plane, _mm512_add_ps(_mm512_mul_ps(lane(13), row(15)), lane(14)));
+}
+#undef SPHERECHAIN_FILTER16_TARGET
+#ifdef __clang__
+#pragma clang attribute pop
+#else
+#pragma GCC pop_options
+#pragma GCC diagnostic pop
+#endif
+#endif
 
 namespace detail {
 

@@ -426,6 +426,13 @@ class NarrowPhaseWorkspace {
   BlockVector<float> patch_tri_box_;
   BlockVector<PreparedTriangle> tri_prepared_;  // this frame's prepared triangles, in the order met (#T)
   BlockVector<uint64_t> tri_frame_;             // per triangle: frame << 32 | its slot (low half ~0u: degenerate)
+  // The AVX-512 copy's float filter by patch: a patch's 16 triangles as PrepareTriangle prepares them, by lane
+  // (filter_pool_: 16 rows of 16 floats a patch, a pool filled in the order the pairs meet the patches),
+  // the lanes it certified (finite, in the filter's range, not degenerate: filter_mask_ per slot), and per
+  // patch its frame and slot (patch_filter_: frame << 32 | slot).
+  BlockVector<float> filter_pool_;
+  BlockVector<uint16_t> filter_mask_;
+  BlockVector<uint64_t> patch_filter_;
   // The joint-matrix cull's frame: per joint pair t = |(M_j − M_r)(anchor, 1)| and f = |A_j − A_r|_F
   // (cull_t_, cull_f_), per joint a lower bound on its linear part's least singular value (cull_smin_),
   // per patch its bound E on how far its vertices stray from its reference joint's rigid motion
@@ -439,7 +446,7 @@ class NarrowPhaseWorkspace {
   BlockVector<uint32_t> patch_active_;
   BlockVector<uint64_t> patch_partner_bits_;
   uint32_t active_stamp_ = 0;
-  uint32_t frame_ = 0, prepared_used_ = 0;
+  uint32_t frame_ = 0, prepared_used_ = 0, filters_used_ = 0;
   CreaseScratch crease_scratch_;
 };
 
