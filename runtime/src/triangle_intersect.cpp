@@ -846,9 +846,8 @@ bool TrianglesIntersect(const PreparedTriangle& a, const PreparedTriangle& b) { 
 #pragma GCC push_options
 #pragma GCC target("avx512f,avx512dq")
 #endif
-#define SPHERECHAIN_FILTER16_TARGET
 
-SPHERECHAIN_FILTER16_TARGET uint32_t PrepareFilter16(float* f, uint32_t lanes) {
+uint32_t PrepareFilter16(float* f, uint32_t lanes) {
   const __m512 sign = _mm512_set1_ps(-0.0f), zero = _mm512_setzero_ps();
   auto row = [&](int r) { return _mm512_loadu_ps(f + 16 * r); };
   auto abs = [&](__m512 v) { return _mm512_andnot_ps(sign, v); };
@@ -901,7 +900,7 @@ SPHERECHAIN_FILTER16_TARGET uint32_t PrepareFilter16(float* f, uint32_t lanes) {
   return ok;
 }
 
-SPHERECHAIN_FILTER16_TARGET uint32_t FilterRejects16(const float* t, uint32_t i, const float* u) {
+uint32_t FilterRejects16(const float* t, uint32_t i, const float* u) {
   auto lane = [&](int r) { return _mm512_set1_ps(t[16 * r + i]); };
   auto row = [&](int r) { return _mm512_loadu_ps(u + 16 * r); };
   const __m512 zero = _mm512_setzero_ps();
@@ -929,7 +928,6 @@ SPHERECHAIN_FILTER16_TARGET uint32_t FilterRejects16(const float* t, uint32_t i,
   const __m512 t_plane[4] = {lane(9), lane(10), lane(11), lane(12)};
   return first | one_side(u_corners, t_plane, _mm512_add_ps(_mm512_mul_ps(lane(13), row(15)), lane(14)));
 }
-#undef SPHERECHAIN_FILTER16_TARGET
 #ifdef __clang__
 #pragma clang attribute pop
 #else
