@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <cstring>
 
+#include "avx512_target.h"
 #include "internal.h"
 
 #if defined(__GNUC__) && defined(__x86_64__)
@@ -56,11 +57,12 @@ inline uint32_t Overlap8(V xi, V yi, V zi, V ri, const float* x, const float* y,
 #include "kernels.inl"
 }  // namespace sse
 
-namespace avx {
-#pragma GCC push_options
-#pragma GCC target("avx,popcnt")  // every AVX CPU has POPCNT (HasAvx checks both)
+namespace avx {  // every AVX CPU has POPCNT (HasAvx checks both)
 #ifdef __clang__
 #pragma clang attribute push(__attribute__((target("avx,popcnt"))), apply_to = function)
+#else
+#pragma GCC push_options
+#pragma GCC target("avx,popcnt")
 #endif
 using V = __m256;
 using M = __m256;
@@ -104,23 +106,13 @@ inline uint32_t Overlap8(V xi, V yi, V zi, V ri, const float* x, const float* y,
 #include "kernels.inl"
 #ifdef __clang__
 #pragma clang attribute pop
-#endif
+#else
 #pragma GCC pop_options
+#endif
 }  // namespace avx
 
-// GCC 12's AVX-512 headers pass _mm512_undefined_ps() (a self-initialised variable) as the merge source of
-// unmasked intrinsics, which -Wuninitialized reports at every inlined use (GCC bug 105593, fixed in 13).
-#if !defined(__clang__)
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wuninitialized"
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#endif
 namespace avx512 {
-#pragma GCC push_options
-#pragma GCC target("avx512f,avx512vl,avx512dq,avx512bw,popcnt")
-#ifdef __clang__
-#pragma clang attribute push(__attribute__((target("avx512f,avx512vl,avx512dq,avx512bw,popcnt"))), apply_to = function)
-#endif
+SPHERECHAIN_AVX512_BEGIN
 struct Ops {  // formulas.inl's lane interface: 16 lanes, comparisons into mask registers
   using V = __m512;
   using M = __mmask16;
@@ -134,14 +126,8 @@ struct Ops {  // formulas.inl's lane interface: 16 lanes, comparisons into mask 
 #include "spherechain/runtime/formulas.inl"
 #include "kernels_avx512.inl"
 void RefitKernel(const RefitArgs& a, uint32_t begin, uint32_t end) { Refit(a, begin, end, &avx::Refit); }
-#ifdef __clang__
-#pragma clang attribute pop
-#endif
-#pragma GCC pop_options
+SPHERECHAIN_AVX512_END
 }  // namespace avx512
-#if !defined(__clang__)
-#pragma GCC diagnostic pop
-#endif
 
 namespace {
 bool NoGather(const GatherArgs&) { return false; }

@@ -36,6 +36,7 @@
 #include <new>
 
 #include "alloc_guard.h"
+#include "avx512_target.h"
 #include "internal.h"
 #include "spherechain/runtime/narrow_phase.h"
 
@@ -171,28 +172,13 @@ struct CreaseSweep {
 };
 
 #if SPHERECHAIN_SKIN_SSE2
-#ifdef __clang__
-#pragma clang attribute push(__attribute__((target("avx512f,avx512vl,avx512dq,avx512bw,popcnt"))), apply_to = function)
-#else
-// GCC 12's AVX-512 headers pass _mm512_undefined_ps() as the merge source of unmasked intrinsics, which
-// -Wuninitialized reports at every inlined use (GCC bug 105593; kernels.cpp does the same).
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wuninitialized"
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#pragma GCC push_options
-#pragma GCC target("avx512f,avx512vl,avx512dq,avx512bw,popcnt")
-#endif
+SPHERECHAIN_AVX512_BEGIN
 struct CreaseSweepAvx512 {
 #define SPHERECHAIN_SKIN_AVX512 1
 #include "skin_contacts_sweep.inl"
 #undef SPHERECHAIN_SKIN_AVX512
 };
-#ifdef __clang__
-#pragma clang attribute pop
-#else
-#pragma GCC pop_options
-#pragma GCC diagnostic pop
-#endif
+SPHERECHAIN_AVX512_END
 #endif
 
 bool NarrowPhaseModel::IntersectsAtBind(uint32_t t, uint32_t u) const {

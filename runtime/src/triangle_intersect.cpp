@@ -38,6 +38,7 @@
 #if defined(__GNUC__) && defined(__x86_64__)
 #include <immintrin.h>  // section 7 (AVX-512 function targets)
 
+#include "avx512_target.h"
 #include "internal.h"
 #endif
 
@@ -834,18 +835,7 @@ bool TrianglesIntersect(const PreparedTriangle& a, const PreparedTriangle& b) { 
 // certified here is a triangle PrepareTriangle accepts, and a pair rejected here is a pair
 // IntersectPrepared rejects in its float filter: the answers and counts of the scalar path, unchanged.
 #if defined(__GNUC__) && defined(__x86_64__)
-#ifdef __clang__
-#pragma clang attribute push(__attribute__((target("avx512f,avx512dq"))), apply_to = function)
-#else
-// GCC 12's AVX-512 headers pass _mm512_undefined_ps() as the merge source of unmasked intrinsics, which
-// -Wuninitialized reports at every inlined use (GCC bug 105593; kernels.cpp does the same).
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wuninitialized"
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#pragma GCC diagnostic ignored "-Wpsabi"
-#pragma GCC push_options
-#pragma GCC target("avx512f,avx512dq")
-#endif
+SPHERECHAIN_AVX512_BEGIN
 
 uint32_t PrepareFilter16(float* f, uint32_t lanes) {
   const __m512 sign = _mm512_set1_ps(-0.0f), zero = _mm512_setzero_ps();
@@ -928,12 +918,7 @@ uint32_t FilterRejects16(const float* t, uint32_t i, const float* u) {
   const __m512 t_plane[4] = {lane(9), lane(10), lane(11), lane(12)};
   return first | one_side(u_corners, t_plane, _mm512_add_ps(_mm512_mul_ps(lane(13), row(15)), lane(14)));
 }
-#ifdef __clang__
-#pragma clang attribute pop
-#else
-#pragma GCC pop_options
-#pragma GCC diagnostic pop
-#endif
+SPHERECHAIN_AVX512_END
 #endif
 
 namespace detail {
