@@ -23,7 +23,8 @@ inline uint32_t SweepLimit(uint64_t per, uint64_t units) {
 #if defined(__GNUC__) && defined(__x86_64__)
 /// The float filter of PrepareTriangle and TrianglesIntersect(const PreparedTriangle&, const PreparedTriangle&)
 /// on 16 triangles by lane (triangle_intersect.cpp section 7): the same values by the same operations, so the
-/// same decisions. AVX-512F and DQ: call only where kernels::Best() is kAvx512 (the crease rule's AVX-512 sweep).
+/// same decisions. Compiled for AVX-512 (avx512_target.h): call only where kernels::Best() is kAvx512 (the
+/// crease rule's AVX-512 sweep).
 /// `f`: 16 rows of 16 floats. Rows 0–8 hold the corners on input (p x, y, z, q x, y, z, r x, y, z; the
 /// triangle's own vertex order), rows 9–15 are written: the float plane (n x, y, z, δ) and the error terms
 /// G, A, M. Returns the lanes of `lanes` that PrepareTriangle accepts with a certified area (finite, in the
