@@ -236,7 +236,7 @@ SC_API const char* sc_region_name(const sc_model* model, uint32_t region);
 /* ---- workspace: one character -------------------------------------------------------------------------- */
 
 /// Creates a workspace (one character) for `model`, its spheres at the bind pose. With a narrow-phase
-/// model it also holds the narrow phase's scratch (~3 MB for MakeHuman).
+/// model it also holds the narrow phase's scratch (several MB for MakeHuman; docs/runtime.md gives the sizes).
 /// @param model  the model the workspace will be used with (only read during the call).
 /// @param out    receives the workspace; set to NULL on failure.
 /// @return #SC_OK; #SC_ERROR_NULL_ARGUMENT; #SC_ERROR_OUT_OF_MEMORY.

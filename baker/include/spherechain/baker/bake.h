@@ -44,7 +44,7 @@ struct BakeConfig {
   /// joint's pit meets, and a skin pass of 24 spheres instead of 16 (FitParams::skin_spheres' layout default).
   /// Against the paper layout on MakeHuman 40 / 160 frames, CesiumMan, BCN_Epileptic: region recall M2 100 / 97.6 /
   /// 98.6 / 96.0 % (paper 100 / 96.8 / 95.5 / 97.9), false-alarm frames 0 / 2 / 1 / 1 (0 / 2 / 5 / 0), bind
-  /// coverage 89.6 / 88.7 / 90.1 % (90.1 / 88.7 / 90.4) (README "Head, hands and feet").
+  /// coverage 89.6 / 88.7 / 90.1 % (90.1 / 88.7 / 90.4) (docs/evaluation.md "Default against the paper layout").
   RegionSet regions = RegionSet::kExtended;
   std::string region_map;  ///< [opt] with segmentation "map" (or set alone: implies "map")
   ImportOptions import;
@@ -58,9 +58,10 @@ struct BakeConfig {
   /// height: a pair of spheres of one region is reported within 2 × this instead of 2 × contact_margin_rel.
   /// Unset: the layout's default — 0.0015 for a standing biped's extended regions (their elbows' and knees'
   /// spheres meet before the skin in the joint's pit: false-alarm frames 2 / 22 / 5 / 0 → 0 / 2 / 1 / 0 on
-  /// MakeHuman 40 / 160 frames, CesiumMan, BCN_Epileptic; README "Head, hands and feet"), none for the paper's
-  /// five and creatures (where a limb region holds its hand or foot, and BCN_Epileptic's knee folds are found
-  /// through those pairs). Negative: none (every pair on contact_margin_rel). [Limit: < 0, or [0, 0.05]]
+  /// MakeHuman 40 / 160 frames, CesiumMan, BCN_Epileptic, with the 16-sphere skin pass; docs/design.md
+  /// "The fold margin"), none for the paper's five and creatures (where a limb region holds its hand or foot,
+  /// and BCN_Epileptic's knee folds are found through those pairs). Negative: none (every pair on
+  /// contact_margin_rel). [Limit: < 0, or [0, 0.05]]
   std::optional<double> fold_margin_rel;
   /// The crease (Asset.crease, runtime crease.h), relative to the body height: two triangles that intersect
   /// are a fold of the skin, not a self-contact, when their corners lie within crease_rel × body height of
@@ -80,11 +81,11 @@ struct BakeConfig {
   /// Reach regions (regions.h AddReachRegions, Asset.reach_offsets / reach_triangles): a triangle is
   /// behind every sphere of its region whose surface one of its corners lies within reach_rel × body
   /// height of at bind pose, besides its owner's. [Limit: 0..0.05; 0: corners inside the sphere]
-  /// 0.003 (0.3 % of the height): README "Behind the proxy's pairs" measures 0.002–0.005.
+  /// 0.003 (0.3 % of the height): docs/design.md "Reach regions" gives what it adds.
   double reach_rel = 0.003;
   /// Pivot choice refined against random poses of the rig (regions.h PivotTraining, training_poses.h):
   /// how many poses ("pivot_poses" [Limit: 0..256]; 0, the default, keeps the geometric choice alone;
-  /// ignored without a skin; 24 is what README "Pivots trained on poses" measures) and how far each joint
+  /// ignored without a skin; 24 is what docs/design.md "Pivots trained on poses" measures) and how far each joint
   /// turns ("pivot_pose_angle" [Units: degrees] [Limit: [0, 90]]). Opt-in: on the reference animations it
   /// trades sphere-pair recall for fewer false alarms on some bodies and not on others (measured there).
   uint32_t pivot_poses = 0;

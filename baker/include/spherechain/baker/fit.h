@@ -47,7 +47,7 @@ struct FitParams {
   /// 0 turns it off. kSkinSpheresByLayout (the default): the layout's, SkinSpheres(). [Limit: −1..max_spheres−5]
   int skin_spheres = kSkinSpheresByLayout;
   /// skin_spheres' default: 16 for the paper's five regions and a creature's, 24 for a standing biped's extended
-  /// regions, whose head, hands and feet bring more skin far from the volume cover (README "Head, hands and
+  /// regions, whose head, hands and feet bring more skin far from the volume cover (docs/design.md "Head, hands and
   /// feet": region recall on MakeHuman 160 frames / CesiumMan 94.5 → 97.6 % / 95.6 → 98.6 %).
   static constexpr int kSkinSpheresByLayout = -1;
   /// A limb vertex is uncovered when it lies more than this × body height outside every sphere of its

@@ -7,7 +7,7 @@
 
 namespace spherechain::import {
 
-/// Input policy (README "Bad input"): the baker reads untrusted files, so it bounds what it reads.
+/// Input policy (docs/guide.md "Bad input"): the baker reads untrusted files, so it bounds what it reads.
 /// Largest input file [bytes]; bigger files are refused (kFormat) before any parser sees them.
 inline constexpr uint64_t kMaxInputBytes = uint64_t{512} << 20;
 /// Most vertices / triangles an imported mesh may have (2^26); more is refused (kInvalidMesh).
@@ -35,7 +35,7 @@ struct MeshIssues {
 /// Counts the MeshIssues of a mesh that passed ValidateMesh. O(\#T log \#T), allocates.
 MeshIssues InspectMesh(const Mesh& mesh);
 
-/// Which vertex buffer an assimp-format character is read as (README "Vertex contract"); the asset's
+/// Which vertex buffer an assimp-format character is read as (docs/guide.md "The vertex contract"); the asset's
 /// indices refer to it and records it (Asset.vertex_contract), and the runtime must be fed that buffer.
 /// - kJoined: what engines' importers give — assimp with aiProcess_Triangulate |
 ///   aiProcess_JoinIdenticalVertices (vertices whose every attribute assimp read — position, normal,

@@ -34,9 +34,10 @@ struct PlayOptions {
   bool narrow_phase = false;              ///< also NarrowPhaseJob (exact triangle contacts of the surrounding regions)
   /// With narrow_phase: 0 (default) — the narrow phase over every surrounding region (the exact answer); > 0 —
   /// only behind DetectJob M2's pairs found with this many times the asset's contact margin, on the reach regions
-  /// (NarrowPhaseRegions::kReach; what a game running the spheres as its broad phase gets: README "The spheres as
-  /// a broad phase"; 1.5 there), with every pair on that margin (an asset's fold margin set to it: the exact
-  /// narrow phase cannot cry wolf). That M2 run is timed into FrameReport::narrow_us with the narrow phase.
+  /// (NarrowPhaseRegions::kReach; what a game running the spheres as its broad phase gets: docs/evaluation.md
+  /// "The spheres as a broad phase"; 1.5 there), with every pair on that margin (an asset's fold margin set to
+  /// it: the exact narrow phase cannot cry wolf). That M2 run is timed into FrameReport::narrow_us with the
+  /// narrow phase.
   /// [Limit: finite, >= 0; otherwise Play answers kConfig]
   float narrow_behind_margin = 0.0f;
   /// With narrow_phase over every region (narrow_behind_margin 0) on an asset baked with the crease rule

@@ -124,15 +124,17 @@ TriangleSpan SurroundingTriangles(const AssetView& view, uint32_t sphere);
 /// Lifetime: the asset bytes.
 TriangleSpan ReachTriangles(const AssetView& view, uint32_t sphere);
 
-/// Regions of the asset (what Asset.sphere_regions / triangle_regions values mean): len(Asset.regions) for
-/// a creature (schema v4), else 5 — the paper's R0 left_arm, R1 right_arm, R2 left_leg, R3 right_leg,
-/// R4 torso. 0 for an invalid view. Cost O(1).
+/// Regions of the asset (what Asset.sphere_regions / triangle_regions values mean): len(Asset.regions) when
+/// the asset lists them (a creature's limbs and trunk, or a biped's extended layout: ten regions, R9 torso),
+/// else 5 — the paper's R0 left_arm, R1 right_arm, R2 left_leg, R3 right_leg, R4 torso. 0 for an invalid
+/// view. Cost O(1).
 uint32_t RegionCount(const AssetView& view);
 /// Name of region `region`: Asset.regions[region].name ("HindLeg_L", "Tail", "trunk"), or the paper's
 /// "left_arm" … "torso"; "" when `region` >= RegionCount(view). Never null. Lifetime: the asset bytes
 /// (or static). Cost O(1).
 const char* RegionName(const AssetView& view, uint32_t region);
-/// True for the trunk (a creature's Trunk region, the paper's R4 torso). Cost O(1).
+/// True for the trunk: the last region (a creature's trunk, the extended layout's R9 torso, the paper's R4
+/// torso). Cost O(1).
 bool IsTrunkRegion(const AssetView& view, uint32_t region);
 
 /// The four pivot triangles of `sphere` (Asset.pivot_triangles[4·sphere ..]), each < \#T; empty span

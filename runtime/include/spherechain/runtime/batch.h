@@ -37,7 +37,7 @@ struct CharacterFrame {
 /// detection serial inside its task (characters are independent: they share only the read-only model),
 /// so the batch scales with the cores the hook brings; null: serial.
 /// Cost: \#characters × (refit + detect), plus the hook's own overhead — measured on MakeHuman (128 spheres)
-/// in README, "Many characters per frame"; no allocation, no exceptions.
+/// in docs/performance.md, "Many characters"; no allocation, no exceptions.
 /// Thread safety: the workspaces must be distinct (one job per workspace at a time).
 struct BatchJob {
   const Model* model = nullptr;              ///< initialised, shared by every character (read only)

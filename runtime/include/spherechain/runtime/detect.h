@@ -94,7 +94,7 @@ struct DetectJob {
   /// Fold margin [Units: source units]: a pair of two spheres of one region (Asset.sphere_regions) is
   /// reported when ‖cA − cB‖ < rA + rB + 2·fold_margin instead of 2·margin; pairs of two regions keep
   /// `margin`. Inside a region spheres meet only where a joint folds, where the refit spheres do not follow
-  /// the skin the pit compresses (README "Head, hands and feet"). < 0 (default): the asset's,
+  /// the skin the pit compresses (docs/design.md "The fold margin"). < 0 (default): the asset's,
   /// Model::fold_margin() (Asset.fold_margin; assets without one test every pair with `margin`); >= 0 on a
   /// model without a fold margin (no regions to tell the pairs apart), NaN or inf: kErrorInvalidJob.
   /// Collision::depth stays computed with `margin`. In front of the exact narrow phase (NarrowPhaseJob on

@@ -78,9 +78,9 @@ enum class NarrowPhaseRegions : uint8_t {
   /// so a triangle may stand behind two or three spheres). For a job restricted to the proxy's pairs
   /// (NarrowPhaseJob::sphere_pairs): a contact is found when its triangles stand behind a reported pair,
   /// whichever spheres own them — on a coarse mesh the sphere that overlaps is often a neighbour of the
-  /// owner (README "Behind the proxy's pairs"). Contacts are still defined by the owners (different, not
-  /// an excluded pair) and each is reported once, under the candidate pair of lowest (a, b) that covers
-  /// it. Unrestricted it gives the same contacts as kSurrounding, at more cost.
+  /// owner (docs/evaluation.md "The spheres as a broad phase"). Contacts are still defined by the owners
+  /// (different, not an excluded pair) and each is reported once, under the candidate pair of lowest (a, b)
+  /// that covers it. Unrestricted it gives the same contacts as kSurrounding, at more cost.
   kReach = 1,
 };
 

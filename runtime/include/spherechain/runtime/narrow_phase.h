@@ -467,7 +467,7 @@ class NarrowPhaseWorkspace {
 /// separates the planes (~70 % of them), ~40 ns when the planes cross (float-filtered interval test),
 /// exact evaluation only near degeneracy (~1 µs a test: a pose whose triangles are mostly coplanar or
 /// coincident, such as a corrupted bind pose, pays it on nearly every test).
-/// MakeHuman morph: see README "Exact self-contacts". No allocation, no exceptions; serial. Thread
+/// MakeHuman morph: docs/performance.md "Narrow phase", "Skin contacts". No allocation, no exceptions; serial. Thread
 /// safety: the model is only read; the workspace is written (one job per workspace at a time), so
 /// characters sharing a NarrowPhaseModel run in parallel, each with its own NarrowPhaseWorkspace.
 struct NarrowPhaseJob {

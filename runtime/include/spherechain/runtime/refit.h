@@ -128,7 +128,7 @@ inline void JointMatrixFromColumnMajor(const float m[16], float out[kJointMatrix
 /// weights of its surrounding region's vertices, four largest kept, summing to 1) and c_bind =
 /// Asset.spheres' centre. Radius rule: r = bind radius (a rig's joints are rigid; scale in the joint
 /// matrices moves centres but does not resize spheres). Tracking against the vertex refit (RefitJob,
-/// kPivotFrame) on the real clips: README, "Refit from joint matrices".
+/// kPivotFrame) on the real clips: docs/evaluation.md, "Refit from joint matrices".
 ///
 /// Inputs: `joint_matrices` \#J × kJointMatrixFloats floats, packed: the skinning matrices
 /// M_j = (joint j's current model-space transform) · (its inverse bind matrix), in the skin's joint
