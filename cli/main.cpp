@@ -49,7 +49,7 @@ int main(int argc, char** argv) {
     // Usage errors exit 2 (as `check` documents for bad input); --help and --version 0.
     return app.exit(e) == 0 ? 0 : 2;
   }
-  // Messages (info, warnings, errors) on stderr, as the README promises: stdout carries only what a
+  // Messages (info, warnings, errors) on stderr, as docs/cli.md promises: stdout carries only what a
   // command produces (tables, summaries, JSON), so a pipeline can redirect one without the other.
   spdlog::set_default_logger(spdlog::stderr_color_mt("spherechain"));
   spdlog::set_pattern("%^%l%$: %v");

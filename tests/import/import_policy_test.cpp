@@ -1,4 +1,4 @@
-// import input policy (import.h, README "Bad input"): format allowlist, size cap, glTF confined
+// import input policy (import.h, docs/guide.md "Bad input"): format allowlist, size cap, glTF confined
 // to its folder, degenerate / non-manifold triangles kept and counted.
 #include <doctest/doctest.h>
 
