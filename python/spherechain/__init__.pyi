@@ -118,7 +118,8 @@ class Model:
 class Workspace:
     """One character's spheres and scratch; one call at a time; the GIL is released while the runtime runs."""
     def refit(self, positions: _Float32Array, mode: Literal["frame", "paper"] = "frame") -> None:
-        """Refits the spheres to float32 (#V, 3) positions (strides[1] == 4, any row stride), read in place."""
+        """Refits the spheres to float32 (#V, 3) positions, read in place: strides[1] == 4, and a row stride
+        of at least 12 bytes that is a multiple of 4."""
     def refit_joints(self, matrices: _Float32Array) -> None:
         """Refits the spheres from float32 (#J, 3, 4) C-contiguous, 4-byte aligned skinning matrices."""
     @overload

@@ -99,7 +99,7 @@ runtime::DetectMethod MethodOf(const std::string& method) {
 runtime::PositionsView PositionsOf(PyObject* object, uint32_t vertex_count) {
   auto expected = [&] {
     return "positions: expected a numpy.ndarray of float32, shape (" + std::to_string(vertex_count) +
-           ", 3), x y z contiguous in a row (strides[1] == 4, any positive row stride); got " + DescribeArray(object);
+           ", 3), x y z contiguous in a row (strides[1] == 4, a row stride of at least 12 bytes, a multiple of 4); got " + DescribeArray(object);
   };
   if (!PyArray_Check(object)) ThrowValue(expected());
   auto* a = reinterpret_cast<PyArrayObject*>(object);
@@ -771,8 +771,9 @@ of the positions last refitted; the bind pose after reset()]. A copy (the runtim
 Refits the spheres to the deformed vertex positions (runtime RefitJob, paper §5.1), read in place.
 
 positions: numpy.ndarray float32, shape (#V, 3) [source units, the asset's model space or any rigid motion
-    of it]: x, y, z contiguous in a row (strides[1] == 4), any positive row stride — a C-contiguous array or
-    a column slice of an interleaved vertex buffer (e.g. buffer[:, 0:3] of a (#V, 8) float32 array). No copy.
+    of it]: x, y, z contiguous in a row (strides[1] == 4), any row stride of >= 12 bytes and a multiple of 4 —
+    a C-contiguous array or a column slice of an interleaved vertex buffer (e.g. buffer[:, 0:3] of a (#V, 8)
+    float32 array). No copy.
 mode: "frame" (default: the pivot frame, exact under rigid motion) or "paper" (the paper's translation).
 Raises ValueError (not such an array: dtype, shape and strides named), StatusError kErrorVertexCount (#V
 wrong), kErrorAlignment (data not 4-byte aligned), kErrorStride (a row stride < 12 or not a multiple of 4),

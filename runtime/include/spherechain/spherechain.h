@@ -194,7 +194,8 @@ typedef struct sc_model_info {
   uint32_t chain_count;     ///< chains (Table 1 of the paper: 6 for a body), 0..32
   uint32_t joint_count;     ///< \#J the joint refit takes (Asset.joint_count); 0 when the asset has no joint
                             ///< weights (unrigged bake, schema v1/v2): sc_refit_joints() is refused then
-  uint32_t region_count;    ///< regions of the body (sc_region_name()): 5 for the paper's, more for a creature
+  uint32_t region_count;    ///< regions of the body (sc_region_name()): 10 for a biped's extended layout (the
+                            ///< default; R9 torso), 5 for the paper's, a creature's limbs and trunk
   uint32_t schema_version;  ///< Asset.schema_version (1..4)
   uint32_t has_narrow_phase;  ///< 1 when created with #SC_MODEL_NARROW_PHASE, else 0
   uint32_t has_crease;      ///< 1 when the asset carries the crease rule (Asset.bind_positions, crease):
@@ -228,8 +229,10 @@ SC_API sc_status sc_bind_positions(const sc_model* model, const float** position
 /// failure (when given). O(1), thread-safe.
 SC_API sc_status sc_sphere_region(const sc_model* model, uint32_t sphere, uint32_t* region);
 
-/// Name of region `region`: the paper's "left_arm", "right_arm", "left_leg", "right_leg", "torso", or a
-/// creature's ("HindLeg_L", "Tail", "trunk"). "" for a NULL model or region >= sc_model_info::region_count.
+/// Name of region `region`: the extended layout's "left_arm", "right_arm", "left_leg", "right_leg", "head",
+/// "left_hand", "right_hand", "left_foot", "right_foot", "torso" (a body without some of those parts keeps
+/// them in its limbs and has fewer), the paper's five ("left_arm" … "torso"), or a creature's ("HindLeg_L",
+/// "Tail", "trunk"); the last region is the trunk. "" for a NULL model or region >= sc_model_info::region_count.
 /// Never null. Lifetime: the asset bytes (or static). O(1), thread-safe.
 SC_API const char* sc_region_name(const sc_model* model, uint32_t region);
 
@@ -441,7 +444,8 @@ typedef struct sc_contact_depth {
 /// @return #SC_OK; #SC_OK_TRUNCATED (`*count` > capacity); #SC_ERROR_NULL_ARGUMENT (model, workspace,
 ///         positions or count null; contacts null with capacity > 0; sphere_pairs null with a count > 0);
 ///         #SC_ERROR_WORKSPACE_MODEL; #SC_ERROR_INVALID_JOB (model created without #SC_MODEL_NARROW_PHASE,
-///         unknown exclusions, #SC_EXCLUSIONS_CREASE with a crease below the asset's or not finite; joint_matrices with other exclusions); #SC_ERROR_MISSING_FIELD
+///         unknown exclusions, #SC_EXCLUSIONS_CREASE with a crease below the asset's, negative or not finite; a
+///         non-zero crease with other exclusions; joint_matrices with other exclusions); #SC_ERROR_MISSING_FIELD
 ///         (#SC_EXCLUSIONS_CREASE on an asset without the crease rule; joint_matrices on one without skin
 ///         weights); #SC_ERROR_JOINT_COUNT; #SC_ERROR_NON_FINITE_JOINTS (a matrix holds a NaN or an infinity);
 ///         #SC_ERROR_ALIGNMENT; #SC_ERROR_STRIDE; #SC_ERROR_VERTEX_COUNT; #SC_ERROR_INDEX_OUT_OF_RANGE
