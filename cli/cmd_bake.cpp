@@ -97,7 +97,7 @@ int RunBake(const BakeArgs& a) {
     if (int clash = OutputsClash({{"-o", &a.output}, {"--report", &a.report}, {"--ray-csv", &a.ray_csv},
                                   {"--png", &a.png}, {"--depfile", &a.depfile}},
                                  {{"the input", a.inputs.empty() ? &no_input : &a.inputs.front()}, {"--config", &a.config},
-                                  {"--region-map", &a.options.region_map}}))
+                                  {"--region-map", &a.options.region_map}, {"--rig", &a.options.rig}}))
       return clash;
   import::Context ctx = MakeLoggingContext();  // records the files read, the configuration's too (--depfile)
   baker::BakeConfig config;
@@ -211,7 +211,9 @@ void RegisterBake(CLI::App& app, Commands* commands) {
   sub->add_option("--region-map", args->options.region_map,
                   "JSON region map {\"triangle_regions\": [...]} of region values or names (implies map); "
                   "\"regions\": [names] makes a creature's layout (limbs, the trunk last)");
-  sub->add_option("--disk-step", args->options.disk_step, "Torso disk step delta in source units (default: relative to height)");
+  sub->add_option("--disk-step", args->options.disk_step,
+                  "Torso disk step delta in source units (default, or 0: relative to height)")
+      ->check(WithinRange(0.0, 1e9));  // the configuration key's limit; 0: the default
   sub->add_option("--ray-csv", args->ray_csv, "CSV of the paper's per-ray comparison for the torso spheres");
   sub->add_option("--png", args->png, "PNG views (front and side) of regions and spheres (needs rsvg-convert)");
   commands->handlers.emplace_back(sub, [args] { return RunBake(*args); });

@@ -171,7 +171,9 @@ Result<BakeConfig> ParseBakeConfig(const std::string& text, const std::string& w
       if (!e.is_object() || !e.contains("members") || !e["members"].is_array())
         return MakeError(Error::Code::kConfig, at + " must be {\"name\": ..., \"members\": [...]}");
       ChainDef d;
-      d.name = e.contains("name") && e["name"].is_string() ? e["name"].get<std::string>() : "chain" + std::to_string(i);
+      if (e.contains("name") && !e["name"].is_string())
+        return MakeError(Error::Code::kConfig, at + ": name must be a string");
+      d.name = e.contains("name") ? e["name"].get<std::string>() : "chain" + std::to_string(i);
       for (const json& m : e["members"]) {
         if (!m.is_string()) return MakeError(Error::Code::kConfig, at + ": members must be strings");
         d.members.push_back(m);

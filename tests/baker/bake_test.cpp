@@ -174,6 +174,13 @@ TEST_CASE("bake: configuration errors name the key") {
   CHECK_FALSE(ParseBakeConfig("{\"raysss\": 80}", "cfg.json").ok());
   CHECK_FALSE(ParseBakeConfig("[1, 2]", "cfg.json").ok());
   CHECK_FALSE(ParseBakeConfig("{\"chains\": [{\"members\": \"R0\"}]}", "cfg.json").ok());
+  // A chain's name of the wrong type is refused with the key named (it became "chain0" silently).
+  auto badname = ParseBakeConfig(R"({"chains": [{"name": 5, "members": ["R0"]}]})", "cfg.json");
+  REQUIRE_FALSE(badname.ok());
+  CHECK(badname.error().message.find("chains[0]: name must be a string") != std::string::npos);
+  auto unnamed = ParseBakeConfig(R"({"chains": [{"members": ["R0"]}]})", "cfg.json");
+  REQUIRE(unnamed.ok());
+  CHECK(unnamed->chains[0].name == "chain0");
   auto ok = ParseBakeConfig("{\"rays\": 40, \"chains\": [{\"name\": \"arms\", \"members\": [\"R0\", \"R1\"]}]}", "cfg.json");
   REQUIRE(ok.ok());
   CHECK(ok->fit.rays == 40);

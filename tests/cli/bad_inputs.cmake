@@ -60,6 +60,12 @@ expect_exit(rig_with_gltf 1 "config: .*creature.gltf: a MakeHuman rig \\(--rig, 
 expect_exit(not_a_body 1 "segmentation: segment \\(geometry\\): not a standing body: " bake ${WORK}/cube.obj -o ${WORK}/out.sphc)
 expect_exit(bad_config 1 "config: .*config_bad.json: 'penetration_depth' = 7 is out of range \\[0, 0.9\\]"
             bake ${WORK}/cube.obj -o ${WORK}/out.sphc --config ${WORK}/config_bad.json)
+# A torso disk step that is no length: refused by the parser (exit 2), before anything is read.
+expect_exit(disk_step_negative 2 "--disk-step: Value -1 not in range" bake ${WORK}/cube.obj -o ${WORK}/out.sphc --disk-step -1)
+expect_exit(disk_step_nan 2 "--disk-step: Value nan not in range" bake ${WORK}/cube.obj -o ${WORK}/out.sphc --disk-step nan)
+# `check` given a character that does not import: its usage error (exit 2), with the kind as every command gives it.
+file(WRITE ${WORK}/broken.gltf "{not json")
+expect_exit(check_broken_gltf 2 "error: format: .*broken.gltf: not a readable glTF file" check ${WORK}/broken.gltf)
 expect_exit(inspect_missing 1 "'.*nothing.sphc': no such file" inspect ${WORK}/nothing.sphc)
 expect_exit(inspect_garbage 1 "'.*not_an_asset.sphc' is not a loadable .sphc asset: kErrorIdentifier: not a .sphc asset"
             inspect ${WORK}/not_an_asset.sphc)
@@ -74,6 +80,8 @@ expect_exit(output_is_input 2 "-o .*cube.obj' is also the input: writing it woul
             bake ${WORK}/cube.obj -o ${WORK}/./cube.obj)
 expect_exit(report_is_config 2 "--report .*config_bad.json' is also --config" bake ${WORK}/cube.obj -o ${WORK}/out.sphc
             --config ${WORK}/config_bad.json --report ${WORK}/sub/../config_bad.json)
+expect_exit(report_is_rig 2 "--report .*config_bad.json' is also --rig" bake ${WORK}/cube.obj -o ${WORK}/out.sphc
+            --rig ${WORK}/config_bad.json --report ${WORK}/config_bad.json)
 file(READ ${WORK}/cube.obj _cube_after)
 file(READ ${WORK}/config_bad.json _config_after)
 if(NOT _cube_after MATCHES "^v -1 -1 -1" OR NOT _config_after STREQUAL "{\"penetration_depth\": 7}")
