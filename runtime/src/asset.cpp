@@ -126,9 +126,12 @@ Status Semantics(const Asset& a, AssetView* view) {
   if (roffs) {
     if (roffs->size() != S + 1) return Status::kErrorCountMismatch;
     if (roffs->Get(0) != 0 || roffs->Get(S) != reach->size()) return Status::kErrorOffsets;
+    // Every offset ascending first, so that each sphere's range lies within reach_triangles: checked one
+    // sphere at a time, [0, 100, 5] over 5 triangles would walk sphere 0 past the end.
+    for (uint32_t i = 0; i < S; ++i)
+      if (roffs->Get(i + 1) < roffs->Get(i)) return Status::kErrorOffsets;
     for (uint32_t i = 0; i < S; ++i) {
       const uint32_t begin = roffs->Get(i), end = roffs->Get(i + 1);
-      if (end < begin) return Status::kErrorOffsets;
       for (uint32_t k = begin; k < end; ++k) {
         if (reach->Get(k) >= T) return Status::kErrorIndexOutOfRange;
         if (k > begin && reach->Get(k) <= reach->Get(k - 1)) return Status::kErrorOffsets;

@@ -46,3 +46,15 @@ TEST_CASE("Fuzz corpus (fuzz/corpus/load_asset): every input runs the fuzzer's s
   CHECK(loaded_count >= 4);
   CHECK(crease_count >= 2);
 }
+
+TEST_CASE("Fuzz finding: reach offsets that go past the end and fall back are refused, kErrorOffsets") {
+  // A mutated asset whose reach_offsets rise past reach_triangles' length and fall back at a later sphere:
+  // the loader walked each sphere's range before checking the next offset and read past the vector
+  // (fuzz_load_asset, 30 November, 2,593 s into a campaign; a flatbuffers assertion in the fuzz build).
+  const std::vector<uint8_t> bytes =
+      ReadAll(spherechain::test::SourceFile("fuzz/corpus/load_asset/crash_reach_offsets_unordered.sphc"));
+  REQUIRE(bytes.size() > 8);
+  spherechain::runtime::AssetView view;
+  CHECK(spherechain::runtime::LoadAsset(bytes.data(), bytes.size(), &view) == spherechain::runtime::Status::kErrorOffsets);
+  CHECK_FALSE(view.valid());
+}
