@@ -66,6 +66,9 @@ expect_exit(disk_step_nan 2 "--disk-step: Value nan not in range" bake ${WORK}/c
 # `check` given a character that does not import: its usage error (exit 2), with the kind as every command gives it.
 file(WRITE ${WORK}/broken.gltf "{not json")
 expect_exit(check_broken_gltf 2 "error: format: .*broken.gltf: not a readable glTF file" check ${WORK}/broken.gltf)
+# The asset loader's fuzz finding: reach offsets past the end, falling back later (read past the vector before).
+expect_exit(inspect_reach_offsets 1 "is not a loadable .sphc asset: kErrorOffsets: surrounding_offsets or reach_offsets malformed"
+            inspect ${REACH_OFFSETS})
 expect_exit(inspect_missing 1 "'.*nothing.sphc': no such file" inspect ${WORK}/nothing.sphc)
 expect_exit(inspect_garbage 1 "'.*not_an_asset.sphc' is not a loadable .sphc asset: kErrorIdentifier: not a .sphc asset"
             inspect ${WORK}/not_an_asset.sphc)
