@@ -111,6 +111,11 @@
       for (int k = 0; k < 3; ++k) d += (centroid[3 * size_t{a} + k] - centroid[3 * size_t{b} + k]) * (centroid[3 * size_t{a} + k] - centroid[3 * size_t{b} + k]);
       return d;
     };
+    // The growth's budget (NarrowPhaseModel::kGrowPerTriangle): each pick scans the patch's frontier and its
+    // corners' triangles, a few dozen on a surface; around a welded vertex that is a corner of thousands of
+    // triangles (a fan) every patch there scans them all, quadratic in the triangles.
+    const uint64_t grow_budget = uint64_t{NarrowPhaseModel::kGrowPerTriangle} * T + NarrowPhaseModel::kSweepSlack;
+    uint64_t grow_work = 0;
     for (uint64_t key : seeds) {
       const uint32_t seed = static_cast<uint32_t>(key);
       if (patch_of[seed] != kNone) continue;
@@ -125,12 +130,15 @@
               (dist2(frontier[i], seed) == dist2(frontier[best], seed) && frontier[i] < frontier[best]))
             best = i;
         const uint32_t t = frontier[best];
+        grow_work += frontier.size();
         frontier[best] = frontier.back();
         frontier.pop_back();
         patch_of[t] = p;
         m.cl_tri_[kPatch * size_t{p} + n_in++] = t;
         for (int k = 0; k < 3; ++k) {
           const uint32_t n = g.node(m.tri_v_[3 * size_t{t} + k]);
+          grow_work += nt_off[n + 1] - nt_off[n];
+          if (grow_work > grow_budget) return Status::kErrorCreaseTooWide;
           for (uint32_t i = nt_off[n]; i < nt_off[n + 1]; ++i) {
             const uint32_t u = nt_tri[i];
             if (patch_of[u] == kNone && seen[u] != p) seen[u] = p, frontier.push_back(u);
@@ -199,7 +207,10 @@
     // most of its surface from every node, a search and a near row per node quadratic in them; a mesh far
     // denser than its crease comes near that.
     const uint32_t reach_budget = SweepLimit(NarrowPhaseModel::kReachPerNode, N);
-    uint64_t reached = 0;
+    // ... and the triangles at the nodes reached, gathered into the masks: a few per node on a surface, but every
+    // triangle of a fan's centre each time a search reaches it.
+    const uint64_t gather_budget = uint64_t{NarrowPhaseModel::kGatherPerNode} * N + NarrowPhaseModel::kSweepSlack;
+    uint64_t reached = 0, gathered = 0;
     std::vector<uint64_t> pairs;  // (p << 32 | q), p <= q, for every pair of patches with a near pair
     std::vector<uint32_t> block;  // per pair in `pairs`: its rows' block in near_rows_, or kAllNear
     m.near_rows_.clear();
@@ -233,12 +244,14 @@
           fresh.clear();
           const BlockVector<uint32_t>& reach = scratch.Reach(g, source, g.crease());
           if ((reached += reach.size()) > reach_budget) return Status::kErrorCreaseTooWide;
-          for (uint32_t n : reach)
+          for (uint32_t n : reach) {
+            if ((gathered += nt_off[n + 1] - nt_off[n]) > gather_budget) return Status::kErrorCreaseTooWide;
             for (uint32_t k = nt_off[n]; k < nt_off[n + 1]; ++k) {
               const uint32_t u = nt_tri[k], q = patch_of[u];
               if (fresh_of[q] == kNone) fresh_of[q] = static_cast<uint32_t>(fresh.size()), fresh.push_back(uint64_t{q} << 16);
               fresh[fresh_of[q]] |= uint64_t{1} << slot_of[u];
             }
+          }
           for (uint64_t f : fresh) fresh_of[f >> 16] = kNone;
           near = &fresh;
           if (last_patch[node] != p) kept = fresh;

@@ -38,7 +38,7 @@ const char* ToString(Status s) {
       return "kErrorBindPoseTangled: the bind pose passes through itself beyond the narrow phase's budget (a broken mesh)";
     case Status::kErrorCreaseTooWide:
       return "kErrorCreaseTooWide: the crease reaches too much of the bind surface from each vertex (a bind pose "
-             "collapsed onto a few points, or a mesh far denser than its crease)";
+             "collapsed onto a few points, a mesh far denser than its crease, or a vertex shared by thousands of triangles)";
     case Status::kErrorRegions:
       return "kErrorRegions: Asset.regions malformed (count, one trunk last, or a region value past them)";
     case Status::kErrorJointCount:

@@ -647,6 +647,30 @@ TEST_CASE("narrow phase, crease rule: a bind pose collapsed onto a few points is
   CHECK(size_t{rt::NarrowPhaseModel::kReachPerNode} * 2400 + rt::NarrowPhaseModel::kSweepSlack < size_t{2400} * 2400);
 }
 
+TEST_CASE("narrow phase, crease rule: a welded vertex shared by thousands of triangles is refused within the growth's budget") {
+  // st::CreaseTube's 4,768 triangles re-made as one fan around vertex 0 (triangle k: 0, 1 + k mod 2399, its
+  // successor): every patch grown there scans the centre's triangles, about #T²/2 steps in all, past
+  // kGrowPerTriangle × #T, so Init refuses it (kErrorCreaseTooWide) instead of growing patches quadratically.
+  st::Mesh mesh;
+  st::AssetData d = st::CreaseTube(1.0f, &mesh);
+  const uint32_t T = d.triangle_count, rim = d.vertex_count - 1;
+  REQUIRE(d.triangles.size() == size_t{3} * T);
+  for (uint32_t k = 0; k < T; ++k) {
+    d.triangles[3 * size_t{k}] = 0;
+    d.triangles[3 * size_t{k} + 1] = 1 + k % rim;
+    d.triangles[3 * size_t{k} + 2] = 1 + (k + 1) % rim;
+  }
+  CHECK(uint64_t{T} * T / 2 > uint64_t{rt::NarrowPhaseModel::kGrowPerTriangle} * T + rt::NarrowPhaseModel::kSweepSlack);
+  Loaded l = Load(d);
+  rt::NarrowPhaseModel model;
+  CHECK(model.Init(l.view) == rt::Status::kErrorCreaseTooWide);
+  CHECK(!model.initialized());
+  rt::Model whole;
+  rt::ModelOptions options;
+  options.narrow_phase = true;
+  CHECK(whole.Init(l.view, options) == rt::Status::kErrorCreaseTooWide);
+}
+
 TEST_CASE("narrow phase, crease rule: the joint-matrix cull counts a joint listed twice in a row at its whole weight") {
   // The bent tube skinned to two joints: joint 0 fixed, joint 1 turning about the z axis through ring 15, the
   // weight of joint 1 rising from 0 at ring 12 to 1 at ring 18; the frame is the linear blend of those

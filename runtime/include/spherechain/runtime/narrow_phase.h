@@ -181,6 +181,13 @@ class NarrowPhaseModel {
   /// its shape about 8 times as dense, some 200,000 triangles, would reach the budget at a 3 % crease),
   /// CesiumMan 17.6, BCN_Epileptic 37.5, the repository's creature 7.
   static constexpr uint32_t kReachPerNode = 2048;
+  /// The budgets of the other two steps of Init that a welded vertex shared by many triangles (a fan of
+  /// thousands around one vertex) makes quadratic: growing the patches (each triangle picked scans its patch's
+  /// frontier and its corners' triangles: at most kGrowPerTriangle × \#T + kSweepSlack in all) and gathering the
+  /// triangles at the nodes the searches reach (at most kGatherPerNode × \#nodes + kSweepSlack). Past either,
+  /// Init returns kErrorCreaseTooWide. The real characters take about 30 steps a triangle, and gather 1,576
+  /// triangles a node on average (MakeHuman; CesiumMan 106, BCN_Epileptic 221, the repository's creature 42).
+  static constexpr uint32_t kGrowPerTriangle = 512, kGatherPerNode = 16384;
   /// kReach when built from reach regions, else kSurrounding.
   NarrowPhaseRegions regions() const { return reach_ ? NarrowPhaseRegions::kReach : NarrowPhaseRegions::kSurrounding; }
 

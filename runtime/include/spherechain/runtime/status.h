@@ -91,7 +91,9 @@ enum class [[nodiscard]] Status : uint32_t {
                                          ///< surface from each that its searches ran past
                                          ///< NarrowPhaseModel::kReachPerNode: a bind pose collapsed onto a few
                                          ///< points, or a mesh far denser than its crease (MakeHuman uses an
-                                         ///< eighth of it; re-bake with a smaller crease_rel).
+                                         ///< eighth of it; re-bake with a smaller crease_rel). Also when the
+                                         ///< patches' growth or gathering runs past kGrowPerTriangle /
+                                         ///< kGatherPerNode: a welded vertex shared by thousands of triangles.
 };
 
 /// True for kOk and every success-with-detail (kOkTruncated). Cost: one compare.
