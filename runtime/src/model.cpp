@@ -52,20 +52,37 @@ uint32_t Group(const schema::Asset& a, uint32_t s, uint32_t chain_mask) {
   return a.sphere_regions() ? a.sphere_regions()->Get(s) : chain_mask;
 }
 
-// Number of blocks of 8 of the layout: Σ over groups of ceil(n_g / 8). O(#S · (#C log n + #groups)).
+// Number of blocks of 8 of the layout: Σ over groups of ceil(n_g / 8). No allocation. By region: one count
+// per region value, O(#S). By chain mask: the spheres in no chain are one group; every other mask's spheres
+// all lie in the list of its lowest chain, so each such group is counted once, from there:
+// O(#S · #C log n + Σ_c n_c² · #C log n), the second bounded by kMaxChainPairs (LoadAsset). (Comparing each
+// sphere's group with every earlier sphere's was O(#S² · #C log n): minutes for a hostile asset of 65,535
+// spheres.)
 uint32_t CountBlocks(const AssetView& view) {
   const schema::Asset& a = *view.asset;
   const uint32_t S = view.sphere_count, C = view.chain_count;
-  auto group = [&](uint32_t s) { return Group(a, s, a.sphere_regions() ? 0u : AssetChainMask(a, C, s)); };
   uint32_t blocks = 0;
-  for (uint32_t s = 0; s < S; ++s) {
-    const uint32_t g = group(s);
-    bool first = true;
-    for (uint32_t t = 0; t < s && first; ++t) first = group(t) != g;
-    if (!first) continue;
-    uint32_t n = 0;
-    for (uint32_t t = s; t < S; ++t) n += group(t) == g;
-    blocks += (n + 7) / 8;
+  if (const auto* regions = a.sphere_regions()) {  // values < kMaxRegions <= 256 (LoadAsset)
+    uint32_t count[256] = {};
+    for (uint32_t s = 0; s < S; ++s) ++count[regions->Get(s)];
+    for (uint32_t n : count) blocks += (n + 7) / 8;
+    return blocks;
+  }
+  uint32_t unchained = 0;
+  for (uint32_t s = 0; s < S; ++s) unchained += AssetChainMask(a, C, s) == 0;
+  blocks += (unchained + 7) / 8;
+  for (uint32_t c = 0; c < C; ++c) {
+    const auto* list = a.chains()->Get(c)->spheres();
+    for (uint32_t i = 0; i < list->size(); ++i) {
+      const uint32_t mask = AssetChainMask(a, C, list->Get(i));
+      if (static_cast<uint32_t>(std::countr_zero(mask)) != c) continue;  // counted from its lowest chain
+      bool first = true;
+      for (uint32_t j = 0; j < i && first; ++j) first = AssetChainMask(a, C, list->Get(j)) != mask;
+      if (!first) continue;
+      uint32_t n = 0;
+      for (uint32_t j = i; j < list->size(); ++j) n += AssetChainMask(a, C, list->Get(j)) == mask;
+      blocks += (n + 7) / 8;
+    }
   }
   return blocks;
 }

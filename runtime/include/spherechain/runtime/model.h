@@ -119,7 +119,8 @@ class Model {
   ~Model();
 
   /// Bytes InitInPlace needs for `view` (the exact size of the Model's block), or 0 when `!view.valid()`.
-  /// Cost: O(\#S · (\#C log n + \#groups)), no allocation; thread-safe.
+  /// Cost: O(\#S) with sphere regions, else O(\#S · \#C log n + Σ over chains n² · \#C log n) (n a chain's
+  /// length, the sum bounded by kMaxChainPairs); no allocation; thread-safe.
   static size_t RequiredBytes(const AssetView& view);
   /// The same for a model built with `options`. With options.narrow_phase it builds the narrow phase on
   /// the heap to measure it (NarrowPhaseModel::Init's cost: ~0.26 s for MakeHuman), so it allocates and
