@@ -622,6 +622,24 @@ TEST_CASE("narrow phase, crease rule: a mesh whose every triangle is degenerate 
   }
 }
 
+namespace {
+
+// `d` refused by Init's budgets: the narrow phase's model and a Model with its narrow phase, both
+// kErrorCreaseTooWide, neither initialised.
+void CheckRefusedCreaseTooWide(const st::AssetData& d) {
+  Loaded l = Load(d);
+  rt::NarrowPhaseModel model;
+  CHECK(model.Init(l.view) == rt::Status::kErrorCreaseTooWide);
+  CHECK(!model.initialized());
+  rt::Model whole;
+  rt::ModelOptions options;
+  options.narrow_phase = true;
+  CHECK(whole.Init(l.view, options) == rt::Status::kErrorCreaseTooWide);
+  CHECK(!whole.initialized());
+}
+
+}  // namespace
+
 TEST_CASE("narrow phase, crease rule: a bind pose collapsed onto a few points is refused within the searches' budget") {
   // st::CreaseTube: straight, the model builds; its bind pose shrunk 1,000 times, every node reaches all 2,400,
   // past the budget, so Init refuses it (kErrorCreaseTooWide) instead of building near rows between every pair
@@ -636,14 +654,7 @@ TEST_CASE("narrow phase, crease rule: a bind pose collapsed onto a few points is
     CHECK(ctx.model.has_crease());
   }
   for (float& x : d.bind_positions) x *= 1e-3f;  // = st::CreaseTube(1e-3f, ...)
-  Loaded l = Load(d);
-  rt::NarrowPhaseModel model;
-  CHECK(model.Init(l.view) == rt::Status::kErrorCreaseTooWide);
-  CHECK(!model.initialized());
-  rt::Model whole;
-  rt::ModelOptions options;
-  options.narrow_phase = true;
-  CHECK(whole.Init(l.view, options) == rt::Status::kErrorCreaseTooWide);
+  CheckRefusedCreaseTooWide(d);
   CHECK(size_t{rt::NarrowPhaseModel::kReachPerNode} * 2400 + rt::NarrowPhaseModel::kSweepSlack < size_t{2400} * 2400);
 }
 
@@ -661,14 +672,7 @@ TEST_CASE("narrow phase, crease rule: a welded vertex shared by thousands of tri
     d.triangles[3 * size_t{k} + 2] = 1 + (k + 1) % rim;
   }
   CHECK(uint64_t{T} * T / 2 > uint64_t{rt::NarrowPhaseModel::kGrowPerTriangle} * T + rt::NarrowPhaseModel::kSweepSlack);
-  Loaded l = Load(d);
-  rt::NarrowPhaseModel model;
-  CHECK(model.Init(l.view) == rt::Status::kErrorCreaseTooWide);
-  CHECK(!model.initialized());
-  rt::Model whole;
-  rt::ModelOptions options;
-  options.narrow_phase = true;
-  CHECK(whole.Init(l.view, options) == rt::Status::kErrorCreaseTooWide);
+  CheckRefusedCreaseTooWide(d);
 }
 
 TEST_CASE("narrow phase, crease rule: the joint-matrix cull counts a joint listed twice in a row at its whole weight") {
