@@ -30,7 +30,9 @@ inline constexpr uint32_t kMaxHarnessVertices = uint32_t{1} << 22;
 inline constexpr uint32_t kMaxHarnessCollisions = uint32_t{1} << 22;
 
 /// Biggest mesh the harness gives the narrow phase (its Init is O(#T log #T) plus a bounded Dijkstra per
-/// patch node: an asset's triangle count is bounded by its bytes, but a dense 4 MB one would be slow).
+/// patch node, within NarrowPhaseModel's work budgets, which are linear in the mesh: an asset's triangle count
+/// is bounded by its bytes, but a dense 4 MB one would be slow). Past a budget Init returns
+/// kErrorCreaseTooWide, which the sequence accepts as a documented refusal.
 inline constexpr uint32_t kMaxHarnessNarrowTriangles = uint32_t{1} << 13;
 
 /// Exact triangle tests after which the harness runs no other Exclusions on the same positions. The exact
