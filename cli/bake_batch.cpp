@@ -43,7 +43,7 @@ void BakeOne(const baker::BakeConfig& config, Item* item) {
   const auto t0 = Clock::now();
   import::Context ctx;
   ctx.sink = [item](import::Context::Level level, const std::string& m) { item->log.emplace_back(level, m); };
-  auto fail = [item](const import::Error& e) { item->error = std::string(import::ToString(e.code)) + ": " + e.message; };
+  auto fail = [item](const import::Error& e) { item->error = import::ToString(e); };
   try {  // an exception must not end the other inputs' bakes (the baker returns errors; this is the last net)
     auto result = baker::Bake(item->input, config, &ctx);
     if (!result.ok()) {

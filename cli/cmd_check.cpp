@@ -95,8 +95,7 @@ bool OpenOrBake(const CheckArgs& a, LoadedAsset* asset, import::Mesh* mesh, std:
   import::ImportOptions io;
   io.rig_path = a.rig;
   auto imported = import::ImportMesh(a.character, io, &log);
-  if (!imported.ok())
-    return *error = std::string(import::ToString(imported.error().code)) + ": " + imported.error().message, false;
+  if (!imported.ok()) return *error = import::ToString(imported.error()), false;
   *mesh = std::move(imported).value();
   if (!HasAnimation(a, *mesh, error)) return false;
   char name[32];
@@ -113,7 +112,7 @@ bool OpenOrBake(const CheckArgs& a, LoadedAsset* asset, import::Mesh* mesh, std:
   baker::BakeConfig config;
   config.import.rig_path = a.rig;
   auto baked = baker::Bake(a.character, config, &log);
-  if (!baked.ok()) return *error = std::string(import::ToString(baked.error().code)) + ": " + baked.error().message, false;
+  if (!baked.ok()) return *error = import::ToString(baked.error()), false;
   const std::vector<uint8_t>& bytes = baked->asset;
   *mesh = std::move(baked->mesh);
   if (!a.no_cache) {

@@ -59,7 +59,7 @@ void Out(const char* format, ...) {
 }
 
 int Fail(const import::Error& error) {
-  spdlog::error("{}: {}", import::ToString(error.code), error.message);
+  spdlog::error("{}", import::ToString(error));
   return 1;
 }
 

@@ -59,4 +59,6 @@ const char* ToString(Error::Code code) {
   return "unknown";
 }
 
+std::string ToString(const Error& error) { return std::string(ToString(error.code)) + ": " + error.message; }
+
 }  // namespace spherechain::import

@@ -45,8 +45,7 @@ Status ImportMeshForAsset(const runtime::AssetView& view, const std::string& ass
   opts.vertices = import::ContractForReimport(view, mesh_path);  // the buffer the asset was baked from
   auto imported = import::ImportMesh(mesh_path, opts, log);
   if (!imported.ok())
-    return MakeError(imported.error().code,
-                     std::string(import::ToString(imported.error().code)) + ": " + imported.error().message);
+    return MakeError(imported.error().code, import::ToString(imported.error()));
   *mesh = std::move(imported).value();
   return CheckFingerprint(view, *mesh, asset_name, mesh_path);
 }

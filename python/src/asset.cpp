@@ -106,7 +106,7 @@ PyAsset Bake(const py::object& path, const py::object& config, std::optional<std
              const py::object& rig, std::optional<double> disk_step, bool force, bool skin_weights) {
   PyObject* error_class = Exceptions().bake_error;
   auto fail = [&](const import::Error& e) {
-    ThrowOffline(error_class, e, std::string(import::ToString(e.code)) + ": " + e.message);
+    ThrowOffline(error_class, e, import::ToString(e));
   };
   const std::string input = PathString(path);
   // The configuration: a file (as `bake --config`), a mapping (its JSON), or the defaults.

@@ -121,6 +121,8 @@ struct Error {
   std::string message;
 };
 const char* ToString(Error::Code code);
+/// "<kind>: <message>" (ToString(code), then the message): what the CLI prints after "error: ".
+std::string ToString(const Error& error);
 
 /// Value or Error (Jolt's Result<T>). Check `ok()` before `value()`.
 template <class T>
