@@ -24,7 +24,25 @@ std::string FindPosesDir(const std::string& character, const std::string& explic
   return playback::FindPosesDir(character, data_dirs);
 }
 
-std::vector<std::string> PoseInputs(const AnimationArgs& a) { return playback::PoseInputFiles(a.morph, a.poses_dir); }
+std::vector<std::string> DefaultPoseFiles(const std::string& mesh) {
+  std::vector<std::string> files;
+  for (const std::string& character : {std::string("makehuman"), fs::path(mesh).stem().string()}) {
+    const std::string dir = FindPosesDir(character, "");
+    if (dir.empty()) continue;
+    const std::vector<std::string> more = playback::PoseInputFiles({}, dir);
+    files.insert(files.end(), more.begin(), more.end());
+  }
+  return files;
+}
+
+std::vector<std::string> PoseInputs(const AnimationArgs& a) {
+  std::vector<std::string> files = playback::PoseInputFiles(a.morph, a.poses_dir);
+  if (a.poses_dir.empty()) {  // the default folder: where a bare --morph, a pose name or a mesh without clips reads
+    const std::vector<std::string> more = DefaultPoseFiles(a.mesh);
+    files.insert(files.end(), more.begin(), more.end());
+  }
+  return files;
+}
 
 void AddAnimationOptions(CLI::App* sub, std::string* asset, std::string* rig, AnimationArgs* anim) {
   sub->add_option("asset", *asset, ".sphc asset baked from the mesh")->required()->check(CLI::ExistingFile);
@@ -40,8 +58,9 @@ void AddAnimationOptions(CLI::App* sub, std::string* asset, std::string* rig, An
   sub->add_option("--poses-dir", anim->poses_dir,
                   "Folder of default key poses (default: poses/<character> in the installed share/spherechain/, "
                   "else the source tree's data/, else data/poses/<character> upward from the current directory)");
-  sub->add_option("--frames", anim->frames, "Frames: the morph's length, or uniform samples of the clip (default 40)")
-      ->check(WithinRange(1));
+  sub->add_option("--frames", anim->frames,
+                  "Frames: the morph's length, or uniform samples of the clip (default 40, at most 1,000,000)")
+      ->check(WithinRange(1, kMaxFrames));
   sub->add_option("--rig", *rig, "MakeHuman rig (.mhskel) for an OBJ; default: default.mhskel beside the OBJ");
 }
 

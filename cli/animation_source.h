@@ -32,8 +32,14 @@ struct AnimationArgs {
   bool morph_requested() const { return !morph.empty() || (morph_option && morph_option->count() > 0); }
 };
 
+/// The files in the default key-pose folders a run on `mesh` may read (FindPosesDir), for OutputsClash. Before
+/// the import the character is not known, so both folders it may name: `makehuman` (a MakeHuman rig) and the
+/// file's stem. Lists folders; reads no file.
+std::vector<std::string> DefaultPoseFiles(const std::string& mesh);
+
 /// The files the animation may read besides the mesh, for OutputsClash: the --morph arguments, every file in
-/// those that are folders, and every file in --poses-dir (where pose names and a bare --morph are looked up).
+/// those that are folders, and every file in --poses-dir, or without it in the default folders
+/// (DefaultPoseFiles), where pose names, a bare --morph and a mesh without clips look.
 std::vector<std::string> PoseInputs(const AnimationArgs& a);
 
 /// Registers the options every animating command shares on `sub` — ASSET (positional, an existing

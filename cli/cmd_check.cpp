@@ -133,11 +133,20 @@ bool OpenOrBake(const CheckArgs& a, LoadedAsset* asset, import::Mesh* mesh, std:
   return true;
 }
 
+// The files --poses may read: its files, the files in its folders and, for a bare --poses, the default folder's.
+std::vector<std::string> PoseInputFiles(const CheckArgs& a) {
+  if (!a.poses_option || a.poses_option->count() == 0) return {};
+  std::vector<std::string> files = playback::PoseInputFiles(a.poses, "");
+  const std::vector<std::string> defaults = DefaultPoseFiles(a.character);
+  files.insert(files.end(), defaults.begin(), defaults.end());
+  return files;
+}
+
 int RunCheck(const CheckArgs& a) {
   if (int clash = OutputsClash({{"--json", &a.json}, {"--junit", &a.junit}, {"--html", &a.html}},
                                {{"CHARACTER", &a.character}, {"--asset", &a.asset}, {"--rig", &a.rig},
                                 {"--policy", &a.policy}, {"--baseline", &a.baseline}},
-                               a.poses))
+                               PoseInputFiles(a)))
     return clash;
   // ---- what needs no file -----------------------------------------------------------------------------
   if (!(a.fps > 0 && a.fps <= 1000)) return UsageError("--fps " + std::to_string(a.fps) + " is outside (0, 1000]");
@@ -273,8 +282,8 @@ void RegisterCheck(CLI::App& app, Commands* commands) {
                                        "Also check the morph through key poses (files, folders); bare: the "
                                        "character's default poses. How a mesh without clips is checked")
                            ->expected(0, CLI::detail::expected_max_vector_size);
-  sub->add_option("--morph-frames", args->morph_frames, "Frames of the morph (default 40)")
-      ->check(WithinRange(1))
+  sub->add_option("--morph-frames", args->morph_frames, "Frames of the morph (default 40, at most 1,000,000)")
+      ->check(WithinRange(1, kMaxFrames))
       ->needs(args->poses_option);
   CLI::Option* fps = sub->add_option("--fps", args->fps, "Frames per second a clip is sampled at (default 30)");
   sub->add_flag("--key-times", args->key_times,

@@ -112,7 +112,8 @@ void RegisterEvaluate(CLI::App& app, Commands* commands) {
   sub->add_option("--crease", args->crease,
                   "The asset-independent truth counts intersecting triangles whose bind-pose centroids lie at least "
                   "this far apart, as a fraction of the body height (default 0.03; nearer pairs are skin folding at "
-                  "a joint); printed and in the JSON as contacts_by_bind_distance")
+                  "a joint); printed and in the JSON as contacts_by_bind_distance. Wider than the asset's crease, it "
+                  "also widens the skin contacts' definition (the geodesic crease) and their narrow phase")
       ->check(WithinRange(0.0, 1.0));
   sub->add_option("--refit", args->refit,
                   "Refit: paper, frame (default; both from the deformed vertices) or joints (JointRefitJob: the centres "

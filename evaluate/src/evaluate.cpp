@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <tuple>
 
 #include "evaluate_internal.h"
 #include "spherechain/import/file_io.h"
@@ -115,7 +116,10 @@ import::Status Context::Init() {
 
 uint32_t WorstFrame(const std::vector<FrameEval>& rows) {
   uint32_t worst = 0;
-  const auto misses = [](const FrameEval& x) { return std::pair(x.missed_contacts, x.missed_sphere_contacts); };
+  // Ties (every frame found whole, say) go to the frame with the most contacts: a picture with something in it.
+  const auto misses = [](const FrameEval& x) {
+    return std::tuple(x.missed_contacts, x.missed_sphere_contacts, x.contacts);
+  };
   for (uint32_t f = 0; f < rows.size(); ++f)
     if (misses(rows[f]) > misses(rows[worst])) worst = f;
   return worst;
@@ -194,10 +198,11 @@ import::Status Picture(const Context& c, const std::vector<FrameEval>& rows, uin
     for (uint32_t t : {p.a, p.b}) marks[t] = std::max<uint8_t>(marks[t], found ? 2 : 1);
   }
   const std::vector<float>& sp = rows[f].spheres;
+  const auto* sphere_regions = c.view.asset->sphere_regions();
   std::vector<playback::FrameSphere> spheres;
-  for (uint32_t s = 0; 4 * s < sp.size(); ++s)
+  for (uint32_t s = 0; 4 * s < sp.size(); ++s)  // coloured by the asset's own regions, as the triangles are
     spheres.push_back({{sp[4 * s], sp[4 * s + 1], sp[4 * s + 2]}, sp[4 * s + 3],
-                       playback::RegionColor(c.view, uint32_t(std::max(c.SphereRegion(s), 0))), 0.35f});
+                       playback::RegionColor(c.view, sphere_regions ? uint32_t(sphere_regions->Get(s)) : 0u), 0.35f});
   std::string caption;
   detail::Appendf(&caption, "frame %u (%s): %u contacts, %u missed by the proxy's sphere pairs (red), the rest found (amber); "
                             "refit spheres (M2)",

@@ -232,7 +232,8 @@ nlohmann::json SummarizeRefitCoverage(const Context& c, const std::vector<FrameE
 /// The table, the JSON document and the recall figures of `rows` (and of the sweep) into `out`.
 void Report(const Context& c, const std::vector<FrameEval>& rows, const std::vector<SweepPoint>& sweep,
             const nlohmann::json& bind_coverage, Evaluation* out);
-/// The frame with the most missed contacts (by contacts, then by sphere pairs) — the picture's frame.
+/// The frame with the most missed contacts (by contacts, then by sphere pairs, then the most contacts; the
+/// first of equals) — the picture's frame.
 uint32_t WorstFrame(const std::vector<FrameEval>& rows);
 
 }  // namespace spherechain::evaluate::detail

@@ -142,6 +142,9 @@ Result<Pose> ParsePose(std::string_view json_text, const Skin& skin, const std::
       if (!a.is_number() || !std::isfinite(a.get<double>()))
         return fail("bone '" + bone + "': \"axis\" component " + std::to_string(k) + " is not a finite number");
       axis[k] = a.get<float>();
+      if (!std::isfinite(axis[k]))  // finite as a double, past a float's range (±3.4e38)
+        return fail("bone '" + bone + "': \"axis\" component " + std::to_string(k) + " is not a finite number as a "
+                    "32-bit float (its magnitude must be below 3.4e38)");
       len2 += double(axis[k]) * axis[k];
     }
     if (!(len2 > 1e-12)) return fail("bone '" + bone + "': \"axis\" has zero length");

@@ -63,6 +63,23 @@ expect_exit(bad_config 1 "config: .*config_bad.json: 'penetration_depth' = 7 is 
 # A torso disk step that is no length: refused by the parser (exit 2), before anything is read.
 expect_exit(disk_step_negative 2 "--disk-step: Value -1 not in range" bake ${WORK}/cube.obj -o ${WORK}/out.sphc --disk-step -1)
 expect_exit(disk_step_nan 2 "--disk-step: Value nan not in range" bake ${WORK}/cube.obj -o ${WORK}/out.sphc --disk-step nan)
+# A frame count past the limit (a mistyped one ended in std::bad_alloc): a usage error before anything is read.
+expect_exit(frames_too_many 2 "--frames: Value 4000000000 not in range \\[1 - 1e\\+06\\]"
+            play ${CREATURE} --mesh ${CREATURE} --frames 4000000000 --json ${WORK}/out.sphc)
+# An output naming a file of the default key-pose folder (data/poses/<character> upward from the current
+# directory, where a bare --morph and --poses read): refused (exit 2), the pose untouched. It was overwritten.
+file(WRITE ${WORK}/data/poses/creature/wave.json "{\"rotations\": {}}")
+foreach(cmd "play;${CREATURE};--mesh;${CREATURE};--morph;--json" "check;${CREATURE};--poses;--json")
+  execute_process(COMMAND ${CLI} ${cmd} data/poses/creature/wave.json WORKING_DIRECTORY ${WORK}
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  file(READ ${WORK}/data/poses/creature/wave.json pose)
+  if(NOT rc EQUAL 2 OR NOT "${err}" MATCHES "wave.json' is also an input: writing it would destroy what is read"
+     OR NOT pose STREQUAL "{\"rotations\": {}}")
+    message(FATAL_ERROR "${cmd} onto a default pose: expected exit 2, the clash named, the pose kept; got exit ${rc}, "
+                        "pose '${pose}':\n${out}${err}")
+  endif()
+  message(STATUS "${cmd} onto a default pose: exit 2: ${err}")
+endforeach()
 # `check` given a character that does not import: its usage error (exit 2), with the kind as every command gives it.
 file(WRITE ${WORK}/broken.gltf "{not json")
 expect_exit(check_broken_gltf 2 "error: format: .*broken.gltf: not a readable glTF file" check ${WORK}/broken.gltf)

@@ -282,6 +282,11 @@ TEST_CASE("animation: a pose file with an unknown bone or a bad axis is a clear 
   CHECK(m.find("\"axis\" must be an array of 3 numbers") != std::string::npos);
   m = err(R"({"rotations": {"child": {"axis": [1, "up", 0], "degrees": 30}}})");
   CHECK(m.find("not a finite number") != std::string::npos);
+  // Finite as a double, infinite as the float it is kept in: refused (it became a rotation that did nothing).
+  m = err(R"({"rotations": {"child": {"axis": [0, 1e39, 0], "degrees": 30}}})");
+  CHECK(m.find("\"axis\" component 1 is not a finite number as a 32-bit float") != std::string::npos);
+  m = err(R"({"rotations": {"child": {"axis": [0, 1, 0], "degrees": 181}}})");
+  CHECK(m.find("within [-180, 180]") != std::string::npos);
   m = err(R"({"rotations": {"child": {"axis": [1, 0, 0]}}})");
   CHECK(m.find("\"degrees\"") != std::string::npos);
   err(R"({"name": "no rotations"})");

@@ -55,7 +55,8 @@ struct EvaluateOptions {
   /// [Limit: [0, 1)]. Also the sphere-pair precision's distance.
   double margin_rel = 0.01;
   /// The asset-independent truth's bind-centroid distance [Limit: [0, 1]]: nearer pairs are skin folding
-  /// at a joint.
+  /// at a joint. Also the skin contacts' crease (geodesic, on the welded bind surface) when wider than the
+  /// asset's: the definition's truth and its narrow-phase job are then both taken at this crease.
   double crease_rel = 0.03;
   /// "paper" or "frame" (RefitJob from the deformed vertices, RefitMode kPaper / kPivotFrame), or "joints"
   /// (JointRefitJob from the frame's skinning matrices; needs an asset with joint weights and a rigged mesh).
@@ -92,7 +93,8 @@ struct Evaluation {
 /// animation's frames, of the exact intersection and coverage measures (with the frame), and of the PNG
 /// (kIo). `log` [opt] receives warnings (a frame with more than 2^20 narrow-phase contacts).
 /// Cost: dominated by the exact ground truth (~0.1 s a frame on 27k triangles) and, with `coverage`, the
-/// coverage measure; memory ~16 MB for the contact buffer plus the mesh's size a few times.
+/// coverage measure; memory ~24 MB for two 2^20-contact buffers (the frame pipeline's and its own, 12 bytes a
+/// contact) plus the mesh's size a few times.
 import::Result<Evaluation> Evaluate(const runtime::AssetView& asset, const import::Mesh& mesh,
                                     const playback::Animation& animation, const EvaluateOptions& options,
                                     import::Context* log = nullptr);

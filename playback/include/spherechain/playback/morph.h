@@ -71,8 +71,8 @@ Status SkinMorphFrame(const Mesh& mesh, const std::vector<Pose>& keys, uint32_t 
 /// Parses a key pose (format above) against `skin`. `origin` names the source in messages (a path).
 /// Errors (kConfig, the message names origin, bone and field): not JSON / not an object; "rotations"
 /// missing or not an object; a bone not in the skin (the message suggests names that contain it);
-/// "axis" not 3 finite numbers or of zero length; "degrees" not a finite number. "name" defaults to
-/// `origin`'s stem.
+/// "axis" not 3 numbers finite as 32-bit floats, or of zero length; "degrees" not a finite number or outside
+/// [-180, 180]; "name" not a string. "name" defaults to `origin`'s stem.
 Result<Pose> ParsePose(std::string_view json_text, const Skin& skin, const std::string& origin);
 
 /// Reads and parses one pose file. Errors: kIo (unreadable), ParsePose's.

@@ -110,7 +110,8 @@ struct PlayReport {
 /// Errors: kConfig — the vertex count differs; kJoints without centre joint weights in the asset
 /// ("... has no joint weights ...: re-bake it") or with another joint count than the skin's; a
 /// narrow_behind_margin that is negative or not finite (an asset baked before reach regions runs behind its
-/// surrounding regions: runtime ReachTriangles); kFormat — the narrow phase on an asset without its data
+/// surrounding regions: runtime ReachTriangles); a contact_capacity of 0 with the narrow phase; kFormat — the
+/// narrow phase on an asset without its data
 /// ("narrow phase: kErrorMissingField (...: re-bake it)"); kInternal — a runtime job failed (the message names
 /// the job and its status); the skinning's errors; on_frame's errors.
 /// Cost: per frame one skinning (O(Σ influences)), (repeat ×) refit and detect runs, the tracking

@@ -17,7 +17,8 @@
 //   FP-COUNTS       error    mesh vertex/triangle counts differ from the asset's fingerprint (a vertex
 //                            count says which vertex contract, joined or source, the buffer looks like)
 //   FP-INDICES      error    same counts, different triangle indices (re-bake)
-//   FP-POSITIONS    warning  same counts and indices, different bind positions (moved vertices)
+//   FP-POSITIONS    error    same counts and indices, different bind positions (moved vertices; play,
+//                            evaluate, view and check refuse the pair)
 //   RUNTIME         error    the runtime refused the bind-pose refit/detect (status in the message)
 //   BIND-COLLISION  error    two spheres overlap at the bind pose (M2, the asset's contact margin): a
 //                            correct proxy reports nothing for the undeformed character
