@@ -20,6 +20,7 @@
 #include <pthread.h>
 #include <signal.h>
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <xxhash.h>
@@ -149,8 +150,8 @@ class LiveLock {
   BlockEndingSignals blocked_;  // first in, last out
 };
 
-// Links `node` at the head of the list. With `create`, also creates its file (truncated, mode 0666 less the
-// umask) before the lock is released, so that no handler can run between the two and miss it: the file
+// Links `node` at the head of the list. With `create`, also creates its file (new, mode 0666 less the umask)
+// before the lock is released, so that no handler can run between the two and miss it: the file
 // descriptor, or -1 with errno set.
 int Track(detail::LiveTemporary* node, bool create) {
   int fd = -1, error = 0;
@@ -159,7 +160,15 @@ int Track(detail::LiveTemporary* node, bool create) {
     node->next = g_live_head;
     if (g_live_head) g_live_head->prev = node;
     g_live_head = node;
-    if (create) fd = ::open(node->path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666), error = errno;
+    // A new file of its own (O_EXCL | O_NOFOLLOW): a file or link found at the (predictable) name is never
+    // written through. It is removed (unlink takes the link, not what it points to) and the file made once more:
+    // a leftover of a killed process that had the same id, or a link planted in a shared folder.
+    const int flags = O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC;
+    if (create) {
+      fd = ::open(node->path.c_str(), flags, 0666);
+      if (fd < 0 && errno == EEXIST && ::unlink(node->path.c_str()) == 0) fd = ::open(node->path.c_str(), flags, 0666);
+      error = errno;
+    }
   }
   errno = error;  // as open left it, whatever the unlock did
   return fd;
@@ -167,16 +176,22 @@ int Track(detail::LiveTemporary* node, bool create) {
 
 // Unlinks the nodes of `files` from the list (one lock, whatever their number: a folder of frames stages
 // thousands), then frees them.
+// Unlinks them with the lock already held (frees nothing).
+template <typename It>
+void UnlinkLocked(It first, It last) {
+  for (It it = first; it != last; ++it) {
+    detail::LiveTemporary* n = it->live;
+    (n->prev ? n->prev->next : g_live_head) = n->next;
+    if (n->next) n->next->prev = n->prev;
+  }
+}
+
 template <typename It>
 void Untrack(It first, It last) {
   if (first == last) return;
   {
     LiveLock lock;
-    for (It it = first; it != last; ++it) {
-      detail::LiveTemporary* n = it->live;
-      (n->prev ? n->prev->next : g_live_head) = n->next;
-      if (n->next) n->next->prev = n->prev;
-    }
+    UnlinkLocked(first, last);
   }
   for (It it = first; it != last; ++it) delete it->live;
 }
@@ -244,34 +259,37 @@ Error OutputFiles::Explain(Error error) const {
 }
 
 Status OutputFiles::Commit() {
-  namespace fs = std::filesystem;
-  // No ending signal between two renames (one that comes is handled after the last): the set is renamed whole,
-  // or, interrupted before, not at all.
-  BlockEndingSignals blocked;
-  // The first n files are in place (or were never made): forgotten, nothing left to remove.
-  auto forget = [this](size_t n) {
-    const auto end = files_.begin() + static_cast<std::ptrdiff_t>(n);
-    Untrack(files_.begin(), end);
-    files_.erase(files_.begin(), end);
-  };
-  std::error_code ec;
-  for (size_t i = 0; i < files_.size(); ++i) {
-    const std::string &tmp = files_[i].temporary, &path = files_[i].path;
-    const bool made = fs::exists(tmp, ec);
-    if (ec) {
-      const std::string why = ec.message(), failed = path;
-      forget(i);
-      return MakeError(Error::Code::kIo, "cannot read the temporary file of '" + failed + "': " + why);
+  // The set is renamed whole, or, interrupted before, not at all. No ending signal reaches this thread between
+  // two renames, and the list's lock is held across them: a handler that another thread runs meanwhile (a
+  // signal sent to the process goes to any thread that does not block it, a TBB worker say) waits for the last
+  // rename, then removes only what was not renamed. Under the lock nothing allocates: system calls on the
+  // paths' own bytes, the messages made after.
+  size_t done = 0;  // files_[0, done) are in place, or were never made (a writer that wrote nothing)
+  int error = 0;
+  const char* what = nullptr;
+  {
+    LiveLock lock;
+    for (; done < files_.size(); ++done) {
+      const char *tmp = files_[done].temporary.c_str(), *path = files_[done].path.c_str();
+      struct stat st;
+      if (::lstat(tmp, &st) != 0) {
+        if (errno == ENOENT) continue;  // staged for a writer that wrote nothing: the path stays as it was
+        error = errno, what = "cannot read the temporary file of '";
+        break;
+      }
+      if (::rename(tmp, path) != 0) {
+        error = errno, what = "cannot rename the temporary file onto '";
+        break;
+      }
     }
-    if (!made) continue;  // staged for a writer that wrote nothing: the path stays as it was
-    fs::rename(tmp, path, ec);
-    if (ec) {
-      const std::string why = ec.message(), failed = path;
-      forget(i);
-      return MakeError(Error::Code::kIo, "cannot rename the temporary file onto '" + failed + "': " + why);
-    }
+    UnlinkLocked(files_.begin(), files_.begin() + static_cast<std::ptrdiff_t>(done));
   }
-  forget(files_.size());
+  // The first `done` files: forgotten, nothing left to remove.
+  const auto end = files_.begin() + static_cast<std::ptrdiff_t>(done);
+  for (auto it = files_.begin(); it != end; ++it) delete it->live;
+  const std::string failed = what ? files_[done].path : std::string();
+  files_.erase(files_.begin(), end);
+  if (what) return MakeError(Error::Code::kIo, what + failed + "': " + std::strerror(error));
   return Ok{};
 }
 

@@ -373,7 +373,8 @@ Result<Mesh> ImportObj(const std::string& path, const ImportOptions& options, Co
     mesh.indices = obj.triangles;
   }
   MeshPart part;
-  part.name = obj.has_group ? options.obj_group : fs::path(path).stem().string();
+  // Never the file's name: the asset would then differ with the name it was saved under (builds cache on it).
+  part.name = obj.has_group ? options.obj_group : "mesh0";
   part.vertex_count = mesh.vertex_count();
   part.triangle_count = mesh.triangle_count();
   mesh.parts.push_back(part);

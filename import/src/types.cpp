@@ -8,9 +8,18 @@ namespace spherechain::import {
 
 void Context::RecordFileRead(const std::string& path) {
   if (path.empty()) return;
+  namespace fs = std::filesystem;
   std::error_code ec;
-  std::filesystem::path p = std::filesystem::absolute(path, ec);
-  const std::string abs = ec ? path : p.lexically_normal().string();
+  const fs::path p = fs::absolute(path, ec);
+  std::string abs = ec ? path : p.lexically_normal().string();
+  // A `..` after a symbolic link to a folder leads to the link target's parent, not back to where the path
+  // came from: the folders are then resolved as they are on disk (the file itself kept as named). Dropping
+  // `dir/..` by the text alone named files that do not exist (depfiles) and let an output overwrite a file
+  // the bake had read (OutputsClash).
+  if (!ec && std::find(p.begin(), p.end(), fs::path("..")) != p.end()) {
+    const fs::path dir = fs::weakly_canonical(p.parent_path(), ec);
+    if (!ec) abs = (dir / p.filename()).string();
+  }
   if (std::find(files_read.begin(), files_read.end(), abs) == files_read.end()) files_read.push_back(abs);
 }
 

@@ -1,6 +1,7 @@
 # `spherechain bake --depfile`: the depfile names exactly the files the bake read, Make and Ninja read it back
 # (paths with spaces, '#' and '$'), and a failed bake writes neither the asset nor the depfile.
-#   1. boxes.obj + --config fast.json + --region-map limbs_detached.json + --force: the three files, absolute.
+#   1. boxes.obj + --config fast.json + --region-map limbs_detached.json + --force: the three files, absolute;
+#      the same OBJ renamed in another folder bakes to the same bytes.
 #   2. The same without --force fails its plausibility checks: exit 1, no asset, no depfile (an old one stays
 #      untouched, as the asset does); a depfile path that is a folder is refused before the bake; a
 #      configuration's relative region map is read from the configuration's folder.
@@ -46,6 +47,16 @@ expect_deps("config + region map" ${WORK}/boxes.d
 file(READ ${WORK}/boxes.d text)
 if(NOT text MATCHES "^${WORK}/boxes.sphc: ")
   message(FATAL_ERROR "the depfile's target is not the asset as -o named it:\n${text}")
+endif()
+# The same OBJ under another name in another folder: the same bytes (the asset records neither; an OBJ's part
+# was named after its file).
+file(MAKE_DIRECTORY ${WORK}/renamed)
+file(COPY_FILE ${IMPLAUSIBLE}/boxes.obj ${WORK}/renamed/other.obj)
+run("bake boxes renamed" ${CLI} -q bake ${WORK}/renamed/other.obj -o ${WORK}/renamed.sphc
+    --config ${IMPLAUSIBLE}/fast.json --region-map ${IMPLAUSIBLE}/limbs_detached.json --force)
+execute_process(COMMAND ${CMAKE_COMMAND} -E compare_files ${WORK}/boxes.sphc ${WORK}/renamed.sphc RESULT_VARIABLE differ)
+if(differ)
+  message(FATAL_ERROR "one OBJ baked under two names gave two assets")
 endif()
 
 # ---- 2. a failed bake writes nothing ------------------------------------------------------------------

@@ -173,3 +173,42 @@ TEST_CASE("Context::RecordFileRead: absolute, lexically normal, each path once i
   ctx.RecordFileRead("rel.obj");
   CHECK(ctx.files_read == std::vector<std::string>{"/a/c.gltf", "/a/c.bin", Abs("rel.obj")});
 }
+
+TEST_CASE("Context::RecordFileRead: a '..' after a symbolic link to a folder leads to the link target's parent") {
+  // real/deep holds nothing; lnk -> real/deep; so lnk/../ is real/, where the glTF and its buffer are. Dropping
+  // `lnk/..` by the text named files that do not exist (the depfile) and let an output overwrite a file read.
+  FilesDir d;
+  fs::create_directories(d.dir / "real" / "deep");
+  fs::create_directory_symlink("real/deep", d.dir / "lnk");
+  d.Write("real/tri.bin", TriangleBytes());
+  d.Write("real/tri.gltf", TriangleGltf("tri.bin"));
+  const fs::path real = fs::canonical(d.dir / "real");
+  CHECK(FilesRead((d.dir / "lnk" / ".." / "tri.gltf").string()) ==
+        std::vector<std::string>{(real / "tri.gltf").string(), (real / "tri.bin").string()});
+  // The clash check compares with what was read: a report onto the buffer is refused.
+  const std::string report = (d.dir / "lnk" / ".." / "tri.bin").string();
+  Context ctx;
+  REQUIRE(ImportMesh((d.dir / "lnk" / ".." / "tri.gltf").string(), {}, &ctx).ok());
+  const std::string clash = spherechain::import::OutputsClash({{"--report", &report}}, {}, ctx.files_read);
+  CHECK(clash.find("is also an input") != std::string::npos);
+}
+
+TEST_CASE("OutputFiles::Write never writes through a link planted at its temporary's name") {
+  FilesDir d;
+  const std::string victim = d.Write("victim.txt", "keep me"), out = (d.dir / "out.json").string();
+  // The next temporary of `out` is the one after this one (the process's count goes up by one a call).
+  const std::string seen = spherechain::import::TemporaryPathFor(out);
+  const size_t dot = seen.rfind('.');
+  const std::string next = seen.substr(0, dot + 1) + std::to_string(std::stoull(seen.substr(dot + 1)) + 1);
+  fs::create_symlink(victim, next);
+  spherechain::import::OutputFiles files;
+  REQUIRE(files.Write(out, std::string("new")).ok());
+  REQUIRE(files.Commit().ok());
+  std::ifstream a(victim), b(out);
+  const std::string victim_text((std::istreambuf_iterator<char>(a)), {}), out_text((std::istreambuf_iterator<char>(b)), {});
+  CHECK(victim_text == "keep me");
+  CHECK(out_text == "new");
+  CHECK_FALSE(fs::is_symlink(out));
+  std::error_code ec;
+  CHECK_FALSE(fs::exists(fs::symlink_status(next, ec)));
+}
