@@ -1,7 +1,7 @@
 # Type stubs of the package spherechain (the native module spherechain._spherechain, re-exported).
 # Shapes: #V vertices, #T triangles, #S spheres, #J joints. Lengths in the character's source units.
 import os
-from typing import Any, Literal, Mapping, Sequence, Union, overload
+from typing import Any, Literal, Mapping, Sequence, SupportsIndex, Union, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -50,7 +50,8 @@ class Asset:
     def to_bytes(self) -> bytes:
         """The .sphc file's bytes (a copy)."""
     def close(self) -> None:
-        """Drops this object's reference to the bytes (Models and Workspaces keep theirs)."""
+        """Drops this object's reference to the bytes (Models and Workspaces keep theirs); later uses of the
+        bytes raise StatusError kErrorNullArgument (path, report, closed and repr still answer)."""
     @property
     def closed(self) -> bool: ...
     def __enter__(self) -> Asset: ...
@@ -184,7 +185,7 @@ def evaluate(
     asset: Asset,
     mesh: _Path,
     clip: str | None = None,
-    frames: int = 40,
+    frames: SupportsIndex = 40,
     *,
     morph: bool | _Path | Sequence[_Path] | None = None,
     poses_dir: _Path | None = None,

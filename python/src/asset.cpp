@@ -48,7 +48,7 @@ struct LogLines {
     py::object logger = py::module_::import("logging").attr("getLogger")("spherechain");
     for (const auto& [level, message] : lines) {
       const int py_level = level == import::Context::Level::kWarn ? 30 : level == import::Context::Level::kInfo ? 20 : 10;
-      logger.attr("log")(py_level, "%s", message);
+      logger.attr("log")(py_level, "%s", Text(message));  // a path in it may not be UTF-8
     }
     lines.clear();
   }
@@ -61,8 +61,13 @@ py::object JsonToPython(const nlohmann::json& j) {
 
 // A path argument (str, bytes or os.PathLike) as the file system's bytes (os.fsencode: a str in the file system
 // encoding, undecodable bytes kept as they were); TypeError for anything else.
+// A NUL inside is refused (ValueError, as Python's open()): the file system would stop at it, and another file
+// than the one named would be read or written.
 std::string PathString(const py::handle& path) {
-  return py::bytes(py::module_::import("os").attr("fsencode")(path)).cast<std::string>();
+  std::string bytes = py::bytes(py::module_::import("os").attr("fsencode")(path)).cast<std::string>();
+  if (bytes.find('\0') != std::string::npos)
+    throw py::value_error("path " + std::string(py::str(py::repr(path))) + ": embedded null byte");
+  return bytes;
 }
 // A path as Python shows it (os.fsdecode of its bytes).
 py::object PathObject(const std::string& path) { return py::module_::import("os").attr("fsdecode")(py::bytes(path)); }
@@ -77,9 +82,8 @@ AssetPtr LoadOrThrow(const std::function<import::Status(import::LoadedAsset*)>& 
   if (s.ok()) return data;
   if (runtime::Failed(data->loaded.status)) ThrowStatus(data->loaded.status, s.error().message);
   // kIo: no such file, a folder, unreadable, too large.
-  PyErr_SetString(s.error().message.find(": no such file") != std::string::npos ? PyExc_FileNotFoundError : PyExc_OSError,
-                  s.error().message.c_str());
-  throw py::error_already_set();
+  ThrowOsError(s.error().message.find(": no such file") != std::string::npos ? PyExc_FileNotFoundError : PyExc_OSError,
+               s.error().message);
 }
 
 PyAsset Load(const py::object& source) {
@@ -124,7 +128,8 @@ PyAsset Bake(const py::object& path, const py::object& config, std::optional<std
         text = py::str(py::module_::import("json").attr("dumps")(py::dict(config), py::arg("default") = plain));
       } catch (const py::error_already_set& e) {
         if (!e.matches(PyExc_TypeError) && !e.matches(PyExc_ValueError)) throw;
-        fail(import::MakeError(import::Error::Code::kConfig, std::string("the config dict: ") + e.what()));
+        // The exception's own message (e.what() appends pybind11's traceback of json.dumps).
+        fail(import::MakeError(import::Error::Code::kConfig, "the config dict: " + std::string(py::str(e.value()))));
       }
     }
     import::Result<baker::BakeConfig> parsed =
@@ -156,7 +161,9 @@ PyAsset Bake(const py::object& path, const py::object& config, std::optional<std
       if (auto s = import::LoadAssetBytes(r.asset.data(), r.asset.size(), "the baked asset", &data->loaded); !s.ok())
         error = import::MakeError(import::Error::Code::kInternal, s.error().message);
       asset.data = std::move(data);
-      asset.report_json = baker::MakeBakeReport(r, bake_config, ctx).dump();
+      // A name from the file that is not UTF-8 (a part's, a bone's) replaced, as the CLI writes the report.
+      asset.report_json =
+          baker::MakeBakeReport(r, bake_config, ctx).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
     } else {
       error = result.error();
     }
@@ -167,7 +174,7 @@ PyAsset Bake(const py::object& path, const py::object& config, std::optional<std
 }
 
 // ---- evaluate -------------------------------------------------------------------------------------
-py::object Evaluate(const PyAsset& asset, const py::object& mesh_path, std::optional<std::string> clip, uint32_t frames,
+py::object Evaluate(const PyAsset& asset, const py::object& mesh_path, std::optional<std::string> clip, const py::object& frames,
                     const py::object& morph, const py::object& poses_dir, const py::object& rig, double margin,
                     double crease, const std::string& refit, const std::string& regions, bool coverage,
                     const py::object& sweep_margin, const py::object& png) {
@@ -201,7 +208,18 @@ py::object Evaluate(const PyAsset& asset, const py::object& mesh_path, std::opti
   playback::AnimationRequest request;
   request.mesh_name = options.mesh_name;
   request.clip = clip.value_or("");
-  request.frames = frames;
+  // Any integer (an int, numpy's, anything with __index__): out of [1, 1,000,000] a config error, as the CLI's
+  // --frames, instead of pybind11's TypeError for what does not fit 32 bits.
+  {
+    const py::int_ count = py::reinterpret_steal<py::int_>(PyNumber_Index(frames.ptr()));
+    if (!count) throw py::error_already_set();
+    int overflow = 0;
+    const long long n = PyLong_AsLongLongAndOverflow(count.ptr(), &overflow);
+    if (overflow != 0 || n < 1 || n > 1'000'000)
+      fail(import::MakeError(import::Error::Code::kConfig,
+                             "frames: " + std::string(py::repr(count)) + " is not in [1, 1000000]"));
+    request.frames = static_cast<uint32_t>(n);
+  }
   if (py::isinstance<py::bool_>(morph)) {
     request.use_morph = morph.cast<bool>();
   } else if (py::isinstance<py::str>(morph) || py::isinstance<py::bytes>(morph) || py::hasattr(morph, "__fspath__")) {
@@ -280,8 +298,7 @@ source units of the character the asset was baked from, in its model space (bind
                s = import::WriteFileAtomic(p, data->loaded.bytes(), data->loaded.size);
              }
              if (!s.ok()) {
-               PyErr_SetString(PyExc_OSError, s.error().message.c_str());
-               throw py::error_already_set();
+               ThrowOsError(PyExc_OSError, s.error().message);
              }
              self.path = p;
            }, py::arg("path"), R"doc(
@@ -300,7 +317,8 @@ coverage, forced findings). Fields an older schema lacks are absent or None.
            }, "The .sphc file's bytes (a copy), as save() writes them.")
       .def("close", [](PyAsset& self) { self.data.reset(); }, R"doc(
 Drops this object's reference to the bytes. Models and Workspaces made from it keep working (they hold
-their own reference); every later use of this Asset raises StatusError kErrorNullArgument.
+their own reference); every later use of this Asset's bytes raises StatusError kErrorNullArgument (path,
+report, closed and repr still answer).
 )doc")
       .def_property_readonly("closed", [](const PyAsset& self) { return !self.data; }, "True after close().")
       .def("__enter__", [](PyAsset& self) -> PyAsset& { return self; }, py::return_value_policy::reference)
@@ -323,8 +341,8 @@ their own reference); every later use of this Asset raises StatusError kErrorNul
                              "#J: the matrices refit_joints() takes; 0 without joint weights (unrigged or old asset).")
       .def_property_readonly("region_names", [](const PyAsset& self) {
              const runtime::AssetView& v = self.Get()->view();
-             std::vector<std::string> names;
-             for (uint32_t k = 0; k < runtime::RegionCount(v); ++k) names.emplace_back(runtime::RegionName(v, k));
+             py::list names;  // Text: a name the verifier let through may not be UTF-8 (a bit flip)
+             for (uint32_t k = 0; k < runtime::RegionCount(v); ++k) names.append(Text(runtime::RegionName(v, k)));
              return names;
            }, "Names of the region values sphere_regions and triangle_regions hold (list of str, index = value).")
       .def_property_readonly("bind_spheres", [](const PyAsset& self) -> py::object {
@@ -415,7 +433,7 @@ Releases the GIL; slow (the exact truth: ~0.1 s a frame on 27k triangles, more w
 asset: an Asset (its path names it in the report); mesh: the character it was baked from (checked by
 fingerprint), str, bytes or os.PathLike (every path here: bytes are the file system's bytes).
 clip: the clip to play (None: the first, or the morph through the default key poses when there is none);
-frames: frames to play (> 0). morph: True (the default key poses), a pose file / name / folder, or a list of them;
+frames: frames to play, an integer in [1, 1000000] (else EvaluateError config). morph: True (the default key poses), a pose file / name / folder, or a list of them;
 poses_dir: the folder of key poses; rig: a MakeHuman .mhskel.
 margin: false-alarm distance, a fraction of the body height [0, 1); crease: the truth's bind distance, a
 fraction of the height [0, 1]; refit: "frame", "paper" or "joints"; regions: "asset" or "paper";

@@ -38,6 +38,13 @@ struct ExceptionClasses {
 };
 ExceptionClasses& Exceptions();
 
+/// Text for Python from C++ bytes that are mostly UTF-8 but may not be (a path's undecodable bytes, a name from a
+/// file): invalid bytes become `\xNN` escapes (backslashreplace), so a message never raises UnicodeDecodeError
+/// and always prints.
+py::str Text(const std::string& bytes);
+/// Raises `type` (an OSError class) with Text(message).
+[[noreturn]] void ThrowOsError(PyObject* type, const std::string& message);
+
 /// The status name alone: "kErrorVertexCount" (the part of runtime::ToString before its ':').
 std::string StatusName(runtime::Status status);
 /// Raises spherechain.StatusError: message "<ToString(status)>" followed by " (<context>)" when given.

@@ -21,11 +21,22 @@ std::string StatusName(runtime::Status status) {
   return text.substr(0, text.find(':'));
 }
 
+py::str Text(const std::string& bytes) {
+  PyObject* text = PyUnicode_DecodeUTF8(bytes.data(), static_cast<Py_ssize_t>(bytes.size()), "backslashreplace");
+  if (!text) throw py::error_already_set();
+  return py::reinterpret_steal<py::str>(text);
+}
+
+void ThrowOsError(PyObject* type, const std::string& message) {
+  PyErr_SetObject(type, Text(message).ptr());
+  throw py::error_already_set();
+}
+
 void ThrowStatus(runtime::Status status, const std::string& context) {
   std::string text = runtime::ToString(status);
   if (!context.empty()) text += " (" + context + ")";
   PyObject* cls = Exceptions().status_error;
-  py::object exc = py::reinterpret_steal<py::object>(PyObject_CallFunction(cls, "s", text.c_str()));
+  py::object exc = py::reinterpret_steal<py::object>(PyObject_CallOneArg(cls, Text(text).ptr()));
   if (!exc) throw py::error_already_set();
   exc.attr("status") = StatusName(status);
   exc.attr("code") = static_cast<uint32_t>(status);
@@ -34,10 +45,10 @@ void ThrowStatus(runtime::Status status, const std::string& context) {
 }
 
 void ThrowOffline(PyObject* cls, const import::Error& error, const std::string& text) {
-  py::object exc = py::reinterpret_steal<py::object>(PyObject_CallFunction(cls, "s", text.c_str()));
+  py::object exc = py::reinterpret_steal<py::object>(PyObject_CallOneArg(cls, Text(text).ptr()));
   if (!exc) throw py::error_already_set();
   exc.attr("code") = import::ToString(error.code);
-  exc.attr("message") = error.message;
+  exc.attr("message") = Text(error.message);
   PyErr_SetObject(cls, exc.ptr());
   throw py::error_already_set();
 }

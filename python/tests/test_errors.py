@@ -3,7 +3,9 @@ infinite inputs; closed, truncated, bit-flipped, too old and too new assets; the
 (the CLI's message and code). Each raises — ValueError / TypeError for arguments, StatusError with the runtime
 status name, BakeError / EvaluateError as the CLI prints them — and never crashes."""
 import json
+import os
 import random
+import shutil
 import struct
 import threading
 import time
@@ -530,6 +532,56 @@ def test_bake_errors(tmp_path):
         spherechain.bake(CREATURE, None, "paper")  # options are keywords
     with pytest.raises(TypeError):
         spherechain.bake(CREATURE, regions=5)
+    # A value json cannot write: its own message, without pybind11's traceback of json.dumps.
+    with pytest.raises(BakeError) as e:
+        spherechain.bake(CREATURE, {"max_spheres": {1, 2}})
+    assert e.value.code == "config" and "set is not a JSON value" in e.value.message, str(e.value)
+    assert "At:" not in e.value.message and "encoder.py" not in e.value.message, str(e.value)
+
+
+def test_paths_with_a_nul_or_bytes_that_are_not_utf8(asset, tmp_path):
+    # A NUL inside a path: ValueError, as open() — the file system would stop there and use another file.
+    asset.save(tmp_path / "a.sphc")
+    for call in (lambda: spherechain.load(str(tmp_path / "a.sphc") + "\0garbage"),
+                 lambda: asset.save(str(tmp_path / "b.sphc") + "\0.bak"),
+                 lambda: spherechain.bake(str(CREATURE) + "\0x"),
+                 lambda: spherechain.evaluate(asset, str(CREATURE) + "\0x")):
+        with pytest.raises(ValueError, match="embedded null byte"):
+            call()
+    assert not (tmp_path / "b.sphc").exists()
+    # Bytes that are not UTF-8 (the file system's own): the documented exception, its message escaped.
+    odd = bytes(tmp_path) + b"/\xff"
+    with pytest.raises(FileNotFoundError, match=r"\\xff/missing.sphc': no such file"):
+        spherechain.load(os.fsdecode(odd + b"/missing.sphc"))  # load() takes bytes as an asset's bytes
+    with pytest.raises(OSError, match=r"\\xff"):
+        asset.save(odd + b"/no/x.sphc")
+    with pytest.raises(BakeError) as e:
+        spherechain.bake(odd + b"/missing.obj")
+    assert e.value.code == "io" and "\\xff/missing.obj" in e.value.message, str(e.value)
+    with pytest.raises(EvaluateError) as e:
+        spherechain.evaluate(asset, odd + b"/missing.gltf")
+    assert "\\xff" in str(e.value)
+    corrupt = odd + b"bad.sphc"
+    with open(corrupt, "wb") as f:
+        f.write(b"x" * 64)
+    with pytest.raises(StatusError, match=r"\\xffbad.sphc"):
+        spherechain.load(os.fsdecode(corrupt))
+    # A valid input at such a path bakes (its report was a RuntimeError of nlohmann::json).
+    os.mkdir(odd)
+    shutil.copy(CREATURE, odd + b"/creature.gltf")
+    baked = spherechain.bake(odd + b"/creature.gltf", FAST)
+    assert baked.report is not None and baked.sphere_count == asset.sphere_count
+
+
+def test_a_region_name_that_is_not_utf8(asset):
+    # The verifier lets any bytes through in a name: region_names escapes them, as info() does.
+    data = bytearray(asset.to_bytes())
+    name = asset.region_names[0].encode()
+    at = data.find(name)
+    assert at > 0
+    data[at] = 0xFF
+    names = spherechain.load(bytes(data)).region_names
+    assert names[0] == "\\xff" + asset.region_names[0][1:], names
 
 
 # ---- evaluate ----------------------------------------------------------------------------------------
@@ -548,10 +600,14 @@ def test_evaluate_errors_are_the_cli_errors(asset, tmp_path):
             spherechain.evaluate(*args, **kwargs)
         assert e.value.code == code, str(e.value)
         assert str(e.value) == cli_error("evaluate", path, *cli_args), kwargs
-    # The CLI refuses --frames 0 while parsing (a usage error, exit 2); the function says it as a config error.
-    with pytest.raises(EvaluateError) as e:
-        spherechain.evaluate(loaded, CREATURE, refit="paper", frames=0)
-    assert e.value.code == "config" and "frames must be > 0" in str(e.value), str(e.value)
+    # The CLI refuses --frames 0 or past a million while parsing (a usage error, exit 2); the function says it
+    # as a config error, whatever the integer (pybind11 raised TypeError for what does not fit 32 bits).
+    for frames in (0, -1, 1_000_001, 2**32, 2**70):
+        with pytest.raises(EvaluateError) as e:
+            spherechain.evaluate(loaded, CREATURE, refit="paper", frames=frames)
+        assert e.value.code == "config" and f"frames: {frames} is not in [1, 1000000]" in str(e.value), str(e.value)
+    with pytest.raises(TypeError):
+        spherechain.evaluate(loaded, CREATURE, frames=2.5)
     with pytest.raises(EvaluateError, match="regions"):
         spherechain.evaluate(loaded, CREATURE, regions="limbs")
     with pytest.raises(EvaluateError) as e:
