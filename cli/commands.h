@@ -12,6 +12,7 @@
 
 #include "spherechain/import/file_io.h"
 #include "spherechain/import/types.h"
+#include "spherechain/playback/animation_source.h"
 #include "spherechain/playback/debug_export.h"
 #include "spherechain/runtime/asset.h"
 
@@ -54,10 +55,8 @@ int UsageError(const std::string& message);
 /// checked as the float32 an option of type float holds (1e-50 is 0 there).
 CLI::Validator WithinRange(double lo, double hi = HUGE_VAL, bool lo_open = false, bool as_float = false);
 
-/// The most frames --frames and check's --morph-frames take (a usage error past it): an hour at 277 fps. Each
-/// frame keeps a row in the reports (evaluate's holds its spheres and contact sets), so a mistyped count ends
-/// here instead of in an allocation failure.
-inline constexpr double kMaxFrames = 1'000'000;
+/// The most frames --frames and check's --morph-frames take (a usage error past it): playback::kMaxFrames.
+inline constexpr double kMaxFrames = playback::kMaxFrames;
 
 using import::OutputPathProblem;  // "cannot write 'p': ..." before the work (import/file_io.h)
 using import::PathArg;

@@ -2,7 +2,13 @@
 # Installs every build and test dependency of spherechain from Debian 12 packages.
 set -euo pipefail
 SUDO=""
-if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+if [ "$(id -u)" -ne 0 ]; then
+  if ! command -v sudo >/dev/null 2>&1; then
+    echo "spherechain: installing packages needs root: run this script as root, or install sudo" >&2
+    exit 1
+  fi
+  SUDO="sudo"
+fi
 export DEBIAN_FRONTEND=noninteractive
 $SUDO apt-get update -qq
 $SUDO apt-get install -y -qq --no-install-recommends \
@@ -18,7 +24,7 @@ $SUDO apt-get install -y -qq --no-install-recommends \
 if ! command -v npm >/dev/null 2>&1; then
   $SUDO apt-get install -y -qq --no-install-recommends nodejs npm >/dev/null
 fi
-# Without the registry the rest still builds and runs; only `spherechain view` is missing (the build says so).
+# Without the registry the rest still builds and runs; only `spherechain view` fails, saying to run npm ci.
 (cd "$(dirname "$0")/../viewer" && npm ci --no-audit --no-fund --loglevel=error) ||
-  echo "spherechain: three.js not installed (npm ci failed): \`spherechain view\` is not built" >&2
+  echo "spherechain: three.js not installed (npm ci failed): \`spherechain view\` will fail until \`npm ci\` succeeds in viewer/" >&2
 echo "spherechain: dependencies installed"

@@ -174,9 +174,7 @@ int Track(detail::LiveTemporary* node, bool create) {
   return fd;
 }
 
-// Unlinks the nodes of `files` from the list (one lock, whatever their number: a folder of frames stages
-// thousands), then frees them.
-// Unlinks them with the lock already held (frees nothing).
+// Unlinks the nodes of `files` from the list, the lock already held (frees nothing).
 template <typename It>
 void UnlinkLocked(It first, It last) {
   for (It it = first; it != last; ++it) {
@@ -186,6 +184,7 @@ void UnlinkLocked(It first, It last) {
   }
 }
 
+// Unlinks them under one lock (whatever their number: a folder of frames stages thousands), then frees them.
 template <typename It>
 void Untrack(It first, It last) {
   if (first == last) return;

@@ -133,7 +133,8 @@ Result<Animation> OpenAnimation(const Mesh& mesh, const AnimationRequest& a) {
     }
   }
   out.frames = a.frames;
-  if (a.frames == 0) return fail(a.frames_option + " must be > 0");
+  if (a.frames == 0 || a.frames > kMaxFrames)
+    return fail(a.frames_option + ": " + std::to_string(a.frames) + " is not in [1, " + std::to_string(kMaxFrames) + "]");
   if (!out.clip && a.frames < 2 * out.poses.size())
     return fail(a.frames_option + " " + std::to_string(a.frames) + " is too few for " + std::to_string(out.poses.size()) +
                 " key poses (each needs a rest frame and its key frame: at least " +

@@ -208,16 +208,16 @@ py::object Evaluate(const PyAsset& asset, const py::object& mesh_path, std::opti
   playback::AnimationRequest request;
   request.mesh_name = options.mesh_name;
   request.clip = clip.value_or("");
-  // Any integer (an int, numpy's, anything with __index__): out of [1, 1,000,000] a config error, as the CLI's
-  // --frames, instead of pybind11's TypeError for what does not fit 32 bits.
+  // Any integer (an int, numpy's, anything with __index__): out of [1, kMaxFrames] a config error, as
+  // OpenAnimation says it, instead of pybind11's TypeError for what does not fit 32 bits.
   {
     const py::int_ count = py::reinterpret_steal<py::int_>(PyNumber_Index(frames.ptr()));
     if (!count) throw py::error_already_set();
     int overflow = 0;
     const long long n = PyLong_AsLongLongAndOverflow(count.ptr(), &overflow);
-    if (overflow != 0 || n < 1 || n > 1'000'000)
-      fail(import::MakeError(import::Error::Code::kConfig,
-                             "frames: " + std::string(py::repr(count)) + " is not in [1, 1000000]"));
+    if (overflow != 0 || n < 1 || n > playback::kMaxFrames)
+      fail(import::MakeError(import::Error::Code::kConfig, "frames: " + std::string(py::repr(count)) + " is not in [1, " +
+                                                               std::to_string(playback::kMaxFrames) + "]"));
     request.frames = static_cast<uint32_t>(n);
   }
   if (py::isinstance<py::bool_>(morph)) {
@@ -433,7 +433,8 @@ Releases the GIL; slow (the exact truth: ~0.1 s a frame on 27k triangles, more w
 asset: an Asset (its path names it in the report); mesh: the character it was baked from (checked by
 fingerprint), str, bytes or os.PathLike (every path here: bytes are the file system's bytes).
 clip: the clip to play (None: the first, or the morph through the default key poses when there is none);
-frames: frames to play, an integer in [1, 1000000] (else EvaluateError config). morph: True (the default key poses), a pose file / name / folder, or a list of them;
+frames: frames to play, an integer in [1, 1000000] (else EvaluateError config).
+morph: True (the default key poses), a pose file / name / folder, or a list of them;
 poses_dir: the folder of key poses; rig: a MakeHuman .mhskel.
 margin: false-alarm distance, a fraction of the body height [0, 1); crease: the truth's bind distance, a
 fraction of the height [0, 1]; refit: "frame", "paper" or "joints"; regions: "asset" or "paper";

@@ -16,11 +16,12 @@ int main(int argc, char** argv) {
   const char* path = argc > 1 ? argv[1] : CMAKE_BAKE_ASSET;
   // The file's bytes, 8-byte aligned (LoadAsset reads them in place; they outlive the model).
   std::ifstream file(path, std::ios::binary | std::ios::ate);
-  if (!file) return std::fprintf(stderr, "error: cannot read '%s'\n", path), 1;
-  const size_t size = size_t(file.tellg());
+  const std::streamoff end = file ? std::streamoff(file.tellg()) : -1;
+  if (end < 0) return std::fprintf(stderr, "error: cannot read '%s'\n", path), 1;
+  const size_t size = size_t(end);
   std::vector<uint64_t> bytes((size + 7) / 8);
-  file.seekg(0);
-  file.read(reinterpret_cast<char*>(bytes.data()), std::streamsize(size));
+  if (!file.seekg(0) || !file.read(reinterpret_cast<char*>(bytes.data()), std::streamsize(size)))
+    return std::fprintf(stderr, "error: cannot read '%s'\n", path), 1;
   runtime::AssetView asset;
   runtime::Status s = runtime::LoadAsset(bytes.data(), size, &asset);
   if (runtime::Failed(s)) return std::fprintf(stderr, "error: '%s': %s\n", path, runtime::ToString(s)), 1;
@@ -31,7 +32,7 @@ int main(int argc, char** argv) {
 
   // One frame: refit the spheres from a vertex buffer, find the colliding sphere pairs (M2: all spheres).
   const auto* bind = asset.asset->bind_positions();
-  if (!bind) return std::fprintf(stderr, "error: '%s' has no bind positions (baked before schema v3)\n", path), 1;
+  if (!bind) return std::fprintf(stderr, "error: '%s' has no bind positions (baked before the crease rule: re-bake it)\n", path), 1;
   std::vector<runtime::Collision> pairs(runtime::DetectBound(asset, runtime::DetectMethod::kM2));
   uint32_t n = 0;
   runtime::RefitJob refit;

@@ -8,6 +8,7 @@
  * copied into an interleaved vertex buffer (position, normal, uv), and the "animation" pushes the left arm into
  * the body. */
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -87,7 +88,7 @@ int main(int argc, char** argv) {
   sc_model_info info;
   sc_status s;
   const float* bind = NULL;
-  uint32_t vertex_count = 0, pair_count = 0, contact_count = 0, i, deepest = 0;
+  uint32_t vertex_count = 0, pair_count = 0, contact_count = 0, i, deepest = 0, pair_bound = 0;
   float* spheres = NULL;
   vertex* vb = NULL;
   sc_pair* pairs = NULL;
@@ -117,10 +118,20 @@ int main(int argc, char** argv) {
     fprintf(stderr, "error: %s\n", sc_status_string(s));
     goto done;
   }
+  /* The pair buffer's bytes in 64 bits: on a 32-bit target they overflow size_t past about 26,700 spheres. A
+   * one-sphere asset has no pair: malloc(1) then, since malloc(0) may be NULL. */
+  pair_bound = sc_detect_bound(model, SC_DETECT_M2);
+  if ((uint64_t)pair_bound * sizeof(sc_pair) > SIZE_MAX) {
+    fprintf(stderr, "error: %u sphere pairs do not fit this machine's memory\n", pair_bound);
+    goto done;
+  }
   spheres = (float*)malloc(sizeof(float) * 4 * info.sphere_count);
   vb = (vertex*)calloc(vertex_count, sizeof(vertex));
-  pairs = (sc_pair*)malloc(sizeof(sc_pair) * sc_detect_bound(model, SC_DETECT_M2)); /* never truncated */
-  if (!spheres || !vb || !pairs) goto done;
+  pairs = (sc_pair*)malloc(pair_bound ? sizeof(sc_pair) * (size_t)pair_bound : 1); /* never truncated */
+  if (!spheres || !vb || !pairs) {
+    fprintf(stderr, "error: out of memory\n");
+    goto done;
+  }
 
   /* 2. The game's vertex buffer: the bind pose (and the bind spheres, to find the arm), the left arm pushed in. */
   for (i = 0; i < vertex_count; ++i) memcpy(vb[i].position, bind + 3 * i, sizeof(float) * 3);
@@ -130,7 +141,7 @@ int main(int argc, char** argv) {
   /* 3. Every frame: refit, broad phase (M2: all spheres), narrow phase (exact contacts, with depths). */
   if (SC_FAILED(s = sc_refit_vertices(model, ws, vb[0].position, vertex_count, sizeof(vertex))) ||
       SC_FAILED(
-          s = sc_detect(model, ws, SC_DETECT_M2, -1.0f, pairs, sc_detect_bound(model, SC_DETECT_M2), &pair_count)) ||
+          s = sc_detect(model, ws, SC_DETECT_M2, -1.0f, pairs, pair_bound, &pair_count)) ||
       SC_FAILED(s = sc_narrow_phase(model, ws, vb[0].position, vertex_count, sizeof(vertex),
                                     info.has_crease ? &skin : NULL, contacts, depths, MAX_CONTACTS, &contact_count))) {
     fprintf(stderr, "error: %s\n", sc_status_string(s));

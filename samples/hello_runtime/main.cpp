@@ -23,14 +23,17 @@ int main(int argc, char** argv) {
   }
   // 1. Load: the bytes must stay alive and 8-byte aligned while the view is used.
   std::ifstream file(argv[1], std::ios::binary | std::ios::ate);
-  if (!file) {
+  const std::streamoff end = file ? std::streamoff(file.tellg()) : -1;
+  if (end < 0) {
     std::fprintf(stderr, "error: cannot open '%s'\n", argv[1]);
     return 1;
   }
-  const size_t size = size_t(file.tellg());
+  const size_t size = size_t(end);
   std::vector<uint64_t> bytes((size + 7) / 8);
-  file.seekg(0);
-  file.read(reinterpret_cast<char*>(bytes.data()), std::streamsize(size));
+  if (!file.seekg(0) || !file.read(reinterpret_cast<char*>(bytes.data()), std::streamsize(size))) {
+    std::fprintf(stderr, "error: cannot read '%s'\n", argv[1]);
+    return 1;
+  }
   runtime::AssetView asset;
   if (runtime::Status s = runtime::LoadAsset(bytes.data(), size, &asset); runtime::Failed(s)) {
     std::fprintf(stderr, "error: '%s': %s\n", argv[1], runtime::ToString(s));
@@ -51,10 +54,18 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "error: %s\n", mesh.error().message.c_str());
     return 1;
   }
+  // The mesh must be the one the asset was baked from: its triangles are indexed by the asset's (the refit
+  // checks the vertex count too, but the loop below reads the mesh's triangles first).
+  if (mesh->vertex_count() != asset.vertex_count || mesh->triangle_count() != asset.triangle_count) {
+    std::fprintf(stderr, "error: '%s' has %u vertices and %u triangles, the asset was baked from %u and %u\n", argv[2],
+                 mesh->vertex_count(), mesh->triangle_count(), asset.vertex_count, asset.triangle_count);
+    return 1;
+  }
   std::vector<float> positions = mesh->positions;
+  // Regions are optional in the schema (the baker always writes them): without them nothing is moved.
   const auto* tri_regions = asset.asset->triangle_regions();
   std::vector<uint8_t> is_left_arm(positions.size() / 3, 0);
-  for (uint32_t t = 0; t < asset.triangle_count; ++t)
+  for (uint32_t t = 0; tri_regions && t < asset.triangle_count; ++t)
     if (tri_regions->Get(t) == 0)
       for (int k = 0; k < 3; ++k) is_left_arm[mesh->indices[3 * t + k]] = 1;
   float arm[3] = {0, 0, 0}, body[3] = {0, 0, 0};
@@ -64,7 +75,7 @@ int main(int argc, char** argv) {
       (is_left_arm[v] ? arm : body)[j] += positions[3 * v + j];
       if (j == 0) ++(is_left_arm[v] ? n_arm : n_body);
     }
-  for (size_t v = 0; v < is_left_arm.size(); ++v)
+  for (size_t v = 0; n_arm > 0 && n_body > 0 && v < is_left_arm.size(); ++v)
     if (is_left_arm[v])
       for (int j : {0, 2}) positions[3 * v + j] -= 0.8f * (arm[j] / n_arm - body[j] / n_body);
 
@@ -91,16 +102,16 @@ int main(int argc, char** argv) {
     return 1;
   }
 
-  // 4. Print the pairs and the mesh triangles behind them (the surrounding regions, for a narrow phase).
-  // Region names from the asset: the paper's five, or a creature's limbs and trunk (schema v4).
+  // 4. Print the pairs and how many mesh triangles stand behind each sphere (its surrounding region, what a
+  // narrow phase tests). Region names from the asset: the paper's five, or a creature's limbs and trunk.
   const auto* sphere_regions = asset.asset->sphere_regions();
+  auto region = [&](uint32_t sphere) { return sphere_regions ? runtime::RegionName(asset, sphere_regions->Get(sphere)) : "?"; };
   std::printf("%s: %u spheres, %u colliding pairs with the left arm pushed into the chest\n", argv[1],
               asset.sphere_count, count);
   for (uint32_t i = 0; i < count; ++i) {
     const runtime::Collision& c = pairs[i];
-    std::printf("  sphere %3u (%-9s) x sphere %3u (%-9s) depth %.3f  triangles %u + %u\n", c.a,
-                runtime::RegionName(asset, sphere_regions->Get(c.a)), c.b, runtime::RegionName(asset, sphere_regions->Get(c.b)),
-                c.depth,
+    std::printf("  sphere %3u (%-9s) x sphere %3u (%-9s) depth %.3f  triangles %u + %u\n", c.a, region(c.a), c.b,
+                region(c.b), c.depth,
                 runtime::SurroundingTriangles(asset, c.a).count, runtime::SurroundingTriangles(asset, c.b).count);
   }
   return 0;

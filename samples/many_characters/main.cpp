@@ -5,6 +5,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -34,11 +35,12 @@ int main(int argc, char** argv) {
   const uint32_t N = argc > 3 ? uint32_t(std::max(1, std::atoi(argv[3]))) : 1000u;
   // 1. Load the asset once, build its Model once (shared, immutable), one Workspace per character.
   std::ifstream file(argv[1], std::ios::binary | std::ios::ate);
-  if (!file) return std::fprintf(stderr, "error: cannot open '%s'\n", argv[1]), 1;
-  const size_t size = size_t(file.tellg());
+  const std::streamoff end = file ? std::streamoff(file.tellg()) : -1;
+  if (end < 0) return std::fprintf(stderr, "error: cannot open '%s'\n", argv[1]), 1;
+  const size_t size = size_t(end);
   std::vector<uint64_t> bytes((size + 7) / 8);
-  file.seekg(0);
-  file.read(reinterpret_cast<char*>(bytes.data()), std::streamsize(size));
+  if (!file.seekg(0) || !file.read(reinterpret_cast<char*>(bytes.data()), std::streamsize(size)))
+    return std::fprintf(stderr, "error: cannot read '%s'\n", argv[1]), 1;
   runtime::AssetView asset;
   if (runtime::Status s = runtime::LoadAsset(bytes.data(), size, &asset); runtime::Failed(s))
     return std::fprintf(stderr, "error: '%s': %s\n", argv[1], runtime::ToString(s)), 1;
@@ -57,8 +59,10 @@ int main(int argc, char** argv) {
   auto mesh = import::ImportMesh(argv[2], options);
   if (!mesh.ok()) return std::fprintf(stderr, "error: %s\n", mesh.error().message.c_str()), 1;
   const uint32_t V = asset.vertex_count;
-  if (mesh->positions.size() != size_t{V} * 3)
-    return std::fprintf(stderr, "error: the mesh has %zu vertices, the asset %u\n", mesh->positions.size() / 3, V), 1;
+  if (mesh->vertex_count() != V || mesh->triangle_count() != asset.triangle_count)  // the loop below indexes its triangles
+    return std::fprintf(stderr, "error: the mesh has %u vertices and %u triangles, the asset %u and %u\n",
+                        mesh->vertex_count(), mesh->triangle_count(), V, asset.triangle_count),
+           1;
   const auto* tri_regions = asset.asset->triangle_regions();
   std::vector<uint8_t> arm(V, 0);
   for (uint32_t t = 0; t < asset.triangle_count; ++t)

@@ -6,6 +6,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <unistd.h>
 
 #include "spherechain/baker/bake.h"
 #include "spherechain/playback/validate.h"
@@ -19,7 +20,7 @@ namespace fs = std::filesystem;
 namespace {
 
 fs::path TempDir(const std::string& name) {
-  fs::path d = fs::temp_directory_path() / ("spherechain_bake_test_" + name);
+  fs::path d = fs::temp_directory_path() / ("spherechain_bake_test_" + name + "." + std::to_string(::getpid()));
   fs::remove_all(d);
   fs::create_directories(d);
   return d;

@@ -16,6 +16,7 @@
 #include <set>
 #include <string>
 #include <vector>
+#include <unistd.h>
 
 #include "spherechain/baker/bake.h"
 #include "spherechain/baker/chains.h"
@@ -55,7 +56,7 @@ sc::BakeConfig Fast() {
 }
 
 std::string Write(const std::string& name, const nlohmann::json& j) {
-  const fs::path p = fs::temp_directory_path() / ("spherechain_skeleton_" + name + ".json");
+  const fs::path p = fs::temp_directory_path() / ("spherechain_skeleton_" + name + "." + std::to_string(::getpid()) + ".json");
   std::ofstream(p) << j.dump();
   return p.string();
 }
@@ -458,7 +459,7 @@ TEST_CASE("bake: a quadruped whose bones carry humanoid names is rerouted from t
   for (const auto& [from, to] : {std::pair<std::string, std::string>{"ForeLeg_L_0", "LeftArm_0"}, {"ForeLeg_R_0", "RightArm_0"},
                                  {"HindLeg_L_0", "LeftLeg_0"}, {"HindLeg_R_0", "RightLeg_0"}})
     for (size_t at = text.find(from); at != std::string::npos; at = text.find(from, at)) text.replace(at, from.size(), to);
-  const fs::path path = fs::temp_directory_path() / "spherechain_skeleton_humanoid_names.gltf";
+  const fs::path path = fs::temp_directory_path() / ("spherechain_skeleton_humanoid_names." + std::to_string(::getpid()) + ".gltf");
   std::ofstream(path) << text;
   auto rig = sc::SegmentByRig(Import(path.string()));
   REQUIRE_MESSAGE(rig.ok(), (rig.ok() ? "" : rig.error().message));  // the rules take it for a biped

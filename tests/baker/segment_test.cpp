@@ -19,6 +19,7 @@
 #include <string>
 #include <unordered_map>
 #include <vector>
+#include <unistd.h>
 
 #include "spherechain/import/import.h"
 #include "spherechain/baker/plausibility.h"
@@ -382,7 +383,7 @@ TEST_CASE("segment: region map, wrong length and bad values are config errors") 
   const sc::Mesh& mesh = body.mesh;
   const auto dir = std::filesystem::temp_directory_path();
   auto write = [&](const std::string& name, const nlohmann::json& j) {
-    const std::string p = (dir / ("spherechain_segment_" + name + ".json")).string();
+    const std::string p = (dir / ("spherechain_segment_" + name + "." + std::to_string(::getpid()) + ".json")).string();
     std::ofstream(p) << j.dump();
     return p;
   };

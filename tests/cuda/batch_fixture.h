@@ -7,11 +7,13 @@
 #include <cuda_runtime_api.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
 #include <map>
+#include <string>
 
 #include "cuda/cuda_test_util.h"
 #include "test_data.h"
@@ -57,7 +59,15 @@ inline void LoadSet(AssetSet* s, AssetData d) {
   LoadBytes(s);
 }
 
-/// A baked .sphc file (e.g. /tmp/mh.sphc).
+/// The baked MakeHuman asset the CUDA cases compare on: $SPHERECHAIN_MH_ASSET (scripts/gpu-check.sh, which
+/// builds without the baker), else the test fixture's bake (tests/makehuman.sphc in the build folder: the
+/// cli_bake_makehuman fixture, which the cuda cases require).
+inline std::string MakeHumanAssetPath() {
+  const char* env = std::getenv("SPHERECHAIN_MH_ASSET");
+  return env && *env ? std::string(env) : std::string(SPHERECHAIN_BINARY_DIR) + "/tests/makehuman.sphc";
+}
+
+/// A baked .sphc file (e.g. MakeHumanAssetPath()).
 inline void LoadFile(AssetSet* s, const std::string& path) {
   REQUIRE_MESSAGE(ReadAlignedFile(path, &s->bytes), path);
   LoadBytes(s);

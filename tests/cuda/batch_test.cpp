@@ -184,11 +184,10 @@ TEST_CASE("cuda: a too-small output sets the overflow flag and the counts stay c
 
 TEST_CASE("cuda: MakeHuman asset, CPU == GPU over randomised instances") {
   if (!RequireDevice()) return;
-  const char* env = std::getenv("SPHERECHAIN_MH_ASSET");
-  const std::string asset_path = env ? env : "/tmp/mh.sphc";
+  const std::string asset_path = MakeHumanAssetPath();
   const std::string obj = test::SharedData("makehuman/base.obj");
   if (!test::Require(asset_path) || !test::Require(obj)) {
-    MESSAGE("SKIPPED: bake it with `spherechain bake " << obj << " -o /tmp/mh.sphc` (or set SPHERECHAIN_MH_ASSET)");
+    MESSAGE("SKIPPED: bake it with `spherechain bake " << obj << " -o " << asset_path << "` (or set SPHERECHAIN_MH_ASSET)");
     return;
   }
   AssetSet mh;

@@ -162,11 +162,10 @@ TEST_CASE("cuda: FrameParams::margin < 0 uses each instance's asset margin in a 
 // one batch with a synthetic asset of another margin: the default, 0 and 2x the asset's, CPU == GPU.
 TEST_CASE("cuda: FrameParams::margin on the MakeHuman asset mixed with a synthetic one, CPU == GPU") {
   if (!RequireDevice()) return;
-  const char* env = std::getenv("SPHERECHAIN_MH_ASSET");
-  const std::string asset_path = env ? env : "/tmp/mh.sphc";
+  const std::string asset_path = MakeHumanAssetPath();
   const std::string obj = test::SharedData("makehuman/base.obj");
   if (!test::Require(asset_path) || !test::Require(obj)) {
-    MESSAGE("SKIPPED: bake it with `spherechain bake " << obj << " -o /tmp/mh.sphc` (or set SPHERECHAIN_MH_ASSET)");
+    MESSAGE("SKIPPED: bake it with `spherechain bake " << obj << " -o " << asset_path << "` (or set SPHERECHAIN_MH_ASSET)");
     return;
   }
   AssetSet mh, star;

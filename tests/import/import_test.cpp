@@ -11,6 +11,7 @@
 #include <fstream>
 #include <string>
 #include <vector>
+#include <unistd.h>
 
 #include "spherechain/import/import.h"
 #include "test_data.h"
@@ -28,7 +29,7 @@ namespace fs = std::filesystem;
 struct TempDir {
   fs::path dir;
   explicit TempDir(const std::string& name) {
-    dir = fs::temp_directory_path() / ("spherechain_import_test_" + name);
+    dir = fs::temp_directory_path() / ("spherechain_import_test_" + name + "." + std::to_string(::getpid()));
     fs::remove_all(dir);
     fs::create_directories(dir);
   }

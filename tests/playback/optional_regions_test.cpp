@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <string>
+#include <unistd.h>
 
 #include "runtime/asset_builder.h"
 #include "spherechain/playback/debug_export.h"
@@ -29,7 +30,7 @@ TEST_CASE("debug pictures of an asset without sphere_regions and triangle_region
   mesh.indices = tube_mesh.triangles;
   const std::string svg = sc::playback::RenderDebugSvg(mesh, view, 400);
   CHECK(svg.find("<svg") != std::string::npos);
-  const std::filesystem::path out = std::filesystem::temp_directory_path() / "spherechain_optional_regions.gltf";
+  const std::filesystem::path out = std::filesystem::temp_directory_path() / ("spherechain_optional_regions." + std::to_string(::getpid()) + ".gltf");
   const sc::playback::Status s = sc::playback::ExportDebugGltf(mesh, view, out.string());
   CHECK(s.ok());
   CHECK(std::filesystem::file_size(out) > 0);

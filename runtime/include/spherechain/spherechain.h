@@ -20,7 +20,7 @@
 /// @code
 ///   sc_model* model;  sc_status s = sc_model_create(bytes, size, SC_MODEL_NARROW_PHASE, &model);  // per asset
 ///   sc_workspace* ws; s = sc_workspace_create(model, &ws);                                        // per character
-///   sc_pair* pairs = malloc(sizeof(sc_pair) * sc_detect_bound(model, SC_DETECT_M2));              // once
+///   sc_pair* pairs = malloc(sizeof(sc_pair) * sc_detect_bound(model, SC_DETECT_M2));  // once (32-bit: see the bound)
 ///   uint32_t n;
 ///   // every frame:
 ///   s = sc_refit_vertices(model, ws, vertex_buffer, vertex_count, sizeof(my_vertex));

@@ -14,13 +14,18 @@
 namespace spherechain::playback {
 
 /// What to play (the CLI's --clip / --morph / --poses-dir / --frames).
+/// The most frames an animation plays (AnimationRequest::frames; the CLI's --frames, Python's `frames`): an hour
+/// at 277 fps. Each frame keeps a row in the reports (evaluate's holds its spheres and contact sets), so a
+/// mistyped count ends here instead of in an allocation failure.
+inline constexpr uint32_t kMaxFrames = 1'000'000;
+
 struct AnimationRequest {
   std::string mesh_name;           ///< the character file, for messages
   std::string clip;                ///< [opt] clip name; empty: the first clip, or the morph when there is none
   std::vector<std::string> morph;  ///< [opt] key poses: .json files, names of poses in `poses_dir`, or folders
   bool use_morph = false;          ///< play the morph even when the mesh has clips (`morph` empty: every pose in `poses_dir`)
   std::string poses_dir;           ///< [opt] folder of the character's default key poses (see DefaultPoseCharacter)
-  uint32_t frames = 40;            ///< [Limit: > 0; >= 2 × \#keys for the morph] frames to play
+  uint32_t frames = 40;            ///< [Limit: 1..kMaxFrames; >= 2 × \#keys for the morph] frames to play
   std::string frames_option = "--frames";  ///< how the caller's users set `frames`, for its errors
 };
 
@@ -78,8 +83,8 @@ struct Animation {
 /// `request.morph` (each a file, a pose name in `poses_dir`, or a folder of *.json), or through every
 /// pose in `poses_dir`. Errors (kConfig unless the pose loader says otherwise; the messages name the
 /// CLI's options): clip and morph both given, no skin, unknown clip (the message lists the clips), no
-/// clips and no poses folder, a pose file that does not parse (LoadPose / LoadPoseFolder), frames == 0,
-/// frames < 2 × \#keys for the morph. Cost: reads the pose files.
+/// clips and no poses folder, a pose file that does not parse (LoadPose / LoadPoseFolder), frames outside
+/// [1, kMaxFrames], frames < 2 × \#keys for the morph. Cost: reads the pose files.
 Result<Animation> OpenAnimation(const Mesh& mesh, const AnimationRequest& request);
 
 }  // namespace spherechain::playback

@@ -88,8 +88,8 @@ struct DetectJob {
   ParallelFor parallel_for;     ///< [opt]
   /// Contact margin [Units: source units]: spheres are tested with every radius grown by it (a pair is
   /// reported when ‖cA − cB‖ < rA + rB + 2·margin, as physics engines' contact offset / skin width).
-  /// < 0 (default): the asset's, Model::contact_margin() (Asset.contact_margin); NaN or +inf:
-  /// kErrorInvalidJob. [Limit: finite]
+  /// < 0 (default): the asset's, Model::contact_margin() (Asset.contact_margin); NaN or ±inf:
+  /// kErrorInvalidJob (the C API's sc_detect reads −inf as the asset's). [Limit: finite]
   float margin = -1.0f;
   /// Fold margin [Units: source units]: a pair of two spheres of one region (Asset.sphere_regions) is
   /// reported when ‖cA − cB‖ < rA + rB + 2·fold_margin instead of 2·margin; pairs of two regions keep
