@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <system_error>
+#include <vector>
 
 namespace spherechain::import {
 
@@ -13,12 +14,20 @@ void Context::RecordFileRead(const std::string& path) {
   const fs::path p = fs::absolute(path, ec);
   std::string abs = ec ? path : p.lexically_normal().string();
   // A `..` after a symbolic link to a folder leads to the link target's parent, not back to where the path
-  // came from: the folders are then resolved as they are on disk (the file itself kept as named). Dropping
+  // came from: the path up to its last `..` is resolved as it is on disk, the rest kept as named. Dropping
   // `dir/..` by the text alone named files that do not exist (depfiles) and let an output overwrite a file
   // the bake had read (OutputsClash).
-  if (!ec && std::find(p.begin(), p.end(), fs::path("..")) != p.end()) {
-    const fs::path dir = fs::weakly_canonical(p.parent_path(), ec);
-    if (!ec) abs = (dir / p.filename()).string();
+  if (!ec) {
+    const std::vector<fs::path> parts(p.begin(), p.end());
+    size_t last = parts.size();  // the last `..`
+    for (size_t k = 0; k < parts.size(); ++k)
+      if (parts[k] == "..") last = k;
+    if (last < parts.size()) {
+      fs::path upto, rest;
+      for (size_t k = 0; k < parts.size(); ++k) (k <= last ? upto : rest) /= parts[k];
+      const fs::path dir = fs::weakly_canonical(upto, ec);
+      if (!ec) abs = (dir / rest).lexically_normal().string();
+    }
   }
   if (std::find(files_read.begin(), files_read.end(), abs) == files_read.end()) files_read.push_back(abs);
 }
