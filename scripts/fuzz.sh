@@ -12,7 +12,8 @@
 #   last hour added (when it ran an hour or more).
 # Saving a campaign: scripts/fuzz.sh save TARGET
 #   merges build/fuzz/work/TARGET/ (libFuzzer -merge=1: the smallest set of its inputs with the same coverage)
-#   into fuzz/campaign/TARGET.tar.xz, so that the next campaign on any machine resumes from it.
+#   into fuzz/campaign/TARGET.tar.xz, so that the next campaign on any machine resumes from it. On a CPU that
+#   does not run the runtime's AVX-512 kernels, the archive is kept whole and the merge's inputs added to it.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if [ $# -lt 2 ]; then
@@ -70,6 +71,24 @@ if [ "$save" -eq 1 ]; then
     [ -f "$f" ] || continue
     rm -f "$merged/$(sha1sum "$f" | cut -c1-40)"
   done
+  # A merge counts the edges of the code this CPU runs. Without the four AVX-512 extensions the runtime's
+  # dispatch asks for (runtime/src/kernels.cpp), or with SPHERECHAIN_ISA capping it below them, the AVX-512
+  # kernels never run, and the merge drops the inputs that reach only them. The saved campaign is then kept
+  # whole and the merge's inputs are added to it (the names are the inputs' SHA-1, so none is held twice).
+  all_isa=1
+  for flag in avx512f avx512vl avx512dq avx512bw; do
+    grep -qw "$flag" /proc/cpuinfo 2>/dev/null || all_isa=0
+  done
+  case "${SPHERECHAIN_ISA:-avx512}" in avx512) ;; *) all_isa=0 ;; esac
+  united=""
+  if [ "$all_isa" -eq 0 ] && [ -f "$saved" ]; then
+    kept=$(ls "$merged" | wc -l)
+    if ! tar -C "$merged" -xJf "$saved"; then
+      echo "scripts/fuzz.sh save: could not read $saved" >&2
+      exit 1
+    fi
+    united=", the union of the archive before and this merge's $kept: this CPU does not run the AVX-512 kernels"
+  fi
   mkdir -p fuzz/campaign
   # Reproducible: names sorted, no owners or times (the same corpus gives the same bytes).
   (cd "$merged" && find . -type f -printf '%P\n' | LC_ALL=C sort) >"$merged.list"
@@ -81,7 +100,7 @@ if [ "$save" -eq 1 ]; then
   fi
   rm -f "$merged.list"
   mv "$saved.tmp" "$saved"
-  echo "fuzz_$name: $(ls "$merged" | wc -l) inputs saved to $saved ($(du -k "$saved" | cut -f1) KB); log: $log"
+  echo "fuzz_$name: $(ls "$merged" | wc -l) inputs saved to $saved ($(du -k "$saved" | cut -f1) KB$united); log: $log"
   exit 0
 fi
 if [ -z "$(ls -A "$work")" ] && [ -f "$saved" ]; then
