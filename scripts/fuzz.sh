@@ -87,7 +87,7 @@ if [ "$save" -eq 1 ]; then
       echo "scripts/fuzz.sh save: could not read $saved" >&2
       exit 1
     fi
-    united=", the union of the archive before and this merge's $kept: this CPU does not run the AVX-512 kernels"
+    united=", the union of the archive before and this merge's $kept: the AVX-512 kernels do not run here"
   fi
   mkdir -p fuzz/campaign
   # Reproducible: names sorted, no owners or times (the same corpus gives the same bytes).
